@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# One idempotent set-up for a fresh Debian bookworm machine (or this project's CI):
+#   1. system packages (apt-get): compilers, CMake, Eigen, urdfdom, KDL, MuJoCo 2.2, NLopt, Ceres,
+#      LCM, yaml-cpp, GoogleTest, Google Benchmark, CLI11, spdlog/fmt, pagmo (CMA-ES);
+#   2. Python packages for the plotting/report scripts (pip);
+#   3. ONNX Runtime 1.24.4: libonnxruntime.so from the PyPI wheel + onnxruntime_c_api.h from the Go
+#      module github.com/yalue/onnxruntime_go@v1.27.0, unpacked into third_party/onnxruntime/ (ignored
+#      by git). A robot host with an official ONNX Runtime release passes -DONNXRUNTIME_ROOT= instead.
+# Re-running it is cheap: every step checks whether its result is already there.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+sudo_cmd=""
+if [ "$(id -u)" != "0" ]; then sudo_cmd="sudo"; fi
+
+apt_packages=(
+  build-essential cmake ninja-build pkg-config git unzip curl golang-go
+  libeigen3-dev liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev libmujoco-dev
+  libnlopt-dev libnlopt-cxx-dev libceres-dev liblcm-dev liblcm-bin libglib2.0-dev libyaml-cpp-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libspdlog-dev libfmt-dev libpagmo-dev
+  python3 python3-pip
+)
+missing=()
+for p in "${apt_packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "[setup] apt-get install ${missing[*]}"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq "${missing[@]}"
+fi
+
+py=python3
+if ! $py -c "import numpy, matplotlib, yaml" 2>/dev/null; then
+  echo "[setup] pip install numpy matplotlib pyyaml"
+  $py -m pip install -q numpy matplotlib pyyaml || $py -m pip install -q --break-system-packages numpy matplotlib pyyaml
+fi
+
+ort_dir="$root/third_party/onnxruntime"
+ort_ver=1.24.4
+if [ ! -f "$ort_dir/lib/libonnxruntime.so.$ort_ver" ] || [ ! -f "$ort_dir/include/onnxruntime_c_api.h" ]; then
+  echo "[setup] fetching ONNX Runtime $ort_ver (PyPI wheel + C API header)"
+  tmp="$(mktemp -d)"
+  $py -m pip download -q --no-deps --only-binary=:all: --dest "$tmp" \
+      --platform manylinux_2_28_x86_64 --platform manylinux_2_27_x86_64 --platform manylinux_2_17_x86_64 \
+      --python-version 3.11 "onnxruntime==$ort_ver"
+  mkdir -p "$ort_dir/lib" "$ort_dir/include"
+  (cd "$tmp" && unzip -q -o onnxruntime-*.whl 'onnxruntime/capi/libonnxruntime.so*')
+  cp "$tmp"/onnxruntime/capi/libonnxruntime.so.* "$ort_dir/lib/"
+  ln -sf "libonnxruntime.so.$ort_ver" "$ort_dir/lib/libonnxruntime.so.1"
+  ln -sf "libonnxruntime.so.1" "$ort_dir/lib/libonnxruntime.so"
+  export GOPATH="$tmp/go" GOFLAGS=-modcacherw
+  (cd "$tmp" && go mod download -json github.com/yalue/onnxruntime_go@v1.27.0 >/dev/null)
+  cp "$tmp/go/pkg/mod/github.com/yalue/onnxruntime_go@v1.27.0/onnxruntime_c_api.h" "$ort_dir/include/"
+  rm -rf "$tmp"
+fi
+echo "[setup] done"
