@@ -15,7 +15,7 @@ if [ "$(id -u)" != "0" ]; then sudo_cmd="sudo"; fi
 
 apt_packages=(
   build-essential cmake ninja-build pkg-config git unzip curl golang-go
-  libeigen3-dev liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev libmujoco-dev
+  libeigen3-dev liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev libmujoco-dev libqhull-dev
   libnlopt-dev libnlopt-cxx-dev libceres-dev liblcm-dev liblcm-bin libglib2.0-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libspdlog-dev libfmt-dev libpagmo-dev
   python3 python3-pip

@@ -1,0 +1,55 @@
+#pragma once
+/// @file mujoco_model.hpp
+/// Loading the robot MJCF into MuJoCo 2.2 (the SIL and calibration simulator).
+///
+/// Unitree's G1 MJCF targets newer MuJoCo releases; MuJoCo 2.2.2 rejects it as shipped
+/// (config/robots/g1/SOURCE.md). adaptMjcfForMujoco22() is the one reproducible, documented
+/// transform (docs/mujoco22.md) applied in memory at load time; the shipped file stays pristine:
+///  1. delete every `actuatorfrcrange` / `actuatorfrclimited` attribute (2.2 does not know them;
+///     torque limits are enforced by the motor model from the robot config instead);
+///  2. `<compiler autolimits="true">` (2.2 otherwise rejects `range` without `limited`), and an
+///     absolute `meshdir` so the text can be loaded from any folder;
+///  3. `<option timestep>` = the requested physics step; `<size nconmax="500" njmax="2000"/>`
+///     (the default contact buffer overflows when the robot falls);
+///  4. `<default><joint armature damping frictionloss/>` with Unitree's unitree_mujoco values
+///     (armature 0.01 kg·m², damping 0.05 N·m·s/rad, frictionloss 0.2 N·m); without armature the
+///     stiff motor-level PD at 1 kHz is unstable;
+///  5. a `framequat` sensor on the IMU site (orientation of the IMU frame in world, w x y z), as an
+///     IMU's attitude filter would report it.
+
+#include <memory>
+#include <string>
+
+#include <mujoco/mujoco.h>
+
+namespace pmg {
+
+struct MjModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+struct MjDataDeleter {
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+using MjModelPtr = std::unique_ptr<mjModel, MjModelDeleter>;
+using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
+
+/// Options of the MuJoCo 2.2 adaptation.
+struct Mujoco22Options {
+  double timestep = 0.001;      ///< physics step [s] (≥ 1 kHz for the SIL), in (0, 0.01]
+  double armature = 0.01;       ///< default joint armature (rotor inertia at the joint) [kg·m²]
+  double damping = 0.05;        ///< default joint viscous damping [N·m·s/rad]
+  double frictionloss = 0.2;    ///< default joint dry friction [N·m]
+  std::string imu_site = "imu_in_pelvis";  ///< site that gets the framequat sensor "<site>-orientation"
+};
+
+/// Returns the MJCF text adapted for MuJoCo 2.2 (see file comment). @p mjcf_dir is the folder of
+/// the original file, used to make `meshdir` absolute. @throws std::runtime_error if the text has
+/// no `<compiler>` or `<sensor>`/`</mujoco>` element to anchor the edits.
+std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string& mjcf_dir,
+                                 const Mujoco22Options& options = {});
+
+/// Reads @p mjcf_path, adapts it and compiles it with MuJoCo 2.2.
+/// @throws std::runtime_error with MuJoCo's message and the file name on failure.
+MjModelPtr loadMujocoModel(const std::string& mjcf_path, const Mujoco22Options& options = {});
+
+}  // namespace pmg

@@ -1,0 +1,90 @@
+#pragma once
+/// @file robot_config.hpp
+/// The robot configuration: the single source of truth for joint order, joint limits, default
+/// standing pose, motor-level PD gains, torque limits and the motor-to-bus mapping.
+/// Loaded from YAML (e.g. config/robots/g1/g1.yaml) and validated once at start-up (setup code:
+/// allocates, throws pmg::ConfigError). The loop only reads the resulting immutable struct.
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace pmg {
+
+/// Error raised by every configuration loader. what() names the file, the key and the
+/// expected range, e.g. "g1.yaml: joints[3].kp = -1: expected > 0".
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// One actuated joint (= one motor). Units: rad, rad/s, N·m, N·m/rad, N·m·s/rad.
+struct JointConfig {
+  std::string name;            ///< joint name as in URDF/MJCF, e.g. "left_knee_joint"
+  double lower = 0.0;          ///< position lower limit [rad]
+  double upper = 0.0;          ///< position upper limit [rad], > lower
+  double velocity_limit = 0;   ///< |q̇| limit [rad/s], > 0
+  double torque_limit = 0;     ///< |τ| limit at the joint [N·m], > 0
+  double kp = 0.0;             ///< motor-level PD stiffness [N·m/rad], ≥ 0
+  double kd = 0.0;             ///< motor-level PD damping [N·m·s/rad], ≥ 0
+  double default_position = 0; ///< default standing pose [rad], within [lower, upper]
+  int bus = 0;                 ///< index into RobotConfig::buses
+  int motor_id = 0;            ///< CAN id of the motor driver on its bus, 1..2047
+  std::string mirror;          ///< name of the left/right mirror joint (itself for sagittal joints)
+  int mirror_sign = 1;         ///< q_mirror = mirror_sign · q (±1)
+};
+
+/// One motor bus (CAN / CAN FD).
+struct BusConfig {
+  std::string name;            ///< interface name, e.g. "can0"
+  int bitrate = 1000000;       ///< nominal (arbitration) bit rate [bit/s]
+  int data_bitrate = 0;        ///< CAN FD data-phase bit rate [bit/s]; 0 = same as bitrate
+  bool fd = false;             ///< CAN FD frames
+};
+
+/// The whole robot configuration. Paths are absolute after loading.
+struct RobotConfig {
+  std::string source_file;     ///< the YAML file this was loaded from
+  std::string name;            ///< robot model name
+  std::string urdf_path;       ///< absolute path of the URDF (kinematics, KDL)
+  std::string mjcf_path;       ///< absolute path of the MJCF (simulation, MuJoCo)
+  std::string base_link;       ///< floating-base link, e.g. "pelvis"
+  std::string left_foot_link;  ///< e.g. "left_ankle_roll_link"
+  std::string right_foot_link; ///< e.g. "right_ankle_roll_link"
+  std::string imu_site;        ///< MJCF site of the IMU, e.g. "imu_in_pelvis"
+  double standing_base_height = 0.78;  ///< pelvis height above the ground in the default pose [m]
+  std::vector<BusConfig> buses;
+  std::vector<JointConfig> joints;     ///< in motor/joint order (= MJCF joint order)
+
+  std::size_t numJoints() const { return joints.size(); }
+  /// Index of a joint by name, or -1.
+  int jointIndex(const std::string& joint_name) const;
+  /// Default standing pose, (n) [rad].
+  Eigen::VectorXd defaultPose() const;
+  /// Per-joint vectors (n): lower/upper limits [rad], kp [N·m/rad], kd [N·m·s/rad], torque limit [N·m].
+  Eigen::VectorXd lowerLimits() const;
+  Eigen::VectorXd upperLimits() const;
+  Eigen::VectorXd velocityLimits() const;
+  Eigen::VectorXd kp() const;
+  Eigen::VectorXd kd() const;
+  Eigen::VectorXd torqueLimits() const;
+  /// Mirror map: index of each joint's mirror partner (n) and its sign (n).
+  std::vector<int> mirrorIndex() const;
+  /// Joint names in order.
+  std::vector<std::string> jointNames() const;
+};
+
+/// Loads and validates a robot config YAML file. Relative model paths are resolved against the
+/// file's folder. @throws ConfigError naming the file, key and expected range on any problem
+/// (missing key, wrong type, limits out of order, default pose outside limits, negative gains,
+/// unknown/duplicate joint or bus, mirror map not an involution, bus index out of range, duplicate
+/// motor id on a bus, model file missing).
+RobotConfig loadRobotConfig(const std::string& yaml_path);
+
+/// Validates an already-filled config (also used by loadRobotConfig). @throws ConfigError.
+void validate(const RobotConfig& config);
+
+}  // namespace pmg
