@@ -31,14 +31,15 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 py=python3
-if ! $py -c "import numpy, matplotlib, yaml" 2>/dev/null; then
-  echo "[setup] pip install numpy matplotlib pyyaml"
-  $py -m pip install -q numpy matplotlib pyyaml || $py -m pip install -q --break-system-packages numpy matplotlib pyyaml
+if ! $py -c "import numpy, matplotlib, yaml, onnx" 2>/dev/null; then
+  echo "[setup] pip install numpy matplotlib pyyaml onnx"
+  $py -m pip install -q numpy matplotlib pyyaml onnx || $py -m pip install -q --break-system-packages numpy matplotlib pyyaml onnx
 fi
 
 ort_dir="$root/third_party/onnxruntime"
 ort_ver=1.24.4
-if [ ! -f "$ort_dir/lib/libonnxruntime.so.$ort_ver" ] || [ ! -f "$ort_dir/include/onnxruntime_c_api.h" ]; then
+if [ ! -f "$ort_dir/lib/libonnxruntime.so.$ort_ver" ] || [ ! -f "$ort_dir/include/onnxruntime_c_api.h" ] \
+   || [ ! -f "$ort_dir/include/onnxruntime_ep_c_api.h" ]; then
   echo "[setup] fetching ONNX Runtime $ort_ver (PyPI wheel + C API header)"
   tmp="$(mktemp -d)"
   $py -m pip download -q --no-deps --only-binary=:all: --dest "$tmp" \
@@ -51,7 +52,9 @@ if [ ! -f "$ort_dir/lib/libonnxruntime.so.$ort_ver" ] || [ ! -f "$ort_dir/includ
   ln -sf "libonnxruntime.so.1" "$ort_dir/lib/libonnxruntime.so"
   export GOPATH="$tmp/go" GOFLAGS=-modcacherw
   (cd "$tmp" && go mod download -json github.com/yalue/onnxruntime_go@v1.27.0 >/dev/null)
-  cp "$tmp/go/pkg/mod/github.com/yalue/onnxruntime_go@v1.27.0/onnxruntime_c_api.h" "$ort_dir/include/"
+  # onnxruntime_c_api.h includes onnxruntime_ep_c_api.h (since ORT 1.23): copy both.
+  cp "$tmp/go/pkg/mod/github.com/yalue/onnxruntime_go@v1.27.0/onnxruntime_c_api.h" \
+     "$tmp/go/pkg/mod/github.com/yalue/onnxruntime_go@v1.27.0/onnxruntime_ep_c_api.h" "$ort_dir/include/"
   rm -rf "$tmp"
 fi
 echo "[setup] done"
