@@ -1,0 +1,483 @@
+#pragma once
+/// @file generator.hpp
+/// The Parameterized Motion Generator (PMG), header-only.
+///
+/// From a velocity command u_d = (v_x, v_y, ω) and a posture command u_s = (pitch, roll, height)
+/// the generator blends the dynamic clips by convex weights, adds the posture offset of the static
+/// clips and advances the shared gait phase φ, producing per tick: joint references q_ref, reference
+/// velocities q̇_ref, per-foot contact schedule and the template's base velocity, yaw rate and height.
+///
+/// Equations (PMG paper, "Parameterized Motion Generator"):
+///   eq. 4   α_i = clip(|u_i| / x̄_i, 0, 1)                     (x̄_i: clip nominal scale)
+///   eq. 5   q̃_i(φ) = α_i q_Di(φ) + (1 − α_i) q_stand
+///   eq. 6   w_i = |u_i| / (Σ_j |u_j| + ε)
+///   eq. 7   q_d(φ) = Σ_i w_i q̃_i(φ)            [+ (1 − Σ_i w_i) q_stand, see "Standing" below]
+///   eq. 8   μ_f = Σ_i w_i μ_f,i / Σ_i w_i      (contact centre of foot f)
+///   eq. 9   σ_f = Σ_i w_i σ_f,i                [+ (1 − Σ_i w_i) · 0.5, see "Standing"]
+///   eq. 10  q_ref = q_d + q_s                   (q_s: posture offset from the static clips)
+///   eq. 11  φ ← (φ + Δt / T_u) mod 1
+///   eq. 12  T_u = Σ_i w_i T_i                  [+ (1 − Σ_i w_i) T_stand]
+///
+/// Conventions and decisions (docs/generator.md):
+/// - **Standing / zero command.** Eq. 7 alone gives q_d = 0 at u_d = 0 (all w_i = 0). pmg gives the
+///   remaining weight w_stand = 1 − Σ w_i to the standing pose, so q_d = q_stand exactly at zero
+///   command, and moves continuously away from it as |u| grows (Σ w_i = Σ|u| / (Σ|u| + ε)). The
+///   standing part of the cycle has both feet in contact (σ = 0.5) and period T_stand (the forward
+///   clip's period), so φ keeps running while standing and a start from rest is continuous.
+/// - **φ wrap.** Clips are periodic (sample N ≡ sample 0); phase interpolation wraps from the last
+///   sample to the first, so q_ref is continuous across φ = 1 → 0.
+/// - **Negative commands.** Each axis has a clip per sign. A missing one is derived at load time:
+///   backward walking = the forward clip played in reverse time (q(1 − φ), velocities negated);
+///   right-sideways walking and clockwise turning = the left/right mirror of the left clip (mirror
+///   map of the robot config, contacts of the two feet swapped). Derived clips record this in
+///   their metadata (provenance "mocap_time_reversed" / "mocap_mirrored").
+/// - **Reference velocity** q̇_ref: central finite difference of q_d over one template sample in
+///   phase, times dφ/dt = 1 / T_u (the posture offset is constant in φ).
+/// - **Posture offset** q_s: each static clip is a table q(value) over its command range; the
+///   command is clamped to the range, β ∈ [−1, 1] reports where it lies between the neutral value
+///   and the range end, and q_s,axis = q(value) − q(neutral) (piecewise-linear in value).
+/// - q_ref is finally clamped to the joint limits (reported in the output).
+///
+/// Model/Data split: GeneratorModel is immutable after construction (may allocate and throw);
+/// MotionGenerator::step() is noexcept and allocation-free (tested).
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pmg/generator/clip.hpp"
+
+namespace pmg {
+
+/// Velocity command u_d in the heading (yaw-aligned base) frame: v_x forward [m/s], v_y left
+/// [m/s], ω yaw rate counter-clockwise [rad/s].
+struct VelocityCommand {
+  double vx = 0.0;
+  double vy = 0.0;
+  double wz = 0.0;
+  double operator[](std::size_t i) const { return i == 0 ? vx : (i == 1 ? vy : wz); }
+};
+
+/// Posture command u_s: torso pitch (forward bend) [rad], roll (lean right) [rad], pelvis height
+/// above the ground [m]. NaN-free; values outside a static clip's range are clamped to it.
+struct PostureCommand {
+  double pitch = 0.0;
+  double roll = 0.0;
+  double height = 0.0;  ///< absolute pelvis height [m]; <= 0 means "the standing height" (the squat clip's neutral)
+  double operator[](std::size_t i) const { return i == 0 ? pitch : (i == 1 ? roll : height); }
+};
+
+/// The joint space the generator works in (filled from the robot config, pmg::RobotConfig).
+struct GeneratorJointSpace {
+  std::vector<std::string> joint_names;  ///< (n)
+  Eigen::VectorXd q_stand;               ///< (n) standing pose [rad]
+  Eigen::VectorXd lower, upper;          ///< (n) joint limits [rad]
+  std::vector<int> mirror_index;         ///< (n) left/right mirror partner of each joint
+  std::vector<int> mirror_sign;          ///< (n) ±1
+  double standing_base_height = 0.78;    ///< pelvis height in q_stand [m]
+};
+
+/// Tunables of the generator.
+struct GeneratorParams {
+  double epsilon = 0.05;  ///< ε of eq. 6 [command units]; keeps w finite at zero command
+  /// |command| accepted per axis (v_x, v_y, ω) [m/s, m/s, rad/s]; larger values are clamped.
+  std::array<double, kNumCommandAxes> max_command{1.5, 0.8, 1.5};
+
+  /// Returns an empty string when valid, else what is wrong (field and expected range).
+  std::string validate() const {
+    if (!(epsilon > 0 && epsilon < 1)) return "GeneratorParams.epsilon: expected in (0, 1)";
+    for (double m : max_command)
+      if (!(m > 0 && m < 10)) return "GeneratorParams.max_command: expected each in (0, 10)";
+    return {};
+  }
+};
+
+/// Status of one generator tick.
+enum class GeneratorStatus : int {
+  kOk = 0,
+  kCommandClamped = 1,   ///< a command exceeded max_command or a static clip's range
+  kInvalidCommand = 2,   ///< NaN/Inf in the command: treated as zero velocity / neutral posture
+  kBadTimeStep = 3,      ///< dt not finite or ≤ 0: phase not advanced
+};
+
+/// Everything the generator produces per tick. Sized once by MotionGenerator's constructor.
+struct GeneratorOutput {
+  double phase = 0.0;                 ///< φ at which the references were evaluated [0, 1)
+  double next_phase = 0.0;            ///< φ after the update of eq. 11
+  double period = 1.0;                ///< T_u of eq. 12 [s]
+  Eigen::VectorXd q_ref;              ///< (n) q_ref = q_d + q_s (eq. 10), clamped to limits [rad]
+  Eigen::VectorXd qd_ref;             ///< (n) reference joint velocity [rad/s]
+  Eigen::VectorXd q_dynamic;          ///< (n) q_d of eq. 7 [rad]
+  Eigen::VectorXd q_posture;          ///< (n) q_s [rad]
+  std::array<double, kNumCommandAxes> alpha{};    ///< α_i (eq. 4)
+  std::array<double, kNumCommandAxes> weight{};   ///< w_i (eq. 6)
+  double standing_weight = 1.0;       ///< 1 − Σ w_i
+  std::array<double, kNumPostureAxes> beta{};     ///< β per posture axis in [−1, 1]
+  std::array<FootContact, kNumFeet> contact{};    ///< blended μ_f, σ_f (eqs. 8–9)
+  std::array<bool, kNumFeet> in_contact{};        ///< c_f(φ): foot f in stance
+  Eigen::Vector3d v_base{0, 0, 0};    ///< template base linear velocity, heading frame [m/s]
+  double yaw_rate = 0.0;              ///< template base yaw rate [rad/s]
+  double base_height = 0.0;           ///< template pelvis height above ground [m] (incl. posture)
+  int clamped_joints = 0;             ///< joints clamped to their limits this tick
+  GeneratorStatus status = GeneratorStatus::kOk;
+};
+
+namespace detail {
+
+inline double wrapPhase(double phi) noexcept {
+  phi -= std::floor(phi);
+  return phi >= 1.0 ? 0.0 : phi;
+}
+
+/// Circular distance between two phases, in [0, 0.5].
+inline double phaseDistance(double a, double b) noexcept {
+  const double d = std::fabs(wrapPhase(a) - wrapPhase(b));
+  return std::min(d, 1.0 - d);
+}
+
+/// Sample index and fraction for phase φ on N samples: φ·N = k + t.
+inline void phaseSample(double phi, std::size_t n_samples, std::size_t& k0, std::size_t& k1, double& t) noexcept {
+  const double x = wrapPhase(phi) * static_cast<double>(n_samples);
+  const double fl = std::floor(x);
+  k0 = static_cast<std::size_t>(fl) % n_samples;
+  k1 = (k0 + 1) % n_samples;
+  t = x - fl;
+}
+
+inline DynamicClip timeReversed(const DynamicClip& c) {
+  DynamicClip r = c;
+  const Eigen::Index n = c.q.rows();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Index s = (n - k) % n;
+    r.q.row(k) = c.q.row(s);
+    r.qd.row(k) = -c.qd.row(s);
+    r.v_base.row(k) = -c.v_base.row(s);
+    r.omega_base.row(k) = -c.omega_base.row(s);
+    r.base_height[k] = c.base_height[s];
+  }
+  for (auto& fc : r.contact) fc.mu = wrapPhase(1.0 - fc.mu);
+  r.direction = -c.direction;
+  r.name = c.name + "_time_reversed";
+  r.meta.provenance = "mocap_time_reversed";
+  r.meta.notes += (r.meta.notes.empty() ? "" : "; ") + std::string("derived by time reversal of ") + c.name;
+  return r;
+}
+
+inline DynamicClip mirrored(const DynamicClip& c, const GeneratorJointSpace& js) {
+  DynamicClip m = c;
+  for (Eigen::Index j = 0; j < c.q.cols(); ++j) {
+    const auto src = static_cast<Eigen::Index>(js.mirror_index[static_cast<std::size_t>(j)]);
+    const double sign = js.mirror_sign[static_cast<std::size_t>(j)];
+    m.q.col(j) = sign * c.q.col(src);
+    m.qd.col(j) = sign * c.qd.col(src);
+  }
+  m.v_base.col(1) = -c.v_base.col(1);   // y flips
+  m.omega_base.col(0) = -c.omega_base.col(0);  // roll rate flips
+  m.omega_base.col(2) = -c.omega_base.col(2);  // yaw rate flips
+  std::swap(m.contact[0], m.contact[1]);
+  m.direction = -c.direction;
+  m.name = c.name + "_mirrored";
+  m.meta.provenance = "mocap_mirrored";
+  m.meta.notes += (m.meta.notes.empty() ? "" : "; ") + std::string("derived by left/right mirroring of ") + c.name;
+  return m;
+}
+
+}  // namespace detail
+
+/// Immutable generator model: six dynamic clips (3 axes × 2 signs), up to three static clips,
+/// and the joint space. Construction validates everything and throws std::invalid_argument with
+/// the clip name, field and expected range on any inconsistency.
+class GeneratorModel {
+ public:
+  GeneratorModel(const ClipLibrary& library, GeneratorJointSpace joint_space, GeneratorParams params = {})
+      : js_(std::move(joint_space)), params_(params) {
+    if (const std::string e = params_.validate(); !e.empty()) throw std::invalid_argument(e);
+    const auto n = static_cast<Eigen::Index>(js_.joint_names.size());
+    if (n == 0) throw std::invalid_argument("GeneratorJointSpace.joint_names: empty");
+    if (js_.q_stand.size() != n || js_.lower.size() != n || js_.upper.size() != n ||
+        js_.mirror_index.size() != js_.joint_names.size() || js_.mirror_sign.size() != js_.joint_names.size())
+      throw std::invalid_argument("GeneratorJointSpace: q_stand/lower/upper/mirror sizes differ from joint_names (" +
+                                  std::to_string(n) + ")");
+    for (const auto& c : library.dynamic_clips) {
+      checkDynamic(c);
+      auto& entry = dynamic_[slotOf(c.axis, c.direction)];
+      if (entry) throw std::invalid_argument("clip '" + c.name + "': a second clip for the same axis and direction");
+      entry = std::make_unique<DynamicClip>(c);
+    }
+    for (std::size_t a = 0; a < kNumCommandAxes; ++a) {
+      auto& pos = dynamic_[2 * a];
+      auto& neg = dynamic_[2 * a + 1];
+      const auto derive = [&](const DynamicClip& src) {
+        return static_cast<CommandAxis>(a) == CommandAxis::kForward ? detail::timeReversed(src)
+                                                                    : detail::mirrored(src, js_);
+      };
+      if (pos && !neg) neg = std::make_unique<DynamicClip>(derive(*pos));
+      if (neg && !pos) pos = std::make_unique<DynamicClip>(derive(*neg));
+    }
+    for (const auto& s : library.static_clips) {
+      checkStatic(s);
+      auto& entry = static_[static_cast<std::size_t>(s.axis)];
+      if (entry) throw std::invalid_argument("static clip '" + s.name + "': a second clip for the same posture axis");
+      entry = std::make_unique<StaticClip>(s);
+    }
+    t_stand_ = dynamic_[0] ? dynamic_[0]->period : 1.0;
+    for (const auto& d : dynamic_)
+      if (d) max_samples_ = std::max(max_samples_, d->numSamples());
+  }
+
+  std::size_t numJoints() const { return js_.joint_names.size(); }
+  const GeneratorJointSpace& jointSpace() const { return js_; }
+  const GeneratorParams& params() const { return params_; }
+  /// Clip for axis and sign of the command (direction +1 or −1), or nullptr if the axis has none.
+  const DynamicClip* dynamicClip(CommandAxis axis, int direction) const { return dynamic_[slotOf(axis, direction)].get(); }
+  const StaticClip* staticClip(PostureAxis axis) const { return static_[static_cast<std::size_t>(axis)].get(); }
+  double standingPeriod() const { return t_stand_; }
+  std::size_t maxSamples() const { return max_samples_; }
+
+ private:
+  static std::size_t slotOf(CommandAxis axis, int direction) {
+    return 2 * static_cast<std::size_t>(axis) + (direction < 0 ? 1 : 0);
+  }
+  void checkJoints(const std::string& name, const ClipMetadata& meta, Eigen::Index cols) const {
+    if (cols != static_cast<Eigen::Index>(numJoints()))
+      throw std::invalid_argument("clip '" + name + "': q has " + std::to_string(cols) + " columns, expected " +
+                                  std::to_string(numJoints()) + " joints");
+    if (!meta.joint_names.empty() && meta.joint_names != js_.joint_names)
+      throw std::invalid_argument("clip '" + name + "': meta.joint_names differ from the robot's joint order");
+  }
+  void checkDynamic(const DynamicClip& c) const {
+    const Eigen::Index n = c.q.rows();
+    checkJoints(c.name, c.meta, c.q.cols());
+    if (n < 2) throw std::invalid_argument("clip '" + c.name + "': q has " + std::to_string(n) + " samples, expected >= 2");
+    if (c.qd.rows() != n || c.qd.cols() != c.q.cols() || c.v_base.rows() != n || c.v_base.cols() != 3 ||
+        c.omega_base.rows() != n || c.omega_base.cols() != 3 || c.base_height.size() != n)
+      throw std::invalid_argument("clip '" + c.name + "': qd/v_base/omega_base/base_height shapes do not match q (" +
+                                  std::to_string(n) + " samples)");
+    if (!(c.period > 0 && c.period < 10)) throw std::invalid_argument("clip '" + c.name + "': period expected in (0, 10) s");
+    if (!(c.nominal_scale > 0)) throw std::invalid_argument("clip '" + c.name + "': nominal_scale expected > 0");
+    if (c.direction != 1 && c.direction != -1) throw std::invalid_argument("clip '" + c.name + "': direction expected +1 or -1");
+    for (const auto& fc : c.contact)
+      if (!(fc.mu >= 0 && fc.mu < 1 && fc.sigma >= 0 && fc.sigma <= 0.5))
+        throw std::invalid_argument("clip '" + c.name + "': contact mu expected in [0, 1), sigma in [0, 0.5]");
+    if (!c.q.allFinite() || !c.qd.allFinite() || !c.v_base.allFinite() || !c.omega_base.allFinite() ||
+        !c.base_height.allFinite())
+      throw std::invalid_argument("clip '" + c.name + "': contains NaN or Inf");
+  }
+  void checkStatic(const StaticClip& s) const {
+    checkJoints(s.name, s.meta, s.q.cols());
+    const Eigen::Index k = s.values.size();
+    if (k < 2 || s.q.rows() != k)
+      throw std::invalid_argument("static clip '" + s.name + "': expected >= 2 values and one q row per value");
+    for (Eigen::Index i = 1; i < k; ++i)
+      if (!(s.values[i] > s.values[i - 1]))
+        throw std::invalid_argument("static clip '" + s.name + "': values expected strictly increasing");
+    if (s.neutral < s.values[0] || s.neutral > s.values[k - 1])
+      throw std::invalid_argument("static clip '" + s.name + "': neutral expected within [values.front, values.back]");
+    if (!s.q.allFinite() || !s.values.allFinite()) throw std::invalid_argument("static clip '" + s.name + "': NaN/Inf");
+  }
+
+  GeneratorJointSpace js_;
+  GeneratorParams params_;
+  std::array<std::unique_ptr<DynamicClip>, 2 * kNumCommandAxes> dynamic_{};
+  std::array<std::unique_ptr<StaticClip>, kNumPostureAxes> static_{};
+  double t_stand_ = 1.0;
+  std::size_t max_samples_ = 2;
+};
+
+/// The per-robot generator state and workspace (Data). One per controller.
+class MotionGenerator {
+ public:
+  explicit MotionGenerator(std::shared_ptr<const GeneratorModel> model) : model_(std::move(model)) {
+    if (!model_) throw std::invalid_argument("MotionGenerator: null model");
+    const auto n = static_cast<Eigen::Index>(model_->numJoints());
+    for (auto* v : {&out_.q_ref, &out_.qd_ref, &out_.q_dynamic, &out_.q_posture, &q_minus_, &q_plus_, &row_})
+      v->setZero(n);
+    reset(0.0);
+  }
+
+  /// Sets the phase (e.g. 0 at start-up) and the outputs to the standing pose.
+  void reset(double phase) noexcept {
+    phase_ = detail::wrapPhase(phase);
+    out_.q_ref = model_->jointSpace().q_stand;
+    out_.q_dynamic = model_->jointSpace().q_stand;
+    out_.qd_ref.setZero();
+    out_.q_posture.setZero();
+    out_.phase = out_.next_phase = phase_;
+  }
+
+  double phase() const noexcept { return phase_; }
+  const GeneratorOutput& output() const noexcept { return out_; }
+  const GeneratorModel& model() const noexcept { return *model_; }
+
+  /// One generator tick: evaluates the references at the current phase φ for the commands, then
+  /// advances φ by dt / T_u (eq. 11). noexcept, allocation-free. @p dt control period [s].
+  GeneratorStatus step(const VelocityCommand& u_d_in, const PostureCommand& u_s_in, double dt) noexcept {
+    GeneratorStatus status = GeneratorStatus::kOk;
+    VelocityCommand u_d = u_d_in;
+    PostureCommand u_s = u_s_in;
+    if (!std::isfinite(u_d.vx) || !std::isfinite(u_d.vy) || !std::isfinite(u_d.wz)) {
+      u_d = {};
+      status = GeneratorStatus::kInvalidCommand;
+    }
+    if (!std::isfinite(u_s.pitch) || !std::isfinite(u_s.roll) || !std::isfinite(u_s.height)) {
+      u_s = {};
+      status = GeneratorStatus::kInvalidCommand;
+    }
+    const auto& p = model_->params();
+    std::array<double, kNumCommandAxes> u{u_d.vx, u_d.vy, u_d.wz};
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      if (std::fabs(u[i]) > p.max_command[i]) {
+        u[i] = std::copysign(p.max_command[i], u[i]);
+        if (status == GeneratorStatus::kOk) status = GeneratorStatus::kCommandClamped;
+      }
+    }
+    const bool clamped_posture = evalPosture(u_s);
+    if (clamped_posture && status == GeneratorStatus::kOk) status = GeneratorStatus::kCommandClamped;
+
+    // Weights (eqs. 4, 6). Axes without a clip get no weight.
+    const DynamicClip* clip[kNumCommandAxes] = {};
+    double sum_abs = 0.0;
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      clip[i] = model_->dynamicClip(static_cast<CommandAxis>(i), u[i] < 0 ? -1 : 1);
+      if (clip[i]) sum_abs += std::fabs(u[i]);
+    }
+    double sum_w = 0.0;
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      out_.alpha[i] = clip[i] ? std::clamp(std::fabs(u[i]) / clip[i]->nominal_scale, 0.0, 1.0) : 0.0;
+      out_.weight[i] = clip[i] ? std::fabs(u[i]) / (sum_abs + p.epsilon) : 0.0;
+      sum_w += out_.weight[i];
+    }
+    out_.standing_weight = 1.0 - sum_w;
+
+    // Period (eq. 12) and the dynamic reference at φ and φ ± h (eq. 7, reference velocity).
+    double period = out_.standing_weight * model_->standingPeriod();
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i)
+      if (clip[i]) period += out_.weight[i] * clip[i]->period;
+    out_.period = period;
+    const double h = 0.5 / static_cast<double>(model_->maxSamples());
+    blendJoints(clip, phase_ - h, q_minus_);
+    blendJoints(clip, phase_ + h, q_plus_);
+    blendJoints(clip, phase_, out_.q_dynamic);
+
+    // Contacts (eqs. 8–9) and template base motion.
+    const auto& js = model_->jointSpace();
+    for (std::size_t f = 0; f < kNumFeet; ++f) {
+      double mu = 0.0, sigma = 0.5 * out_.standing_weight;
+      for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+        if (!clip[i]) continue;
+        mu += out_.weight[i] * clip[i]->contact[f].mu;
+        sigma += out_.weight[i] * clip[i]->contact[f].sigma;
+      }
+      out_.contact[f].mu = sum_w > 0 ? detail::wrapPhase(mu / sum_w) : 0.0;
+      out_.contact[f].sigma = std::clamp(sigma, 0.0, 0.5);
+      out_.in_contact[f] = detail::phaseDistance(phase_, out_.contact[f].mu) < out_.contact[f].sigma ||
+                           out_.contact[f].sigma >= 0.5;
+    }
+    out_.v_base.setZero();
+    out_.yaw_rate = 0.0;
+    double height = out_.standing_weight * js.standing_base_height;
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      if (!clip[i]) continue;
+      std::size_t k0, k1;
+      double t;
+      detail::phaseSample(phase_, clip[i]->numSamples(), k0, k1, t);
+      const auto K0 = static_cast<Eigen::Index>(k0), K1 = static_cast<Eigen::Index>(k1);
+      const double wa = out_.weight[i] * out_.alpha[i];
+      for (int a = 0; a < 3; ++a) out_.v_base[a] += wa * ((1 - t) * clip[i]->v_base(K0, a) + t * clip[i]->v_base(K1, a));
+      out_.yaw_rate += wa * ((1 - t) * clip[i]->omega_base(K0, 2) + t * clip[i]->omega_base(K1, 2));
+      const double h_clip = (1 - t) * clip[i]->base_height[K0] + t * clip[i]->base_height[K1];
+      height += out_.weight[i] * (out_.alpha[i] * h_clip + (1 - out_.alpha[i]) * js.standing_base_height);
+    }
+    out_.base_height = height + posture_height_offset_;
+
+    // q_ref = q_d + q_s (eq. 10), clamped to the limits; q̇_ref by central difference in phase.
+    const double inv = 1.0 / (2.0 * h * period);
+    out_.clamped_joints = 0;
+    for (Eigen::Index j = 0; j < out_.q_ref.size(); ++j) {
+      double q = out_.q_dynamic[j] + out_.q_posture[j];
+      if (q < js.lower[j] || q > js.upper[j]) {
+        q = std::clamp(q, js.lower[j], js.upper[j]);
+        ++out_.clamped_joints;
+      }
+      out_.q_ref[j] = q;
+      out_.qd_ref[j] = (q_plus_[j] - q_minus_[j]) * inv;
+    }
+
+    out_.phase = phase_;
+    if (std::isfinite(dt) && dt > 0) {
+      phase_ = detail::wrapPhase(phase_ + dt / period);  // eq. 11
+    } else {
+      status = GeneratorStatus::kBadTimeStep;
+    }
+    out_.next_phase = phase_;
+    out_.status = status;
+    return status;
+  }
+
+ private:
+  // q_out = Σ w_i (α_i q_Di(φ) + (1 − α_i) q_stand) + w_stand q_stand  (eqs. 5, 7).
+  void blendJoints(const DynamicClip* const* clip, double phi, Eigen::VectorXd& q_out) const noexcept {
+    const auto& q_stand = model_->jointSpace().q_stand;
+    double w_stand = out_.standing_weight;
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i)
+      if (clip[i]) w_stand += out_.weight[i] * (1.0 - out_.alpha[i]);
+    for (Eigen::Index j = 0; j < q_out.size(); ++j) q_out[j] = w_stand * q_stand[j];
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      if (!clip[i] || out_.weight[i] == 0.0) continue;
+      std::size_t k0, k1;
+      double t;
+      detail::phaseSample(phi, clip[i]->numSamples(), k0, k1, t);
+      const double wa = out_.weight[i] * out_.alpha[i];
+      const auto K0 = static_cast<Eigen::Index>(k0), K1 = static_cast<Eigen::Index>(k1);
+      for (Eigen::Index j = 0; j < q_out.size(); ++j)
+        q_out[j] += wa * ((1.0 - t) * clip[i]->q(K0, j) + t * clip[i]->q(K1, j));
+    }
+  }
+
+  // Fills out_.q_posture and out_.beta; returns true if a command was clamped to a clip's range.
+  bool evalPosture(const PostureCommand& u_s) noexcept {
+    bool clamped = false;
+    out_.q_posture.setZero();
+    posture_height_offset_ = 0.0;
+    for (std::size_t a = 0; a < kNumPostureAxes; ++a) {
+      out_.beta[a] = 0.0;
+      const StaticClip* s = model_->staticClip(static_cast<PostureAxis>(a));
+      if (!s) continue;
+      double value = u_s[a];
+      if (static_cast<PostureAxis>(a) == PostureAxis::kHeight && value <= 0.0) value = s->neutral;  // "no command"
+      const double lo = s->values[0], hi = s->values[s->values.size() - 1];
+      if (value < lo || value > hi) clamped = true;
+      value = std::clamp(value, lo, hi);
+      const double span = value >= s->neutral ? hi - s->neutral : s->neutral - lo;
+      out_.beta[a] = span > 0 ? (value - s->neutral) / span : 0.0;
+      interpolateStatic(*s, value, row_);
+      interpolateStatic(*s, s->neutral, q_minus_);  // q_minus_ is scratch here
+      for (Eigen::Index j = 0; j < row_.size(); ++j) out_.q_posture[j] += row_[j] - q_minus_[j];
+      if (static_cast<PostureAxis>(a) == PostureAxis::kHeight) posture_height_offset_ = value - s->neutral;
+    }
+    return clamped;
+  }
+
+  static void interpolateStatic(const StaticClip& s, double value, Eigen::VectorXd& q_out) noexcept {
+    const Eigen::Index k = s.values.size();
+    Eigen::Index i = 0;
+    while (i + 2 < k && value > s.values[i + 1]) ++i;
+    const double t = std::clamp((value - s.values[i]) / (s.values[i + 1] - s.values[i]), 0.0, 1.0);
+    for (Eigen::Index j = 0; j < q_out.size(); ++j) q_out[j] = (1 - t) * s.q(i, j) + t * s.q(i + 1, j);
+  }
+
+  std::shared_ptr<const GeneratorModel> model_;
+  GeneratorOutput out_;
+  double phase_ = 0.0;
+  double posture_height_offset_ = 0.0;
+  Eigen::VectorXd q_minus_, q_plus_, row_;
+};
+
+}  // namespace pmg

@@ -1,0 +1,285 @@
+// PMG generator: each equation on hand-computed cases, convexity, continuity across φ = 1 → 0,
+// negative commands, standing, posture offsets, and no allocation per tick.
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "pmg/generator/generator.hpp"
+
+namespace pmg {
+namespace {
+
+constexpr int kJoints = 4;  // j0 <-> j1 mirror pair (sign +1), j2 self-mirror sign -1, j3 self +1
+constexpr int kSamples = 8;
+
+GeneratorJointSpace jointSpace() {
+  GeneratorJointSpace js;
+  js.joint_names = {"l", "r", "yaw", "pitch"};
+  js.q_stand = Eigen::Vector4d(0.1, 0.1, 0.0, -0.2);
+  js.lower = Eigen::VectorXd::Constant(kJoints, -3.0);
+  js.upper = Eigen::VectorXd::Constant(kJoints, 3.0);
+  js.mirror_index = {1, 0, 2, 3};
+  js.mirror_sign = {1, 1, -1, 1};
+  js.standing_base_height = 0.75;
+  return js;
+}
+
+// Clip whose joint j at sample k is offset + (k+1) * 0.01 * (j+1): distinct, easy to hand-compute.
+DynamicClip makeClip(CommandAxis axis, double offset, double scale, double period, double mu_l, double mu_r) {
+  DynamicClip c;
+  c.name = "clip" + std::to_string(static_cast<int>(axis));
+  c.axis = axis;
+  c.nominal_scale = scale;
+  c.period = period;
+  c.q.resize(kSamples, kJoints);
+  for (int k = 0; k < kSamples; ++k)
+    for (int j = 0; j < kJoints; ++j) c.q(k, j) = offset + (k + 1) * 0.01 * (j + 1);
+  c.qd = Eigen::MatrixXd::Zero(kSamples, kJoints);
+  c.v_base = Eigen::MatrixXd::Zero(kSamples, 3);
+  c.omega_base = Eigen::MatrixXd::Zero(kSamples, 3);
+  c.v_base.col(static_cast<int>(axis) < 2 ? static_cast<int>(axis) : 0).setConstant(axis == CommandAxis::kYaw ? 0 : scale);
+  if (axis == CommandAxis::kYaw) c.omega_base.col(2).setConstant(scale);
+  c.base_height = Eigen::VectorXd::Constant(kSamples, 0.72);
+  c.contact = {FootContact{mu_l, 0.3}, FootContact{mu_r, 0.3}};
+  return c;
+}
+
+ClipLibrary library() {
+  ClipLibrary lib;
+  lib.dynamic_clips.push_back(makeClip(CommandAxis::kForward, 0.0, 1.0, 1.2, 0.25, 0.75));
+  lib.dynamic_clips.push_back(makeClip(CommandAxis::kLateral, 0.5, 0.4, 1.0, 0.30, 0.80));
+  lib.dynamic_clips.push_back(makeClip(CommandAxis::kYaw, -0.5, 0.8, 0.8, 0.20, 0.70));
+  StaticClip squat;
+  squat.name = "squat";
+  squat.axis = PostureAxis::kHeight;
+  squat.values = Eigen::Vector3d(0.45, 0.6, 0.75);
+  squat.neutral = 0.75;
+  squat.q.resize(3, kJoints);
+  squat.q << 0.9, 0.9, 0.0, 1.0,  //
+      0.5, 0.5, 0.0, 0.6,         //
+      0.1, 0.1, 0.0, -0.2;
+  lib.static_clips.push_back(squat);
+  return lib;
+}
+
+std::shared_ptr<const GeneratorModel> model(GeneratorParams p = {}) {
+  return std::make_shared<const GeneratorModel>(library(), jointSpace(), p);
+}
+
+TEST(Generator, ZeroCommandIsExactlyTheStandingPose) {
+  MotionGenerator gen(model());
+  gen.step({}, {}, 0.01);
+  const auto& out = gen.output();
+  EXPECT_TRUE(out.q_ref.isApprox(jointSpace().q_stand, 1e-12));
+  EXPECT_DOUBLE_EQ(out.standing_weight, 1.0);
+  EXPECT_TRUE(out.in_contact[0] && out.in_contact[1]);
+  EXPECT_NEAR(out.period, 1.2, 1e-12);  // T_stand = forward clip period
+  EXPECT_NEAR(out.next_phase, 0.01 / 1.2, 1e-12);
+  EXPECT_NEAR(out.base_height, 0.75, 1e-12);
+}
+
+TEST(Generator, Eq4AlphaAndEq6WeightsHandComputed) {
+  GeneratorParams p;
+  p.epsilon = 0.1;
+  MotionGenerator gen(model(p));
+  gen.step({0.5, 0.2, 0.0}, {}, 0.01);
+  const auto& out = gen.output();
+  EXPECT_NEAR(out.alpha[0], 0.5 / 1.0, 1e-12);          // eq. 4
+  EXPECT_NEAR(out.alpha[1], 0.2 / 0.4, 1e-12);
+  EXPECT_NEAR(out.alpha[2], 0.0, 1e-12);
+  EXPECT_NEAR(out.weight[0], 0.5 / (0.7 + 0.1), 1e-12);  // eq. 6
+  EXPECT_NEAR(out.weight[1], 0.2 / (0.7 + 0.1), 1e-12);
+  EXPECT_NEAR(out.standing_weight, 0.1 / 0.8, 1e-12);
+  gen.step({3.0, 0.0, 0.0}, {}, 0.01);  // α saturates at 1 (and the command is clamped to 1.5)
+  EXPECT_NEAR(gen.output().alpha[0], 1.0, 1e-12);
+  EXPECT_EQ(gen.output().status, GeneratorStatus::kCommandClamped);
+}
+
+TEST(Generator, Eq5Eq7BlendAtASampleHandComputed) {
+  GeneratorParams p;
+  p.epsilon = 0.1;
+  MotionGenerator gen(model(p));
+  gen.reset(2.0 / kSamples);  // exactly sample k = 2: q_D(k=2, j) = offset + 0.03 (j + 1)
+  gen.step({0.5, 0.2, 0.0}, {}, 0.01);
+  const auto& out = gen.output();
+  const auto js = jointSpace();
+  const double w0 = 0.5 / 0.8, w1 = 0.2 / 0.8, ws = 0.1 / 0.8, a0 = 0.5, a1 = 0.5;
+  for (int j = 0; j < kJoints; ++j) {
+    const double qf = 0.0 + 0.03 * (j + 1), ql = 0.5 + 0.03 * (j + 1);
+    const double qt_f = a0 * qf + (1 - a0) * js.q_stand[j];  // eq. 5
+    const double qt_l = a1 * ql + (1 - a1) * js.q_stand[j];
+    const double expected = w0 * qt_f + w1 * qt_l + ws * js.q_stand[j];  // eq. 7 (+ standing weight)
+    EXPECT_NEAR(out.q_dynamic[j], expected, 1e-12) << j;
+    EXPECT_NEAR(out.q_ref[j], expected, 1e-12) << j;  // no posture command: q_s = 0 (eq. 10)
+  }
+}
+
+TEST(Generator, PhaseInterpolatesLinearlyBetweenSamples) {
+  MotionGenerator gen(model());
+  gen.reset(2.25 / kSamples);
+  gen.step({1.5, 0, 0}, {}, 0.01);  // w0 = 1.5/1.55, α = 1
+  const double w0 = 1.5 / 1.55;
+  const double q_clip = 0.75 * 0.03 + 0.25 * 0.04;  // joint 0 at samples 2 and 3
+  EXPECT_NEAR(gen.output().q_dynamic[0], w0 * q_clip + (1 - w0) * 0.1, 1e-12);
+}
+
+TEST(Generator, Eq8Eq9ContactBlendHandComputed) {
+  GeneratorParams p;
+  p.epsilon = 0.1;
+  MotionGenerator gen(model(p));
+  gen.step({0.5, 0.2, 0.0}, {}, 0.01);
+  const auto& out = gen.output();
+  const double w0 = 0.5 / 0.8, w1 = 0.2 / 0.8, ws = 0.1 / 0.8;
+  EXPECT_NEAR(out.contact[0].mu, (w0 * 0.25 + w1 * 0.30) / (w0 + w1), 1e-12);
+  EXPECT_NEAR(out.contact[1].mu, (w0 * 0.75 + w1 * 0.80) / (w0 + w1), 1e-12);
+  EXPECT_NEAR(out.contact[0].sigma, (w0 + w1) * 0.3 + ws * 0.5, 1e-12);
+  // φ = 0: left centre ≈ 0.264, σ ≈ 0.325 → in contact; right centre ≈ 0.764, distance 0.236 → in contact too.
+  EXPECT_TRUE(out.in_contact[0]);
+  EXPECT_TRUE(out.in_contact[1]);
+  // φ = 0.62: left distance |0.62 − 0.264| = 0.356 > σ = 0.325 → swing; right distance 0.144 → stance.
+  gen.reset(0.62);
+  gen.step({0.5, 0.2, 0.0}, {}, 0.01);
+  EXPECT_FALSE(gen.output().in_contact[0]);
+  EXPECT_TRUE(gen.output().in_contact[1]);
+}
+
+TEST(Generator, Eq11Eq12PhaseAdvanceAndWrap) {
+  GeneratorParams p;
+  p.epsilon = 0.1;
+  MotionGenerator gen(model(p));
+  gen.reset(0.995);
+  gen.step({0.5, 0.2, 0.0}, {}, 0.01);
+  const double T = (0.5 / 0.8) * 1.2 + (0.2 / 0.8) * 1.0 + (0.1 / 0.8) * 1.2;  // eq. 12
+  EXPECT_NEAR(gen.output().period, T, 1e-12);
+  EXPECT_NEAR(gen.output().next_phase, std::fmod(0.995 + 0.01 / T, 1.0), 1e-12);  // eq. 11 with wrap
+  EXPECT_LT(gen.phase(), 0.01);
+}
+
+TEST(Generator, Eq10PostureOffsetFromStaticClip) {
+  MotionGenerator gen(model());
+  gen.step({}, {0.0, 0.0, 0.6}, 0.01);  // squat to 0.6 m: q_s = q(0.6) − q(0.75)
+  const auto& out = gen.output();
+  const Eigen::Vector4d expected_offset(0.4, 0.4, 0.0, 0.8);
+  EXPECT_TRUE(out.q_posture.isApprox(expected_offset, 1e-12)) << out.q_posture.transpose();
+  EXPECT_TRUE(out.q_ref.isApprox(jointSpace().q_stand + expected_offset, 1e-12));
+  EXPECT_NEAR(out.beta[2], -0.5, 1e-12);  // halfway between neutral 0.75 and range end 0.45
+  EXPECT_NEAR(out.base_height, 0.6, 1e-12);
+  gen.step({}, {0.0, 0.0, 0.1}, 0.01);  // below the range: clamped to 0.45
+  EXPECT_EQ(gen.output().status, GeneratorStatus::kCommandClamped);
+  EXPECT_NEAR(gen.output().beta[2], -1.0, 1e-12);
+}
+
+TEST(Generator, ConvexityQdStaysInTheSpanOfTheTemplates) {
+  auto m = model();
+  MotionGenerator gen(m);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), phase(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    gen.reset(phase(rng));
+    gen.step({u(rng), 0.5 * u(rng), u(rng)}, {}, 0.01);
+    for (int j = 0; j < kJoints; ++j) {
+      double lo = jointSpace().q_stand[j], hi = lo;
+      for (int a = 0; a < 3; ++a)
+        for (int s : {1, -1}) {
+          const DynamicClip* c = m->dynamicClip(static_cast<CommandAxis>(a), s);
+          lo = std::min(lo, c->q.col(j).minCoeff());
+          hi = std::max(hi, c->q.col(j).maxCoeff());
+        }
+      EXPECT_GE(gen.output().q_dynamic[j], lo - 1e-12);
+      EXPECT_LE(gen.output().q_dynamic[j], hi + 1e-12);
+    }
+  }
+}
+
+TEST(Generator, ContinuousAcrossPhaseWrap) {
+  MotionGenerator gen(model());
+  const VelocityCommand u{0.8, 0.1, 0.3};
+  gen.reset(1.0 - 1e-9);
+  gen.step(u, {}, 1e-9);
+  const Eigen::VectorXd before = gen.output().q_ref;
+  gen.reset(0.0);
+  gen.step(u, {}, 1e-9);
+  EXPECT_LT((gen.output().q_ref - before).cwiseAbs().maxCoeff(), 1e-7);
+  // And a full cycle of small steps never jumps more than the largest sample-to-sample change.
+  gen.reset(0.9);
+  Eigen::VectorXd prev = gen.output().q_ref;
+  gen.step(u, {}, 0.001);
+  prev = gen.output().q_ref;
+  for (int i = 0; i < 2000; ++i) {
+    gen.step(u, {}, 0.001);
+    EXPECT_LT((gen.output().q_ref - prev).cwiseAbs().maxCoeff(), 0.02) << "tick " << i;
+    prev = gen.output().q_ref;
+  }
+}
+
+TEST(Generator, NegativeCommandsUseTimeReversedAndMirroredClips) {
+  auto m = model();
+  const DynamicClip* fwd = m->dynamicClip(CommandAxis::kForward, 1);
+  const DynamicClip* back = m->dynamicClip(CommandAxis::kForward, -1);
+  ASSERT_NE(back, nullptr);
+  EXPECT_EQ(back->meta.provenance, "mocap_time_reversed");
+  EXPECT_TRUE(back->q.row(1).isApprox(fwd->q.row(kSamples - 1)));  // q_back(φ) = q_fwd(1 − φ)
+  EXPECT_NEAR(back->v_base(0, 0), -fwd->v_base(0, 0), 1e-12);
+  const DynamicClip* left = m->dynamicClip(CommandAxis::kLateral, 1);
+  const DynamicClip* right = m->dynamicClip(CommandAxis::kLateral, -1);
+  EXPECT_EQ(right->meta.provenance, "mocap_mirrored");
+  EXPECT_TRUE(right->q.col(0).isApprox(left->q.col(1)));   // left joint takes the right joint's motion
+  EXPECT_TRUE(right->q.col(2).isApprox(-left->q.col(2)));  // yaw joint flips sign
+  EXPECT_DOUBLE_EQ(right->contact[0].mu, left->contact[1].mu);
+  MotionGenerator gen(m);
+  gen.step({0, -0.3, 0}, {}, 0.01);
+  EXPECT_GT(gen.output().weight[1], 0.0);
+  EXPECT_LT(gen.output().v_base[1], 0.0);  // walking right
+  gen.step({0, 0, -0.5}, {}, 0.01);
+  EXPECT_LT(gen.output().yaw_rate, 0.0);  // turning clockwise
+}
+
+TEST(Generator, NanCommandFallsBackToStandingAndIsReported) {
+  MotionGenerator gen(model());
+  EXPECT_EQ(gen.step({std::nan(""), 0, 0}, {}, 0.01), GeneratorStatus::kInvalidCommand);
+  EXPECT_TRUE(gen.output().q_ref.isApprox(jointSpace().q_stand, 1e-12));
+  EXPECT_TRUE(gen.output().q_ref.allFinite());
+  EXPECT_EQ(gen.step({}, {}, -1.0), GeneratorStatus::kBadTimeStep);
+}
+
+TEST(Generator, ReferenceVelocityMatchesTheFiniteDifferenceOfQref) {
+  MotionGenerator gen(model());
+  const VelocityCommand u{0.7, 0.0, 0.2};
+  const double dt = 1e-4;
+  gen.reset(0.4);
+  gen.step(u, {}, dt);
+  const Eigen::VectorXd q0 = gen.output().q_ref, qd0 = gen.output().qd_ref;
+  gen.step(u, {}, dt);
+  const Eigen::VectorXd fd = (gen.output().q_ref - q0) / dt;
+  EXPECT_LT((fd - qd0).cwiseAbs().maxCoeff(), 1e-6 + 0.02 * fd.cwiseAbs().maxCoeff());
+}
+
+TEST(Generator, RejectsInconsistentClips) {
+  ClipLibrary lib = library();
+  lib.dynamic_clips[0].qd.resize(3, kJoints);
+  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+  lib = library();
+  lib.dynamic_clips[1].contact[0].sigma = 0.7;
+  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+  lib = library();
+  lib.dynamic_clips.push_back(lib.dynamic_clips[0]);
+  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+}
+
+TEST(Generator, StepDoesNotAllocate) {
+  MotionGenerator gen(model());
+  gen.step({0.3, 0.1, 0.2}, {0.1, 0.0, 0.6}, 0.01);  // warm
+  std::size_t allocations = 0;
+  {
+    test::AllocationGuard guard;
+    for (int i = 0; i < 1000; ++i) gen.step({0.3 + 1e-3 * i, -0.1, 0.2}, {0.0, 0.0, 0.6}, 0.01);
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0u);
+}
+
+}  // namespace
+}  // namespace pmg
