@@ -1,0 +1,130 @@
+// Contract parsing and checking: every bad_*.onnx model breaks one field and must be refused
+// with a ContractError that names that field.
+#include <gtest/gtest.h>
+
+#include "pmg/policy/contract.hpp"
+#include "pmg/policy/policy_runner.hpp"
+#include "test_policy_common.hpp"
+
+namespace pmg::policy::test {
+namespace {
+
+std::string loadError(const std::string& file, std::string* field = nullptr) {
+  try {
+    PolicyRunner runner(kDataDir + file, g1Spec());
+  } catch (const ContractError& e) {
+    if (field != nullptr) *field = e.field();
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PolicyRobotSpec, LoadsG1Config) {
+  const PolicyRobotSpec s = g1Spec();
+  ASSERT_EQ(s.joint_names.size(), 29u);
+  EXPECT_EQ(s.joint_names[3], "left_knee_joint");
+  EXPECT_DOUBLE_EQ(s.default_pose[3], 0.3);
+  EXPECT_DOUBLE_EQ(s.kp[3], 200.0);
+  EXPECT_DOUBLE_EQ(s.kd[4], 2.0);
+  EXPECT_EQ(s.leg_joints.size(), 12u);
+  ASSERT_EQ(s.waist_joints.size(), 3u);
+  EXPECT_EQ(s.waist_joints[0], "waist_yaw_joint");
+}
+
+TEST(PolicyRobotSpec, MissingFileNamesPath) {
+  try {
+    loadPolicyRobotSpec("config/robots/none/none.yaml", 0.01);
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("config/robots/none/none.yaml"), std::string::npos) << e.what();
+  }
+}
+
+struct BadCase {
+  const char* file;
+  const char* field;  // substring expected in ContractError::field()
+};
+
+class BadContract : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadContract, RefusedNamingTheField) {
+  std::string field;
+  const std::string what = loadError(GetParam().file, &field);
+  ASSERT_FALSE(what.empty()) << GetParam().file << " was accepted";
+  EXPECT_NE(field.find(GetParam().field), std::string::npos) << "field '" << field << "', message: " << what;
+  EXPECT_NE(what.find(GetParam().file), std::string::npos) << "message does not name the file: " << what;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Models, BadContract,
+    ::testing::Values(BadCase{"bad_joint_order.onnx", "joint_names[3]"}, BadCase{"bad_kp.onnx", "kp[3] (left_knee_joint)"},
+                      BadCase{"bad_kd.onnx", "kd[0] (left_hip_pitch_joint)"},
+                      BadCase{"bad_default_pose.onnx", "default_pose[3]"},
+                      BadCase{"bad_control_period.onnx", "control_period"},
+                      BadCase{"bad_reference.onnx", "reference_pairs[2].action[5]"},
+                      BadCase{"bad_obs_layout.onnx", "observation"},
+                      BadCase{"bad_actuated_waist.onnx", "actuated_joints"},
+                      BadCase{"bad_unknown_joint.onnx", "actuated_joints[0]"}, BadCase{"bad_pmg_gco.onnx", "pmg.gco"},
+                      BadCase{"bad_action_scale_size.onnx", "action.scale"}, BadCase{"bad_version.onnx", "version"},
+                      BadCase{"bad_no_contract.onnx", "pmg.contract"}, BadCase{"bad_yaml.onnx", "pmg.contract"}),
+    [](const ::testing::TestParamInfo<BadCase>& param_info) {
+      std::string n = param_info.param.file;
+      n = n.substr(0, n.find('.'));
+      return n;
+    });
+
+TEST(Contract, GoodModelsAccepted) {
+  EXPECT_EQ(loadError("g1_legs_ok.onnx"), "");
+  EXPECT_EQ(loadError("g1_legs_waist_hist3_ok.onnx"), "");
+}
+
+TEST(Contract, MismatchMessageGivesBothValues) {
+  const std::string what = loadError("bad_kp.onnx");
+  EXPECT_NE(what.find("100"), std::string::npos) << what;
+  EXPECT_NE(what.find("200"), std::string::npos) << what;
+}
+
+TEST(Contract, ControllerPmgSettingMissingFromContract) {
+  PolicyRobotSpec s = g1Spec();
+  s.pmg["gco_iterations"] = "3";
+  try {
+    PolicyRunner runner(kDataDir + "g1_legs_ok.onnx", s);
+    FAIL() << "accepted a contract without pmg.gco_iterations";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.gco_iterations");
+  }
+}
+
+TEST(Contract, NumericPmgSettingComparedAsNumber) {
+  PolicyRobotSpec s = g1Spec();
+  s.pmg["gait_period"] = "0.80";  // same number, different text
+  EXPECT_NO_THROW(PolicyRunner(kDataDir + "g1_legs_ok.onnx", s));
+  s.pmg["gait_period"] = "0.7";
+  EXPECT_THROW(PolicyRunner(kDataDir + "g1_legs_ok.onnx", s), ContractError);
+}
+
+TEST(Contract, ParseRejectsNonFiniteAndWrongSizes) {
+  const std::string base =
+      "version: 1\njoint_names: [a, b]\nactuated_joints: [a]\ncontrols_waist: false\ncontrol_period: 0.01\n"
+      "default_pose: [0, 0]\nkp: [1, 1]\nkd: [0.1, 0.1]\naction: {scale: [0.5], offset: [0], clip: 5}\n"
+      "observation: {history_length: 2, clip: 10, terms: [{name: x, size: 2, scale: [1, 2]}]}\npmg: {enabled: true}\n";
+  const PolicyContract c = parseContract(base + "reference_pairs: [{obs: [1, 2, 3, 4], action: [0.5]}]\n", "mem");
+  EXPECT_EQ(c.observation.size(), 4);
+  EXPECT_FLOAT_EQ(c.observation.terms[0].scale[1], 2.0f);
+  EXPECT_EQ(c.pmg.at("enabled"), "true");
+  try {
+    parseContract(base + "reference_pairs: [{obs: [1, 2, 3], action: [0.5]}]\n", "mem");
+    FAIL();
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "reference_pairs[0].obs");
+  }
+  try {
+    parseContract(base + "reference_pairs: [{obs: [1, 2, 3, .nan], action: [0.5]}]\n", "mem");
+    FAIL();
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "reference_pairs[0].obs[3]");
+  }
+}
+
+}  // namespace
+}  // namespace pmg::policy::test

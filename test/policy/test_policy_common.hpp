@@ -1,0 +1,19 @@
+#pragma once
+// Shared fixtures for test/policy: the G1 robot spec and the committed test models
+// (test/data/policy/make_test_models.py writes them). Tests run from the repository root.
+#include <string>
+
+#include "pmg/policy/contract.hpp"
+
+namespace pmg::policy::test {
+
+inline const std::string kDataDir = "test/data/policy/";
+
+/// Robot spec from the lead's robot config, with the settings the test models were written for.
+inline PolicyRobotSpec g1Spec() {
+  PolicyRobotSpec s = loadPolicyRobotSpec("config/robots/g1/g1.yaml", 0.01);
+  s.pmg = {{"enabled", "true"}, {"gco", "false"}, {"gait_period", "0.8"}};
+  return s;
+}
+
+}  // namespace pmg::policy::test
