@@ -1,0 +1,178 @@
+#include "pmg/hal/mujoco_backend.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+namespace pmg {
+
+std::string GantryOptions::validate() const {
+  if (!(anchor_height > 0.2 && anchor_height < 3.0)) return "gantry.anchor_height: expected in (0.2, 3) m";
+  if (!(stiffness >= 0 && damping >= 0 && rot_stiffness >= 0 && rot_damping >= 0))
+    return "gantry.stiffness/damping/rot_stiffness/rot_damping: expected >= 0";
+  return {};
+}
+
+std::string MujocoBackendOptions::validate() const {
+  if (!(timestep > 0 && timestep <= 0.001)) return "mujoco.timestep: expected in (0, 0.001] s (>= 1 kHz physics)";
+  const double ratio = cycle_period / timestep;
+  if (!(cycle_period > 0) || std::fabs(ratio - std::round(ratio)) > 1e-9 || ratio < 1)
+    return "mujoco.cycle_period: expected a positive multiple of timestep";
+  for (double o : encoder_offsets)
+    if (!std::isfinite(o) || std::fabs(o) > 0.5) return "mujoco.encoder_offsets: expected finite, |offset| <= 0.5 rad";
+  return gantry.enabled ? gantry.validate() : std::string();
+}
+
+MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions options)
+    : robot_(robot), options_(std::move(options)) {
+  if (const std::string e = options_.validate(); !e.empty()) throw ConfigError(e);
+  Mujoco22Options mo;
+  mo.timestep = options_.timestep;
+  mo.imu_site = robot_.imu_site;
+  model_ = loadMujocoModel(robot_.mjcf_path, mo);
+  data_.reset(mj_makeData(model_.get()));
+  substeps_ = static_cast<int>(std::lround(options_.cycle_period / options_.timestep));
+  pelvis_body_ = mj_name2id(model_.get(), mjOBJ_BODY, robot_.base_link.c_str());
+  if (pelvis_body_ < 0) throw ConfigError(robot_.mjcf_path + ": no body '" + robot_.base_link + "' (robot.base_link)");
+  const auto n = robot_.numJoints();
+  for (const auto& j : robot_.joints) {
+    const int id = mj_name2id(model_.get(), mjOBJ_JOINT, j.name.c_str());
+    if (id < 0) throw ConfigError(robot_.mjcf_path + ": joint '" + j.name + "' of " + robot_.source_file + " not in the MJCF");
+    if (model_->jnt_type[id] != mjJNT_HINGE)
+      throw ConfigError(robot_.mjcf_path + ": joint '" + j.name + "' is not a hinge");
+    const int act = static_cast<int>(qpos_adr_.size());
+    if (act >= model_->nu || model_->actuator_trnid[2 * act] != id)
+      throw ConfigError(robot_.mjcf_path + ": actuator " + std::to_string(act) + " does not drive joint '" + j.name +
+                        "' (expected one <motor> per joint in the robot config's order)");
+    qpos_adr_.push_back(model_->jnt_qposadr[id]);
+    dof_adr_.push_back(model_->jnt_dofadr[id]);
+  }
+  const auto sensor = [&](const std::string& sname) {
+    const int id = mj_name2id(model_.get(), mjOBJ_SENSOR, sname.c_str());
+    if (id < 0) throw ConfigError(robot_.mjcf_path + ": sensor '" + sname + "' not found");
+    return model_->sensor_adr[id];
+  };
+  sensor_quat_ = sensor(robot_.imu_site + "-orientation");
+  // Unitree names its pelvis IMU sensors "imu-pelvis-*".
+  const std::string prefix = robot_.imu_site == "imu_in_torso" ? "imu-torso-" : "imu-pelvis-";
+  sensor_gyro_ = sensor(prefix + "angular-velocity");
+  sensor_acc_ = sensor(prefix + "linear-acceleration");
+  tau_.setZero(static_cast<Eigen::Index>(n));
+  torque_limit_ = robot_.torqueLimits();
+  offsets_.setZero(static_cast<Eigen::Index>(n));
+  if (!options_.encoder_offsets.empty()) {
+    if (options_.encoder_offsets.size() != n)
+      throw ConfigError("mujoco.encoder_offsets: has " + std::to_string(options_.encoder_offsets.size()) +
+                        " entries, expected " + std::to_string(n) + " (one per joint)");
+    for (std::size_t i = 0; i < n; ++i) offsets_[static_cast<Eigen::Index>(i)] = options_.encoder_offsets[i];
+  }
+  reset();
+}
+
+void MujocoBackend::reset() noexcept {
+  mj_resetData(model_.get(), data_.get());
+  const double z = options_.gantry.enabled ? options_.gantry.anchor_height : robot_.standing_base_height + 0.015;
+  data_->qpos[0] = 0.0;
+  data_->qpos[1] = 0.0;
+  data_->qpos[2] = z;
+  data_->qpos[3] = 1.0;
+  data_->qpos[4] = data_->qpos[5] = data_->qpos[6] = 0.0;
+  for (std::size_t i = 0; i < qpos_adr_.size(); ++i) data_->qpos[qpos_adr_[i]] = robot_.joints[i].default_position;
+  anchor_ = Eigen::Vector3d(0.0, 0.0, z);
+  mj_forward(model_.get(), data_.get());
+  tau_.setZero();
+  push_until_ = -1.0;
+  cycles_ = 0;
+}
+
+void MujocoBackend::push(int body, const Eigen::Vector3d& f_W, double duration) noexcept {
+  push_body_ = body;
+  push_force_ = f_W;
+  push_until_ = data_->time + duration;
+}
+
+void MujocoBackend::applyGantry() noexcept {
+  mju_zero(data_->xfrc_applied, 6 * model_->nbody);
+  const GantryOptions& g = options_.gantry;
+  if (g.enabled) {
+    const double* p = data_->xpos + 3 * pelvis_body_;
+    const double* v = data_->qvel;  // free joint: linear velocity (world) then angular (body frame)
+    double* f = data_->xfrc_applied + 6 * pelvis_body_;
+    for (int a = 0; a < 3; ++a) f[a] = g.stiffness * (anchor_[a] - p[a]) - g.damping * v[a];
+    // Orientation: torque = −k · axis·angle(R_WB) − d · ω_W.
+    const double* q = data_->xquat + 4 * pelvis_body_;
+    Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
+    const Eigen::AngleAxisd aa(quat.normalized());
+    double angle = aa.angle();
+    if (angle > M_PI) angle -= 2 * M_PI;
+    const Eigen::Vector3d rotvec = aa.axis() * angle;
+    const Eigen::Vector3d omega_B(v[3], v[4], v[5]);
+    const Eigen::Vector3d omega_W = quat.normalized() * omega_B;
+    for (int a = 0; a < 3; ++a) f[3 + a] = -g.rot_stiffness * rotvec[a] - g.rot_damping * omega_W[a];
+  }
+  if (push_body_ >= 0 && data_->time < push_until_) {
+    double* f = data_->xfrc_applied + 6 * push_body_;
+    for (int a = 0; a < 3; ++a) f[a] += push_force_[a];
+  }
+}
+
+BackendStatus MujocoBackend::exchange(const LowCommand& command, LowState& state) noexcept {
+  const int n = static_cast<int>(qpos_adr_.size());
+  const int nc = std::min(n, command.num_motors);
+  for (int s = 0; s < substeps_; ++s) {
+    applyGantry();
+    for (int i = 0; i < n; ++i) {
+      double tau = 0.0;
+      if (i < nc) {
+        const MotorCommand& c = command.motors[static_cast<std::size_t>(i)];
+        // The driver sees its own (offset) encoder reading.
+        const double q_meas = data_->qpos[qpos_adr_[static_cast<std::size_t>(i)]] + offsets_[i];
+        const double qd_meas = data_->qvel[dof_adr_[static_cast<std::size_t>(i)]];
+        tau = c.kp * (c.q - q_meas) + c.kd * (c.qd - qd_meas) + c.tau_ff;
+        if (!std::isfinite(tau)) tau = 0.0;
+        tau = std::clamp(tau, -torque_limit_[i], torque_limit_[i]);
+      }
+      tau_[i] = tau;
+      data_->ctrl[i] = tau;  // MJCF <motor> gear 1, in joint order
+    }
+    mj_step(model_.get(), data_.get());
+  }
+  ++cycles_;
+  bool diverged = false;
+  for (int i = 0; i < model_->nq; ++i)
+    if (!std::isfinite(data_->qpos[i])) diverged = true;
+  if (data_->warning[mjWARN_BADQACC].number > 0) diverged = true;
+  if (diverged) ++faults_;
+  readState(state);
+  return diverged ? BackendStatus::kFault : BackendStatus::kOk;
+}
+
+void MujocoBackend::readState(LowState& state) const noexcept {
+  const int n = static_cast<int>(qpos_adr_.size());
+  state.sequence = cycles_;
+  state.time = data_->time;
+  state.num_motors = n;
+  for (int i = 0; i < n; ++i) {
+    MotorState& m = state.motors[static_cast<std::size_t>(i)];
+    m.q = data_->qpos[qpos_adr_[static_cast<std::size_t>(i)]] + offsets_[i];
+    m.qd = data_->qvel[dof_adr_[static_cast<std::size_t>(i)]];
+    m.tau = tau_[i];
+    m.valid = true;
+  }
+  const mjtNum* sd = data_->sensordata;
+  for (int a = 0; a < 4; ++a) state.imu.quat_wxyz[static_cast<std::size_t>(a)] = sd[sensor_quat_ + a];
+  for (int a = 0; a < 3; ++a) {
+    state.imu.gyro[static_cast<std::size_t>(a)] = sd[sensor_gyro_ + a];
+    state.imu.acc[static_cast<std::size_t>(a)] = sd[sensor_acc_ + a];
+    state.base_position[static_cast<std::size_t>(a)] = data_->qpos[a];
+    state.base_linear_velocity[static_cast<std::size_t>(a)] = data_->qvel[a];
+  }
+  for (int a = 0; a < 4; ++a) state.base_quat_wxyz[static_cast<std::size_t>(a)] = data_->qpos[3 + a];
+  state.imu.valid = true;
+  state.base_truth_valid = true;
+  state.backend_faults = faults_;
+}
+
+}  // namespace pmg
