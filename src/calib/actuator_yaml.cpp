@@ -1,0 +1,142 @@
+#include "pmg/calib/actuator_yaml.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "pmg/calib/dynamics_calibration.hpp"
+
+namespace pmg::calib {
+namespace {
+
+const std::set<std::string>& known_keys() {
+  static const std::set<std::string> k = {"armature_kgm2", "kp_scale", "kd_scale", "rate_hz", "delay_s",
+                                          "offset_rad", "torque_limit_Nm", "tau_stall_Nm", "w_max_rad_per_s",
+                                          "fc_Nm", "fs_Nm", "vs_rad_per_s", "kl", "fv_Nms_per_rad",
+                                          "backlash_gap_rad"};
+  return k;
+}
+
+}  // namespace
+
+void ActuatorBlock::validate(const std::string& where) const {
+  try {
+    params.validate();
+  } catch (const std::invalid_argument& e) {
+    std::string msg = e.what();
+    const std::string prefix = "ActuatorParams.";
+    if (msg.rfind(prefix, 0) == 0) msg = "actuator." + msg.substr(prefix.size());
+    throw std::runtime_error(where + ": " + msg);
+  }
+  if (armature_kgm2 && !(std::isfinite(*armature_kgm2) && *armature_kgm2 >= 0))
+    throw std::runtime_error(fmt::format("{}: actuator.armature_kgm2 = {}: expected >= 0 kg·m²", where, *armature_kgm2));
+  if (!(std::isfinite(kp_scale) && kp_scale > 0))
+    throw std::runtime_error(fmt::format("{}: actuator.kp_scale = {}: expected > 0", where, kp_scale));
+  if (!(std::isfinite(kd_scale) && kd_scale > 0))
+    throw std::runtime_error(fmt::format("{}: actuator.kd_scale = {}: expected > 0", where, kd_scale));
+}
+
+ActuatorBlock parse_actuator_block(const YAML::Node& map, const std::string& where) {
+  if (!map || !map.IsMap()) throw std::runtime_error(where + ": 'actuator' must be a map");
+  ActuatorBlock b;
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    if (!known_keys().count(key))
+      throw std::runtime_error(fmt::format("{}: actuator.{}: unknown key (expected one of armature_kgm2, kp_scale, "
+                                           "kd_scale, rate_hz, delay_s, offset_rad, torque_limit_Nm, tau_stall_Nm, "
+                                           "w_max_rad_per_s, fc_Nm, fs_Nm, vs_rad_per_s, kl, fv_Nms_per_rad, "
+                                           "backlash_gap_rad)", where, key));
+    double v = 0.0;
+    try {
+      v = kv.second.as<double>();
+    } catch (const std::exception&) {
+      throw std::runtime_error(fmt::format("{}: actuator.{} must be a number", where, key));
+    }
+    ActuatorParams& p = b.params;
+    if (key == "armature_kgm2") b.armature_kgm2 = v;
+    else if (key == "kp_scale") b.kp_scale = v;
+    else if (key == "kd_scale") b.kd_scale = v;
+    else if (key == "rate_hz") p.rate_hz = v;
+    else if (key == "delay_s") p.delay_s = v;
+    else if (key == "offset_rad") p.offset_rad = v;
+    else if (key == "torque_limit_Nm") p.torque_limit_Nm = v;
+    else if (key == "tau_stall_Nm") p.tau_stall_Nm = v;
+    else if (key == "w_max_rad_per_s") p.w_max_rad_per_s = v;
+    else if (key == "fc_Nm") p.fc_Nm = v;
+    else if (key == "fs_Nm") p.fs_Nm = v;
+    else if (key == "vs_rad_per_s") p.vs_rad_per_s = v;
+    else if (key == "kl") p.kl = v;
+    else if (key == "fv_Nms_per_rad") p.fv_Nms_per_rad = v;
+    else if (key == "backlash_gap_rad") p.backlash_gap_rad = v;
+  }
+  b.validate(where);
+  return b;
+}
+
+YAML::Node actuator_block_to_yaml(const ActuatorBlock& b) {
+  YAML::Node n;
+  const ActuatorParams& p = b.params;
+  if (b.armature_kgm2) n["armature_kgm2"] = *b.armature_kgm2;
+  n["kp_scale"] = b.kp_scale;
+  n["kd_scale"] = b.kd_scale;
+  n["rate_hz"] = p.rate_hz;
+  n["torque_limit_Nm"] = p.torque_limit_Nm;
+  auto put = [&](const char* k, double v) {
+    if (v != 0.0) n[k] = v;
+  };
+  put("delay_s", p.delay_s);
+  put("offset_rad", p.offset_rad);
+  put("tau_stall_Nm", p.tau_stall_Nm);
+  put("w_max_rad_per_s", p.w_max_rad_per_s);
+  put("fc_Nm", p.fc_Nm);
+  put("fs_Nm", p.fs_Nm);
+  if (p.fs_Nm != 0.0) n["vs_rad_per_s"] = p.vs_rad_per_s;
+  put("kl", p.kl);
+  put("fv_Nms_per_rad", p.fv_Nms_per_rad);
+  put("backlash_gap_rad", p.backlash_gap_rad);
+  return n;
+}
+
+ActuatorBlock load_actuator_file(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read YAML: {}", path, e.what()));
+  }
+  if (!root["actuator"]) throw std::runtime_error(path + ": missing map 'actuator'");
+  return parse_actuator_block(root["actuator"], path);
+}
+
+void write_actuator_file(const std::string& path, const ActuatorBlock& block, const std::string& comment) {
+  block.validate(path);
+  YAML::Node root;
+  root["actuator"] = actuator_block_to_yaml(block);
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write");
+  std::istringstream lines(comment);
+  std::string line;
+  while (std::getline(lines, line)) out << "# " << line << "\n";
+  YAML::Emitter em;
+  em.SetDoublePrecision(6);
+  em << root;
+  out << em.c_str() << "\n";
+}
+
+ActuatorBlock actuator_block_from_params(const RigConfig& rig, const std::map<std::string, double>& params) {
+  const RigParams rp = rig_params_from(rig, params);
+  ActuatorBlock b;
+  b.params = rp.act;
+  b.params.rate_hz = rig.rate_hz;
+  b.armature_kgm2 = rp.armature_kgm2;
+  b.kp_scale = rp.kp_scale;
+  b.kd_scale = rp.kd_scale;
+  return b;
+}
+
+}  // namespace pmg::calib

@@ -1,0 +1,726 @@
+#include "pmg/calib/dynamics_calibration.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlopt.hpp>
+#include <pagmo/algorithms/cmaes.hpp>
+#include <pagmo/population.hpp>
+#include <pagmo/problem.hpp>
+
+namespace pmg::calib {
+namespace {
+
+using ParamMap = std::map<std::string, double>;
+
+struct Spec {
+  std::string name;
+  double lo = 0.0, hi = 1.0, init = 0.0;
+  bool log = false;
+};
+
+double to_unit(const Spec& s, double v) {
+  v = std::clamp(v, s.lo, s.hi);
+  const double u = s.log ? (std::log(v) - std::log(s.lo)) / (std::log(s.hi) - std::log(s.lo)) : (v - s.lo) / (s.hi - s.lo);
+  return std::clamp(u, 0.0, 1.0);
+}
+double from_unit(const Spec& s, double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  return s.log ? std::exp(std::log(s.lo) + u * (std::log(s.hi) - std::log(s.lo))) : s.lo + u * (s.hi - s.lo);
+}
+
+const std::map<std::string, std::vector<std::string>>& param_table() {
+  static const std::map<std::string, std::vector<std::string>> t = {
+      {"coulomb_friction", {"fc_Nm"}},
+      {"viscous_friction", {"fv_Nms_per_rad"}},
+      {"stribeck_friction", {"fc_Nm", "fs_Nm", "vs_rad_per_s"}},
+      {"load_dependent_friction", {"fc_Nm", "kl"}},
+      {"backlash", {"gap_rad"}},
+      {"transport_delay", {"delay_s"}},
+      {"torque_saturation", {"tau_max_Nm"}},
+      {"torque_speed_limit", {"tau_stall_Nm", "w_max_rad_per_s"}},
+      {"zero_offset", {"offset_rad"}},
+  };
+  return t;
+}
+
+/// Characteristic magnitudes of the training data, used to scale parameter ranges.
+struct Scales {
+  double tau_peak = 1.0;  ///< max |baseline motor torque| on training logs [N·m]
+  double w_peak = 1.0;    ///< max |measured velocity| on training logs [rad/s]
+  double dt = 0.001;      ///< physics step [s]
+};
+
+Spec spec_for(const std::string& p, const RigConfig& rig, const Scales& sc) {
+  const double tau_ref = std::max(sc.tau_peak, 0.05 * rig.gravity_torque_Nm());
+  const double max_delay = std::min(0.1, (ActuatorState::kMaxDelaySteps - 2) * sc.dt);
+  if (p == "kp_scale") return {p, 0.05, 20.0, 1.0, true};
+  if (p == "kd_scale") return {p, 0.01, 50.0, 1.0, true};
+  if (p == "armature") {
+    const double hi = std::max(20.0 * rig.armature_kgm2, 2.0 * rig.link_inertia_about_axis());
+    return {p, 0.0, hi, rig.armature_kgm2, false};
+  }
+  if (p == "fc_Nm") return {p, 0.0, 0.5 * tau_ref, 0.02 * tau_ref, false};
+  if (p == "fs_Nm") return {p, 0.0, 0.8 * tau_ref, 0.05 * tau_ref, false};
+  if (p == "vs_rad_per_s") return {p, 0.002, 2.0, 0.05, true};
+  if (p == "kl") return {p, 0.0, 0.6, 0.02, false};
+  if (p == "fv_Nms_per_rad") return {p, 0.0, 2.0 * tau_ref / sc.w_peak, 0.02 * tau_ref / sc.w_peak, false};
+  if (p == "gap_rad") return {p, 0.0, 0.2, 0.005, false};
+  if (p == "delay_s") return {p, 0.0, max_delay, 0.005, false};
+  if (p == "tau_max_Nm") return {p, 0.05 * sc.tau_peak, 1.2 * sc.tau_peak, 1.1 * sc.tau_peak, false};
+  if (p == "tau_stall_Nm") return {p, 0.1 * sc.tau_peak, 4.0 * sc.tau_peak, 2.0 * sc.tau_peak, true};
+  if (p == "w_max_rad_per_s") return {p, 0.3 * sc.w_peak, 50.0 * sc.w_peak, 20.0 * sc.w_peak, true};
+  if (p == "offset_rad") return {p, -0.2, 0.2, 0.0, false};
+  throw std::invalid_argument("unknown calibration parameter '" + p + "'");
+}
+
+/// Coarse starting points for a candidate's parameters (the rest of the fit starts from the
+/// baseline): the scan avoids BOBYQA starting in a flat region (e.g. a gap smaller than the motion).
+std::vector<ParamMap> scan_grid(const std::string& c, const RigConfig& rig, const Scales& sc) {
+  const double tau_ref = std::max(sc.tau_peak, 0.05 * rig.gravity_torque_Nm());
+  std::vector<ParamMap> g;
+  if (c == "coulomb_friction")
+    for (double f : {0.01, 0.03, 0.08, 0.15, 0.3}) g.push_back({{"fc_Nm", f * tau_ref}});
+  if (c == "viscous_friction")
+    for (double f : {0.01, 0.05, 0.15, 0.4}) g.push_back({{"fv_Nms_per_rad", f * tau_ref / sc.w_peak}});
+  if (c == "stribeck_friction")
+    for (double f : {0.03, 0.08, 0.15, 0.3})
+      for (double vs : {0.02, 0.1, 0.4}) g.push_back({{"fc_Nm", 0.5 * f * tau_ref}, {"fs_Nm", f * tau_ref}, {"vs_rad_per_s", vs}});
+  if (c == "load_dependent_friction")
+    for (double k : {0.02, 0.05, 0.1, 0.2, 0.4}) g.push_back({{"fc_Nm", 0.005 * tau_ref}, {"kl", k}});
+  if (c == "backlash")
+    for (double gap : {0.002, 0.005, 0.01, 0.02, 0.04, 0.08}) g.push_back({{"gap_rad", gap}});
+  if (c == "transport_delay")
+    for (double d : {0.002, 0.005, 0.01, 0.02, 0.04, 0.07})
+      if (d < spec_for("delay_s", rig, sc).hi) g.push_back({{"delay_s", d}});
+  if (c == "torque_saturation")
+    for (double f : {0.3, 0.5, 0.7, 0.85, 1.0}) g.push_back({{"tau_max_Nm", f * sc.tau_peak}});
+  if (c == "torque_speed_limit")
+    for (double f : {0.5, 1.0, 2.0})
+      for (double w : {1.0, 2.0, 5.0}) g.push_back({{"tau_stall_Nm", f * sc.tau_peak}, {"w_max_rad_per_s", w * sc.w_peak}});
+  if (c == "zero_offset")
+    for (double o : {-0.05, -0.02, -0.007, 0.007, 0.02, 0.05}) g.push_back({{"offset_rad", o}});
+  return g;
+}
+
+double get(const ParamMap& m, const char* k, double dflt) {
+  const auto it = m.find(k);
+  return it == m.end() ? dflt : it->second;
+}
+
+/// One worker's simulators (plain and with backlash), created on first use.
+class WorkerSims {
+ public:
+  explicit WorkerSims(const RigConfig& rig) : rig_(rig) {}
+  BenchSimulator& get(bool backlash) {
+    auto& p = backlash ? backlash_ : plain_;
+    if (!p) p = std::make_unique<BenchSimulator>(rig_, backlash);
+    return *p;
+  }
+
+ private:
+  RigConfig rig_;
+  std::unique_ptr<BenchSimulator> plain_, backlash_;
+};
+
+/// Mean squared error over a set of logs; rollouts spread over the given workers (one thread each).
+double mse(const RigConfig& rig, const std::vector<const BenchLog*>& logs, const ParamMap& params,
+           std::vector<WorkerSims*>& workers) {
+  const RigParams rp = rig_params_from(rig, params);
+  const bool backlash = params.count("gap_rad") > 0;
+  std::size_t rows = 0;
+  for (const auto* l : logs) rows += l->size();
+  std::vector<double> sse(logs.size(), 0.0);
+  const std::size_t nw = std::min(workers.size(), logs.size());
+  if (nw <= 1) {
+    for (std::size_t i = 0; i < logs.size(); ++i) sse[i] = workers[0]->get(backlash).rollout(*logs[i], rp);
+  } else {
+    std::vector<std::thread> th;
+    for (std::size_t w = 1; w < nw; ++w)
+      th.emplace_back([&, w] {
+        for (std::size_t i = w; i < logs.size(); i += nw) sse[i] = workers[w]->get(backlash).rollout(*logs[i], rp);
+      });
+    for (std::size_t i = 0; i < logs.size(); i += nw) sse[i] = workers[0]->get(backlash).rollout(*logs[i], rp);
+    for (auto& t : th) t.join();
+  }
+  double total = 0.0;
+  for (double s : sse) total += s;
+  return std::isfinite(total) ? total / static_cast<double>(rows) : 1e6;
+}
+
+struct FitOutcome {
+  ParamMap params;
+  double mse = std::numeric_limits<double>::infinity();
+  int evals = 0;
+};
+
+using Objective = std::function<double(const ParamMap&)>;
+
+/// pagmo user-defined problem on the unit box.
+struct PagmoProblem {
+  const std::function<double(const std::vector<double>&)>* f = nullptr;
+  std::size_t n = 1;
+  pagmo::vector_double fitness(const pagmo::vector_double& x) const { return {(*f)(x)}; }
+  std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
+    return {pagmo::vector_double(n, 0.0), pagmo::vector_double(n, 1.0)};
+  }
+};
+
+/// Minimises `obj` over `specs` (other parameters fixed in `fixed`), starting from the specs' init.
+FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Objective& obj, Optimizer opt,
+               int max_evals, unsigned seed) {
+  const std::size_t n = specs.size();
+  FitOutcome best;
+  best.params = fixed;
+  auto to_map = [&](const std::vector<double>& u) {
+    ParamMap m = fixed;
+    for (std::size_t i = 0; i < n; ++i) m[specs[i].name] = from_unit(specs[i], u[i]);
+    return m;
+  };
+  std::function<double(const std::vector<double>&)> f = [&](const std::vector<double>& u) {
+    ParamMap m = to_map(u);
+    const double v = obj(m);
+    ++best.evals;
+    if (v < best.mse) {
+      best.mse = v;
+      best.params = std::move(m);
+    }
+    return v;
+  };
+  std::vector<double> u0(n);
+  for (std::size_t i = 0; i < n; ++i) u0[i] = to_unit(specs[i], specs[i].init);
+  f(u0);
+  int left = max_evals - 1;
+  if (opt == Optimizer::kCmaes && left > 20) {
+    PagmoProblem pp{&f, n};
+    pagmo::problem prob{pp};
+    const unsigned pop_size = 4 + static_cast<unsigned>(3.0 * std::log(static_cast<double>(n))) + 4;
+    const unsigned gens = static_cast<unsigned>(std::max(1, (left / 2) / static_cast<int>(pop_size)));
+    pagmo::population pop{prob, pop_size, seed};
+    pagmo::cmaes algo{gens, -1, -1, -1, -1, 0.25, 1e-10, 1e-8, false, true, seed};
+    pop = algo.evolve(pop);
+    left = max_evals - best.evals;
+  } else if (opt == Optimizer::kCrs2 && left > 20) {
+    nlopt::opt g(nlopt::GN_CRS2_LM, static_cast<unsigned>(n));
+    nlopt::srand(seed);
+    g.set_lower_bounds(std::vector<double>(n, 0.0));
+    g.set_upper_bounds(std::vector<double>(n, 1.0));
+    g.set_maxeval(left / 2);
+    g.set_min_objective([](const std::vector<double>& x, std::vector<double>&, void* d) {
+      return (*static_cast<std::function<double(const std::vector<double>&)>*>(d))(x);
+    }, &f);
+    std::vector<double> x = u0;
+    double fx = 0.0;
+    try {
+      g.optimize(x, fx);
+    } catch (const std::exception&) {
+      // NLopt reports round-off / forced stops as exceptions; the best point is kept in `best`.
+    }
+    left = max_evals - best.evals;
+  }
+  if (left > static_cast<int>(2 * n + 2)) {
+    for (std::size_t i = 0; i < n; ++i) u0[i] = to_unit(specs[i], best.params.at(specs[i].name));
+    nlopt::opt local(nlopt::LN_BOBYQA, static_cast<unsigned>(n));
+    local.set_lower_bounds(std::vector<double>(n, 0.0));
+    local.set_upper_bounds(std::vector<double>(n, 1.0));
+    local.set_maxeval(left);
+    local.set_xtol_rel(1e-5);
+    local.set_ftol_rel(1e-9);
+    std::vector<double> step(n);
+    for (std::size_t i = 0; i < n; ++i) step[i] = std::min({0.08, std::max(u0[i], 1.0 - u0[i]) * 0.5});
+    local.set_initial_step(step);
+    local.set_min_objective([](const std::vector<double>& x, std::vector<double>&, void* d) {
+      return (*static_cast<std::function<double(const std::vector<double>&)>*>(d))(x);
+    }, &f);
+    double fx = 0.0;
+    try {
+      local.optimize(u0, fx);
+    } catch (const std::exception&) {
+      // Round-off stop: the best point seen is in `best`.
+    }
+  }
+  return best;
+}
+
+const char* optimizer_name(Optimizer o) {
+  switch (o) {
+    case Optimizer::kBobyqa: return "bobyqa";
+    case Optimizer::kCrs2: return "crs2";
+    case Optimizer::kCmaes: return "cmaes";
+  }
+  return "?";
+}
+
+std::vector<double> measured_velocity(const BenchLog& log) {
+  if (log.has_dq()) return log.dq;
+  std::vector<double> v(log.size(), 0.0);
+  for (std::size_t i = 1; i + 1 < log.size(); ++i) v[i] = (log.q[i + 1] - log.q[i - 1]) / (log.t[i + 1] - log.t[i - 1]);
+  if (log.size() > 2) {
+    v[0] = v[1];
+    v.back() = v[log.size() - 2];
+  }
+  return v;
+}
+
+std::string json_num(double v) {
+  if (!std::isfinite(v)) return "null";
+  return fmt::format("{:.6g}", v);
+}
+
+std::string json_params(const ParamMap& m) {
+  std::string s = "{";
+  bool first = true;
+  for (const auto& [k, v] : m) {
+    s += fmt::format("{}\"{}\": {}", first ? "" : ", ", k, json_num(v));
+    first = false;
+  }
+  return s + "}";
+}
+
+/// Adds the output-only keys kp [N·m/rad] and kd [N·m·s/rad] (rig nominal x fitted scale) and, for
+/// logs with gain columns, kp_per_log_unit / kd_per_log_unit.
+void add_si_gains(const RigConfig& rig, bool gain_columns, ParamMap& p) {
+  const double ks = get(p, "kp_scale", 1.0), ds = get(p, "kd_scale", 1.0);
+  p["kp"] = ks * rig.kp_Nm_per_rad;
+  p["kd"] = ds * rig.kd_Nms_per_rad;
+  if (!p.count("armature")) p["armature"] = rig.armature_kgm2;
+  if (gain_columns) {
+    p["kp_per_log_unit"] = ks * rig.log_gain_to_SI;
+    p["kd_per_log_unit"] = ds * rig.log_gain_to_SI;
+  }
+}
+
+}  // namespace
+
+Optimizer parse_optimizer(const std::string& name) {
+  if (name == "bobyqa") return Optimizer::kBobyqa;
+  if (name == "crs2") return Optimizer::kCrs2;
+  if (name == "cmaes") return Optimizer::kCmaes;
+  throw std::invalid_argument("--optimizer = '" + name + "': expected bobyqa, crs2 or cmaes");
+}
+
+const std::vector<std::string>& catalogue_names() {
+  static const std::vector<std::string> names = {
+      "coulomb_friction", "viscous_friction", "stribeck_friction", "load_dependent_friction", "backlash",
+      "transport_delay",  "torque_saturation", "torque_speed_limit", "zero_offset"};
+  return names;
+}
+
+const std::vector<std::string>& catalogue_params(const std::string& name) {
+  const auto it = param_table().find(name);
+  if (it == param_table().end()) throw std::invalid_argument("unknown catalogue entry '" + name + "'");
+  return it->second;
+}
+
+std::string nested_entry(const std::string& name) {
+  if (name == "stribeck_friction" || name == "load_dependent_friction") return "coulomb_friction";
+  if (name == "torque_speed_limit") return "torque_saturation";
+  return "";
+}
+
+void CalibrationOptions::validate() const {
+  if (threads < 0) throw std::invalid_argument(fmt::format("CalibrationOptions.threads = {}: expected >= 0", threads));
+  if (!(min_gain_per_param > 0.0 && min_gain_per_param < 0.5))
+    throw std::invalid_argument(
+        fmt::format("CalibrationOptions.min_gain_per_param = {}: expected in (0, 0.5)", min_gain_per_param));
+  if (max_evals_baseline < 10)
+    throw std::invalid_argument(fmt::format("CalibrationOptions.max_evals_baseline = {}: expected >= 10", max_evals_baseline));
+  if (max_evals_candidate < 10)
+    throw std::invalid_argument(fmt::format("CalibrationOptions.max_evals_candidate = {}: expected >= 10", max_evals_candidate));
+  for (const auto& c : candidates) catalogue_params(c);
+}
+
+RigParams rig_params_from(const RigConfig& rig, const std::map<std::string, double>& p) {
+  RigParams r;
+  r.kp_scale = get(p, "kp_scale", 1.0);
+  r.kd_scale = get(p, "kd_scale", 1.0);
+  r.armature_kgm2 = get(p, "armature", rig.armature_kgm2);
+  ActuatorParams& a = r.act;
+  a.rate_hz = rig.rate_hz;
+  a.torque_limit_Nm = get(p, "tau_max_Nm", rig.torque_limit_Nm);
+  a.tau_stall_Nm = get(p, "tau_stall_Nm", 0.0);
+  a.w_max_rad_per_s = get(p, "w_max_rad_per_s", 0.0);
+  a.fc_Nm = get(p, "fc_Nm", 0.0);
+  a.fs_Nm = get(p, "fs_Nm", 0.0);
+  a.vs_rad_per_s = get(p, "vs_rad_per_s", 0.1);
+  a.kl = get(p, "kl", 0.0);
+  a.fv_Nms_per_rad = get(p, "fv_Nms_per_rad", 0.0);
+  a.delay_s = get(p, "delay_s", 0.0);
+  a.offset_rad = get(p, "offset_rad", 0.0);
+  a.backlash_gap_rad = get(p, "gap_rad", 0.0);
+  return r;
+}
+
+CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<BenchLog>& train,
+                                     const std::vector<BenchLog>& heldout, const CalibrationOptions& options) {
+  options.validate();
+  rig.validate();
+  if (train.empty()) throw std::invalid_argument("calibrate_dynamics: at least one training log is required (--train)");
+  if (heldout.empty()) throw std::invalid_argument("calibrate_dynamics: at least one held-out log is required (--heldout)");
+  const auto t_start = std::chrono::steady_clock::now();
+  const double thr = options.min_gain_per_param;
+  const int nthreads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  auto log_msg = [&](const std::string& s) {
+    if (options.verbose) fmt::print(stderr, "[calib] {}\n", s);
+  };
+
+  std::vector<const BenchLog*> tr, ho;
+  for (const auto& l : train) tr.push_back(&l);
+  for (const auto& l : heldout) ho.push_back(&l);
+
+  std::vector<std::unique_ptr<WorkerSims>> sims_owned;
+  for (int i = 0; i < nthreads; ++i) sims_owned.push_back(std::make_unique<WorkerSims>(rig));
+  std::vector<WorkerSims*> all_workers;
+  for (auto& s : sims_owned) all_workers.push_back(s.get());
+
+  CalibrationReport rep;
+  rep.optimizer = optimizer_name(options.optimizer);
+  for (const auto& l : train) rep.train_logs.push_back(l.name);
+  for (const auto& l : heldout) rep.heldout_logs.push_back(l.name);
+
+  // ---- Baseline eta = [Kp, Kd, I] ------------------------------------------------------------
+  Scales sc;
+  sc.dt = rig.sim_dt_s;
+  const std::vector<std::string> base_names = {"kp_scale", "kd_scale", "armature"};
+  std::vector<Spec> base_specs;
+  for (const auto& p : base_names) base_specs.push_back(spec_for(p, rig, sc));
+  Objective train_obj = [&](const ParamMap& m) { return mse(rig, tr, m, all_workers); };
+  {
+    ParamMap nominal;
+    for (const auto& s : base_specs) nominal[s.name] = s.init;
+    if (!std::isfinite(train_obj(nominal)) || train_obj(nominal) >= 1e6)
+      throw std::runtime_error("calibrate_dynamics: the rig simulation diverges at the nominal parameters; check the rig file");
+  }
+  FitOutcome base = fit(base_specs, {}, train_obj, options.optimizer, options.max_evals_baseline, options.seed);
+  rep.baseline.params = base.params;
+  rep.baseline.train_rmse_rad = std::sqrt(base.mse);
+  rep.baseline.heldout_rmse_rad = std::sqrt(mse(rig, ho, base.params, all_workers));
+  rep.baseline.evaluations = base.evals;
+  log_msg(fmt::format("baseline: kp_scale {:.4g} kd_scale {:.4g} armature {:.4g}; train RMSE {:.4g} rad, held-out {:.4g} rad ({} evals)",
+                      base.params["kp_scale"], base.params["kd_scale"], base.params["armature"], rep.baseline.train_rmse_rad,
+                      rep.baseline.heldout_rmse_rad, base.evals));
+
+  // Scales from the fitted baseline.
+  {
+    RolloutTrace trace;
+    const RigParams rp = rig_params_from(rig, base.params);
+    sc.tau_peak = 1e-6;
+    sc.w_peak = 1e-3;
+    for (const auto* l : tr) {
+      all_workers[0]->get(false).rollout(*l, rp, &trace);
+      for (double x : trace.tau_motor) sc.tau_peak = std::max(sc.tau_peak, std::abs(x));
+      for (double x : measured_velocity(*l)) sc.w_peak = std::max(sc.w_peak, std::abs(x));
+    }
+  }
+
+  // ---- Candidates (one worker each, in parallel) ---------------------------------------------
+  std::vector<std::string> cands = options.candidates.empty() ? catalogue_names() : options.candidates;
+  rep.candidates.resize(cands.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex err_mutex;
+  std::string first_error;
+  auto run_candidate = [&](WorkerSims* ws, std::size_t ci) {
+    const std::string& c = cands[ci];
+    std::vector<WorkerSims*> mine{ws};
+    Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
+    // Coarse scan of the new parameters with the baseline fixed.
+    ParamMap start = base.params;
+    double best = std::numeric_limits<double>::infinity();
+    for (const ParamMap& g : scan_grid(c, rig, sc)) {
+      ParamMap m = base.params;
+      for (const auto& [k, v] : g) m[k] = v;
+      const double v = obj(m);
+      if (v < best) {
+        best = v;
+        start = m;
+      }
+    }
+    std::vector<Spec> specs;
+    for (const auto& p : base_names) {
+      Spec s = spec_for(p, rig, sc);
+      s.init = base.params.at(p);
+      specs.push_back(s);
+    }
+    for (const auto& p : catalogue_params(c)) {
+      Spec s = spec_for(p, rig, sc);
+      s.init = get(start, p.c_str(), s.init);
+      specs.push_back(s);
+    }
+    FitOutcome fo = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate, options.seed);
+    CandidateResult r;
+    r.name = c;
+    r.fit.params = fo.params;
+    r.fit.train_rmse_rad = std::sqrt(fo.mse);
+    r.fit.heldout_rmse_rad = std::sqrt(mse(rig, ho, fo.params, mine));
+    r.fit.evaluations = fo.evals;
+    for (const auto& p : catalogue_params(c)) r.params[p] = fo.params.at(p);
+    r.gain = 1.0 - r.fit.heldout_rmse_rad / rep.baseline.heldout_rmse_rad;
+    rep.candidates[ci] = r;
+    log_msg(fmt::format("{:<24} held-out RMSE {:.4g} rad  gain {:+.3f}  {}", c, r.fit.heldout_rmse_rad, r.gain, json_params(r.params)));
+  };
+  {
+    std::vector<std::thread> th;
+    const int nw = std::min<int>(nthreads, static_cast<int>(cands.size()));
+    for (int w = 0; w < nw; ++w)
+      th.emplace_back([&, w] {
+        for (std::size_t ci = next++; ci < cands.size(); ci = next++) {
+          try {
+            run_candidate(all_workers[w], ci);
+          } catch (const std::exception& e) {
+            std::lock_guard<std::mutex> lock(err_mutex);
+            if (first_error.empty()) first_error = cands[ci] + ": " + e.what();
+          }
+        }
+      });
+    for (auto& t : th) t.join();
+    if (!first_error.empty()) throw std::runtime_error("calibrate_dynamics: candidate fit failed: " + first_error);
+  }
+
+  // ---- Name: significance with per-parameter penalty, nesting ------------------------------
+  auto find = [&](const std::string& n) -> CandidateResult* {
+    for (auto& r : rep.candidates)
+      if (r.name == n) return &r;
+    return nullptr;
+  };
+  for (auto& r : rep.candidates) {
+    const double need = thr * static_cast<double>(catalogue_params(r.name).size());
+    r.significant = r.gain > need;
+    r.verdict = r.significant ? fmt::format("held-out gain {:.3f} > {:.3f} required for {} parameter(s)", r.gain, need,
+                                            catalogue_params(r.name).size())
+                              : fmt::format("held-out gain {:.3f} <= {:.3f} required for {} parameter(s)", r.gain, need,
+                                            catalogue_params(r.name).size());
+  }
+  for (auto& big : rep.candidates) {
+    const std::string small_name = nested_entry(big.name);
+    CandidateResult* small = small_name.empty() ? nullptr : find(small_name);
+    if (!small || !big.significant) continue;
+    const double extra = static_cast<double>(catalogue_params(big.name).size() - catalogue_params(small_name).size());
+    const double need = small->fit.heldout_rmse_rad * (1.0 - thr * extra);
+    if (big.fit.heldout_rmse_rad < need) {
+      if (small->significant) {
+        small->significant = false;
+        small->verdict += fmt::format("; superseded by {} (nests it, beats it on held-out data)", big.name);
+      }
+    } else if (small->significant) {
+      big.significant = false;
+      big.verdict += fmt::format("; does not beat the nested {} clearly (held-out RMSE {:.4g} vs {:.4g}, needs < {:.4g})",
+                                 small_name, big.fit.heldout_rmse_rad, small->fit.heldout_rmse_rad, need);
+    }
+  }
+  std::vector<const CandidateResult*> pool;
+  for (const auto& r : rep.candidates)
+    if (r.significant) pool.push_back(&r);
+  std::sort(pool.begin(), pool.end(), [](const auto* a, const auto* b) { return a->gain > b->gain; });
+
+  // ---- Extend: forward selection. The best single cause first; then, in parallel, each other
+  // individually significant entry is fitted together with the causes chosen so far, and the best
+  // one joins if it lowers the held-out RMSE by the per-parameter margin. The causes are the ones
+  // that pay for their parameters in the joint model, ranked by the order they joined. -----------
+  rep.extended = rep.baseline;
+  if (!pool.empty()) {
+    rep.extended = pool.front()->fit;
+    rep.extended_causes.push_back(pool.front()->name);
+    rep.causes.push_back(*pool.front());
+    std::vector<const CandidateResult*> remaining(pool.begin() + 1, pool.end());
+    while (!remaining.empty()) {
+      struct Trial {
+        FitOutcome fo;
+        double heldout = std::numeric_limits<double>::infinity();
+        std::size_t added = 0;
+      };
+      std::vector<Trial> trials(remaining.size());
+      std::atomic<std::size_t> nxt{0};
+      auto work = [&](WorkerSims* ws) {
+        std::vector<WorkerSims*> mine{ws};
+        Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
+        for (std::size_t k = nxt++; k < remaining.size(); k = nxt++) {
+          const CandidateResult& cause = *remaining[k];
+          std::set<std::string> names(base_names.begin(), base_names.end());
+          for (const auto& c : rep.extended_causes)
+            for (const auto& p : catalogue_params(c)) names.insert(p);
+          for (const auto& p : catalogue_params(cause.name)) trials[k].added += names.insert(p).second ? 1 : 0;
+          if (trials[k].added == 0) continue;
+          std::vector<Spec> specs;
+          for (const auto& p : names) {
+            Spec sp = spec_for(p, rig, sc);
+            sp.init = rep.extended.params.count(p) ? rep.extended.params.at(p) : cause.fit.params.at(p);
+            specs.push_back(sp);
+          }
+          trials[k].fo = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate, options.seed);
+          trials[k].heldout = std::sqrt(mse(rig, ho, trials[k].fo.params, mine));
+        }
+      };
+      {
+        std::vector<std::thread> th;
+        const std::size_t nw = std::min<std::size_t>(all_workers.size(), remaining.size());
+        for (std::size_t w = 1; w < nw; ++w) th.emplace_back(work, all_workers[w]);
+        work(all_workers[0]);
+        for (auto& t : th) t.join();
+      }
+      std::size_t best = 0;
+      for (std::size_t k = 1; k < trials.size(); ++k)
+        if (trials[k].heldout < trials[best].heldout) best = k;
+      const Trial& bt = trials[best];
+      const bool accept = bt.added > 0 &&
+                          bt.heldout < rep.extended.heldout_rmse_rad * (1.0 - thr * static_cast<double>(bt.added));
+      log_msg(fmt::format("extend with {}: held-out RMSE {:.4g} (current {:.4g}) -> {}", remaining[best]->name, bt.heldout,
+                          rep.extended.heldout_rmse_rad, accept ? "accepted" : "rejected"));
+      if (!accept) break;
+      rep.extended.params = bt.fo.params;
+      rep.extended.train_rmse_rad = std::sqrt(bt.fo.mse);
+      rep.extended.heldout_rmse_rad = bt.heldout;
+      rep.extended.evaluations = bt.fo.evals;
+      rep.extended_causes.push_back(remaining[best]->name);
+      rep.causes.push_back(*remaining[best]);
+      remaining.erase(remaining.begin() + static_cast<long>(best));
+    }
+  }
+  // Verdicts of individually significant entries that did not join the joint model.
+  for (auto& r : rep.candidates) {
+    if (!r.significant) continue;
+    if (std::find(rep.extended_causes.begin(), rep.extended_causes.end(), r.name) == rep.extended_causes.end()) {
+      r.significant = false;
+      r.verdict += "; adds nothing significant once the chosen causes are in the model";
+    }
+  }
+
+  // ---- Show: where the baseline residuals concentrate (held-out) ----------------------------
+  {
+    const char* names[] = {"all", "velocity_reversal", "high_torque", "steady_hold", "fast_move"};
+    std::vector<double> n_in(5, 0), se_b(5, 0), se_e(5, 0);
+    double n_total = 0;
+    RolloutTrace tb, te;
+    const RigParams rb = rig_params_from(rig, rep.baseline.params);
+    const RigParams re = rig_params_from(rig, rep.extended.params);
+    const bool ext_backlash = rep.extended.params.count("gap_rad") > 0;
+    for (const auto* l : ho) {
+      all_workers[0]->get(false).rollout(*l, rb, &tb);
+      all_workers[0]->get(ext_backlash).rollout(*l, re, &te);
+      const std::vector<double> v = measured_velocity(*l);
+      double vmax = 1e-9, tmax = 1e-9, cmax = 1e-9;
+      std::vector<double> vcmd(l->size(), 0.0);
+      for (std::size_t i = 1; i < l->size(); ++i) vcmd[i] = (l->q_cmd[i] - l->q_cmd[i - 1]) / (l->t[i] - l->t[i - 1]);
+      for (std::size_t i = 0; i < l->size(); ++i) {
+        vmax = std::max(vmax, std::abs(v[i]));
+        tmax = std::max(tmax, std::abs(tb.tau_motor[i]));
+        cmax = std::max(cmax, std::abs(vcmd[i]));
+      }
+      // Velocity reversals: +-50 ms around a sign change of the measured velocity between
+      // motions faster than 10 % of the peak.
+      std::vector<char> rev(l->size(), 0);
+      std::size_t last_fast = 0;
+      bool have_fast = false;
+      for (std::size_t i = 0; i < l->size(); ++i) {
+        if (std::abs(v[i]) > 0.1 * vmax) {
+          if (have_fast && (v[i] > 0) != (v[last_fast] > 0) && l->t[i] - l->t[last_fast] < 0.5) {
+            const double tc = 0.5 * (l->t[i] + l->t[last_fast]);
+            for (std::size_t k = last_fast; k > 0 && l->t[k] > tc - 0.05 - (l->t[i] - l->t[last_fast]); --k) rev[k] = 1;
+            for (std::size_t k = last_fast; k < l->size() && l->t[k] < tc + 0.05 + (l->t[i] - l->t[last_fast]); ++k) rev[k] = 1;
+          }
+          last_fast = i;
+          have_fast = true;
+        }
+      }
+      for (std::size_t i = 0; i < l->size(); ++i) {
+        const double eb = tb.q[i] - l->q[i], ee = te.q[i] - l->q[i];
+        const bool in[5] = {true, rev[i] != 0, std::abs(tb.tau_motor[i]) >= 0.7 * tmax,
+                            std::abs(vcmd[i]) < 0.02 * cmax && std::abs(v[i]) < 0.05 * vmax,
+                            std::abs(v[i]) >= 0.5 * vmax};
+        for (int r = 0; r < 5; ++r)
+          if (in[r]) {
+            n_in[r] += 1;
+            se_b[r] += eb * eb;
+            se_e[r] += ee * ee;
+          }
+        n_total += 1;
+      }
+    }
+    for (int r = 0; r < 5; ++r) {
+      RegionResidual rr;
+      rr.name = names[r];
+      rr.fraction_of_samples = n_in[r] / std::max(1.0, n_total);
+      rr.baseline_rmse_rad = n_in[r] > 0 ? std::sqrt(se_b[r] / n_in[r]) : 0.0;
+      rr.extended_rmse_rad = n_in[r] > 0 ? std::sqrt(se_e[r] / n_in[r]) : 0.0;
+      rep.regions.push_back(rr);
+    }
+  }
+  bool gain_columns = false;
+  for (const auto* l : tr) gain_columns = gain_columns || l->has_kp() || l->has_kd();
+  add_si_gains(rig, gain_columns, rep.baseline.params);
+  add_si_gains(rig, gain_columns, rep.extended.params);
+  for (auto& c : rep.candidates) add_si_gains(rig, gain_columns, c.fit.params);
+  for (auto& c : rep.causes) add_si_gains(rig, gain_columns, c.fit.params);
+  rep.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return rep;
+}
+
+std::string report_to_json(const CalibrationReport& r) {
+  std::string s = "{\n";
+  s += fmt::format("  \"baseline\": {{\"params\": {}, \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}}},\n",
+                   json_params(r.baseline.params), json_num(r.baseline.train_rmse_rad), json_num(r.baseline.heldout_rmse_rad));
+  s += "  \"causes\": [";
+  for (std::size_t i = 0; i < r.causes.size(); ++i) {
+    const auto& c = r.causes[i];
+    s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"train_rmse_rad\": {}}}",
+                     i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.gain),
+                     json_num(c.fit.train_rmse_rad));
+  }
+  s += r.causes.empty() ? "],\n" : "\n  ],\n";
+  s += fmt::format("  \"extended\": {{\"params\": {}, \"causes\": [", json_params(r.extended.params));
+  for (std::size_t i = 0; i < r.extended_causes.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.extended_causes[i]);
+  s += fmt::format("], \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}}},\n", json_num(r.extended.train_rmse_rad),
+                   json_num(r.extended.heldout_rmse_rad),
+                   json_num(1.0 - r.extended.heldout_rmse_rad / r.baseline.heldout_rmse_rad));
+  s += "  \"candidates\": [";
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    const auto& c = r.candidates[i];
+    s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"train_rmse_rad\": {}, \"gain\": {}, "
+                     "\"significant\": {}, \"verdict\": \"{}\", \"evaluations\": {}}}",
+                     i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.fit.train_rmse_rad),
+                     json_num(c.gain), c.significant ? "true" : "false", c.verdict, c.fit.evaluations);
+  }
+  s += "\n  ],\n  \"residual_regions\": [";
+  for (std::size_t i = 0; i < r.regions.size(); ++i) {
+    const auto& g = r.regions[i];
+    s += fmt::format("{}\n    {{\"region\": \"{}\", \"fraction_of_samples\": {}, \"baseline_rmse_rad\": {}, \"extended_rmse_rad\": {}}}",
+                     i ? "," : "", g.name, json_num(g.fraction_of_samples), json_num(g.baseline_rmse_rad),
+                     json_num(g.extended_rmse_rad));
+  }
+  s += "\n  ],\n  \"train_logs\": [";
+  for (std::size_t i = 0; i < r.train_logs.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.train_logs[i]);
+  s += "],\n  \"heldout_logs\": [";
+  for (std::size_t i = 0; i < r.heldout_logs.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.heldout_logs[i]);
+  s += fmt::format("],\n  \"optimizer\": \"{}\",\n  \"wall_time_s\": {}\n}}\n", r.optimizer, json_num(r.wall_time_s));
+  return s;
+}
+
+void write_trace_csv(const RigConfig& rig, const std::vector<BenchLog>& heldout, const CalibrationReport& report,
+                     const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write trace CSV");
+  out << "log,t,q_cmd,q_measured,q_baseline,q_extended\n";
+  BenchSimulator plain(rig, false);
+  const bool ext_backlash = report.extended.params.count("gap_rad") > 0;
+  BenchSimulator ext(rig, ext_backlash);
+  RolloutTrace tb, te;
+  for (std::size_t k = 0; k < heldout.size(); ++k) {
+    const auto& l = heldout[k];
+    plain.rollout(l, rig_params_from(rig, report.baseline.params), &tb);
+    ext.rollout(l, rig_params_from(rig, report.extended.params), &te);
+    for (std::size_t i = 0; i < l.size(); ++i)
+      out << fmt::format("{},{:.6f},{:.6g},{:.6g},{:.6g},{:.6g}\n", k, l.t[i], l.q_cmd[i], l.q[i], tb.q[i], te.q[i]);
+  }
+}
+
+}  // namespace pmg::calib
