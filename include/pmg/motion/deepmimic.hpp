@@ -1,0 +1,62 @@
+#pragma once
+/// @file deepmimic.hpp
+/// Reader for DeepMimic reference motions (`humanoid3d_*.txt`, JSON text; Peng et al.,
+/// SIGGRAPH 2018) and the axis convention needed to use them on a Z-up robot.
+///
+/// File layout (see ../shared/data/motions/deepmimic/SOURCE.md): {"Loop": "wrap"|"none",
+/// "Frames": [[44 numbers], ...]}; per frame: duration [s], root position (3, metres, file frame
+/// M: Y up, X = walking direction at t = 0, Z = character's right), root orientation quaternion
+/// (w,x,y,z) in M, then chest, neck, right hip (quaternions, local to parent), right knee [rad],
+/// right ankle, right shoulder (quaternions), right elbow [rad], left hip, left knee, left ankle,
+/// left shoulder, left elbow. Revolute joints (knee, elbow) rotate about the local +Z (= right) axis.
+///
+/// The file is parsed with yaml-cpp (JSON is a subset of YAML 1.2), so syntax errors carry a line.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace pmg::motion {
+
+/// One DeepMimic frame. Quaternions are unit, expressed in the file's Y-up frame convention.
+struct DeepMimicFrame {
+  double duration = 0.0;                  ///< time to the next frame [s] (0 on the last frame)
+  Eigen::Vector3d p_MR = Eigen::Vector3d::Zero();  ///< root position in the file frame M [m]
+  Eigen::Quaterniond R_MR = Eigen::Quaterniond::Identity();  ///< root orientation in M
+  Eigen::Quaterniond chest, neck;         ///< relative to root / chest
+  Eigen::Quaterniond right_hip, right_ankle, right_shoulder;
+  Eigen::Quaterniond left_hip, left_ankle, left_shoulder;
+  double right_knee = 0.0, right_elbow = 0.0;  ///< about local +Z [rad]; knee ≤ 0 = flexion
+  double left_knee = 0.0, left_elbow = 0.0;    ///< elbow ≥ 0 = flexion
+};
+
+/// A whole DeepMimic motion file.
+struct DeepMimicMotion {
+  std::string source_file;   ///< path it was read from
+  bool loop_wrap = false;    ///< "Loop": "wrap" (last frame closes the cycle) vs "none"
+  double fps = 0.0;          ///< frame rate [Hz] = 1 / duration of frame 0
+  std::vector<DeepMimicFrame> frames;
+};
+
+/// Reads a DeepMimic motion. Every frame must have 44 finite numbers, unit quaternions (|q| within
+/// 1e-2 of 1; renormalised) and the same duration as frame 0 (within 1e-4 s; the last may be 0).
+/// @throws std::runtime_error naming the file, the line, frame index and field on any problem.
+DeepMimicMotion readDeepMimicMotion(const std::string& path);
+
+/// Sole tracks of the DeepMimic humanoid3d feet by forward kinematics of its skeleton
+/// (characters/humanoid3d.txt: hip attach z = ±0.084887 m, knee −0.421546 m, ankle −0.409870 m
+/// along y; foot box centre (0.045, −0.0225, 0) m, size 0.177 × 0.055 × 0.09 m), in the robot's
+/// world axes W (Z up), multiplied by @p scale. Per foot (index 0 = left, 1 = right), F × 3:
+/// x, y = centre of the foot box's bottom face, z = height of its lowest corner above the ground.
+/// The ground height is the median over frames of the lower foot's lowest corner (the files put
+/// the ground near y = 0 with ±2 cm error).
+std::array<Eigen::MatrixXd, 2> deepMimicSoleTracks(const DeepMimicMotion& motion, double scale);
+
+/// Rotation from the DeepMimic file frame M (x fwd, y up, z right) to the robot world/body
+/// convention W (x fwd, y left, z up): v_W = C · v_M with C = [[1,0,0],[0,0,-1],[0,1,0]].
+Eigen::Matrix3d deepMimicToZUp();
+
+}  // namespace pmg::motion

@@ -1,0 +1,255 @@
+#include "pmg/motion/clip_builder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "pmg/motion/clip_io.hpp"
+
+namespace pmg::motion {
+namespace {
+
+const char* footName(Foot f) { return f == Foot::kLeft ? "left" : "right"; }
+
+/// Flips runs shorter than min_frames (non-circular sequence), repeated until stable.
+void debounce(std::vector<bool>& flags, int min_frames) {
+  const int F = static_cast<int>(flags.size());
+  for (int pass = 0; pass < 4; ++pass) {
+    bool changed = false;
+    int start = 0;
+    while (start < F) {
+      int end = start;
+      while (end < F && flags[static_cast<std::size_t>(end)] == flags[static_cast<std::size_t>(start)]) ++end;
+      // Runs touching the ends of the motion are kept (they may continue outside the recording).
+      if (start > 0 && end < F && end - start < min_frames) {
+        for (int k = start; k < end; ++k) flags[static_cast<std::size_t>(k)] = !flags[static_cast<std::size_t>(k)];
+        changed = true;
+      }
+      start = end;
+    }
+    if (!changed) break;
+  }
+}
+
+Eigen::Vector3d rotationLog(const Eigen::Matrix3d& R) {
+  const Eigen::AngleAxisd aa(R);
+  return aa.angle() * aa.axis();
+}
+
+}  // namespace
+
+void ContactOptions::validate() const {
+  if (!(height_threshold > 0.0)) throw std::invalid_argument(fmt::format("ContactOptions.height_threshold = {}: expected > 0 [m]", height_threshold));
+  if (!(speed_threshold > 0.0)) throw std::invalid_argument(fmt::format("ContactOptions.speed_threshold = {}: expected > 0 [m/s]", speed_threshold));
+  if (min_frames < 1) throw std::invalid_argument(fmt::format("ContactOptions.min_frames = {}: expected >= 1", min_frames));
+}
+
+void DynamicClipOptions::validate() const {
+  if (name.empty()) throw std::invalid_argument("DynamicClipOptions.name: expected a non-empty clip name");
+  if (num_samples < 8) throw std::invalid_argument(fmt::format("DynamicClipOptions.num_samples = {}: expected >= 8", num_samples));
+  if (!(smoothing_sigma >= 0.0) || !std::isfinite(smoothing_sigma))
+    throw std::invalid_argument(fmt::format("DynamicClipOptions.smoothing_sigma = {}: expected finite >= 0 [s]", smoothing_sigma));
+}
+
+ContactSequence detectContacts(const RobotMotion& motion, const ContactOptions& options) {
+  options.validate();
+  const int F = motion.numFrames();
+  if (F < 2 || motion.p_WS[0].rows() != F || motion.p_WS[1].rows() != F)
+    throw std::invalid_argument("detectContacts: motion has no foot tracks (call placeOnGround first) or < 2 frames");
+  ContactSequence out(static_cast<std::size_t>(F));
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    const Eigen::MatrixXd& p = motion.p_WS[f];
+    std::vector<bool> flags(static_cast<std::size_t>(F));
+    for (int k = 0; k < F; ++k) {
+      const int a = std::max(0, k - 1), b = std::min(F - 1, k + 1);
+      const double speed = (p.row(b).head<2>() - p.row(a).head<2>()).norm() * motion.fps / static_cast<double>(b - a);
+      flags[static_cast<std::size_t>(k)] = p(k, 2) < options.height_threshold && speed < options.speed_threshold;
+    }
+    debounce(flags, options.min_frames);
+    for (int k = 0; k < F; ++k) out[static_cast<std::size_t>(k)][f] = flags[static_cast<std::size_t>(k)];
+  }
+  return out;
+}
+
+std::vector<int> findContactEvents(const ContactSequence& contacts, Foot foot, ContactEvent event, int search_begin,
+                                   int search_end) {
+  std::vector<int> events;
+  const auto f = static_cast<std::size_t>(foot);
+  const int F = static_cast<int>(contacts.size());
+  for (int k = std::max(1, search_begin); k < std::min(F, search_end); ++k) {
+    const bool now = contacts[static_cast<std::size_t>(k)][f], before = contacts[static_cast<std::size_t>(k - 1)][f];
+    if ((event == ContactEvent::kTouchdown && now && !before) || (event == ContactEvent::kLiftoff && !now && before))
+      events.push_back(k);
+  }
+  return events;
+}
+
+CycleWindow findGaitCycle(const ContactSequence& contacts, Foot foot, ContactEvent event, int search_begin,
+                          int search_end) {
+  const std::vector<int> ev = findContactEvents(contacts, foot, event, search_begin, search_end);
+  if (ev.size() < 2)
+    throw std::runtime_error(fmt::format("findGaitCycle: found {} {} events of the {} foot in frames [{}, {}): expected >= 2",
+                                         ev.size(), event == ContactEvent::kTouchdown ? "touchdown" : "liftoff",
+                                         footName(foot), search_begin, search_end));
+  return {ev[0], ev[1]};
+}
+
+FootContact contactModel(const std::vector<bool>& in_contact) {
+  const int M = static_cast<int>(in_contact.size());
+  const int count = static_cast<int>(std::count(in_contact.begin(), in_contact.end(), true));
+  if (M == 0 || count == 0) return {0.0, 0.0};
+  if (count == M) return {0.5, 0.5};
+  int best_start = 0, best_len = 0;
+  for (int s = 0; s < M; ++s) {
+    if (!in_contact[static_cast<std::size_t>(s)] || in_contact[static_cast<std::size_t>((s + M - 1) % M)]) continue;
+    int len = 0;
+    while (len < M && in_contact[static_cast<std::size_t>((s + len) % M)]) ++len;
+    if (len > best_len) {
+      best_len = len;
+      best_start = s;
+    }
+  }
+  double mu = (best_start + 0.5 * (best_len - 1)) / M;
+  mu -= std::floor(mu);
+  if (mu >= 1.0) mu = 0.0;
+  return {mu, std::min(0.5, 0.5 * best_len / M)};
+}
+
+Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_samples) {
+  if (sigma_samples <= 0.0) return x;
+  const Eigen::Index M = x.rows();
+  const int half = static_cast<int>(std::ceil(4.0 * sigma_samples));
+  std::vector<double> w(static_cast<std::size_t>(2 * half + 1));
+  double sum = 0.0;
+  for (int j = -half; j <= half; ++j) {
+    w[static_cast<std::size_t>(j + half)] = std::exp(-0.5 * j * j / (sigma_samples * sigma_samples));
+    sum += w[static_cast<std::size_t>(j + half)];
+  }
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(M, x.cols());
+  for (Eigen::Index k = 0; k < M; ++k)
+    for (int j = -half; j <= half; ++j) {
+      const Eigen::Index i = ((k + j) % M + M) % M;
+      y.row(k) += (w[static_cast<std::size_t>(j + half)] / sum) * x.row(i);
+    }
+  return y;
+}
+
+Eigen::MatrixXd resamplePeriodic(const Eigen::MatrixXd& x, int num_samples) {
+  const Eigen::Index M = x.rows();
+  Eigen::MatrixXd y(num_samples, x.cols());
+  for (int k = 0; k < num_samples; ++k) {
+    const double u = static_cast<double>(k) * static_cast<double>(M) / num_samples;
+    const Eigen::Index i = static_cast<Eigen::Index>(std::floor(u));
+    const double t = u - static_cast<double>(i);
+    auto row = [&](Eigen::Index j) { return x.row(((j % M) + M) % M); };
+    const Eigen::RowVectorXd p0 = row(i - 1), p1 = row(i), p2 = row(i + 1), p3 = row(i + 2);
+    y.row(k) = 0.5 * (2.0 * p1 + (p2 - p0) * t + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t * t +
+                      (3.0 * p1 - p0 - 3.0 * p2 + p3) * t * t * t);
+  }
+  return y;
+}
+
+Eigen::MatrixXd periodicDerivative(const Eigen::MatrixXd& x, double period) {
+  const Eigen::Index N = x.rows();
+  Eigen::MatrixXd d(N, x.cols());
+  const double h = period / static_cast<double>(N);
+  for (Eigen::Index k = 0; k < N; ++k) d.row(k) = (x.row((k + 1) % N) - x.row((k + N - 1) % N)) / (2.0 * h);
+  return d;
+}
+
+DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& contacts, const CycleWindow& window,
+                             const RobotConfig& robot, const DynamicClipOptions& options) {
+  options.validate();
+  const int F = motion.numFrames();
+  const int M = window.end - window.begin;
+  if (window.begin < 0 || window.end >= F || M < 4)
+    throw std::invalid_argument(fmt::format("buildDynamicClip({}): cycle window [{}, {}] invalid for a motion of {} frames "
+                                            "(need 0 <= begin, end < frames, end - begin >= 4)",
+                                            options.name, window.begin, window.end, F));
+  if (static_cast<int>(contacts.size()) != F) throw std::invalid_argument("buildDynamicClip: contact sequence length != frames");
+  const Eigen::Index n = motion.q.cols();
+  if (n != static_cast<Eigen::Index>(robot.numJoints())) throw std::invalid_argument("buildDynamicClip: joint count != robot config");
+  const double dt = 1.0 / motion.fps;
+
+  // Columns: q (n) | v_H (3) | omega_H (3) | base height (1), rows: frames begin..end.
+  const Eigen::Index d = n + 7;
+  Eigen::MatrixXd X(M + 1, d);
+  for (int r = 0; r <= M; ++r) {
+    const int k = window.begin + r;
+    const int a = std::max(0, k - 1), b = std::min(F - 1, k + 1);
+    const double span = (b - a) * dt;
+    const Eigen::Matrix3d Ra = motion.R_WB[static_cast<std::size_t>(a)].toRotationMatrix();
+    const Eigen::Matrix3d Rb = motion.R_WB[static_cast<std::size_t>(b)].toRotationMatrix();
+    const Eigen::Vector3d v_W = (motion.p_WB.row(b) - motion.p_WB.row(a)).transpose() / span;
+    const Eigen::Vector3d w_W = rotationLog(Rb * Ra.transpose()) / span;
+    const double psi = headingOf(motion.R_WB[static_cast<std::size_t>(k)]);
+    const Eigen::Matrix3d R_HW = Eigen::AngleAxisd(-psi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    X.row(r).head(n) = motion.q.row(k);
+    X.row(r).segment<3>(n) = (R_HW * v_W).transpose();
+    X.row(r).segment<3>(n + 3) = (R_HW * w_W).transpose();
+    X(r, n + 6) = motion.p_WB(k, 2);
+  }
+  // Mean command over the cycle (raw data, before closing).
+  const Eigen::Index cmd_col = options.axis == CommandAxis::kForward ? n : options.axis == CommandAxis::kLateral ? n + 1 : n + 5;
+  const double mean_cmd = X.col(cmd_col).head(M).mean();
+  if (std::abs(mean_cmd) < 1e-3)
+    throw std::runtime_error(fmt::format("buildDynamicClip({}): mean {} command over the cycle is {:.2e}: expected |x̄| >= 1e-3",
+                                         options.name, toString(options.axis), mean_cmd));
+
+  // Close the cycle: remove the linear drift with a zero-mean ramp, so row M equals row 0 and the
+  // cycle mean (x̄, mean posture) is unchanged; then drop row M.
+  Eigen::MatrixXd P(M, d);
+  const Eigen::RowVectorXd drift = X.row(M) - X.row(0);
+  for (int r = 0; r < M; ++r) P.row(r) = X.row(r) - (static_cast<double>(r) / M - 0.5 * (M - 1) / M) * drift;
+  P = circularGaussianSmooth(P, options.smoothing_sigma * motion.fps);
+
+  std::vector<std::array<bool, kNumFeet>> cyc(contacts.begin() + window.begin, contacts.begin() + window.end);
+  int shift = 0;
+  if (options.align_on_left_touchdown) {
+    for (int r = 0; r < M; ++r) {
+      const bool now = cyc[static_cast<std::size_t>(r)][0], before = cyc[static_cast<std::size_t>((r + M - 1) % M)][0];
+      if (now && !before) {
+        shift = r;
+        break;
+      }
+    }
+  }
+  Eigen::MatrixXd S(M, d);
+  std::vector<std::array<bool, kNumFeet>> cyc_shifted(static_cast<std::size_t>(M));
+  for (int r = 0; r < M; ++r) {
+    S.row(r) = P.row((r + shift) % M);
+    cyc_shifted[static_cast<std::size_t>(r)] = cyc[static_cast<std::size_t>((r + shift) % M)];
+  }
+  const Eigen::MatrixXd Y = resamplePeriodic(S, options.num_samples);
+
+  DynamicClip clip;
+  clip.name = options.name;
+  clip.axis = options.axis;
+  clip.direction = mean_cmd > 0.0 ? 1 : -1;
+  clip.nominal_scale = std::abs(mean_cmd);
+  clip.period = M * dt;
+  clip.q = Y.leftCols(n);
+  const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
+  for (Eigen::Index k = 0; k < clip.q.rows(); ++k)
+    for (Eigen::Index j = 0; j < n; ++j) clip.q(k, j) = std::min(upper(j), std::max(lower(j), clip.q(k, j)));
+  clip.qd = periodicDerivative(clip.q, clip.period);
+  clip.v_base = Y.middleCols(n, 3);
+  clip.omega_base = Y.middleCols(n + 3, 3);
+  clip.base_height = Y.col(n + 6);
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    std::vector<bool> flags(static_cast<std::size_t>(M));
+    for (int r = 0; r < M; ++r) flags[static_cast<std::size_t>(r)] = cyc_shifted[static_cast<std::size_t>(r)][f];
+    clip.contact[f] = contactModel(flags);
+  }
+  clip.meta.robot = robot.name;
+  clip.meta.joint_names = robot.jointNames();
+  clip.meta.frame_begin = window.begin;
+  clip.meta.frame_end = window.end;
+  clip.meta.source_fps = motion.fps;
+  clip.meta.source_file = motion.source_file;
+  return clip;
+}
+
+}  // namespace pmg::motion
