@@ -33,6 +33,25 @@ void debounce(std::vector<bool>& flags, int min_frames) {
   }
 }
 
+/// Hampel filter on columns [first, first + count) of x: a value farther than
+/// max(3 · 1.4826 · MAD, 0.05) from the median of its 5-sample window is replaced by that median.
+void despike(Eigen::MatrixXd& x, Eigen::Index first, Eigen::Index count) {
+  const Eigen::Index R = x.rows();
+  if (R < 5) return;
+  const Eigen::MatrixXd in = x;
+  for (Eigen::Index c = first; c < first + count; ++c)
+    for (Eigen::Index r = 0; r < R; ++r) {
+      const Eigen::Index a = std::max<Eigen::Index>(0, std::min(r - 2, R - 5));
+      double w[5], dev[5];
+      for (int i = 0; i < 5; ++i) w[i] = in(a + i, c);
+      std::sort(w, w + 5);
+      const double med = w[2];
+      for (int i = 0; i < 5; ++i) dev[i] = std::abs(w[i] - med);
+      std::sort(dev, dev + 5);
+      if (std::abs(in(r, c) - med) > std::max(3.0 * 1.4826 * dev[2], 0.05)) x(r, c) = med;
+    }
+}
+
 Eigen::Vector3d rotationLog(const Eigen::Matrix3d& R) {
   const Eigen::AngleAxisd aa(R);
   return aa.angle() * aa.axis();
@@ -191,7 +210,10 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
     X.row(r).segment<3>(n + 3) = (R_HW * w_W).transpose();
     X(r, n + 6) = motion.p_WB(k, 2);
   }
-  // Mean command over the cycle (raw data, before closing).
+  // Base velocities: single-frame spikes (root jumps in the source, e.g. the 7° yaw step at frame
+  // 19 of humanoid3d_walk.txt) replaced by the local median (Hampel filter).
+  despike(X, n, 6);
+  // Mean command over the cycle (before closing).
   const Eigen::Index cmd_col = options.axis == CommandAxis::kForward ? n : options.axis == CommandAxis::kLateral ? n + 1 : n + 5;
   const double mean_cmd = X.col(cmd_col).head(M).mean();
   if (std::abs(mean_cmd) < 1e-3)
