@@ -7,6 +7,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "pmg/common/robot_config.hpp"
+
 namespace pmg::policy {
 namespace {
 
@@ -204,42 +206,30 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   return c;
 }
 
-PolicyRobotSpec loadPolicyRobotSpec(const std::string& path, double control_period) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": cannot read robot config: " + e.what());
+PolicyRobotSpec makePolicyRobotSpec(const RobotConfig& robot, double control_period) {
+  if (!(control_period > 0.0) || !std::isfinite(control_period)) {
+    throw std::invalid_argument("makePolicyRobotSpec: control_period must be > 0 s, got " + fmtNum(control_period));
   }
   PolicyRobotSpec s;
+  s.name = robot.name;
   s.control_period = control_period;
-  if (root["robot"] && root["robot"]["name"]) s.name = root["robot"]["name"].as<std::string>();
-  const YAML::Node joints = root["joints"];
-  if (!joints || !joints.IsSequence() || joints.size() == 0) {
-    throw std::runtime_error(path + ": joints: expected a non-empty list of joints");
-  }
-  for (std::size_t i = 0; i < joints.size(); ++i) {
-    const std::string f = "joints[" + std::to_string(i) + "]";
-    for (const char* key : {"name", "default", "kp", "kd"}) {
-      if (!joints[i][key]) throw std::runtime_error(path + ": " + f + "." + key + ": missing");
-    }
-    try {
-      const auto name = joints[i]["name"].as<std::string>();
-      s.joint_names.push_back(name);
-      s.default_pose.push_back(joints[i]["default"].as<double>());
-      s.kp.push_back(joints[i]["kp"].as<double>());
-      s.kd.push_back(joints[i]["kd"].as<double>());
-      if (name.find("hip") != std::string::npos || name.find("knee") != std::string::npos ||
-          name.find("ankle") != std::string::npos) {
-        s.leg_joints.push_back(name);
-      } else if (name.rfind("waist", 0) == 0) {
-        s.waist_joints.push_back(name);
-      }
-    } catch (const YAML::Exception& e) {
-      throw std::runtime_error(path + ": " + f + ": expected name (text) and default/kp/kd (numbers): " + e.what());
+  for (const auto& j : robot.joints) {
+    s.joint_names.push_back(j.name);
+    s.default_pose.push_back(j.default_position);
+    s.kp.push_back(j.kp);
+    s.kd.push_back(j.kd);
+    if (j.name.find("hip") != std::string::npos || j.name.find("knee") != std::string::npos ||
+        j.name.find("ankle") != std::string::npos) {
+      s.leg_joints.push_back(j.name);
+    } else if (j.name.rfind("waist", 0) == 0) {
+      s.waist_joints.push_back(j.name);
     }
   }
   return s;
+}
+
+PolicyRobotSpec loadPolicyRobotSpec(const std::string& path, double control_period) {
+  return makePolicyRobotSpec(loadRobotConfig(path), control_period);
 }
 
 void checkContract(const PolicyContract& c, const PolicyRobotSpec& robot, const std::string& source) {

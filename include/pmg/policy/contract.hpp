@@ -18,6 +18,10 @@
 #include <string>
 #include <vector>
 
+namespace pmg {
+struct RobotConfig;  // include/pmg/common/robot_config.hpp
+}
+
 namespace pmg::policy {
 
 /// Contract format version this code reads (`version` field).
@@ -96,8 +100,8 @@ struct PolicyContract {
 PolicyContract parseContract(const std::string& yaml_text, const std::string& source);
 
 /// What the runner needs to know about the robot and the controller to accept a policy.
-/// Filled from the robot configuration (config/robots/<robot>/<robot>.yaml); see
-/// loadPolicyRobotSpec until pmg::RobotConfig provides it directly.
+/// Filled from the robot configuration (pmg::RobotConfig, config/robots/<robot>/<robot>.yaml) by
+/// makePolicyRobotSpec, plus the controller's period and PMG/GCO settings.
 struct PolicyRobotSpec {
   std::string name;                      ///< robot model name (informative)
   std::vector<std::string> joint_names;  ///< (nj) robot joint order
@@ -112,10 +116,14 @@ struct PolicyRobotSpec {
   std::map<std::string, std::string> pmg;
 };
 
-/// Reads joint names, default pose and PD gains from a robot YAML (`joints:` list with
-/// name/default/kp/kd, see config/robots/g1/g1.yaml). Leg joints = names containing "hip",
-/// "knee" or "ankle"; waist joints = names starting with "waist".
-/// @throws std::runtime_error naming file and field on a missing/malformed entry.
+/// Fills a spec from the robot configuration: joint order, default pose, kp, kd. Leg joints =
+/// names containing "hip", "knee" or "ankle"; waist joints = names starting with "waist".
+/// @param control_period controller loop period [s], > 0. pmg settings are left empty.
+/// @throws std::invalid_argument if control_period is not > 0.
+PolicyRobotSpec makePolicyRobotSpec(const RobotConfig& robot, double control_period);
+
+/// loadRobotConfig(robot_yaml_path) (validated, throws pmg::ConfigError naming file and key)
+/// followed by makePolicyRobotSpec.
 PolicyRobotSpec loadPolicyRobotSpec(const std::string& robot_yaml_path, double control_period);
 
 /// Compares a contract with the robot/controller. Numbers must match to 1e-9 relative
