@@ -1,0 +1,50 @@
+#pragma once
+/// @file controller_config.hpp
+/// Configuration of `pmg_controller` (config/controller/*.yaml): which robot, which clips, which
+/// backend (the SIL or the motor buses), timing, command limits, telemetry. Validated once at
+/// start-up; every error names the file, key and expected range.
+
+#include <string>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/controller/commands.hpp"
+#include "pmg/generator/generator.hpp"
+#include "pmg/hal/hal_runner.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+
+namespace pmg {
+
+enum class BackendKind { kMujoco };
+enum class TimingMode {
+  kLockstep,  ///< the loop drives the HAL cycles itself, as fast as possible (tests, CI)
+  kRealtime,  ///< 100 Hz loop thread + 500 Hz HAL thread paced to the wall clock
+};
+
+struct ControllerConfig {
+  std::string source_file;
+  std::string robot_file;        ///< absolute path of the robot config
+  std::string clips_dir;         ///< absolute path of the clip library folder
+  RobotConfig robot;
+  BackendKind backend = BackendKind::kMujoco;
+  TimingMode timing = TimingMode::kLockstep;
+  double loop_rate_hz = 100.0;   ///< controller loop rate [Hz]
+  double hal_rate_hz = 500.0;    ///< HAL rate [Hz], an integer multiple of loop_rate_hz
+  int loop_fifo_priority = 0;    ///< SCHED_FIFO priority of the loop thread (0: normal)
+  HalRunnerOptions hal;          ///< HAL thread priority / CPU
+  MujocoBackendOptions mujoco;
+  GeneratorParams generator;
+  CommandLimits commands;
+  double soft_stand_duration = 1.0;   ///< interpolation time from the measured to the standing pose [s]
+  double damping_kd_scale = 1.0;      ///< damping mode: kd = scale · config kd
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  bool lcm_enabled = true;       ///< receive commands / publish telemetry over LCM
+  std::string log_file;          ///< LCM event log to record ("" = none)
+
+  int cyclesPerTick() const { return static_cast<int>(hal_rate_hz / loop_rate_hz + 0.5); }
+};
+
+/// Loads and validates a controller config. Relative paths resolve against the file's folder.
+/// @throws ConfigError.
+ControllerConfig loadControllerConfig(const std::string& path);
+
+}  // namespace pmg
