@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""Tracking plot of a pmg_controller run: reference vs. measured joint angles of the leg joints
+(like the PMG paper's tracking figure), from the CSV written by pmg_log_export.
+
+    scripts/plot_tracking.py run.csv run_tracking.png
+"""
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+LEG = ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
+
+
+def main(csv_path: str, png_path: str) -> int:
+    data = np.genfromtxt(csv_path, delimiter=",", names=True)
+    t = data["t"]
+    fig, axes = plt.subplots(len(LEG), 2, figsize=(13, 12), sharex=True)
+    rms_all = []
+    for col, side in enumerate(["left", "right"]):
+        for row, joint in enumerate(LEG):
+            name = f"{side}_{joint}_joint"
+            q, q_ref = data["q_" + name], data["q_ref_" + name]
+            active = data["mode"] == 2
+            rms = float(np.sqrt(np.mean((q - q_ref)[active] ** 2))) if active.any() else float("nan")
+            rms_all.append(rms)
+            ax = axes[row, col]
+            ax.plot(t, q_ref, "k--", lw=1.0, label="reference (PMG)")
+            ax.plot(t, q, "C0", lw=1.2, label="measured")
+            ax.set_ylabel(f"{side} {joint}\n[rad]", fontsize=8)
+            ax.set_title(f"RMS error {rms:.4f} rad", fontsize=8, loc="right")
+            ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    # Shade the command segments on the top row.
+    for ax in axes[0]:
+        ax2 = ax.twinx()
+        ax2.plot(t, data["vx"], "C2", lw=0.8, alpha=0.6, label="v_x cmd [m/s]")
+        ax2.plot(t, data["wz"], "C3", lw=0.8, alpha=0.6, label="ω cmd [rad/s]")
+        ax2.set_ylim(-1.2, 1.2)
+        ax2.legend(loc="lower right", fontsize=7)
+    axes[0, 0].legend(loc="upper left", fontsize=7)
+    fig.suptitle(f"G1 leg joint tracking in the MuJoCo 2.2 SIL (gantry), mean RMS {np.nanmean(rms_all):.4f} rad")
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=110)
+    print(f"{png_path}: leg tracking RMS per joint [rad]: " + " ".join(f"{r:.4f}" for r in rms_all))
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        print(__doc__)
+        sys.exit(2)
+    sys.exit(main(sys.argv[1], sys.argv[2]))
