@@ -1,0 +1,76 @@
+#pragma once
+/// @file safe_backend.hpp
+/// @brief Puts the SafetySupervisor between the HAL and any backend, without changing the HAL:
+/// SafeBackend is itself a pmg::HalBackend that wraps the real one (CanBackend, MujocoBackend):
+///
+///   HalRunner(std::make_unique<SafeBackend>(std::make_unique<CanBackend>(...), options), n)
+///
+/// Each exchange() (one 2 ms HAL cycle, noexcept, allocation-free):
+///  1. builds the SafetyInput from the previous cycle's LowState (motor replies with valid = true
+///     refresh their watchdog; the IMU likewise; base height from simulation truth when valid, else
+///     unknown) and from the loop's LowCommand (a new `sequence` refreshes the command watchdog;
+///     the policy watchdog follows the command, and a non-finite command counts as invalid policy
+///     output);
+///  2. takes the pending mode request from requests() (gamepad / LCM threads post there);
+///  3. steps the supervisor and sends only its clamped command to the wrapped backend;
+///  4. publishes a SafetyStatus for telemetry through a lock-free LatestValue.
+/// Time is counted in HAL cycles (now = cycle * period), so lockstep runs are deterministic and
+/// the watchdogs measure "cycles without news" exactly.
+
+#include <memory>
+
+#include "pmg/hal/backend.hpp"
+#include "pmg/hal/latest_value.hpp"
+#include "pmg/hal/safety/mode_requests.hpp"
+#include "pmg/hal/safety/supervisor.hpp"
+
+namespace pmg::hal::safety {
+
+/// Telemetry snapshot (trivially copyable).
+struct SafetyStatus {
+  Mode mode = Mode::kPassive;
+  Fault fault;
+  double time_s = 0.0;                 ///< HAL time of this snapshot [s].
+  double stand_progress = 0.0;
+  /// max over joints of |predicted PD torque of the command sent| / tau_max this cycle (<= 1 by
+  /// construction; telemetry proof that no torque beyond limits was commanded).
+  double max_tau_ratio = 0.0;
+  std::uint64_t ticks = 0;
+  std::uint64_t refused_requests = 0;
+  std::uint64_t clamped_joint_ticks = 0;
+  std::uint64_t nonfinite_commands = 0;  ///< Loop commands that contained NaN/Inf.
+  std::array<std::uint32_t, kNumFaultCodes> fault_counts{};
+};
+
+class SafeBackend final : public pmg::HalBackend {
+ public:
+  /// Throws std::invalid_argument if `inner` is null or the options are invalid.
+  SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options);
+  const char* name() const noexcept override { return "safe"; }
+  double cyclePeriod() const noexcept override { return inner_->cyclePeriod(); }
+  pmg::BackendStatus exchange(const pmg::LowCommand& command, pmg::LowState& state) noexcept override;
+
+  /// Gamepad / LCM threads post mode requests here (lock-free).
+  ModeRequestMailbox& requests() noexcept { return requests_; }
+  /// Reporting side: newest status (wait-free).
+  bool status(SafetyStatus& out) noexcept { return status_.read(out); }
+  pmg::HalBackend& inner() noexcept { return *inner_; }
+  const SafetySupervisor& supervisor() const noexcept { return sup_; }
+  /// Last command sent to the wrapped backend (HAL thread / lockstep caller only).
+  const pmg::LowCommand& lastSafeCommand() const noexcept { return safe_; }
+
+ private:
+  std::unique_ptr<pmg::HalBackend> inner_;
+  SafetySupervisor sup_;
+  SafetyInput in_;
+  SafetyOutput out_;
+  pmg::LowCommand safe_{};
+  pmg::LowState last_{};
+  ModeRequestMailbox requests_;
+  pmg::LatestValue<SafetyStatus> status_;
+  std::uint64_t cycles_ = 0;
+  std::uint64_t last_sequence_ = ~0ull;
+  std::uint64_t nonfinite_ = 0;
+};
+
+}  // namespace pmg::hal::safety

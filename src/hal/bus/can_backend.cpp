@@ -1,0 +1,200 @@
+#include "pmg/hal/bus/can_backend.hpp"
+
+#include <poll.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "pmg/hal/bus/imu_protocol.hpp"
+#include "pmg/hal/bus/realtime.hpp"
+
+namespace pmg::hal::bus {
+
+std::string CanBackendOptions::validate() const {
+  if (!(reply_window_s >= 0.0)) return "reply_window_s: expected >= 0 s";
+  if (!(lockstep_timeout_s > 0.0)) return "lockstep_timeout_s: expected > 0 s";
+  if (bus_off_restart_cycles < 1) return "bus_off_restart_cycles: expected >= 1";
+  return {};
+}
+
+CanBackend::CanBackend(BusPlan plan, std::vector<std::unique_ptr<CanTransport>> transports,
+                       std::unique_ptr<CanTransport> imu, CanBackendOptions options)
+    : plan_(std::move(plan)), opt_(options), transports_(std::move(transports)), imu_(std::move(imu)) {
+  const std::string msg = opt_.validate();
+  if (!msg.empty()) throw std::invalid_argument("can backend options: " + msg);
+  const std::size_t nb = plan_.buses().size();
+  if (transports_.size() != nb)
+    throw std::invalid_argument("can backend: " + std::to_string(transports_.size()) + " transports for " +
+                                std::to_string(nb) + " buses");
+  num_joints_ = plan_.options().num_joints;
+  if (num_joints_ > pmg::kMaxMotors)
+    throw std::invalid_argument("can backend: " + std::to_string(num_joints_) + " joints > kMaxMotors");
+  route_.resize(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (!transports_[b]) throw std::invalid_argument("can backend: transport " + std::to_string(b) + " is null");
+    protocols_.push_back(makeMotorProtocol(plan_.buses()[b].protocol));
+    route_[b].fill(-1);
+    const auto& motors = plan_.buses()[b].motors;
+    for (std::size_t k = 0; k < motors.size(); ++k) route_[b][motors[k].motor_id] = static_cast<std::int16_t>(k);
+    pollfds_.push_back(::pollfd{transports_[b]->pollFd(), POLLIN, 0});
+  }
+  if (imu_) pollfds_.push_back(::pollfd{imu_->pollFd(), POLLIN, 0});
+  motor_counters_.resize(static_cast<std::size_t>(num_joints_));
+  got_.assign(static_cast<std::size_t>(num_joints_), 0);
+  bus_off_cycles_.assign(nb, 0);
+  double busiest = 0.0;
+  for (const BusLoad& l : plan_.loads()) busiest = std::max(busiest, l.busy_s);
+  window_s_ = opt_.reply_window_s > 0.0 ? opt_.reply_window_s
+                                        : std::min(busiest + 0.2e-3, 0.9 * plan_.options().period_s);
+}
+
+CanBackend::~CanBackend() {
+  // Best effort: leave every motor disabled (zero torque).
+  for (std::size_t b = 0; b < transports_.size(); ++b) {
+    for (const MotorSpec& m : plan_.buses()[b].motors) {
+      CanFrame f;
+      protocols_[b]->encodeControl(m, ControlRequest::kDisable, f);
+      transports_[b]->send(f);
+    }
+  }
+}
+
+bool CanBackend::allReplied() const noexcept {
+  for (std::size_t b = 0; b < transports_.size(); ++b) {
+    if (transports_[b]->state() == BusState::kBusOff) continue;  // nothing will come
+    for (const MotorSpec& m : plan_.buses()[b].motors)
+      if (!got_[static_cast<std::size_t>(m.joint_index)]) return false;
+  }
+  return true;
+}
+
+void CanBackend::handleFrame(std::size_t b, const CanFrame& f, pmg::LowState& state, bool late) noexcept {
+  if (f.error) return;  // state already updated by the transport
+  const MotorProtocol& p = *protocols_[b];
+  const int id = p.replyMotorId(f);
+  const int k = (id >= 0 && id < 256) ? route_[b][static_cast<std::size_t>(id)] : -1;
+  if (k < 0) {
+    // Not routable: count against no motor (transport rx counters still show it).
+    return;
+  }
+  const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];
+  MotorLinkCounters& c = motor_counters_[static_cast<std::size_t>(m.joint_index)];
+  if (late) {
+    ++c.late;
+    return;
+  }
+  MotorFeedback fb;
+  if (p.decodeReply(m, f, fb) != ReplyStatus::kOk) {
+    ++c.rejected;
+    return;
+  }
+  std::uint8_t& got = got_[static_cast<std::size_t>(m.joint_index)];
+  if (got) {
+    ++c.duplicates;
+    return;
+  }
+  got = 1;
+  const MotorFeedback j = toJointSide(m, fb);
+  pmg::MotorState& s = state.motors[static_cast<std::size_t>(m.joint_index)];
+  s.q = j.q;
+  s.qd = j.qd;
+  s.tau = j.tau;
+  s.valid = true;
+  ++c.replies;
+}
+
+pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::LowState& state) noexcept {
+  const std::size_t nb = transports_.size();
+  CanFrame f;
+  // 1. Late frames from the previous cycle.
+  for (std::size_t b = 0; b < nb; ++b) {
+    while (transports_[b]->receive(f) != RxStatus::kEmpty) handleFrame(b, f, state, true);
+  }
+  std::fill(got_.begin(), got_.end(), 0);
+  imu_got_ = false;
+  state.num_motors = num_joints_;
+  for (int j = 0; j < num_joints_; ++j) state.motors[static_cast<std::size_t>(j)].valid = false;
+  state.imu.valid = false;
+
+  // 2. Sends, bus by bus in plan order; bus-off handling.
+  for (std::size_t b = 0; b < nb; ++b) {
+    CanTransport& t = *transports_[b];
+    if (t.state() == BusState::kBusOff) {
+      if (++bus_off_cycles_[b] >= opt_.bus_off_restart_cycles) {
+        t.restart();
+        bus_off_cycles_[b] = 0;
+      }
+      continue;
+    }
+    bus_off_cycles_[b] = 0;
+    const MotorProtocol& p = *protocols_[b];
+    for (const MotorSpec& m : plan_.buses()[b].motors) {
+      if (cycles_ == 0) {
+        p.encodeControl(m, ControlRequest::kEnable, f);
+      } else {
+        const pmg::MotorCommand& jc = command.motors[static_cast<std::size_t>(m.joint_index)];
+        const MotorCommand mc = toMotorSide(m, MotorCommand{jc.q, jc.qd, jc.kp, jc.kd, jc.tau_ff});
+        if (!p.encodeCommand(m, mc, f)) {
+          ++nonfinite_commands_;
+          p.encodeCommand(m, MotorCommand{m.offset, 0.0, 0.0, 0.0, 0.0}, f);
+        }
+      }
+      t.send(f);
+    }
+  }
+
+  // 3. Replies.
+  const double t0 = rt::now();
+  const double deadline = t0 + (opt_.lockstep ? opt_.lockstep_timeout_s : window_s_);
+  for (;;) {
+    for (std::size_t b = 0; b < nb; ++b) {
+      while (transports_[b]->receive(f) == RxStatus::kFrame) handleFrame(b, f, state, false);
+    }
+    if (imu_) {
+      while (imu_->receive(f) == RxStatus::kFrame) {
+        std::uint32_t seq = 0;
+        if (decodeImu(f, state.imu, seq)) {
+          imu_got_ = true;
+          ++imu_frames_;
+        } else if (!f.error) {
+          ++imu_rejected_;
+        }
+      }
+    }
+    const bool motors_done = allReplied();
+    if (opt_.lockstep ? (imu_ ? imu_got_ : motors_done) : motors_done) {
+      // In lockstep the SIL sends the IMU frame after all its replies: once it is here, every reply
+      // that will come this cycle is already in the socket buffers; drain them once more.
+      if (opt_.lockstep) {
+        for (std::size_t b = 0; b < nb; ++b)
+          while (transports_[b]->receive(f) == RxStatus::kFrame) handleFrame(b, f, state, false);
+      }
+      break;
+    }
+    const double now = rt::now();
+    if (now >= deadline) break;
+    const double wait = std::min(deadline - now, 1e-3);
+    const timespec ts{0, static_cast<long>(wait * 1e9)};
+    ::ppoll(pollfds_.data(), pollfds_.size(), &ts, nullptr);
+  }
+
+  int valid = 0;
+  for (int j = 0; j < num_joints_; ++j) {
+    if (got_[static_cast<std::size_t>(j)]) ++valid;
+    else ++motor_counters_[static_cast<std::size_t>(j)].missing;
+  }
+  ++cycles_;
+  state.sequence = cycles_;
+  state.time = static_cast<double>(cycles_) * plan_.options().period_s;
+  std::uint32_t faults = 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const TransportCounters& c = transports_[b]->counters();
+    faults += static_cast<std::uint32_t>(c.bus_off_events + c.tx_errors + c.rx_errors);
+  }
+  state.backend_faults = faults;
+  if (valid == num_joints_) return pmg::BackendStatus::kOk;
+  return valid > 0 ? pmg::BackendStatus::kPartial : pmg::BackendStatus::kFault;
+}
+
+}  // namespace pmg::hal::bus

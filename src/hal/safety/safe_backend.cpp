@@ -1,0 +1,93 @@
+#include "pmg/hal/safety/safe_backend.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace pmg::hal::safety {
+
+SafeBackend::SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options)
+    : inner_(std::move(inner)), sup_(std::move(options)) {
+  if (!inner_) throw std::invalid_argument("SafeBackend: wrapped backend is null");
+  if (sup_.numJoints() > static_cast<std::size_t>(pmg::kMaxMotors))
+    throw std::invalid_argument("SafeBackend: more joints than pmg::kMaxMotors");
+  in_ = sup_.makeInput();
+  out_ = sup_.makeOutput();
+  safe_.num_motors = static_cast<int>(sup_.numJoints());
+}
+
+pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::LowState& state) noexcept {
+  const std::size_t n = sup_.numJoints();
+  const double now = static_cast<double>(cycles_) * inner_->cyclePeriod();
+  in_.now_s = now;
+  in_.request = requests_.take();
+  for (std::size_t j = 0; j < n; ++j) {
+    const pmg::MotorState& m = last_.motors[j];
+    if (cycles_ > 0 && m.valid) {
+      in_.q[j] = m.q;
+      in_.qd[j] = m.qd;
+      in_.tau[j] = m.tau;
+      in_.motor_stamp_s[j] = now;
+    }
+  }
+  if (cycles_ > 0 && last_.imu.valid) {
+    for (int i = 0; i < 4; ++i) in_.imu.quat_WB[i] = last_.imu.quat_wxyz[static_cast<std::size_t>(i)];
+    for (int i = 0; i < 3; ++i) {
+      in_.imu.omega_B[i] = last_.imu.gyro[static_cast<std::size_t>(i)];
+      in_.imu.acc_B[i] = last_.imu.acc[static_cast<std::size_t>(i)];
+    }
+    in_.imu.stamp_s = now;
+  }
+  in_.base_height_m = last_.base_truth_valid ? last_.base_position[2] : std::nan("");
+  bool finite = true;
+  for (std::size_t j = 0; j < n; ++j) {
+    const pmg::MotorCommand& c = command.motors[j];
+    in_.cmd_q[j] = c.q;
+    in_.cmd_qd[j] = c.qd;
+    in_.cmd_kp[j] = c.kp;
+    in_.cmd_kd[j] = c.kd;
+    in_.cmd_tau[j] = c.tau_ff;
+    finite = finite && std::isfinite(c.q) && std::isfinite(c.qd) && std::isfinite(c.kp) && std::isfinite(c.kd) &&
+             std::isfinite(c.tau_ff);
+  }
+  if (command.sequence != last_sequence_) {
+    last_sequence_ = command.sequence;
+    in_.command_stamp_s = now;
+    in_.policy_stamp_s = now;
+    if (!finite) ++nonfinite_;
+  }
+  in_.policy_valid = finite;
+
+  sup_.step(in_, out_);
+
+  double max_tau = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    pmg::MotorCommand& s = safe_.motors[j];
+    s.q = out_.cmd_q[j];
+    s.qd = out_.cmd_qd[j];
+    s.kp = out_.cmd_kp[j];
+    s.kd = out_.cmd_kd[j];
+    s.tau_ff = out_.cmd_tau[j];
+    const JointSetpoint sp{s.q, s.qd, s.kp, s.kd, s.tau_ff};
+    max_tau = std::max(max_tau, std::fabs(predictedTorque(sp, in_.q[j], in_.qd[j])) / sup_.options().joints[j].tau_max);
+  }
+  safe_.sequence = command.sequence;
+  const pmg::BackendStatus st = inner_->exchange(safe_, state);
+  last_ = state;
+  ++cycles_;
+
+  SafetyStatus s;
+  s.mode = out_.mode;
+  s.fault = out_.fault;
+  s.time_s = now;
+  s.stand_progress = out_.stand_progress;
+  s.max_tau_ratio = max_tau;
+  s.ticks = out_.ticks;
+  s.refused_requests = out_.refused_requests;
+  s.clamped_joint_ticks = out_.clamped_joint_ticks;
+  s.nonfinite_commands = nonfinite_;
+  s.fault_counts = out_.fault_counts;
+  status_.write(s);
+  return st;
+}
+
+}  // namespace pmg::hal::safety
