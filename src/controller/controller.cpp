@@ -35,7 +35,10 @@ std::int64_t toUtime(double t) { return static_cast<std::int64_t>(std::llround(t
 
 }  // namespace
 
-Controller::Controller(ControllerConfig config) : config_(std::move(config)), shaper_(config_.commands) {
+Controller::Controller(ControllerConfig config) : Controller(config, nullptr) {}
+
+Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> backend)
+    : config_(std::move(config)), shaper_(config_.commands) {
   const RobotConfig& robot = config_.robot;
   if (robot.numJoints() > static_cast<std::size_t>(kMaxMotors))
     throw ConfigError(robot.source_file + ": joints: " + std::to_string(robot.numJoints()) + " joints, at most " +
@@ -44,7 +47,7 @@ Controller::Controller(ControllerConfig config) : config_(std::move(config)), sh
   generator_model_ = std::make_shared<const GeneratorModel>(clips, jointSpaceOf(robot), config_.generator);
   generator_ = std::make_unique<MotionGenerator>(generator_model_);
   dt_ = 1.0 / config_.loop_rate_hz;
-  auto backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
+  if (!backend) backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
   hal_ = std::make_unique<HalRunner>(std::move(backend), static_cast<int>(robot.numJoints()), config_.hal);
   command_.num_motors = static_cast<int>(robot.numJoints());
 

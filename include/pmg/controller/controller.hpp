@@ -75,6 +75,8 @@ class Controller {
   /// Setup: loads the clips, builds the generator, the backend and the HAL, opens LCM and the
   /// event log. @throws ConfigError / std::runtime_error naming the file and field.
   explicit Controller(ControllerConfig config);
+  /// Same with an explicit backend (hardware buses, test mocks) instead of the config's.
+  Controller(ControllerConfig config, std::unique_ptr<HalBackend> backend);
   ~Controller();
   Controller(const Controller&) = delete;
   Controller& operator=(const Controller&) = delete;
