@@ -1,0 +1,283 @@
+// pmg_generator_vectors: runs the C++ PMG generator (include/pmg/generator/generator.hpp) over a
+// fixed command schedule and writes inputs and outputs as JSON, for the Python/JAX port used in
+// training (training/pmg_train/pmg_generator.py) to prove equality (test/policy: pmg_port_*).
+//
+//   build-policy/bin/pmg_generator_vectors --out /tmp/vectors.json            # synthetic clips
+//   build-policy/bin/pmg_generator_vectors --clips config/clips/g1/*.yaml --out v.json
+//
+// The JSON holds everything the port needs: the joint space (from the robot config), the
+// generator parameters, the clips as given to GeneratorModel (missing directions are derived by
+// both implementations), dt, and per tick the commands and every GeneratorOutput field.
+// Synthetic clips (default) are smooth periodic joint trajectories around the default pose,
+// declared provenance "synthesized"; they exercise every code path (time reversal, mirroring,
+// all three static axes, clamping) independently of the motion-preprocessing clips.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/generator/generator.hpp"
+#include "pmg/motion/clip_io.hpp"
+
+namespace {
+
+using pmg::CommandAxis;
+using pmg::PostureAxis;
+
+class Json {
+ public:
+  explicit Json(std::FILE* f) : f_(f) {}
+  void num(double v) { std::fprintf(f_, "%.17g", std::isfinite(v) ? v : 0.0); }
+  void vec(const Eigen::VectorXd& v) {
+    std::fputc('[', f_);
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      if (i) std::fputc(',', f_);
+      num(v[i]);
+    }
+    std::fputc(']', f_);
+  }
+  template <typename C>
+  void list(const C& c) {
+    std::fputc('[', f_);
+    bool first = true;
+    for (const auto& v : c) {
+      if (!first) std::fputc(',', f_);
+      first = false;
+      num(static_cast<double>(v));
+    }
+    std::fputc(']', f_);
+  }
+  void mat(const Eigen::MatrixXd& m) {
+    std::fputc('[', f_);
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      if (r) std::fputc(',', f_);
+      vec(m.row(r).transpose());
+    }
+    std::fputc(']', f_);
+  }
+  void key(const char* k) { std::fprintf(f_, "\"%s\":", k); }
+  void raw(const char* s) { std::fputs(s, f_); }
+
+ private:
+  std::FILE* f_;
+};
+
+pmg::GeneratorJointSpace jointSpaceOf(const pmg::RobotConfig& r) {
+  pmg::GeneratorJointSpace js;
+  js.joint_names = r.jointNames();
+  js.q_stand = r.defaultPose();
+  js.lower = r.lowerLimits();
+  js.upper = r.upperLimits();
+  js.mirror_index = r.mirrorIndex();
+  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
+  js.standing_base_height = r.standing_base_height;
+  return js;
+}
+
+pmg::DynamicClip syntheticDynamic(const pmg::GeneratorJointSpace& js, const char* name, CommandAxis axis,
+                                  int direction, double nominal, double period, int samples, double seed) {
+  const auto n = static_cast<Eigen::Index>(js.joint_names.size());
+  pmg::DynamicClip c;
+  c.name = name;
+  c.axis = axis;
+  c.direction = direction;
+  c.nominal_scale = nominal;
+  c.period = period;
+  c.q.resize(samples, n);
+  c.qd.resize(samples, n);
+  c.v_base.resize(samples, 3);
+  c.omega_base.resize(samples, 3);
+  c.base_height.resize(samples);
+  const double w = 2.0 * M_PI / period;
+  for (int k = 0; k < samples; ++k) {
+    const double ph = 2.0 * M_PI * k / samples;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double amp = 0.05 + 0.15 * std::fabs(std::sin(1.7 * static_cast<double>(j) + seed));
+      const double off = 0.4 * static_cast<double>(j) + seed;
+      const double mid = 0.5 * (js.lower[j] + js.upper[j]);
+      const double q0 = js.q_stand[j] + 0.02 * (mid - js.q_stand[j]);
+      c.q(k, j) = std::clamp(q0 + amp * std::sin(ph + off), js.lower[j] + 1e-3, js.upper[j] - 1e-3);
+      c.qd(k, j) = amp * w * std::cos(ph + off);
+    }
+    const double s = direction * nominal;
+    c.v_base.row(k) << (axis == CommandAxis::kForward ? s : 0.0) + 0.05 * std::sin(2 * ph),
+        (axis == CommandAxis::kLateral ? s : 0.0) + 0.03 * std::sin(ph + seed), 0.01 * std::cos(2 * ph);
+    c.omega_base.row(k) << 0.05 * std::sin(ph), 0.04 * std::cos(ph + seed),
+        (axis == CommandAxis::kYaw ? s : 0.0) + 0.02 * std::sin(ph);
+    c.base_height[k] = js.standing_base_height - 0.02 + 0.01 * std::sin(2 * ph + seed);
+  }
+  c.contact[0] = {0.25 + 0.01 * seed, 0.27};
+  c.contact[1] = {0.74 - 0.01 * seed, 0.29};
+  c.meta.joint_names = js.joint_names;
+  c.meta.provenance = "synthesized";
+  c.meta.notes = "pmg_generator_vectors test clip";
+  return c;
+}
+
+pmg::StaticClip syntheticStatic(const pmg::GeneratorJointSpace& js, const char* name, PostureAxis axis,
+                                std::vector<double> values, double neutral, double seed) {
+  const auto n = static_cast<Eigen::Index>(js.joint_names.size());
+  pmg::StaticClip s;
+  s.name = name;
+  s.axis = axis;
+  s.values = Eigen::Map<Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+  s.neutral = neutral;
+  s.q.resize(s.values.size(), n);
+  for (Eigen::Index k = 0; k < s.values.size(); ++k) {
+    const double d = s.values[k] - neutral;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double g = std::sin(0.9 * static_cast<double>(j) + seed) + 0.3 * d;
+      s.q(k, j) = std::clamp(js.q_stand[j] + 1.2 * d * g, js.lower[j] + 1e-3, js.upper[j] - 1e-3);
+    }
+  }
+  s.meta.joint_names = js.joint_names;
+  s.meta.provenance = "synthesized";
+  return s;
+}
+
+/// Command schedule: 14 segments covering standing, every axis and sign, combinations,
+/// clamping, posture axes, height "no command" (0), and smooth transitions between them.
+void commandAt(int tick, int ticks_per_segment, pmg::VelocityCommand& u_d, pmg::PostureCommand& u_s) {
+  static const double table[][6] = {
+      // vx, vy, wz, pitch, roll, height
+      {0.0, 0.0, 0.0, 0.0, 0.0, 0.0},   {0.6, 0.0, 0.0, 0.0, 0.0, 0.0},   {1.2, 0.0, 0.0, 0.0, 0.0, 0.0},
+      {-0.5, 0.0, 0.0, 0.0, 0.0, 0.0},  {0.0, 0.4, 0.0, 0.0, 0.0, 0.0},   {0.0, -0.5, 0.0, 0.0, 0.0, 0.0},
+      {0.0, 0.0, 0.8, 0.0, 0.0, 0.0},   {0.0, 0.0, -1.0, 0.0, 0.0, 0.0},  {0.5, 0.2, 0.5, 0.1, -0.1, 0.70},
+      {2.0, -1.0, 2.0, 0.0, 0.0, 0.0},  {0.0, 0.0, 0.0, 0.4, 0.0, 0.62}, {0.0, 0.0, 0.0, -0.3, 0.25, 0.50},
+      {-0.3, 0.3, -0.4, 0.8, -0.5, 0.9}, {0.02, -0.01, 0.03, 0.0, 0.0, 0.0}};
+  constexpr int kSegments = sizeof(table) / sizeof(table[0]);
+  const int seg = (tick / ticks_per_segment) % kSegments;
+  const int next = (seg + 1) % kSegments;
+  const double t = static_cast<double>(tick % ticks_per_segment) / ticks_per_segment;
+  const double blend = t < 0.7 ? 0.0 : (t - 0.7) / 0.3;  // hold, then ramp to the next segment
+  double v[6];
+  for (int i = 0; i < 6; ++i) v[i] = (1 - blend) * table[seg][i] + blend * table[next][i];
+  u_d = {v[0], v[1], v[2]};
+  u_s = {v[3], v[4], v[5]};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Emit PMG generator test vectors (JSON) for the Python port"};
+  std::string robot_path = "config/robots/g1/g1.yaml", out = "pmg_vectors.json";
+  std::vector<std::string> clip_files;
+  int ticks = 1400;
+  double dt = 0.01, phase0 = 0.3;
+  app.add_option("--robot", robot_path, "robot config YAML");
+  app.add_option("--clips", clip_files, "clip files (default: synthetic clips)");
+  app.add_option("--out", out, "output JSON file");
+  app.add_option("--ticks", ticks, "generator ticks")->check(CLI::Range(1, 1000000));
+  app.add_option("--dt", dt, "tick period [s]")->check(CLI::PositiveNumber);
+  app.add_option("--phase0", phase0, "initial phase")->check(CLI::Range(0.0, 1.0));
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
+    const pmg::GeneratorJointSpace js = jointSpaceOf(robot);
+    pmg::ClipLibrary lib;
+    if (!clip_files.empty()) {
+      lib = pmg::loadClipLibrary(clip_files, robot);
+    } else {
+      lib.dynamic_clips.push_back(syntheticDynamic(js, "walk_forward", CommandAxis::kForward, 1, 0.8, 0.9, 40, 0.0));
+      lib.dynamic_clips.push_back(syntheticDynamic(js, "walk_left", CommandAxis::kLateral, 1, 0.35, 0.8, 33, 1.0));
+      lib.dynamic_clips.push_back(syntheticDynamic(js, "turn_left", CommandAxis::kYaw, 1, 0.7, 1.1, 48, 2.0));
+      lib.dynamic_clips.push_back(syntheticDynamic(js, "turn_right", CommandAxis::kYaw, -1, 0.6, 1.0, 45, 3.0));
+      lib.static_clips.push_back(syntheticStatic(js, "squat", PostureAxis::kHeight, {0.55, 0.65, 0.72, js.standing_base_height},
+                                                 js.standing_base_height, 0.5));
+      lib.static_clips.push_back(syntheticStatic(js, "bend", PostureAxis::kPitch, {-0.2, 0.0, 0.3, 0.6}, 0.0, 1.5));
+      lib.static_clips.push_back(syntheticStatic(js, "lean", PostureAxis::kRoll, {-0.3, 0.0, 0.3}, 0.0, 2.5));
+    }
+    const pmg::GeneratorParams params;
+    auto model = std::make_shared<const pmg::GeneratorModel>(lib, js, params);
+    pmg::MotionGenerator gen(model);
+    gen.reset(phase0);
+
+    std::FILE* f = std::fopen(out.c_str(), "w");
+    if (f == nullptr) throw std::runtime_error(out + ": cannot open for writing");
+    Json j(f);
+    j.raw("{");
+    j.key("generator");
+    j.raw("\"include/pmg/generator/generator.hpp\",");
+    j.key("joint_names");
+    j.raw("[");
+    for (std::size_t i = 0; i < js.joint_names.size(); ++i) std::fprintf(f, "%s\"%s\"", i ? "," : "", js.joint_names[i].c_str());
+    j.raw("],");
+    j.key("q_stand"); j.vec(js.q_stand); j.raw(",");
+    j.key("lower"); j.vec(js.lower); j.raw(",");
+    j.key("upper"); j.vec(js.upper); j.raw(",");
+    j.key("mirror_index"); j.list(js.mirror_index); j.raw(",");
+    j.key("mirror_sign"); j.list(js.mirror_sign); j.raw(",");
+    j.key("standing_base_height"); j.num(js.standing_base_height); j.raw(",");
+    j.key("epsilon"); j.num(params.epsilon); j.raw(",");
+    j.key("max_command"); j.list(params.max_command); j.raw(",");
+    j.key("dynamic_clips");
+    j.raw("[");
+    for (std::size_t i = 0; i < lib.dynamic_clips.size(); ++i) {
+      const auto& c = lib.dynamic_clips[i];
+      std::fprintf(f, "%s{\"name\":\"%s\",\"axis\":%d,\"direction\":%d,", i ? "," : "", c.name.c_str(), static_cast<int>(c.axis), c.direction);
+      j.key("nominal_scale"); j.num(c.nominal_scale); j.raw(",");
+      j.key("period"); j.num(c.period); j.raw(",");
+      j.key("q"); j.mat(c.q); j.raw(",");
+      j.key("qd"); j.mat(c.qd); j.raw(",");
+      j.key("v_base"); j.mat(c.v_base); j.raw(",");
+      j.key("omega_base"); j.mat(c.omega_base); j.raw(",");
+      j.key("base_height"); j.vec(c.base_height); j.raw(",");
+      j.key("contact");
+      std::fprintf(f, "[[%.17g,%.17g],[%.17g,%.17g]]}", c.contact[0].mu, c.contact[0].sigma, c.contact[1].mu, c.contact[1].sigma);
+    }
+    j.raw("],");
+    j.key("static_clips");
+    j.raw("[");
+    for (std::size_t i = 0; i < lib.static_clips.size(); ++i) {
+      const auto& s = lib.static_clips[i];
+      std::fprintf(f, "%s{\"name\":\"%s\",\"axis\":%d,", i ? "," : "", s.name.c_str(), static_cast<int>(s.axis));
+      j.key("values"); j.vec(s.values); j.raw(",");
+      j.key("neutral"); j.num(s.neutral); j.raw(",");
+      j.key("q"); j.mat(s.q); j.raw("}");
+    }
+    j.raw("],");
+    j.key("dt"); j.num(dt); j.raw(",");
+    j.key("phase0"); j.num(phase0); j.raw(",");
+    j.key("ticks");
+    j.raw("[\n");
+    const int per_segment = std::max(1, ticks / 14);
+    for (int t = 0; t < ticks; ++t) {
+      pmg::VelocityCommand u_d;
+      pmg::PostureCommand u_s;
+      commandAt(t, per_segment, u_d, u_s);
+      gen.step(u_d, u_s, dt);
+      const pmg::GeneratorOutput& o = gen.output();
+      j.raw(t ? ",\n{" : "{");
+      j.key("u_d"); j.list(std::vector<double>{u_d.vx, u_d.vy, u_d.wz}); j.raw(",");
+      j.key("u_s"); j.list(std::vector<double>{u_s.pitch, u_s.roll, u_s.height}); j.raw(",");
+      j.key("phase"); j.num(o.phase); j.raw(",");
+      j.key("next_phase"); j.num(o.next_phase); j.raw(",");
+      j.key("period"); j.num(o.period); j.raw(",");
+      j.key("q_ref"); j.vec(o.q_ref); j.raw(",");
+      j.key("qd_ref"); j.vec(o.qd_ref); j.raw(",");
+      j.key("alpha"); j.list(o.alpha); j.raw(",");
+      j.key("weight"); j.list(o.weight); j.raw(",");
+      j.key("standing_weight"); j.num(o.standing_weight); j.raw(",");
+      j.key("beta"); j.list(o.beta); j.raw(",");
+      j.key("contact_mu"); j.list(std::vector<double>{o.contact[0].mu, o.contact[1].mu}); j.raw(",");
+      j.key("contact_sigma"); j.list(std::vector<double>{o.contact[0].sigma, o.contact[1].sigma}); j.raw(",");
+      j.key("in_contact"); j.list(std::vector<double>{o.in_contact[0] ? 1.0 : 0.0, o.in_contact[1] ? 1.0 : 0.0}); j.raw(",");
+      j.key("v_base"); j.vec(o.v_base); j.raw(",");
+      j.key("yaw_rate"); j.num(o.yaw_rate); j.raw(",");
+      j.key("base_height"); j.num(o.base_height); j.raw(",");
+      j.key("clamped_joints"); j.num(o.clamped_joints); j.raw("}");
+    }
+    j.raw("]}\n");
+    std::fclose(f);
+    std::printf("wrote %d ticks, %zu dynamic + %zu static clips to %s\n", ticks, lib.dynamic_clips.size(),
+                lib.static_clips.size(), out.c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
