@@ -43,7 +43,7 @@ double robotLegLength(const KinematicModel& model) {
   ChainFkWorkspace ws(leg);
   const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.config().numJoints()));
   Eigen::Isometry3d X_foot, X_hip;
-  if (!ws.tipPose(q0, X_foot) || !ws.segmentPose(q0, 0, X_hip))
+  if (!ws.tipPose(q0, X_foot) || !ws.segmentPose(q0, 1, X_hip))  // after segment 1 = hip pitch link
     throw std::runtime_error("robotLegLength: KDL forward kinematics failed");
   return (X_foot.translation() - X_hip.translation()).norm();
 }

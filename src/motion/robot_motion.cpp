@@ -19,7 +19,8 @@ double headingOf(const Eigen::Quaterniond& R_WB) {
   return std::atan2(R(1, 0), R(0, 0));
 }
 
-void placeOnGround(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg) {
+namespace {
+void soleTracks(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg, bool place) {
   const int F = motion.numFrames();
   const auto soles = g1SolePoints_F();
   ChainFkWorkspace ws_left(left_leg), ws_right(right_leg);
@@ -42,8 +43,8 @@ void placeOnGround(RobotMotion& motion, const LimbChain& left_leg, const LimbCha
       }
       lowest[f] = Eigen::Vector3d(centre.x(), centre.y(), zmin);
     }
-    const double height = -std::min(lowest[0].z(), lowest[1].z());
-    motion.p_WB(k, 2) = height;
+    if (place) motion.p_WB(k, 2) = -std::min(lowest[0].z(), lowest[1].z());
+    const double height = motion.p_WB(k, 2);
     for (int f = 0; f < 2; ++f) {
       Eigen::Vector3d p = lowest[f];
       p.x() += motion.p_WB(k, 0);
@@ -52,6 +53,16 @@ void placeOnGround(RobotMotion& motion, const LimbChain& left_leg, const LimbCha
       motion.p_WS[static_cast<std::size_t>(f)].row(k) = p.transpose();
     }
   }
+}
+
+}  // namespace
+
+void placeOnGround(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg) {
+  soleTracks(motion, left_leg, right_leg, true);
+}
+
+void computeSoleTracks(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg) {
+  soleTracks(motion, left_leg, right_leg, false);
 }
 
 }  // namespace pmg::motion

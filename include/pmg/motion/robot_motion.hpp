@@ -47,6 +47,10 @@ std::array<Eigen::Vector3d, 4> g1SolePoints_F();
 /// @throws std::runtime_error if forward kinematics fails.
 void placeOnGround(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg);
 
+/// Fills RobotMotion::p_WS by forward kinematics without moving the base (p_WB as given).
+/// @throws std::runtime_error if forward kinematics fails.
+void computeSoleTracks(RobotMotion& motion, const LimbChain& left_leg, const LimbChain& right_leg);
+
 /// Heading (yaw) of a base orientation: angle of its x axis projected on the ground plane [rad].
 double headingOf(const Eigen::Quaterniond& R_WB);
 

@@ -1,0 +1,97 @@
+#pragma once
+/// @file keypoint_retarget.hpp
+/// Optimisation-based retargeting "ceres_keypoints_v1" (seed: human mocap → D_robot^d).
+///
+/// Per frame, Ceres (Levenberg-Marquardt, dense QR, central numeric derivatives of a KDL forward
+/// kinematics pass) solves for the robot base pose x_B = (p_WB [m], roll/pitch/yaw [rad], R_WB =
+/// Rz·Ry·Rx) and the joint angles q (n, bounded by the joint limits) that minimise
+///   Σ w_kp |p_WK(x) − p̂_WK|²                  keypoints: knees, ankles, toes, shoulders, elbows,
+///                                               wrists (+ pelvis position, weak in z)
+/// + w_ori (|log R̂ᵀR|²) for pelvis, torso and feet
+/// + w_contact (|p_xy − anchor|² + |z_ankle − z_flat|² + |flatness|²) for feet in contact
+/// + w_ground Σ max(0, −z_sole)²                 no ground penetration (4 sole points per foot)
+/// + w_smooth |x − x_prev|²                      temporal smoothness (warm-started sequence)
+/// + w_posture |q − q_default|²                  resolves unobserved joints (wrists)
+/// Targets p̂ handle the size difference by scaling: the pelvis position is scaled by s
+/// (robot/human leg length), and each limb keypoint is placed from its parent target along the
+/// human segment direction with the robot's segment length (hip → knee → ankle, shoulder → elbow
+/// → wrist); toes = ankle + R̂_foot·(kToeOffset, 0, 0). Contacts are detected on the human
+/// (foot height and speed thresholds); during a contact run the robot foot is held at the run's
+/// mean target position (unsliding), flat, on the ground.
+/// Setup-time/offline code (allocates, throws).
+
+#include <array>
+#include <vector>
+
+#include "pmg/common/kinematics.hpp"
+#include "pmg/motion/clip_builder.hpp"
+#include "pmg/motion/human_motion.hpp"
+#include "pmg/motion/robot_motion.hpp"
+
+namespace pmg::motion {
+
+struct KeypointRetargetOptions {
+  double scale = 0.0;              ///< human → robot length scale; ≤ 0: robot leg / human leg length
+  /// true: limb targets along the human segment directions with the robot's segment lengths;
+  /// false: every keypoint target = scale · human keypoint (exact for motions generated from the
+  /// robot itself, used by the recovery test).
+  bool segment_directions = true;
+  double w_keypoint = 1.0;         ///< limb keypoints [1/m]
+  double w_foot_keypoint = 3.0;    ///< ankle and toe keypoints [1/m]
+  double w_pelvis_xy = 1.0;        ///< pelvis horizontal position [1/m]
+  double w_pelvis_z = 0.2;         ///< pelvis height [1/m] (weak: feet and ground decide)
+  double w_orientation = 0.5;      ///< pelvis and torso orientation [1/rad]
+  double w_foot_orientation = 0.3; ///< foot orientation [1/rad]
+  double w_contact = 10.0;         ///< stance foot anchor/flat/on-ground [1/m, 1/rad]
+  double w_ground = 30.0;          ///< ground penetration hinge [1/m]
+  double w_smooth = 0.01;          ///< change from the previous frame [1/rad, 1/m]
+  double w_posture = 0.003;        ///< pull to the default pose [1/rad]
+  int max_iterations = 60;         ///< Ceres iterations per frame, ≥ 1
+  double contact_height = 0.03;    ///< human foot (min of ankle, toe) above its flat height [m]
+  double contact_speed = 0.5;      ///< human ankle horizontal speed [m/s]
+  /// @throws std::invalid_argument naming the field and range.
+  void validate() const;
+};
+
+/// Target keypoints of one frame, robot scale, W [m].
+using KeypointTargets = std::array<Eigen::Vector3d, kNumKeypoints>;
+
+/// Quality numbers of a retargeted motion (over a frame window).
+struct RetargetStats {
+  double keypoint_error_mean = 0.0;  ///< mean |robot − target| over limb keypoints and frames [m]
+  double keypoint_error_max = 0.0;   ///< max of the same [m]
+  int joint_limit_violations = 0;    ///< samples outside the limits (bounds: must be 0)
+  int stances = 0;                   ///< contact runs fully inside the window
+  double skate_mean_mm = 0.0;        ///< mean over stances of the sole's max horizontal drift [mm]
+  double skate_max_mm = 0.0;         ///< max of the same [mm]
+  double penetration_max_mm = 0.0;   ///< deepest sole point below the ground [mm]
+  double solve_ms_per_frame = 0.0;   ///< mean Ceres time per frame [ms]
+};
+
+struct RetargetResult {
+  RobotMotion motion;                    ///< q, base pose, sole tracks (p_WS filled)
+  ContactSequence contacts;              ///< human contacts the solve enforced
+  std::vector<KeypointTargets> targets;  ///< (F) targets, robot scale
+  std::vector<KeypointTargets> achieved; ///< (F) robot keypoints after the solve
+  double scale = 1.0;                    ///< the s used
+  double solve_ms_per_frame = 0.0;
+};
+
+/// Human contact detection (see KeypointRetargetOptions::contact_height/contact_speed).
+ContactSequence detectHumanContacts(const HumanMotion& human, const KeypointRetargetOptions& options);
+
+/// Retargets @p human onto the robot of @p model. @throws std::invalid_argument / std::runtime_error.
+RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel& model,
+                                 const KeypointRetargetOptions& options = {});
+
+/// Statistics over frames [begin, end) of a result. @throws std::out_of_range.
+RetargetStats retargetStats(const RetargetResult& result, const RobotConfig& robot, int begin, int end);
+
+/// Robot keypoints (same set/meaning as the human ones) for base pose and q, by KDL forward
+/// kinematics: hips = hip roll link origins, knees = knee links, ankles = ankle roll links,
+/// toes = ankle roll link + R·(kToeOffset, 0, 0), shoulders = shoulder roll links, elbows = elbow
+/// links, wrists = wrist roll links. Also returns torso and foot orientations in W.
+/// Used to build synthetic motions for tests. @throws std::runtime_error.
+HumanFrame robotKeypoints(const KinematicModel& model, const Eigen::Isometry3d& X_WB, const Eigen::VectorXd& q);
+
+}  // namespace pmg::motion
