@@ -116,3 +116,42 @@ def save_onnx(path, graph, contract, extra_metadata=None, drop_contract=False):
         entry.key, entry.value = k, v
     onnx.checker.check_model(model)
     onnx.save(model, path)
+
+
+# ---- exported actor (Brax PPO policy: normaliser -> MLP(swish) -> loc -> tanh) ----------------
+
+def actor_forward(mean, std, layers, n_act, x):
+    """float32 NumPy forward pass identical to actor_graph()."""
+    h = ((np.asarray(x, np.float32) - mean.astype(np.float32)) / std.astype(np.float32)).astype(np.float32)
+    for i, (w, b) in enumerate(layers):
+        h = (h @ w.astype(np.float32) + b.astype(np.float32)).astype(np.float32)
+        if i + 1 < len(layers):
+            h = (h * (1.0 / (1.0 + np.exp(-h)))).astype(np.float32)
+    return np.tanh(h[..., :n_act]).astype(np.float32)
+
+
+def actor_graph(mean, std, layers, n_act, name="pmg_actor"):
+    """ONNX graph of a Brax PPO actor: obs[1,n_obs] -> action[1,n_act] (deterministic, tanh)."""
+    n_obs = mean.shape[0]
+    inits = [numpy_helper.from_array(mean.astype(np.float32).reshape(1, -1), "obs_mean"),
+             numpy_helper.from_array(std.astype(np.float32).reshape(1, -1), "obs_std"),
+             numpy_helper.from_array(np.array([0], np.int64), "sl_start"),
+             numpy_helper.from_array(np.array([n_act], np.int64), "sl_end"),
+             numpy_helper.from_array(np.array([1], np.int64), "sl_axis")]
+    nodes = [helper.make_node("Sub", [INPUT_NAME, "obs_mean"], ["centred"]),
+             helper.make_node("Div", ["centred", "obs_std"], ["normalised"])]
+    cur = "normalised"
+    for i, (w, b) in enumerate(layers):
+        inits += [numpy_helper.from_array(w.astype(np.float32), f"w{i}"),
+                  numpy_helper.from_array(b.astype(np.float32).reshape(1, -1), f"b{i}")]
+        nodes.append(helper.make_node("Gemm", [cur, f"w{i}", f"b{i}"], [f"lin{i}"]))
+        cur = f"lin{i}"
+        if i + 1 < len(layers):
+            nodes += [helper.make_node("Sigmoid", [cur], [f"sig{i}"]),
+                      helper.make_node("Mul", [cur, f"sig{i}"], [f"h{i}"])]
+            cur = f"h{i}"
+    nodes += [helper.make_node("Slice", [cur, "sl_start", "sl_end", "sl_axis"], ["loc"]),
+              helper.make_node("Tanh", ["loc"], [OUTPUT_NAME])]
+    return helper.make_graph(
+        nodes, name, [helper.make_tensor_value_info(INPUT_NAME, TensorProto.FLOAT, [1, n_obs])],
+        [helper.make_tensor_value_info(OUTPUT_NAME, TensorProto.FLOAT, [1, n_act])], initializer=inits)

@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""Export a trained actor (actor.npz from train_pmg.py) to ONNX with its pmg.contract.
+
+  python3 training/export_onnx.py RUN/actor.npz config/policies/g1_pmg_policy.onnx
+Needs numpy, pyyaml, onnx (no JAX/Brax). The contract's robot fields come from
+config/robots/g1/g1.yaml, the observation layout from pmg_train/g1_env.py (OBS_TERMS, kept
+import-free here), reference pairs from a float32 NumPy forward pass of the exported graph.
+Check the result as the controller would: build*/bin/pmg_policy_check --model <onnx>.
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+import yaml
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(ROOT, "training"))
+from pmg_train.contract import actor_forward, actor_graph, make_contract, save_onnx  # noqa: E402
+
+LEG = 12
+# Must equal pmg_train.g1_env.OBS_TERMS (that module imports JAX/MuJoCo; this one must not).
+OBS_TERMS = [("base_ang_vel_B", 3, 0.25), ("projected_gravity_B", 3, 1.0),
+             ("command", 6, [2.0, 2.0, 0.25, 1.0, 1.0, 1.0]), ("joint_pos_rel", LEG, 1.0), ("joint_vel", LEG, 0.05),
+             ("last_action", LEG, 1.0), ("pmg_ref_q_rel", LEG, 1.0), ("pmg_phase", 2, 1.0)]
+OBS_CLIP = 100.0
+CONTROL_PERIOD = 0.01
+EPSILON = 0.05
+
+
+def load_actor(path):
+    z = np.load(path)
+    n = len([k for k in z.files if k.startswith("w")])
+    layers = [(z[f"w{i}"], z[f"b{i}"]) for i in range(n)]
+    return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]]
+
+
+def export(npz, out_path, brax_check=None, robot_yaml=os.path.join(ROOT, "config/robots/g1/g1.yaml")):
+    mean, std, layers, action_scale, clips = load_actor(npz)
+    with open(robot_yaml) as f:
+        robot = yaml.safe_load(f)
+    joints = robot["joints"]
+    names = [j["name"] for j in joints]
+    default = np.array([j["default"] for j in joints])
+    rng = np.random.default_rng(0)
+    obs = (mean + std * rng.standard_normal((8, mean.size))).astype(np.float32)
+    act = actor_forward(mean, std, layers, LEG, obs)
+    contract = make_contract(
+        robot=robot["robot"]["name"], joint_names=names, actuated_joints=names[:LEG], controls_waist=False,
+        control_period=CONTROL_PERIOD, default_pose=default, kp=[j["kp"] for j in joints],
+        kd=[j["kd"] for j in joints], action_scale=action_scale, action_offset=default[:LEG], action_clip=1.0,
+        obs_terms=OBS_TERMS, history_length=1, obs_clip=OBS_CLIP,
+        pmg={"enabled": True, "gco": False, "clips": ",".join(clips), "epsilon": EPSILON},
+        reference_pairs=list(zip(obs, act)))
+    meta = {"pmg.training": json.dumps({"brax_vs_numpy_max_abs": brax_check, "source": os.path.basename(npz)})}
+    save_onnx(out_path, actor_graph(mean, std, layers, LEG), contract, extra_metadata=meta)
+    print("wrote", out_path)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("npz")
+    ap.add_argument("out")
+    a = ap.parse_args()
+    export(a.npz, a.out)

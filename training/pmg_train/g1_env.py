@@ -1,0 +1,371 @@
+"""G1 29-DoF PMG-tracking environment in MuJoCo MJX (Brax `Env` interface), for PPO.
+
+Same robot as the SIL: config/robots/g1/g1_29dof_rev_1_0.xml (foot spheres + floor collide), the
+joint defaults the SIL's MuJoCo 2.2 model gets (armature 0.01 kg m^2, damping 0.05 N m s/rad,
+frictionloss 0.2 N m), motor PD with the robot config's kp/kd, the controller's 10 ms period.
+
+Limb separation (PMG paper): the actor commands the 12 leg joints (q_des = default + scale * a);
+the waist and arms follow the PMG reference open-loop (plus smooth random perturbations of the
+arm targets during training). PMG references come from training/pmg_train/pmg_generator.py, the
+port proven equal to the C++ generator (test/policy: pmg_port_*). GCO is not in the loop (see
+training/README.md).
+
+Observation (actor, 62 values, order = policy contract terms):
+  base_ang_vel_B (3)  projected_gravity_B (3)  command (6: vx, vy, wz, pitch, roll, height)
+  joint_pos_rel (12)  joint_vel (12)  last_action (12)  pmg_ref_q_rel (12)  pmg_phase (2: sin, cos)
+Raw values are SI; the contract's per-term scales are applied here exactly as the C++
+ObservationAssembler does (scale, then clip to +-obs_clip).
+Privileged critic observation: the actor's terms without noise, plus base linear velocity in the
+heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from brax.envs.base import Env, State
+from mujoco import mjx
+
+from . import pmg_generator as pg
+
+LEG = 12
+OBS_TERMS = [  # (name, size, scale) -- the policy contract's observation layout
+    ("base_ang_vel_B", 3, 0.25),
+    ("projected_gravity_B", 3, 1.0),
+    ("command", 6, [2.0, 2.0, 0.25, 1.0, 1.0, 1.0]),
+    ("joint_pos_rel", LEG, 1.0),
+    ("joint_vel", LEG, 0.05),
+    ("last_action", LEG, 1.0),
+    ("pmg_ref_q_rel", LEG, 1.0),
+    ("pmg_phase", 2, 1.0),
+]
+OBS_CLIP = 100.0
+
+
+@dataclasses.dataclass
+class EnvConfig:
+    mjcf: str = "config/robots/g1/g1_29dof_rev_1_0.xml"
+    robot_yaml: str = "config/robots/g1/g1.yaml"
+    control_dt: float = 0.01       # s, controller period (contract control_period)
+    sim_dt: float = 0.005          # s, physics step (PD recomputed every physics step)
+    episode_length: int = 1000     # control steps (10 s)
+    command_resample: int = 400    # control steps between command changes
+    # Command ranges (heading frame), uniform.
+    vx: tuple = (-0.5, 1.0)
+    vy: tuple = (-0.4, 0.4)
+    wz: tuple = (-0.8, 0.8)
+    pitch: tuple = (-0.1, 0.4)
+    roll: tuple = (-0.2, 0.2)
+    height: tuple = (0.62, 0.78)
+    p_stand: float = 0.1           # probability of a zero velocity command
+    p_posture: float = 0.3         # probability of a non-neutral posture command
+    # Domain randomisation.
+    friction: tuple = (0.4, 1.25)
+    mass_scale: tuple = (0.9, 1.1)
+    payload: tuple = (-1.0, 2.0)   # kg added to the torso
+    armature: tuple = (0.008, 0.015)
+    frictionloss: tuple = (0.1, 0.3)
+    kp_scale: tuple = (0.9, 1.1)
+    kd_scale: tuple = (0.8, 1.2)
+    p_delay: float = 0.5           # probability of one control period of action latency
+    arm_perturb: float = 0.3       # rad, max amplitude of smooth arm-target perturbations
+    noise: dict = dataclasses.field(default_factory=lambda: {"gyro": 0.1, "gravity": 0.03, "q": 0.01, "qd": 0.5})
+    # Reward weights (per control step).
+    w: dict = dataclasses.field(default_factory=lambda: {
+        "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
+        "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0})
+
+
+def _quat_to_rot(q):
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    return jnp.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _pitch_roll(R):
+    """Pitch (about y, positive = forward bend) and roll (about x) of rotation R_WB (ZYX Euler)."""
+    pitch = jnp.arcsin(jnp.clip(-R[2, 0], -1.0, 1.0))
+    roll = jnp.arctan2(R[2, 1], R[2, 2])
+    return pitch, roll
+
+
+def _scale_vector():
+    out = []
+    for _, size, scale in OBS_TERMS:
+        out += list(np.broadcast_to(np.asarray(scale, float), (size,)))
+    return np.asarray(out, np.float32)
+
+
+class G1PmgEnv(Env):
+    def __init__(self, cfg: EnvConfig, clip_files, action_scale=None):
+        self.cfg = cfg
+        self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
+        clips = [pg.load_clip_file(f) for f in clip_files]
+        self.clip_files = list(clip_files)
+        self.pmg = pg.GeneratorModel([c for c in clips if isinstance(c, pg.Clip)],
+                                     [c for c in clips if isinstance(c, pg.StaticClip)], self.js)
+        import yaml
+        with open(cfg.robot_yaml) as f:
+            joints = yaml.safe_load(f)["joints"]
+        self.kp = np.array([j["kp"] for j in joints], np.float32)
+        self.kd = np.array([j["kd"] for j in joints], np.float32)
+        self.tau_max = np.array([j["torque_limit"] for j in joints], np.float32)
+        self.q_default = np.asarray(self.js.q_stand, np.float32)
+
+        if action_scale is None:
+            dev = np.zeros(LEG)
+            for d in self.pmg.dynamic:
+                if d is not None:
+                    dev = np.maximum(dev, np.abs(d.q[:, :LEG] - self.js.q_stand[None, :LEG]).max(0))
+            dev = np.maximum(dev, dev[[6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]])  # left/right symmetric
+            action_scale = np.clip(1.2 * dev, 0.25, 1.2)
+        self.action_scale = np.asarray(action_scale, np.float32)
+
+        mj = mujoco.MjModel.from_xml_path(cfg.mjcf)
+        mj.opt.timestep = cfg.sim_dt
+        mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
+        mj.dof_armature[6:] = 0.01
+        mj.dof_frictionloss[6:] = 0.2
+        mj.dof_damping[6:] = 0.05 + self.kd  # the PD's D term, integrated implicitly
+        mj.opt.iterations = 4
+        mj.opt.ls_iterations = 8
+        self.mj_model = mj
+        self.sys = mjx.put_model(mj)
+        self.n_substeps = int(round(cfg.control_dt / cfg.sim_dt))
+        self.torso_body = mj.body("torso_link").id
+        self.pelvis_body = mj.body("pelvis").id
+        foot_geoms = []
+        for side in ("left", "right"):
+            b = mj.body(f"{side}_ankle_roll_link").id
+            foot_geoms.append([g for g in range(mj.ngeom) if mj.geom_bodyid[g] == b and mj.geom_contype[g] != 0])
+        self.foot_geoms = foot_geoms
+        self.floor_geom = mj.geom("floor").id
+        self.obs_scale = _scale_vector()
+        self.arm_idx = np.arange(15, 29)
+
+    # ---- Brax Env interface ----------------------------------------------------------------
+    @property
+    def observation_size(self):
+        return {"state": (62,), "privileged_state": (62 + 3 + 1 + 2 + 2 + 2 + 2,)}
+
+    @property
+    def action_size(self):
+        return LEG
+
+    @property
+    def backend(self):
+        return "mjx"
+
+    def _sample_command(self, rng):
+        c = self.cfg
+        k = jax.random.split(rng, 10)
+        u = lambda key, r: jax.random.uniform(key, (), minval=r[0], maxval=r[1])
+        v = jnp.array([u(k[0], c.vx), u(k[1], c.vy), u(k[2], c.wz)])
+        v = jnp.where(jax.random.uniform(k[3]) < c.p_stand, 0.0, v)
+        # Often one axis only (the seed's command sequence exercises axes alone and combined).
+        axis = jax.random.randint(k[4], (), 0, 4)
+        mask = jnp.where(axis < 3, jax.nn.one_hot(axis, 3), 1.0)
+        v = v * mask
+        posture = jnp.array([u(k[5], c.pitch), u(k[6], c.roll), u(k[7], c.height)])
+        neutral = jnp.array([0.0, 0.0, self.js.standing_base_height])
+        posture = jnp.where(jax.random.uniform(k[8]) < c.p_posture, posture, neutral)
+        return jnp.concatenate([v, posture])
+
+    def reset(self, rng):
+        c = self.cfg
+        k = jax.random.split(rng, 12)
+        qpos = jnp.asarray(self.mj_model.qpos0).at[7:].set(self.q_default)
+        qpos = qpos.at[2].set(0.79)
+        qpos = qpos.at[7:].add(jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
+        data = mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv))
+        data = mjx.forward(self.sys, data)
+        info = {
+            "rng": k[1],
+            "step": jnp.zeros((), jnp.int32),
+            "phase": jax.random.uniform(k[2]),
+            "command": self._sample_command(k[3]),
+            "last_action": jnp.zeros(LEG),
+            "prev_action": jnp.zeros(LEG),
+            "kp_scale": jax.random.uniform(k[4], (), minval=c.kp_scale[0], maxval=c.kp_scale[1]),
+            "delay": (jax.random.uniform(k[5]) < c.p_delay).astype(jnp.float32),
+            "arm_amp": jax.random.uniform(k[6], (14,), minval=0.0, maxval=c.arm_perturb) *
+                       (jax.random.uniform(k[7]) < 0.7),
+            "arm_freq": jax.random.uniform(k[8], (14,), minval=0.2, maxval=1.0),
+            "arm_off": jax.random.uniform(k[9], (14,), minval=0.0, maxval=2 * math.pi),
+        }
+        ref = pg.step(self.pmg, info["phase"], info["command"][:3], info["command"][3:], c.control_dt, xp=jnp)
+        info["ref_q"] = ref["q_ref"].astype(jnp.float32)
+        info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
+        info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
+        info["ref_height"] = jnp.asarray(ref["base_height"], jnp.float32)
+        info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
+        info["measured"] = jnp.zeros(8)
+        obs = self._obs(data, info, k[10])
+        metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
+                                              "ref_q_err", "contact_match", "energy"]}
+        return State(data, obs, jnp.zeros(()), jnp.zeros(()), metrics, info)
+
+    def step(self, state: State, action):
+        c = self.cfg
+        info = dict(state.info)
+        rng, k_noise, k_cmd = jax.random.split(info["rng"], 3)
+        info["rng"] = rng
+        a = jnp.clip(action, -1.0, 1.0)
+        applied = jnp.where(info["delay"] > 0, info["last_action"], a)  # one period of latency
+        q_des = jnp.asarray(self.q_default)
+        q_des = q_des.at[:LEG].set(jnp.asarray(self.q_default[:LEG]) + jnp.asarray(self.action_scale) * applied)
+        t = info["step"].astype(jnp.float32) * c.control_dt
+        arm_pert = info["arm_amp"] * jnp.sin(2 * math.pi * info["arm_freq"] * t + info["arm_off"])
+        q_des = q_des.at[LEG:].set(info["ref_q"][LEG:])
+        q_des = q_des.at[15:].add(arm_pert)
+        qd_des = jnp.zeros(29).at[LEG:].set(info["ref_qd"][LEG:])
+        kp = jnp.asarray(self.kp) * info["kp_scale"]
+        kd = jnp.asarray(self.kd)
+
+        def substep(data, _):
+            q = data.qpos[7:]
+            tau = kp * (q_des - q) + kd * qd_des  # -kd*qd is the implicit joint damping
+            tau = jnp.clip(tau, -self.tau_max, self.tau_max)
+            data = data.replace(ctrl=tau)
+            return mjx.step(self.sys, data), tau
+
+        data, taus = jax.lax.scan(substep, state.pipeline_state, None, length=self.n_substeps)
+        tau = taus[-1]
+
+        # PMG, as the controller runs it: one generator step per control tick, evaluated at the
+        # phase the previous step advanced to (eq. 11).
+        phase = info["next_phase"]
+        info["step"] = info["step"] + 1
+        resample = (info["step"] % c.command_resample) == 0
+        info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
+        ref_prev_contact = info["ref_contact"]
+        ref = pg.step(self.pmg, phase, info["command"][:3], info["command"][3:], c.control_dt, xp=jnp)
+        info["phase"] = phase
+
+        # Measurements.
+        R = _quat_to_rot(data.qpos[3:7])
+        yaw = jnp.arctan2(R[1, 0], R[0, 0])
+        cy, sy = jnp.cos(yaw), jnp.sin(yaw)
+        v_W = data.qvel[0:3]
+        v_H = jnp.array([cy * v_W[0] + sy * v_W[1], -sy * v_W[0] + cy * v_W[1], v_W[2]])
+        w_W = R @ data.qvel[3:6]
+        R_torso = data.xmat[self.torso_body].reshape(3, 3)
+        pitch, roll = _pitch_roll(R_torso)
+        height = data.qpos[2]
+        contact = self._foot_contacts(data)
+
+        cmd = info["command"]
+        lin_err = jnp.sum((cmd[:2] - v_H[:2]) ** 2)
+        yaw_err = (cmd[2] - w_W[2]) ** 2
+        ori_err = (cmd[3] - pitch) ** 2 + (cmd[4] - roll) ** 2
+        h_err = (info["ref_height"] - height) ** 2
+        q = data.qpos[7:7 + LEG]
+        qd = data.qvel[6:6 + LEG]
+        ref_q_err = jnp.sum((q - info["ref_q"][:LEG]) ** 2)
+        ref_qd_err = jnp.sum((qd - info["ref_qd"][:LEG]) ** 2)
+        contact_match = jnp.mean((contact == ref_prev_contact).astype(jnp.float32))
+        energy = jnp.sum(jnp.abs(tau[:LEG] * qd))
+        action_rate = jnp.sum((a - info["last_action"]) ** 2)
+        R_up = R[2, 2]
+        done = jnp.logical_or(height < 0.4, R_up < 0.5)
+        done = jnp.logical_or(done, jnp.logical_not(jnp.all(jnp.isfinite(data.qpos))))
+        w = c.w
+        reward = (w["lin_vel"] * jnp.exp(-lin_err / 0.25) + w["yaw_rate"] * jnp.exp(-yaw_err / 0.25) +
+                  w["orientation"] * jnp.exp(-ori_err / 0.05) + w["height"] * jnp.exp(-h_err / 0.005) +
+                  w["ref_q"] * jnp.exp(-ref_q_err / 0.5) + w["ref_qd"] * jnp.exp(-ref_qd_err / 50.0) +
+                  w["contact"] * contact_match + w["energy"] * energy + w["action_rate"] * action_rate +
+                  w["alive"] + w["termination"] * done)
+        reward = jnp.where(jnp.isfinite(reward), reward, 0.0)
+
+        info["prev_action"] = info["last_action"]
+        info["last_action"] = a
+        info["ref_q"] = ref["q_ref"].astype(jnp.float32)
+        info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
+        info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
+        info["ref_height"] = jnp.asarray(ref["base_height"], jnp.float32)
+        info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
+        info["measured"] = jnp.concatenate([v_H, jnp.array([height]), contact, jnp.array([pitch, roll])])
+        obs = self._obs(data, info, k_noise)
+        metrics = {"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
+                   "pitch_err": jnp.abs(cmd[3] - pitch), "roll_err": jnp.abs(cmd[4] - roll),
+                   "height_err": jnp.sqrt(h_err), "ref_q_err": jnp.sqrt(ref_q_err / LEG),
+                   "contact_match": contact_match, "energy": energy}
+        data = jax.tree_util.tree_map(lambda new, old: jnp.where(jnp.all(jnp.isfinite(data.qpos)), new, old),
+                                      data, state.pipeline_state)
+        return state.replace(pipeline_state=data, obs=obs, reward=reward, done=done.astype(jnp.float32),
+                             metrics=metrics, info=info)
+
+    # ---- helpers ---------------------------------------------------------------------------
+    def _foot_contacts(self, data):
+        con = data._impl.contact if hasattr(data, "_impl") and hasattr(data._impl, "contact") else data.contact
+        dist = con.dist
+        g1, g2 = con.geom1, con.geom2
+        out = []
+        for geoms in self.foot_geoms:
+            hit = jnp.zeros(dist.shape, bool)
+            for g in geoms:
+                hit = hit | (g1 == g) | (g2 == g)
+            out.append(jnp.any(hit & (dist < 2e-3)))
+        return jnp.stack(out).astype(jnp.float32)
+
+    def raw_obs(self, data, info):
+        """Actor observation terms before scaling (SI units), contract order."""
+        R = _quat_to_rot(data.qpos[3:7])
+        grav_B = R.T @ jnp.array([0.0, 0.0, -1.0])
+        gyro_B = data.qvel[3:6]
+        q_rel = data.qpos[7:7 + LEG] - jnp.asarray(self.q_default[:LEG])
+        qd = data.qvel[6:6 + LEG]
+        ref_rel = info["ref_q"][:LEG] - jnp.asarray(self.q_default[:LEG])
+        ph = 2 * math.pi * info["phase"]
+        return [gyro_B, grav_B, info["command"], q_rel, qd, info["last_action"], ref_rel,
+                jnp.array([jnp.sin(ph), jnp.cos(ph)])]
+
+    def _obs(self, data, info, rng):
+        terms = self.raw_obs(data, info)
+        clean = jnp.concatenate(terms)
+        n = self.cfg.noise
+        k = jax.random.split(rng, 4)
+        noisy = [terms[0] + n["gyro"] * jax.random.normal(k[0], (3,)),
+                 terms[1] + n["gravity"] * jax.random.normal(k[1], (3,)), terms[2],
+                 terms[3] + n["q"] * jax.random.normal(k[2], (LEG,)),
+                 terms[4] + n["qd"] * jax.random.normal(k[3], (LEG,)), terms[5], terms[6], terms[7]]
+        scale = jnp.asarray(self.obs_scale)
+        actor = jnp.clip(jnp.concatenate(noisy) * scale, -OBS_CLIP, OBS_CLIP)
+        measured = info["measured"]
+        priv = jnp.concatenate([jnp.clip(clean * scale, -OBS_CLIP, OBS_CLIP), measured, info["ref_contact"],
+                                jnp.array([info["kp_scale"], info["delay"]])])
+        return {"state": actor, "privileged_state": priv}
+
+
+def make_randomization_fn(env: G1PmgEnv):
+    c = env.cfg
+    mj = env.mj_model
+
+    def randomize(sys, rng):
+        @jax.vmap
+        def one(key):
+            k = jax.random.split(key, 6)
+            friction = sys.geom_friction.at[:, 0].set(jax.random.uniform(k[0], (), minval=c.friction[0],
+                                                                         maxval=c.friction[1]))
+            mass = sys.body_mass * jax.random.uniform(k[1], (mj.nbody,), minval=c.mass_scale[0], maxval=c.mass_scale[1])
+            mass = mass.at[env.torso_body].add(jax.random.uniform(k[2], (), minval=c.payload[0], maxval=c.payload[1]))
+            arm = sys.dof_armature.at[6:].set(jax.random.uniform(k[3], (29,), minval=c.armature[0], maxval=c.armature[1]))
+            fl = sys.dof_frictionloss.at[6:].set(jax.random.uniform(k[4], (29,), minval=c.frictionloss[0],
+                                                                    maxval=c.frictionloss[1]))
+            damp = sys.dof_damping.at[6:].set(0.05 + jnp.asarray(env.kd) * jax.random.uniform(
+                k[5], (), minval=c.kd_scale[0], maxval=c.kd_scale[1]))
+            return friction, mass, arm, fl, damp
+
+        friction, mass, arm, fl, damp = one(rng)
+        fields = {"geom_friction": friction, "body_mass": mass, "dof_armature": arm, "dof_frictionloss": fl,
+                  "dof_damping": damp}
+        in_axes = jax.tree_util.tree_map(lambda x: None, sys)
+        in_axes = in_axes.replace(**{k: 0 for k in fields})
+        return sys.replace(**fields), in_axes
+
+    return randomize

@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""Train the G1 PMG-tracking policy with Brax PPO on MuJoCo MJX, export it to ONNX with its contract.
+
+Runs on the GPU machine (device tool); see training/README.md for the exact commands used.
+  python3 training/train_pmg.py --out OUT --timesteps 60000000 [--restore OUT_prev/params.pkl]
+Writes into --out: progress.jsonl (eval + training metrics vs env steps and wall time),
+params.pkl (normaliser, policy, value: resume with --restore; written at every eval), actor.npz
+(the actor's arrays), train_config.json, g1_pmg_policy.onnx (actor + pmg.contract, export_onnx.py).
+--smoke: imports, env reset/step timing, JAX PMG port vs the committed C++ vectors; no training.
+"""
+import argparse
+import dataclasses
+import functools
+import glob
+import json
+import os
+import pickle
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(ROOT, "training"))
+os.chdir(ROOT)
+
+import numpy as np  # noqa: E402
+
+
+def log(*a):
+    print(f"[{time.strftime('%H:%M:%S')}]", *a, flush=True)
+
+
+def smoke(env, out):
+    import jax
+    import jax.numpy as jnp
+    from pmg_train import pmg_generator as pg
+    log("devices", jax.devices())
+    # JAX (float32) port against the C++ vectors, evaluated at the C++ phase of each tick.
+    with open("test/data/policy/pmg_vectors_synthetic.json") as f:
+        v = json.load(f)
+    model = pg.model_from_vectors(v)
+    step = jax.jit(lambda ph, ud, us: pg.step(model, ph, ud, us, v["dt"], xp=jnp))
+    worst = {}
+    for t in v["ticks"]:
+        o = step(jnp.float32(t["phase"]), jnp.asarray(t["u_d"], jnp.float32), jnp.asarray(t["u_s"], jnp.float32))
+        for k in ("q_ref", "qd_ref", "period", "base_height", "in_contact"):
+            worst[k] = max(worst.get(k, 0.0), float(np.max(np.abs(np.asarray(o[k], float) - np.asarray(t[k], float)))))
+    log("JAX float32 port vs C++ (max abs):", worst)
+    reset = jax.jit(jax.vmap(env.reset))
+    stepf = jax.jit(jax.vmap(env.step))
+    n = 4096
+    s = reset(jax.random.split(jax.random.PRNGKey(0), n))
+    a = jnp.zeros((n, env.action_size))
+    t0 = time.time(); s = stepf(s, a); jax.block_until_ready(s.obs); log("step compile", time.time() - t0)
+    t0 = time.time()
+    for _ in range(50):
+        s = stepf(s, a)
+    jax.block_until_ready(s.obs)
+    dt = time.time() - t0
+    log(f"{n * 50 / dt:.0f} control steps/s ({n} envs), done frac {float(s.done.mean()):.3f}, "
+        f"reward {float(s.reward.mean()):.3f}, height {float(s.pipeline_state.qpos[:, 2].mean()):.3f}")
+    with open(os.path.join(out, "smoke.json"), "w") as f:
+        json.dump({"jax_port_max_abs": worst, "control_steps_per_s": n * 50 / dt}, f)
+
+
+def save_params(params, out, env, clip_names):
+    """params.pkl (full Brax tree, numpy leaves: resume) + actor.npz (plain arrays: export)."""
+    import jax
+    params_np = jax.tree_util.tree_map(np.asarray, params)
+    with open(os.path.join(out, "params.pkl"), "wb") as f:
+        pickle.dump(params_np, f)
+    norm, policy = params_np[0], params_np[1]
+    p = policy["params"]
+    arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
+              "clips": np.array(clip_names)}
+    for i in range(len(p)):
+        arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
+        arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]
+    np.savez(os.path.join(out, "actor.npz"), **arrays)
+
+
+def check_against_brax(params, make_inference_fn, env, out):
+    """The exported graph's NumPy twin equals Brax's deterministic inference."""
+    import jax
+    import jax.numpy as jnp
+    from export_onnx import load_actor
+    from pmg_train.contract import actor_forward
+    mean, std, layers, _, _ = load_actor(os.path.join(out, "actor.npz"))
+    rng = np.random.default_rng(0)
+    obs = (mean + std * rng.standard_normal((64, mean.size))).astype(np.float32)
+    ours = actor_forward(mean, std, layers, env.action_size, obs)
+    infer = make_inference_fn(params, deterministic=True)
+    priv = np.zeros((64, env.observation_size["privileged_state"][0]), np.float32)
+    theirs = np.asarray(jax.vmap(lambda o, q: infer({"state": o, "privileged_state": q}, jax.random.PRNGKey(0))[0])(
+        jnp.asarray(obs), jnp.asarray(priv)))
+    diff = float(np.max(np.abs(ours - theirs)))
+    log("export check: NumPy actor vs Brax inference max |diff|", diff)
+    return diff
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--timesteps", type=int, default=50_000_000)
+    ap.add_argument("--num-envs", type=int, default=8192)
+    ap.add_argument("--num-evals", type=int, default=8)
+    ap.add_argument("--restore", default=None)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--smoke", action="store_true")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+
+    import jax
+    from brax.training.agents.ppo import networks as ppo_networks
+    from brax.training.agents.ppo import train as ppo
+    from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn
+
+    clip_files = sorted(glob.glob("config/clips/g1/*.yaml"))
+    log("clips:", clip_files)
+    cfg = EnvConfig()
+    env = G1PmgEnv(cfg, clip_files)
+    if args.smoke:
+        smoke(env, args.out)
+        return
+
+    ppo_cfg = dict(num_timesteps=args.timesteps, num_envs=args.num_envs, episode_length=cfg.episode_length,
+                   unroll_length=20, batch_size=256, num_minibatches=32, num_updates_per_batch=4,
+                   discounting=0.97, learning_rate=3e-4, entropy_cost=5e-3, reward_scaling=1.0,
+                   clipping_epsilon=0.2, gae_lambda=0.95, max_grad_norm=1.0, normalize_observations=True,
+                   num_evals=args.num_evals, num_eval_envs=256, seed=args.seed, action_repeat=1)
+    net_cfg = dict(policy_hidden_layer_sizes=(512, 256, 128), value_hidden_layer_sizes=(512, 256, 128),
+                   policy_obs_key="state", value_obs_key="privileged_state")
+    with open(os.path.join(args.out, "train_config.json"), "w") as f:
+        json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
+                   "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv}, f, indent=1)
+    restore = None
+    if args.restore:
+        with open(args.restore, "rb") as f:
+            restore = pickle.load(f)
+        log("restoring", args.restore)
+    t_start = time.time()
+    progress = open(os.path.join(args.out, "progress.jsonl"), "a")
+
+    def progress_fn(step, metrics):
+        rec = {"step": int(step), "wall_s": time.time() - t_start}
+        rec.update({k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1})
+        progress.write(json.dumps(rec) + "\n")
+        progress.flush()
+        log(f"step {step:>10d}  eval reward {rec.get('eval/episode_reward', float('nan')):8.2f}  "
+            f"len {rec.get('eval/avg_episode_length', float('nan')):6.1f}")
+
+    clip_names = [os.path.splitext(os.path.basename(c))[0] for c in clip_files]
+
+    def policy_params_fn(step, make_policy, params):  # checkpoint at every eval
+        save_params(params, args.out, env, clip_names)
+        log(f"checkpoint at step {step}")
+
+    make_inference_fn, params, _ = ppo.train(
+        environment=env, network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
+        randomization_fn=make_randomization_fn(env), progress_fn=progress_fn, policy_params_fn=policy_params_fn,
+        restore_params=restore, **ppo_cfg)
+    log("training done in", time.time() - t_start, "s")
+    save_params(params, args.out, env, clip_names)
+    diff = check_against_brax(params, make_inference_fn, env, args.out)
+    from export_onnx import export
+    export(os.path.join(args.out, "actor.npz"), os.path.join(args.out, "g1_pmg_policy.onnx"), brax_check=diff)
+
+
+if __name__ == "__main__":
+    main()
