@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/controller/controller.hpp"
+#include "pmg/hal/bus/can_backend.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -29,6 +30,14 @@ int main(int argc, char** argv) {
   app.add_flag("--realtime", realtime, "pace to the wall clock (overrides timing.mode)");
   app.add_flag("--lockstep", lockstep, "run as fast as possible, loop-driven HAL (overrides timing.mode)");
   app.add_flag("--no-lcm", no_lcm, "do not open LCM");
+  // Motor buses (docs/hal.md): the same loop over the CAN backend, towards pmg_sil or the robot.
+  std::string can_plan, can_transport = "udp";
+  int can_port = 47000;
+  app.add_option("--can-plan", can_plan, "drive the motors over CAN with this bus plan (apps/hal/config/*.yaml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--can-transport", can_transport, "udp (towards pmg_sil) or socketcan (robot)")
+      ->check(CLI::IsMember({"udp", "socketcan"}));
+  app.add_option("--can-port", can_port, "UDP base port of pmg_sil")->check(CLI::Range(1024, 65000));
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -50,7 +59,17 @@ int main(int argc, char** argv) {
     std::printf("pmg_controller: robot %s (%zu joints), backend mujoco (gantry %s), %s, %.0f Hz loop / %.0f Hz HAL\n",
                 config.robot.name.c_str(), config.robot.numJoints(), config.mujoco.gantry.enabled ? "on" : "off",
                 rt ? "real time" : "lockstep", config.loop_rate_hz, config.hal_rate_hz);
-    pmg::Controller controller(config);
+    std::unique_ptr<pmg::HalBackend> backend;  // null: the config's backend (in-process MuJoCo)
+    if (!can_plan.empty()) {
+      pmg::hal::bus::CanBackendSetup cs;
+      cs.plan_file = can_plan;
+      cs.transport = can_transport;
+      cs.udp_base_port = static_cast<std::uint16_t>(can_port);
+      cs.lockstep = !rt;
+      backend = pmg::hal::bus::makeCanBackend(cs);
+      std::printf("pmg_controller: motors over CAN (%s, plan %s)\n", can_transport.c_str(), can_plan.c_str());
+    }
+    pmg::Controller controller(config, std::move(backend));
     const pmg::CommandScript* sp = script_path.empty() ? nullptr : &script;
     const pmg::RunSummary s = rt ? controller.runRealtime(duration, &g_stop, sp) : controller.runLockstep(duration, sp);
     std::printf("ran %lld ticks, %.2f s controller time in %.2f s wall (real-time factor %.1f)\n",
