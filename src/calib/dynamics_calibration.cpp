@@ -434,30 +434,41 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     const std::string& c = cands[ci];
     std::vector<WorkerSims*> mine{ws};
     Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
-    // Coarse scan of the new parameters with the baseline fixed.
-    ParamMap start = base.params;
-    double best = std::numeric_limits<double>::infinity();
-    for (const ParamMap& g : scan_grid(c, rig, sc)) {
-      ParamMap m = base.params;
-      for (const auto& [k, v] : g) m[k] = v;
-      const double v = obj(m);
-      if (v < best) {
-        best = v;
-        start = m;
+    // Coarse scan of the new parameters with the baseline fixed; BOBYQA from the two best points.
+    std::vector<std::pair<double, ParamMap>> scanned;
+    // Two baselines: the fitted one and the nominal one (a fitted baseline distorted by the
+    // missing effect can trap the joint fit; the nominal one often starts nearer the truth).
+    ParamMap nominal_base;
+    for (const auto& p : base_names) nominal_base[p] = spec_for(p, rig, sc).init;
+    for (const ParamMap* b : {&base.params, &nominal_base})
+      for (const ParamMap& g : scan_grid(c, rig, sc)) {
+        ParamMap m = *b;
+        for (const auto& [k, v] : g) m[k] = v;
+        scanned.emplace_back(obj(m), m);
       }
+    std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const std::size_t n_starts = std::min<std::size_t>(2, scanned.size());
+    FitOutcome fo;
+    int evals = static_cast<int>(scanned.size());
+    for (std::size_t st = 0; st < n_starts; ++st) {
+      const ParamMap& start = scanned[st].second;
+      std::vector<Spec> specs;
+      for (const auto& p : base_names) {
+        Spec s = spec_for(p, rig, sc);
+        s.init = start.at(p);
+        specs.push_back(s);
+      }
+      for (const auto& p : catalogue_params(c)) {
+        Spec s = spec_for(p, rig, sc);
+        s.init = get(start, p.c_str(), s.init);
+        specs.push_back(s);
+      }
+      FitOutcome f1 = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate / static_cast<int>(n_starts),
+                          options.seed);
+      evals += f1.evals;
+      if (f1.mse < fo.mse) fo = f1;
     }
-    std::vector<Spec> specs;
-    for (const auto& p : base_names) {
-      Spec s = spec_for(p, rig, sc);
-      s.init = base.params.at(p);
-      specs.push_back(s);
-    }
-    for (const auto& p : catalogue_params(c)) {
-      Spec s = spec_for(p, rig, sc);
-      s.init = get(start, p.c_str(), s.init);
-      specs.push_back(s);
-    }
-    FitOutcome fo = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate, options.seed);
+    fo.evals = evals;
     CandidateResult r;
     r.name = c;
     r.fit.params = fo.params;

@@ -115,6 +115,7 @@ HiddenEffect draw_hidden_effect(const std::string& name, std::uint64_t seed, con
   h.name = name;
   ActuatorParams& a = truth.act;
   a.rate_hz = rig.rate_hz;
+  a.torque_limit_Nm = rig.torque_limit_Nm;
   if (name.empty()) {
   } else if (name == "coulomb_friction") {
     a.fc_Nm = U(0.04, 0.1);
