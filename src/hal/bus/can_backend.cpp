@@ -8,6 +8,8 @@
 
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/bus/sil_emulator.hpp"
+#include "pmg/hal/bus/socketcan_transport.hpp"
 
 namespace pmg::hal::bus {
 
@@ -195,6 +197,22 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
   state.backend_faults = faults;
   if (valid == num_joints_) return pmg::BackendStatus::kOk;
   return valid > 0 ? pmg::BackendStatus::kPartial : pmg::BackendStatus::kFault;
+}
+
+std::unique_ptr<CanBackend> makeCanBackend(const CanBackendSetup& setup) {
+  BusPlan plan = BusPlan::fromYaml(setup.plan_file);
+  CanBackendOptions o;
+  o.lockstep = setup.lockstep;
+  std::unique_ptr<CanTransport> imu;
+  std::vector<std::unique_ptr<CanTransport>> transports;
+  if (setup.transport == "udp") {
+    transports = makeHostUdpTransports(plan, setup.udp_base_port, imu);
+  } else if (setup.transport == "socketcan") {
+    for (const BusConfig& b : plan.buses()) transports.push_back(std::make_unique<SocketCanTransport>(b.name, b.timing.fd));
+  } else {
+    throw std::runtime_error("can backend: transport '" + setup.transport + "' unknown (expected udp or socketcan)");
+  }
+  return std::make_unique<CanBackend>(std::move(plan), std::move(transports), std::move(imu), o);
 }
 
 }  // namespace pmg::hal::bus

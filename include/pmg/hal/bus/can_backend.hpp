@@ -90,4 +90,17 @@ class CanBackend final : public pmg::HalBackend {
   std::uint64_t cycles_ = 0, nonfinite_commands_ = 0, imu_frames_ = 0, imu_rejected_ = 0;
 };
 
+/// How the CAN backend reaches the buses.
+struct CanBackendSetup {
+  std::string plan_file;            ///< Bus plan YAML (e.g. apps/hal/config/g1_can.yaml).
+  std::string transport = "udp";    ///< "socketcan" (robot: interface = bus name) or "udp" (pmg_sil).
+  std::uint16_t udp_base_port = 47000;  ///< UDP port layout base (see sil_emulator.hpp).
+  bool lockstep = false;            ///< Lockstep with pmg_sil (see CanBackendOptions::lockstep).
+};
+
+/// Build a CanBackend from a setup (setup code: throws std::runtime_error / std::system_error
+/// naming the file, interface or port). With "socketcan" there is no IMU channel on CAN: the IMU
+/// must come from another reader.
+std::unique_ptr<CanBackend> makeCanBackend(const CanBackendSetup& setup);
+
 }  // namespace pmg::hal::bus

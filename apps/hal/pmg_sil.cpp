@@ -1,0 +1,121 @@
+// pmg_sil: the software-in-the-loop robot as a separate process. MuJoCo 2.2 simulates the robot;
+// every motor driver is emulated behind the same CAN protocol as on the robot (MIT mode, motor-side
+// PD) and the IMU sends CAN FD frames, all over the UDP CAN transport on loopback. pmg_controller
+// (or any HAL built with the CAN backend) talks to it exactly as to the robot, through the real bus
+// code. Faults can be injected from the command line.
+//
+//   pmg_sil --robot config/robots/g1/g1.yaml --plan apps/hal/config/g1_can.yaml --port 47000
+//           [--realtime] [--no-gantry] [--duration 20] [--drop 0.01] [--silent-joint 3] ...
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+#include <CLI/CLI.hpp>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/bus/sil_emulator.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace pmg::hal::bus;
+  namespace rt = pmg::hal::rt;
+  CLI::App app{"pmg_sil: MuJoCo 2.2 robot behind emulated CAN motor drivers (UDP loopback)"};
+  std::string robot_path = "config/robots/g1/g1.yaml", plan_path = "apps/hal/config/g1_can.yaml";
+  int port = 47000, fifo = 0;
+  double duration = 0.0, faults_after = 0.0, push_at = -1.0, push_force = 300.0, push_duration = 0.2;
+  bool realtime = false, no_gantry = false;
+  SilFaults f;
+  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
+  app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile);
+  app.add_option("--port", port, "UDP base port (bus b: host base+2b, SIL base+2b+1; IMU after the buses)")
+      ->check(CLI::Range(1024, 65000));
+  app.add_flag("--realtime", realtime, "step every 2 ms of wall time even without commands (default: lockstep, "
+                                       "step when the host's commands arrive)");
+  app.add_flag("--no-gantry", no_gantry, "robot stands on the ground instead of hanging in the virtual gantry");
+  app.add_option("--duration", duration, "stop after this much simulated time [s]; 0 = until Ctrl-C");
+  app.add_option("--fifo", fifo, "SCHED_FIFO priority in --realtime (0 = normal)")->check(CLI::Range(0, 99));
+  app.add_option("--faults-after", faults_after, "start injecting the faults below at this simulated time [s]");
+  app.add_option("--drop", f.drop_prob, "probability a reply is lost")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--late", f.late_prob, "probability a reply comes one cycle late")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--dup", f.dup_prob, "probability a reply is duplicated")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--corrupt", f.corrupt_prob, "probability a reply is corrupted")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--silent-joint", f.silent_joint, "joint index whose driver stops replying");
+  app.add_option("--bus-off", f.bus_off_bus, "bus index that goes bus-off");
+  app.add_flag("--imu-frozen", f.imu_frozen, "IMU repeats its last sample");
+  app.add_flag("--imu-silent", f.imu_silent, "IMU stops sending");
+  app.add_option("--imu-noise", f.imu_gyro_noise, "extra gyro noise std [rad/s]");
+  app.add_option("--push-at", push_at, "push the pelvis at this simulated time [s] (-1 = never)");
+  app.add_option("--push-force", push_force, "lateral push force (world y) [N]");
+  app.add_option("--push-duration", push_duration, "push duration [s]");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
+    const BusPlan plan = BusPlan::fromYaml(plan_path);
+    if (plan.options().num_joints != static_cast<int>(robot.numJoints()))
+      throw std::runtime_error(plan_path + ": num_joints " + std::to_string(plan.options().num_joints) +
+                               " differs from the robot's " + std::to_string(robot.numJoints()) + " joints");
+    pmg::MujocoBackendOptions mo;
+    mo.cycle_period = plan.options().period_s;
+    mo.gantry.enabled = !no_gantry;
+    auto sim = std::make_unique<pmg::MujocoBackend>(robot, mo);
+    pmg::MujocoBackend* mj = sim.get();
+    SilDriverEmulator sil(plan, std::move(sim), static_cast<std::uint16_t>(port));
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    std::printf("pmg_sil: %s, %zu buses, %zu motors, UDP base port %d, %s, gantry %s\n", robot.name.c_str(),
+                plan.buses().size(), plan.motorCount(), port, realtime ? "real time" : "lockstep",
+                no_gantry ? "off" : "on");
+    std::printf("%s", plan.report().c_str());
+    std::fflush(stdout);
+    if (realtime && fifo > 0) {
+      std::string why;
+      if (!rt::setThreadFifo(fifo, &why)) std::printf("pmg_sil: %s (continuing with normal scheduling)\n", why.c_str());
+    }
+    const double period = plan.options().period_s;
+    bool faults_on = false, pushed = false;
+    double next = rt::now();
+    while (!g_stop.load()) {
+      const double t_sim = static_cast<double>(sil.counters().cycles) * period;
+      if (duration > 0.0 && t_sim >= duration) break;
+      if (!faults_on && t_sim >= faults_after) {
+        sil.setFaults(f);
+        faults_on = true;
+      }
+      if (!pushed && push_at >= 0.0 && t_sim >= push_at) {
+        sil.post([mj, push_force, push_duration](pmg::HalBackend&) {
+          mj->push(mj->pelvisBody(), Eigen::Vector3d(0.0, push_force, 0.0), push_duration);
+        });
+        pushed = true;
+      }
+      if (realtime) {
+        sil.runCycle(0.8 * period, true);
+        next += period;
+        if (rt::now() > next + period) next = rt::now();
+        rt::sleepUntil(next);
+      } else {
+        sil.runCycle(0.5);
+      }
+    }
+    const SilCounters& c = sil.counters();
+    std::printf("pmg_sil: %llu cycles (%.2f s simulated); commands %llu, replies %llu, dropped %llu, late %llu, "
+                "duplicated %llu, corrupted %llu, silenced %llu, bus-off injected %llu, restarts seen %llu, "
+                "IMU frames %llu\n",
+                static_cast<unsigned long long>(c.cycles), static_cast<double>(c.cycles) * period,
+                static_cast<unsigned long long>(c.commands), static_cast<unsigned long long>(c.replies),
+                static_cast<unsigned long long>(c.dropped), static_cast<unsigned long long>(c.late),
+                static_cast<unsigned long long>(c.duplicated), static_cast<unsigned long long>(c.corrupted),
+                static_cast<unsigned long long>(c.silenced), static_cast<unsigned long long>(c.bus_off_injected),
+                static_cast<unsigned long long>(c.restarts_seen), static_cast<unsigned long long>(c.imu_frames));
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pmg_sil: %s\n", e.what());
+    return 1;
+  }
+}
