@@ -12,5 +12,5 @@ mkdir -p "$out"
 build/bin/pmg_controller --config config/controller/g1_sil.yaml --script config/commands/demo.yaml \
   --log "$out/run.lcmlog" | tee "$out/summary.txt"
 build/bin/pmg_log_export --log "$out/run.lcmlog" --csv "$out/run.csv"
-python3 scripts/plot_tracking.py "$out/run.csv" "$out/tracking.png" | tee -a "$out/summary.txt"
+python3 build/bin/pmg_plot_tracking.py "$out/run.lcmlog" "$out/tracking.png" | tee -a "$out/summary.txt"
 echo "SIL demo done: $out/tracking.png, $out/run.lcmlog (lcm-logplayer / lcm-spy compatible)"

@@ -1,10 +1,15 @@
 #!/usr/bin/env python3
 """Tracking plot of a pmg_controller run: reference vs. measured joint angles of the leg joints
-(like the PMG paper's tracking figure), from the CSV written by pmg_log_export.
+(like the PMG paper's tracking figure), from its LCM event log (or the CSV of pmg_log_export).
 
-    scripts/plot_tracking.py run.csv run_tracking.png
+    build/bin/pmg_plot_tracking.py run.lcmlog tracking.png
+    build/bin/pmg_plot_tracking.py run.csv tracking.png
+An event log is first converted with pmg_log_export (found next to this script in build/bin).
 """
+import os
+import subprocess
 import sys
+import tempfile
 
 import matplotlib
 
@@ -15,8 +20,18 @@ import numpy as np  # noqa: E402
 LEG = ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
 
 
-def main(csv_path: str, png_path: str) -> int:
-    data = np.genfromtxt(csv_path, delimiter=",", names=True)
+def load(path: str):
+    if path.endswith(".csv"):
+        return np.genfromtxt(path, delimiter=",", names=True)
+    exporter = os.path.join(os.path.dirname(os.path.abspath(__file__)), "pmg_log_export")
+    with tempfile.TemporaryDirectory() as tmp:
+        csv_path = os.path.join(tmp, "run.csv")
+        subprocess.run([exporter, "--log", path, "--csv", csv_path], check=True)
+        return np.genfromtxt(csv_path, delimiter=",", names=True)
+
+
+def main(log_path: str, png_path: str) -> int:
+    data = load(log_path)
     t = data["t"]
     fig, axes = plt.subplots(len(LEG), 2, figsize=(13, 12), sharex=True)
     rms_all = []

@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Plot a few frames of a retargeting: scaled human keypoint targets next to the robot keypoints.
+
+Usage: scripts/motion_plot_retarget.py retarget.csv out.png [--frames 0,10,20,30] [--title T]
+The CSV comes from `build/bin/pmg_retarget <mocap> --csv retarget.csv`. Two rows of panels: side
+view (x-z, W) and front view (y-z, W); human target skeleton dashed orange, robot solid blue; the
+feet in contact are marked with a black square. Also prints the mean error per keypoint [m].
+"""
+import argparse
+import csv
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+BONES = [("pelvis", "left_hip"), ("left_hip", "left_knee"), ("left_knee", "left_ankle"), ("left_ankle", "left_toe"),
+         ("pelvis", "right_hip"), ("right_hip", "right_knee"), ("right_knee", "right_ankle"),
+         ("right_ankle", "right_toe"), ("pelvis", "left_shoulder"), ("pelvis", "right_shoulder"),
+         ("left_shoulder", "right_shoulder"), ("left_shoulder", "left_elbow"), ("left_elbow", "left_wrist"),
+         ("right_shoulder", "right_elbow"), ("right_elbow", "right_wrist")]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("csv")
+    ap.add_argument("out")
+    ap.add_argument("--frames", default="")
+    ap.add_argument("--title", default="")
+    a = ap.parse_args()
+    pts = defaultdict(dict)
+    contact = {}
+    with open(a.csv) as f:
+        for r in csv.DictReader(f):
+            k = int(r["frame"])
+            pts[(k, r["source"])][r["keypoint"]] = np.array([float(r["x"]), float(r["y"]), float(r["z"])])
+            contact[k] = (r["contact_left"] == "1", r["contact_right"] == "1")
+    n = max(k for k, _ in pts) + 1
+    frames = [int(x) for x in a.frames.split(",")] if a.frames else list(np.linspace(0, n - 1, 4).astype(int))
+    err = defaultdict(list)
+    for k in range(n):
+        for name, p in pts[(k, "robot")].items():
+            err[name].append(np.linalg.norm(p - pts[(k, "target")][name]))
+    for name in sorted(err):
+        print(f"{name:16s} mean {np.mean(err[name]):.3f} m  max {np.max(err[name]):.3f} m")
+    fig, axes = plt.subplots(2, len(frames), figsize=(3.2 * len(frames), 7), squeeze=False)
+    for c, k in enumerate(frames):
+        centre = pts[(k, "robot")]["pelvis"]
+        for row, (i, lab) in enumerate([(0, "x"), (1, "y")]):
+            ax = axes[row][c]
+            for src, style in (("target", dict(color="tab:orange", ls="--", lw=2)), ("robot", dict(color="tab:blue", lw=2.5))):
+                P = pts[(k, src)]
+                for b0, b1 in BONES:
+                    ax.plot([P[b0][i] - centre[i], P[b1][i] - centre[i]], [P[b0][2], P[b1][2]], **style)
+            for side, foot in ((0, "left_ankle"), (1, "right_ankle")):
+                if contact[k][side]:
+                    p = pts[(k, "robot")][foot]
+                    ax.plot([p[i] - centre[i]], [p[2]], "ks", ms=6)
+            ax.axhline(0.0, color="0.6", lw=1)
+            ax.set_aspect("equal")
+            ax.set_xlim(-0.7, 0.7)
+            ax.set_ylim(-0.05, 1.5)
+            ax.set_xlabel(f"{lab} - pelvis {lab} [m]")
+            if c == 0:
+                ax.set_ylabel(("side view" if row == 0 else "front view") + "  z [m]")
+            if row == 0:
+                ax.set_title(f"frame {k}")
+    fig.suptitle(a.title or a.csv + "  (orange dashed: scaled human targets, blue: G1)")
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=90)
+
+
+if __name__ == "__main__":
+    main()
