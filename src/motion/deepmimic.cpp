@@ -76,6 +76,56 @@ std::array<Eigen::MatrixXd, 2> deepMimicSoleTracks(const DeepMimicMotion& motion
   return out;
 }
 
+HumanMotion deepMimicToHuman(const DeepMimicMotion& motion) {
+  const Eigen::Matrix3d C = deepMimicToZUp();
+  HumanMotion h;
+  h.source_file = motion.source_file;
+  h.format = "deepmimic";
+  h.fps = motion.fps;
+  h.ankle_height = 0.05;
+  h.frames.resize(motion.frames.size());
+  auto W = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d { return C * p; };
+  auto WR = [&](const Eigen::Matrix3d& R) { return Eigen::Quaterniond(C * R * C.transpose()); };
+  auto Rz = [](double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); };
+  for (std::size_t k = 0; k < motion.frames.size(); ++k) {
+    const DeepMimicFrame& f = motion.frames[k];
+    HumanFrame& o = h.frames[k];
+    auto set = [&](Keypoint kp, const Eigen::Vector3d& p_M) { o.p_WK[static_cast<std::size_t>(kp)] = W(p_M); };
+    const Eigen::Matrix3d R0 = f.R_MR.toRotationMatrix();
+    set(Keypoint::kPelvis, f.p_MR);
+    const Eigen::Vector3d p_chest = f.p_MR + R0 * Eigen::Vector3d(0, 0.236151, 0);
+    const Eigen::Matrix3d R_chest = R0 * f.chest.toRotationMatrix();
+    o.R_WPelvis = WR(R0);
+    o.R_WTorso = WR(R_chest);
+    for (int side = 0; side < 2; ++side) {
+      const bool left = side == 0;
+      const double zs = left ? -1.0 : 1.0;  // DeepMimic z = character's right
+      const Eigen::Vector3d p_hip = f.p_MR + R0 * Eigen::Vector3d(0, 0, zs * 0.084887);
+      const Eigen::Matrix3d R_hip = R0 * (left ? f.left_hip : f.right_hip).toRotationMatrix();
+      const Eigen::Vector3d p_knee = p_hip + R_hip * Eigen::Vector3d(0, -0.421546, 0);
+      const Eigen::Matrix3d R_knee = R_hip * Rz(left ? f.left_knee : f.right_knee);
+      const Eigen::Vector3d p_ankle = p_knee + R_knee * Eigen::Vector3d(0, -0.409870, 0);
+      const Eigen::Matrix3d R_ankle = R_knee * (left ? f.left_ankle : f.right_ankle).toRotationMatrix();
+      const Eigen::Vector3d p_sh = p_chest + R_chest * Eigen::Vector3d(-0.02405, 0.2435, zs * 0.18311);
+      const Eigen::Matrix3d R_sh = R_chest * (left ? f.left_shoulder : f.right_shoulder).toRotationMatrix();
+      const Eigen::Vector3d p_el = p_sh + R_sh * Eigen::Vector3d(0, -0.274788, 0);
+      const Eigen::Matrix3d R_el = R_sh * Rz(left ? f.left_elbow : f.right_elbow);
+      const Eigen::Vector3d p_wr = p_el + R_el * Eigen::Vector3d(0, -0.258947, 0);
+      set(left ? Keypoint::kLeftHip : Keypoint::kRightHip, p_hip);
+      set(left ? Keypoint::kLeftKnee : Keypoint::kRightKnee, p_knee);
+      set(left ? Keypoint::kLeftAnkle : Keypoint::kRightAnkle, p_ankle);
+      set(left ? Keypoint::kLeftShoulder : Keypoint::kRightShoulder, p_sh);
+      set(left ? Keypoint::kLeftElbow : Keypoint::kRightElbow, p_el);
+      set(left ? Keypoint::kLeftWrist : Keypoint::kRightWrist, p_wr);
+      o.R_WFoot[static_cast<std::size_t>(side)] = WR(R_ankle);
+      o.p_WK[static_cast<std::size_t>(left ? Keypoint::kLeftToe : Keypoint::kRightToe)] =
+          W(p_ankle) + o.R_WFoot[static_cast<std::size_t>(side)].toRotationMatrix() * Eigen::Vector3d(kToeOffset, 0, 0);
+    }
+  }
+  putOnGround(h);
+  return h;
+}
+
 DeepMimicMotion readDeepMimicMotion(const std::string& path) {
   YAML::Node root;
   try {

@@ -1,6 +1,7 @@
 #include "pmg/motion/keypoint_retarget.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -341,6 +342,24 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
       t = buildTargets(h, geo, s);
     } else {
       for (std::size_t i = 0; i < kNumKeypoints; ++i) t[i] = s * h.p_WK[i];
+    }
+  }
+
+  // Vertical alignment: human and robot differ in pelvis→hip drop and ankle height, so shift all
+  // targets by one constant per motion that puts the target ankles of stance feet at the robot's
+  // flat-foot ankle height (median over stance frames).
+  {
+    std::vector<double> dz;
+    const Keypoint ank[2] = {Keypoint::kLeftAnkle, Keypoint::kRightAnkle};
+    for (int k = 0; k < F; ++k)
+      for (int side = 0; side < 2; ++side)
+        if (res.contacts[static_cast<std::size_t>(k)][static_cast<std::size_t>(side)])
+          dz.push_back(-g1SolePoints_F()[0].z() - res.targets[static_cast<std::size_t>(k)][static_cast<std::size_t>(ank[side])].z());
+    if (!dz.empty()) {
+      std::nth_element(dz.begin(), dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2), dz.end());
+      const double shift = dz[dz.size() / 2];
+      for (KeypointTargets& t : res.targets)
+        for (auto& p : t) p.z() += shift;
     }
   }
 

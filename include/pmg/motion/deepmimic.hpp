@@ -19,6 +19,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "pmg/motion/human_motion.hpp"
+
 namespace pmg::motion {
 
 /// One DeepMimic frame. Quaternions are unit, expressed in the file's Y-up frame convention.
@@ -54,6 +56,13 @@ DeepMimicMotion readDeepMimicMotion(const std::string& path);
 /// The ground height is the median over frames of the lower foot's lowest corner (the files put
 /// the ground near y = 0 with ±2 cm error).
 std::array<Eigen::MatrixXd, 2> deepMimicSoleTracks(const DeepMimicMotion& motion, double scale);
+
+/// Keypoints of a DeepMimic motion by forward kinematics of the humanoid3d skeleton
+/// (characters/humanoid3d.txt offsets: chest 0.236151 m above the root, shoulders at
+/// (−0.02405, 0.2435, ±0.18311) m from the chest, upper arm 0.274788 m, forearm 0.258947 m, hips
+/// ±0.084887 m, thigh 0.421546 m, shank 0.409870 m), in W (Z up), ground at z = 0
+/// (ankle_height = 0.05 m: the foot box bottom is 0.05 m below the ankle joint).
+HumanMotion deepMimicToHuman(const DeepMimicMotion& motion);
 
 /// Rotation from the DeepMimic file frame M (x fwd, y up, z right) to the robot world/body
 /// convention W (x fwd, y left, z up): v_W = C · v_M with C = [[1,0,0],[0,0,-1],[0,1,0]].
