@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
   bool schedule = false;
   app.add_option("plan", path, "bus plan YAML")->required()->check(CLI::ExistingFile);
   app.add_flag("--schedule", schedule, "print the per-bus send schedule inside the slot");
-  app.add_option("--csv", csv, "write bus,motor,joint,send_us,reply_due_us rows (for apps/hal/plot_bus_plan.py)");
+  app.add_option("--csv", csv, "write one row per motor: bus, id, joint, send/reply-due offsets, frame times [us], load (for apps/hal/plot_bus_plan.py)");
   CLI11_PARSE(app, argc, argv);
   try {
     BusPlanOptions o;
@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
     std::ofstream out;
     if (!csv.empty()) {
       out.open(csv);
-      out << "bus,motor,joint,send_us,reply_due_us,load\n";
+      out << "bus,motor,joint,send_us,reply_due_us,command_us,reply_us,load\n";
     }
     for (std::size_t b = 0; b < plan.buses().size(); ++b) {
       for (const SlotEntry& e : plan.schedule()[b]) {
@@ -44,7 +44,8 @@ int main(int argc, char** argv) {
           std::printf("  %-6s %-28s send %7.1f us  reply due %7.1f us\n", plan.buses()[b].name.c_str(),
                       m.name.c_str(), 1e6 * e.send_offset_s, 1e6 * e.reply_due_s);
         if (out) out << plan.buses()[b].name << "," << int(m.motor_id) << "," << m.name << "," << 1e6 * e.send_offset_s
-                     << "," << 1e6 * e.reply_due_s << "," << plan.loads()[b].load << "\n";
+                     << "," << 1e6 * e.reply_due_s << "," << 1e6 * plan.loads()[b].command_s << ","
+                     << 1e6 * plan.loads()[b].reply_s << "," << plan.loads()[b].load << "\n";
       }
     }
     return 0;
