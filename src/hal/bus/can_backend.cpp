@@ -77,7 +77,7 @@ void CanBackend::handleFrame(std::size_t b, const CanFrame& f, pmg::LowState& st
   const int id = p.replyMotorId(f);
   const int k = (id >= 0 && id < 256) ? route_[b][static_cast<std::size_t>(id)] : -1;
   if (k < 0) {
-    // Not routable: count against no motor (transport rx counters still show it).
+    ++unroutable_;
     return;
   }
   const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];

@@ -57,7 +57,9 @@ void MitProtocol::encodeControl(const MotorSpec& m, ControlRequest req, CanFrame
 }
 
 int MitProtocol::replyMotorId(const CanFrame& f) const noexcept {
-  if (f.error || f.fd || f.extended || f.len != 6) return -1;
+  // Route on the id byte alone; decodeReply() then checks the rest and counts a bad frame against
+  // the motor it claims to come from.
+  if (f.error || f.fd || f.extended || f.len < 1) return -1;
   return f.data[0];
 }
 

@@ -6,9 +6,9 @@
 #include <new>
 
 namespace pmg_test {
-inline std::atomic<bool> g_count_allocs{false};
+inline thread_local bool g_count_allocs = false;  // only the thread that opened the scope counts
 inline std::atomic<long> g_allocs{0};
-/// Counts operator new calls between construction and allocations().
+/// Counts operator new calls made by this thread between construction and allocations().
 struct AllocScope {
   AllocScope() {
     g_allocs = 0;

@@ -67,6 +67,8 @@ class CanBackend final : public pmg::HalBackend {
   const MotorLinkCounters& motorCounters(int joint) const noexcept { return motor_counters_[static_cast<std::size_t>(joint)]; }
   std::uint64_t nonfiniteCommands() const noexcept { return nonfinite_commands_; }
   std::uint64_t imuFrames() const noexcept { return imu_frames_; }
+  /// Data frames that no motor of their bus claims (foreign id, wrong kind).
+  std::uint64_t unroutableFrames() const noexcept { return unroutable_; }
   std::uint64_t imuRejected() const noexcept { return imu_rejected_; }
   std::uint64_t cycles() const noexcept { return cycles_; }
 
@@ -87,7 +89,7 @@ class CanBackend final : public pmg::HalBackend {
   int num_joints_ = 0;
   double window_s_ = 0.0;
   bool imu_got_ = false;
-  std::uint64_t cycles_ = 0, nonfinite_commands_ = 0, imu_frames_ = 0, imu_rejected_ = 0;
+  std::uint64_t cycles_ = 0, nonfinite_commands_ = 0, imu_frames_ = 0, imu_rejected_ = 0, unroutable_ = 0;
 };
 
 /// How the CAN backend reaches the buses.

@@ -122,7 +122,7 @@ class MotorProtocol {
   virtual ReplyStatus decodeReply(const MotorSpec& motor, const CanFrame& frame,
                                   MotorFeedback& out) const noexcept = 0;
   /// Motor id a frame claims to come from (for routing a reply to its motor), or -1 if the frame
-  /// cannot be a reply of this protocol.
+  /// cannot be a reply of this protocol at all. Routing only: decodeReply() does the full checks.
   virtual int replyMotorId(const CanFrame& frame) const noexcept = 0;
 };
 
