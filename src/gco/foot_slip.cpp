@@ -62,6 +62,8 @@ void FootSlipMeter::add(const GcoInput& in, const BaseCommand& base) {
 FootSlipStats FootSlipMeter::stats() const {
   FootSlipStats st;
   double speed_sum = 0.0, height_sum = 0.0, slip_sum = 0.0;
+  double ss_sum = 0.0, ds_sum = 0.0;
+  int ss_n = 0, ds_n = 0;
   for (std::size_t f = 0; f < kNumFeet; ++f) {
     // Find complete stances: touchdown (false -> true) ... lift-off (true -> false).
     std::size_t k = 1;
@@ -79,6 +81,13 @@ FootSlipStats FootSlipMeter::stats() const {
           const double speed = s.v_WS_H[f].head<2>().norm();
           const double herr = std::abs(s.p_WS[f].z() - ground_height_);
           speed_sum += speed;
+          if (s.contact[1 - f]) {
+            ds_sum += speed;
+            ++ds_n;
+          } else {
+            ss_sum += speed;
+            ++ss_n;
+          }
           height_sum += herr;
           st.max_stance_speed = std::max(st.max_stance_speed, speed);
           st.max_height_error = std::max(st.max_height_error, herr);
@@ -98,6 +107,8 @@ FootSlipStats FootSlipMeter::stats() const {
     st.mean_height_error = height_sum / st.stance_ticks;
   }
   if (st.stances > 0) st.mean_slip_per_stance = slip_sum / st.stances;
+  if (ss_n > 0) st.mean_single_support_speed = ss_sum / ss_n;
+  if (ds_n > 0) st.mean_double_support_speed = ds_sum / ds_n;
   if (!implied_v_.empty()) {
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     double err = 0.0;

@@ -137,7 +137,7 @@ const char* toString(GcoStatus status) noexcept {
   return "unknown";
 }
 
-void fillLegState(const std::array<std::array<int, kLegDofs>, kNumFeet>& leg_idx, const Eigen::Ref<const Eigen::VectorXd>& q,
+void fillLegState(const LegJointIndex& leg_idx, const Eigen::Ref<const Eigen::VectorXd>& q,
                   const Eigen::Ref<const Eigen::VectorXd>& qd, GcoInput* in) noexcept {
   for (std::size_t f = 0; f < kNumFeet; ++f) {
     for (int j = 0; j < kLegDofs; ++j) {
@@ -306,7 +306,7 @@ GcoStatus Gco::solve(const GcoInput& in, GcoResult* out) noexcept {
   out->u_opt.pitch = in.command.pitch;
   out->u_opt.roll = in.command.roll;
   for (std::size_t f = 0; f < kNumFeet; ++f) {
-    out->contact_weight[f] = m.s[f];
+    out->contact_weight[f] = p.s[f];
     out->v_WS_H[f] = p.v0[f] + Eigen::Vector3d(x(0) - x(2) * p.r[f].y(), x(1) + x(2) * p.r[f].x(), 0.0);
     out->sole_height[f] = p.z0[f] + x(3);
   }

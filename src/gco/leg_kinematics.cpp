@@ -1,5 +1,8 @@
 #include "pmg/gco/leg_kinematics.hpp"
 
+#include "pmg/common/kinematics.hpp"
+#include "pmg/common/robot_config.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -26,25 +29,17 @@ void LegModelOptions::validate() const {
   }
 }
 
-std::shared_ptr<const LegModel> LegModel::fromUrdfFile(const std::string& urdf_path, const LegModelOptions& options) {
-  options.validate();
-  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDFFile(urdf_path);
-  if (!urdf_model) throw std::runtime_error(urdf_path + ": cannot read or parse the URDF");
-  KDL::Tree tree;
-  if (!kdl_parser::treeFromUrdfModel(*urdf_model, tree)) {
-    throw std::runtime_error(urdf_path + ": kdl_parser could not build a KDL tree");
-  }
+std::shared_ptr<const LegModel> LegModel::build(std::array<KDL::Chain, kNumFeet> chains, const LegModelOptions& options,
+                                                const std::string& source) {
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDFFile(source);
+  if (!urdf_model) throw std::runtime_error(source + ": cannot read or parse the URDF");
   std::shared_ptr<LegModel> model(new LegModel());
   model->options_ = options;
-  model->urdf_path_ = urdf_path;
+  model->urdf_path_ = source;
   for (std::size_t f = 0; f < kNumFeet; ++f) {
-    KDL::Chain chain;
-    if (!tree.getChain(options.base_link, options.foot_links[f], chain)) {
-      throw std::runtime_error(urdf_path + ": no kinematic chain from link '" + options.base_link + "' to link '" +
-                               options.foot_links[f] + "'");
-    }
+    KDL::Chain& chain = chains[f];
     if (static_cast<int>(chain.getNrOfJoints()) != kLegDofs) {
-      throw std::runtime_error(urdf_path + ": chain " + options.base_link + " -> " + options.foot_links[f] + " has " +
+      throw std::runtime_error(source + ": chain " + options.base_link + " -> " + options.foot_links[f] + " has " +
                                std::to_string(chain.getNrOfJoints()) + " moving joints, expected " +
                                std::to_string(kLegDofs));
     }
@@ -68,8 +63,35 @@ std::shared_ptr<const LegModel> LegModel::fromUrdfFile(const std::string& urdf_p
   return model;
 }
 
-std::array<std::array<int, kLegDofs>, kNumFeet> LegModel::jointIndices(const std::vector<std::string>& joint_names) const {
-  std::array<std::array<int, kLegDofs>, kNumFeet> idx{};
+std::shared_ptr<const LegModel> LegModel::fromUrdfFile(const std::string& urdf_path, const LegModelOptions& options) {
+  options.validate();
+  const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDFFile(urdf_path);
+  if (!urdf_model) throw std::runtime_error(urdf_path + ": cannot read or parse the URDF");
+  KDL::Tree tree;
+  if (!kdl_parser::treeFromUrdfModel(*urdf_model, tree)) {
+    throw std::runtime_error(urdf_path + ": kdl_parser could not build a KDL tree");
+  }
+  std::array<KDL::Chain, kNumFeet> chains;
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    if (!tree.getChain(options.base_link, options.foot_links[f], chains[f])) {
+      throw std::runtime_error(urdf_path + ": no kinematic chain from link '" + options.base_link + "' to link '" +
+                               options.foot_links[f] + "'");
+    }
+  }
+  return build(std::move(chains), options, urdf_path);
+}
+
+std::shared_ptr<const LegModel> LegModel::fromRobotConfig(const RobotConfig& config, const LegModelOptions& options) {
+  LegModelOptions o = options;
+  o.base_link = config.base_link;
+  o.foot_links = {config.left_foot_link, config.right_foot_link};
+  o.validate();
+  const KinematicModel kinematics(config);
+  return build({kinematics.leftLeg().chain, kinematics.rightLeg().chain}, o, config.urdf_path);
+}
+
+LegJointIndex LegModel::jointIndices(const std::vector<std::string>& joint_names) const {
+  LegJointIndex idx{};
   for (std::size_t f = 0; f < kNumFeet; ++f) {
     for (int j = 0; j < kLegDofs; ++j) {
       idx[f][j] = -1;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "gco_test_util.hpp"
+#include "pmg/common/robot_config.hpp"
 
 namespace pmg::gco {
 namespace {
@@ -30,6 +31,25 @@ TEST(LegModel, MissingFileAndLinkNameTheProblem) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("no_such_link"), std::string::npos) << e.what();
   }
+}
+
+TEST(LegModel, FromRobotConfigMatchesTheUrdfChains) {
+  const RobotConfig cfg = loadRobotConfig("config/robots/g1/g1.yaml");
+  const auto legs = LegModel::fromRobotConfig(cfg);
+  const auto ref = test::g1Legs();
+  LegKinematics a(legs), b(ref);
+  LegVector q;
+  q << -0.3, 0.1, -0.05, 0.7, -0.3, 0.05;
+  for (Foot f : {Foot::kLeft, Foot::kRight}) {
+    EXPECT_EQ(legs->jointNames(f), ref->jointNames(f));
+    Eigen::Isometry3d Xa, Xb;
+    ASSERT_TRUE(a.forward(f, q, &Xa));
+    ASSERT_TRUE(b.forward(f, q, &Xb));
+    EXPECT_LT((Xa.translation() - Xb.translation()).norm(), 1e-12);
+  }
+  const auto idx = legs->jointIndices(cfg.jointNames());
+  EXPECT_EQ(idx[0][3], cfg.jointIndex("left_knee_joint"));
+  EXPECT_EQ(idx[1][0], cfg.jointIndex("right_hip_pitch_joint"));
 }
 
 TEST(LegModel, JointIndicesFromRobotOrder) {

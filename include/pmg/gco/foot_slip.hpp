@@ -29,6 +29,8 @@ struct FootSlipStats {
   double max_slip_per_stance = 0.0;  ///< [m]
   double mean_height_error = 0.0;    ///< [m]
   double max_height_error = 0.0;     ///< [m]
+  double mean_single_support_speed = 0.0;  ///< stance-foot speed over single-support ticks only [m/s]
+  double mean_double_support_speed = 0.0;  ///< stance-foot speed over double-support ticks only [m/s]
   double mean_implied_v_x = 0.0;     ///< base v_x implied by the stance feet [m/s]
   double mean_implied_v_y = 0.0;     ///< base v_y implied by the stance feet [m/s]
   double mean_implied_velocity_error = 0.0;  ///< mean |v_implied,xy − u_cmd,xy| [m/s]

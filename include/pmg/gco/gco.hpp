@@ -102,9 +102,9 @@ struct GcoOptions {
   double contact_ramp_time = 0.03;  ///< s_f rises 0 -> 1 over this time after touchdown [s], >= 0
 
   /// Largest change of u' between consecutive ticks (the jump bound), per component.
-  double max_jump_velocity = 0.05;  ///< [m/s per tick]
-  double max_jump_yaw_rate = 0.10;  ///< [rad/s per tick]
-  double max_jump_height = 0.005;   ///< [m per tick]
+  double max_jump_velocity = 0.10;  ///< [m/s per tick] (10 m/s² at 100 Hz)
+  double max_jump_yaw_rate = 0.20;  ///< [rad/s per tick]
+  double max_jump_height = 0.010;   ///< [m per tick]
 
   int max_iterations = 20;                 ///< Levenberg-Marquardt iteration cap per tick, 1..100
   double failure_gradient_norm = 1e-6;     ///< HIT_MAX_ITERATIONS with a larger max |gradient| = failure
@@ -135,7 +135,7 @@ struct GcoInput {
 
 /// Copies the leg joints out of full joint vectors (robot order) using LegModel::jointIndices().
 /// noexcept, no allocation. q and qd must have at least max(index)+1 entries (not checked).
-void fillLegState(const std::array<std::array<int, kLegDofs>, kNumFeet>& leg_idx, const Eigen::Ref<const Eigen::VectorXd>& q,
+void fillLegState(const LegJointIndex& leg_idx, const Eigen::Ref<const Eigen::VectorXd>& q,
                   const Eigen::Ref<const Eigen::VectorXd>& qd, GcoInput* in) noexcept;
 
 enum class GcoStatus : int {

@@ -21,11 +21,17 @@
 
 #include "pmg/generator/clip.hpp"
 
+namespace pmg {
+struct RobotConfig;
+}
+
 namespace pmg::gco {
 
 /// Number of joints of one G1 leg chain (hip pitch, hip roll, hip yaw, knee, ankle pitch, ankle roll).
 inline constexpr int kLegDofs = 6;
 using LegVector = Eigen::Matrix<double, kLegDofs, 1>;  ///< one leg's joint vector [rad] or [rad/s]
+/// Column of each leg-chain joint in a full joint vector: [foot][chain joint] (LegModel::jointIndices()).
+using LegJointIndex = std::array<std::array<int, kLegDofs>, kNumFeet>;
 
 /// Which links the leg chains connect, and where the sole point sits on the foot.
 struct LegModelOptions {
@@ -50,6 +56,12 @@ class LegModel {
   static std::shared_ptr<const LegModel> fromUrdfFile(const std::string& urdf_path,
                                                       const LegModelOptions& options = {});
 
+  /// Preferred in the controller: the leg chains of the robot config (pmg::KinematicModel of
+  /// include/pmg/common/kinematics.hpp: base_link -> left/right_foot_link of the config's URDF).
+  /// `options.base_link` / `foot_links` are replaced by the config's; p_FS_F is kept.
+  /// Throws pmg::ConfigError / std::runtime_error naming the file on a URDF/config mismatch.
+  static std::shared_ptr<const LegModel> fromRobotConfig(const RobotConfig& config, const LegModelOptions& options = {});
+
   const KDL::Chain& chain(Foot foot) const { return chains_[index(foot)]; }
   /// Joint names of one chain, root to tip (URDF names, e.g. "left_hip_pitch_joint").
   const std::array<std::string, kLegDofs>& jointNames(Foot foot) const { return joint_names_[index(foot)]; }
@@ -62,12 +74,14 @@ class LegModel {
 
   /// Column of each chain joint in a full joint vector ordered by `joint_names` (e.g. the
   /// RobotConfig order). Throws std::runtime_error naming the missing joint.
-  std::array<std::array<int, kLegDofs>, kNumFeet> jointIndices(const std::vector<std::string>& joint_names) const;
+  LegJointIndex jointIndices(const std::vector<std::string>& joint_names) const;
 
   static std::size_t index(Foot foot) { return static_cast<std::size_t>(foot); }
 
  private:
   LegModel() = default;
+  static std::shared_ptr<const LegModel> build(std::array<KDL::Chain, kNumFeet> chains, const LegModelOptions& options,
+                                               const std::string& source);
   std::array<KDL::Chain, kNumFeet> chains_;
   std::array<std::array<std::string, kLegDofs>, kNumFeet> joint_names_;
   std::array<std::array<std::pair<double, double>, kLegDofs>, kNumFeet> limits_;

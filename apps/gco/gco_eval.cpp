@@ -1,0 +1,252 @@
+// pmg_gco_eval: foot slip of the PMG templates with and without GCO over a command grid, the
+// kinematic consistency of the optimized command, the cost per tick, and a foot-trajectory trace
+// for the Fig.-5 plot (scripts/gco_plot.py). See docs/gco.md.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/gco/foot_slip.hpp"
+#include "pmg/gco/generator_bridge.hpp"
+#include "pmg/motion/clip_io.hpp"
+
+namespace {
+
+using pmg::PostureCommand;
+using pmg::VelocityCommand;
+using namespace pmg::gco;
+
+struct Command {
+  VelocityCommand u_d;
+  PostureCommand u_s;
+};
+
+struct Outcome {
+  FootSlipStats with, without;
+};
+
+pmg::GeneratorJointSpace jointSpaceOf(const pmg::RobotConfig& r) {
+  pmg::GeneratorJointSpace js;
+  js.joint_names = r.jointNames();
+  js.q_stand = r.defaultPose();
+  js.lower = r.lowerLimits();
+  js.upper = r.upperLimits();
+  js.mirror_index = r.mirrorIndex();
+  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
+  js.standing_base_height = r.standing_base_height;
+  return js;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(p / 100.0 * v.size())) - 1);
+  return v[i];
+}
+
+/// Generator + GCO with the two stages timed separately (the same calls GeneratorWithGco::step makes).
+struct Pipeline {
+  Pipeline(std::shared_ptr<const pmg::GeneratorModel> model, std::shared_ptr<const LegModel> legs, const GcoOptions& o)
+      : gen(std::move(model)), gco(legs, o), idx(legs->jointIndices(gen.model().jointSpace().joint_names)) {}
+  pmg::MotionGenerator gen;
+  Gco gco;
+  LegJointIndex idx;
+  GcoInput in;
+  GcoResult res;
+};
+
+/// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
+FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double dt, int warmup_ticks,
+                  int measure_ticks, std::vector<double>* tick_us, std::vector<double>* gco_us) {
+  pipe.gen.reset(0.0);
+  pipe.gco.reset();
+  meter.reset();
+  for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    pipe.gen.step(c.u_d, c.u_s, dt);
+    fillFromGenerator(pipe.gen.output(), pipe.idx, c.u_d, c.u_s, &pipe.in);
+    const auto t1 = std::chrono::steady_clock::now();
+    pipe.gco.solve(pipe.in, &pipe.res);
+    const auto t2 = std::chrono::steady_clock::now();
+    if (k >= warmup_ticks) {
+      if (tick_us) tick_us->push_back(std::chrono::duration<double, std::micro>(t2 - t0).count());
+      if (gco_us) gco_us->push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
+      meter.add(pipe.in, pipe.res.u_opt);
+    }
+  }
+  return meter.stats();
+}
+
+void writeTrace(const std::string& path, const FootSlipMeter& with, const FootSlipMeter& without) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write the trace CSV");
+  f << "t,variant,foot,contact,x,y,z,speed\n";
+  for (int variant = 0; variant < 2; ++variant) {
+    const auto& tr = variant == 0 ? without.trace() : with.trace();
+    for (const auto& s : tr) {
+      for (std::size_t ft = 0; ft < pmg::kNumFeet; ++ft) {
+        f << s.t << ',' << (variant == 0 ? "without_gco" : "with_gco") << ',' << (ft == 0 ? "left" : "right") << ','
+          << (s.contact[ft] ? 1 : 0) << ',' << s.p_WS[ft].x() << ',' << s.p_WS[ft].y() << ',' << s.p_WS[ft].z() << ','
+          << s.v_WS_H[ft].head<2>().norm() << '\n';
+      }
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Foot slip of PMG templates with and without GCO over a command grid (issue 4)"};
+  std::string robot_path = "config/robots/g1/g1.yaml";
+  std::string clips_dir = "config/clips/g1";
+  std::string gco_config;
+  std::string out_dir;
+  double seconds = 8.0, warmup = 3.0, dt = 0.01;
+  std::vector<double> vx{-0.6, -0.3, 0.0, 0.3, 0.6, 0.9}, vy{0.0, 0.3}, wz{-0.6, 0.0, 0.6};
+  std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
+  std::vector<double> trace{0.6, 0.0, 0.0};
+  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
+  app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory);
+  app.add_option("--gco-config", gco_config, "GcoOptions YAML (defaults if omitted)")->check(CLI::ExistingFile);
+  app.add_option("--out-dir", out_dir, "write gco_grid.csv and gco_trace.csv here");
+  app.add_option("--seconds", seconds, "measured time per command [s]")->check(CLI::Range(1.0, 120.0));
+  app.add_option("--warmup", warmup, "warm-up time per command [s]")->check(CLI::Range(0.0, 60.0));
+  app.add_option("--vx", vx, "grid values of v_x [m/s]");
+  app.add_option("--vy", vy, "grid values of v_y [m/s]");
+  app.add_option("--wz", wz, "grid values of the yaw rate [rad/s]");
+  app.add_option("--pitch", pitch, "grid values of the pitch command [rad]");
+  app.add_option("--roll", roll, "grid values of the roll command [rad]");
+  app.add_option("--height", height, "grid values of the height command [m] (0 = standing height)");
+  app.add_option("--trace", trace, "command (v_x v_y ω) whose foot trajectories go to gco_trace.csv")->expected(3);
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
+    const pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
+    auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, jointSpaceOf(robot));
+    auto legs = LegModel::fromRobotConfig(robot);
+    GcoOptions on = gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config);
+    on.enabled = true;
+    on.dt = dt;
+    GcoOptions off = on;
+    off.enabled = false;
+    Pipeline pipe_on(gen_model, legs, on), pipe_off(gen_model, legs, off);
+    FootSlipMeter meter_on(legs, dt, on.ground_height), meter_off(legs, dt, on.ground_height);
+    const int warm = static_cast<int>(std::lround(warmup / dt)), meas = static_cast<int>(std::lround(seconds / dt));
+
+    std::printf("clips: %zu dynamic, %zu static from %s\n", clips.dynamic_clips.size(), clips.static_clips.size(),
+                clips_dir.c_str());
+    for (const auto& c : clips.dynamic_clips) std::printf("  dynamic %s\n", c.name.c_str());
+    for (const auto& c : clips.static_clips) std::printf("  static  %s\n", c.name.c_str());
+    std::printf("\n%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s\n", "vx", "vy", "wz", "pitch",
+                "roll", "h", "st", "spd0", "spdG", "slip0", "slipG", "herr0", "herrG", "vimpl", "vcmd");
+    std::printf("%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s\n", "m/s", "m/s", "rad/s",
+                "rad", "rad", "m", "", "mm/s", "mm/s", "mm", "mm", "mm", "mm", "m/s", "m/s");
+
+    std::ofstream grid_csv;
+    if (!out_dir.empty()) {
+      grid_csv.open(out_dir + "/gco_grid.csv");
+      if (!grid_csv) throw std::runtime_error(out_dir + "/gco_grid.csv: cannot write");
+      grid_csv << "vx,vy,wz,pitch,roll,height,stances,speed_without,speed_with,slip_without,slip_with,"
+                  "height_err_without,height_err_with,max_height_err_with,implied_vx_with,implied_vx_without,"
+                  "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with\n";
+    }
+    std::vector<double> tick_us, gco_us;
+    tick_us.reserve(2000000);
+    gco_us.reserve(2000000);
+    double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
+    double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
+    int n_walk = 0, n_all = 0;
+    std::uint64_t failures = 0, jump_limited = 0, ticks = 0;
+    for (double a : vx)
+      for (double b : vy)
+        for (double w : wz)
+          for (double p : pitch)
+            for (double r : roll)
+              for (double h : height) {
+                Command c{{a, b, w}, {p, r, h}};
+                const FootSlipStats s0 = run(pipe_off, meter_off, c, dt, warm, meas, nullptr, nullptr);
+                const FootSlipStats sG = run(pipe_on, meter_on, c, dt, warm, meas, &tick_us, &gco_us);
+                failures += pipe_on.gco.counters().solver_failures;
+                if (pipe_on.gco.counters().solver_failures > 0) {
+                  std::printf("  (GCO solver failures for this command: %llu)\n",
+                              static_cast<unsigned long long>(pipe_on.gco.counters().solver_failures));
+                }
+                jump_limited += pipe_on.gco.counters().jump_limited;
+                ticks += pipe_on.gco.counters().ticks;
+                std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f\n",
+                            a, b, w, p, r, h, sG.stances, 1e3 * s0.mean_stance_speed, 1e3 * sG.mean_stance_speed,
+                            1e3 * s0.mean_slip_per_stance, 1e3 * sG.mean_slip_per_stance, 1e3 * s0.mean_height_error,
+                            1e3 * sG.mean_height_error, sG.mean_implied_v_x, a);
+                if (grid_csv) {
+                  grid_csv << a << ',' << b << ',' << w << ',' << p << ',' << r << ',' << h << ',' << sG.stances << ','
+                           << s0.mean_stance_speed << ',' << sG.mean_stance_speed << ',' << s0.mean_slip_per_stance
+                           << ',' << sG.mean_slip_per_stance << ',' << s0.mean_height_error << ','
+                           << sG.mean_height_error << ',' << sG.max_height_error << ',' << sG.mean_implied_v_x << ','
+                           << s0.mean_implied_v_x << ',' << s0.mean_single_support_speed << ','
+                           << sG.mean_single_support_speed << ',' << s0.mean_double_support_speed << ','
+                           << sG.mean_double_support_speed << '\n';
+                }
+                ++n_all;
+                sum_spd0 += s0.mean_stance_speed;
+                sum_spdG += sG.mean_stance_speed;
+                sum_h0 += s0.mean_height_error;
+                sum_ss0 += s0.mean_single_support_speed;
+                sum_ssG += sG.mean_single_support_speed;
+                sum_ds0 += s0.mean_double_support_speed;
+                sum_dsG += sG.mean_double_support_speed;
+                sum_hG += sG.mean_height_error;
+                max_hG = std::max(max_hG, sG.max_height_error);
+                if (sG.stances > 0) {
+                  ++n_walk;
+                  sum_slip0 += s0.mean_slip_per_stance;
+                  sum_slipG += sG.mean_slip_per_stance;
+                }
+                // Kinematic consistency: |base velocity implied by the stance feet − u' (GCO) or template|.
+                sum_cons0 += s0.mean_implied_velocity_error;
+                sum_consG += sG.mean_implied_velocity_error;
+              }
+
+    std::printf("\nsummary over %d commands (%d with complete stances):\n", n_all, n_walk);
+    std::printf("  mean stance-foot speed  without GCO %8.2f mm/s   with GCO %8.3f mm/s   reduction %5.1f %%\n",
+                1e3 * sum_spd0 / n_all, 1e3 * sum_spdG / n_all, 100.0 * (1.0 - sum_spdG / std::max(sum_spd0, 1e-12)));
+    if (n_walk > 0) {
+      std::printf("  mean slip per stance    without GCO %8.2f mm     with GCO %8.3f mm     reduction %5.1f %%\n",
+                  1e3 * sum_slip0 / n_walk, 1e3 * sum_slipG / n_walk,
+                  100.0 * (1.0 - sum_slipG / std::max(sum_slip0, 1e-12)));
+    }
+    std::printf("    single support only   without GCO %8.2f mm/s   with GCO %8.3f mm/s\n", 1e3 * sum_ss0 / n_all,
+                1e3 * sum_ssG / n_all);
+    std::printf("    double support only   without GCO %8.2f mm/s   with GCO %8.3f mm/s\n", 1e3 * sum_ds0 / n_all,
+                1e3 * sum_dsG / n_all);
+    std::printf("  stance height error     without GCO %8.2f mm     with GCO %8.3f mm (max %.3f mm)\n",
+                1e3 * sum_h0 / n_all, 1e3 * sum_hG / n_all, 1e3 * max_hG);
+    std::printf("  kinematic consistency: mean |v implied by stance feet - commanded v|: without %.3f m/s, with %.3f m/s\n",
+                sum_cons0 / n_all, sum_consG / n_all);
+    std::printf("  GCO solver failures %llu, jump-limited ticks %llu of %llu\n",
+                static_cast<unsigned long long>(failures), static_cast<unsigned long long>(jump_limited),
+                static_cast<unsigned long long>(ticks));
+    std::printf("  cost per tick (this machine, %zu ticks): GCO solve p50 %.1f us  p99 %.1f us  max %.1f us\n",
+                gco_us.size(), percentile(gco_us, 50), percentile(gco_us, 99), percentile(gco_us, 100));
+    std::printf("                                   generator+GCO p50 %.1f us  p99 %.1f us  max %.1f us\n",
+                percentile(tick_us, 50), percentile(tick_us, 99), percentile(tick_us, 100));
+
+    if (!out_dir.empty()) {
+      const Command c{{trace[0], trace[1], trace[2]}, {0.0, 0.0, 0.0}};
+      run(pipe_off, meter_off, c, dt, warm, 300, nullptr, nullptr);
+      run(pipe_on, meter_on, c, dt, warm, 300, nullptr, nullptr);
+      writeTrace(out_dir + "/gco_trace.csv", meter_on, meter_off);
+      std::printf("wrote %s/gco_grid.csv and %s/gco_trace.csv\n", out_dir.c_str(), out_dir.c_str());
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pmg_gco_eval: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

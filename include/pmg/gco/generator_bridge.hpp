@@ -1,0 +1,82 @@
+#pragma once
+/// @file generator_bridge.hpp
+/// The complete generator of issue 4: PMG generator tick (eqs. 4-12, pmg::MotionGenerator) followed
+/// by GCO (eqs. 13-19), header-only (target pmg::gco_generator).
+///
+/// Per 100 Hz tick: MotionGenerator::step(u_d, u_s, dt) -> fillFromGenerator() -> Gco::solve().
+/// The policy observes GcoResult::u_opt (u' of eq. 19) instead of the raw command; with
+/// GcoOptions::enabled = false (the "PMG w/o GCO" ablation) u' is the template's own base state.
+/// Setup allocates and may throw; step() is noexcept and allocation-free (test/gco/
+/// gco_no_alloc_test.cpp runs it under an operator-new counter).
+
+#include <memory>
+
+#include "pmg/gco/gco.hpp"
+#include "pmg/generator/generator.hpp"
+
+namespace pmg::gco {
+
+/// Copies one generator tick into the GCO input (noexcept, no allocation):
+/// q_leg/qd_leg from q_ref/qd_ref through `leg_idx`, c_f = in_contact, v = v_base,
+/// ω = (0, 0, yaw_rate), h = base_height, pelvis level (roll = pitch = 0: clips carry joint angles
+/// relative to the pelvis and no pelvis orientation), command = (u_d, u_s) with a "standing"
+/// height (u_s.height <= 0) replaced by the template height.
+inline void fillFromGenerator(const GeneratorOutput& g, const LegJointIndex& leg_idx, const VelocityCommand& u_d,
+                              const PostureCommand& u_s, GcoInput* in) noexcept {
+  fillLegState(leg_idx, g.q_ref, g.qd_ref, in);
+  in->contact = g.in_contact;
+  in->v_HB_H = g.v_base;
+  in->w_HB_H = Eigen::Vector3d(0.0, 0.0, g.yaw_rate);
+  in->base_height = g.base_height;
+  in->base_roll = 0.0;
+  in->base_pitch = 0.0;
+  in->command.v_x = u_d.vx;
+  in->command.v_y = u_d.vy;
+  in->command.yaw_rate = u_d.wz;
+  in->command.pitch = u_s.pitch;
+  in->command.roll = u_s.roll;
+  in->command.height = u_s.height > 0.0 ? u_s.height : g.base_height;
+}
+
+/// Generator + GCO, one object per control loop (not thread-safe).
+class GeneratorWithGco {
+ public:
+  /// Setup: `legs` must be built from the same robot as the generator's joint space
+  /// (LegModel::fromRobotConfig). Throws std::runtime_error if a leg joint is missing from the
+  /// generator's joint order, std::invalid_argument on bad options.
+  GeneratorWithGco(std::shared_ptr<const GeneratorModel> generator_model, std::shared_ptr<const LegModel> legs,
+                   const GcoOptions& options)
+      : generator_(std::move(generator_model)),
+        gco_(legs, options),
+        leg_idx_(legs->jointIndices(generator_.model().jointSpace().joint_names)) {}
+
+  /// One tick: generator at the current phase, then GCO. Returns GCO's result (u' etc.).
+  const GcoResult& step(const VelocityCommand& u_d, const PostureCommand& u_s, double dt) noexcept {
+    generator_.step(u_d, u_s, dt);
+    fillFromGenerator(generator_.output(), leg_idx_, u_d, u_s, &input_);
+    gco_.solve(input_, &result_);
+    return result_;
+  }
+
+  /// Resets the phase and GCO's warm start / ramps (noexcept).
+  void reset(double phase = 0.0) noexcept {
+    generator_.reset(phase);
+    gco_.reset();
+  }
+
+  const GeneratorOutput& generatorOutput() const noexcept { return generator_.output(); }
+  const GcoInput& gcoInput() const noexcept { return input_; }
+  const GcoResult& gcoResult() const noexcept { return result_; }
+  MotionGenerator& generator() noexcept { return generator_; }
+  Gco& gco() noexcept { return gco_; }
+  const LegJointIndex& legJointIndex() const noexcept { return leg_idx_; }
+
+ private:
+  MotionGenerator generator_;
+  Gco gco_;
+  LegJointIndex leg_idx_;
+  GcoInput input_;
+  GcoResult result_;
+};
+
+}  // namespace pmg::gco
