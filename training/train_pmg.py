@@ -110,6 +110,12 @@ def main():
     os.makedirs(args.out, exist_ok=True)
 
     import jax
+    try:  # brax 0.14.2 still calls jax.device_put_replicated, removed in JAX 0.11
+        jax.device_put_replicated
+    except AttributeError:
+        def _device_put_replicated(x, devices):
+            return jax.pmap(lambda _: x, devices=devices)(np.arange(len(devices)))
+        jax.device_put_replicated = _device_put_replicated
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn

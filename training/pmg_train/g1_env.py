@@ -94,6 +94,19 @@ def _pitch_roll(R):
     return pitch, roll
 
 
+def mjx_friendly_mjcf(path):
+    """The SIL's MJCF text for MJX: visual-only mesh geoms (contype 0, density 0, so no effect on
+    dynamics) and their mesh assets removed; the four shoulder cylinders made non-colliding (MJX
+    lacks some of their collision pairs). Collisions left: 8 foot spheres against the floor."""
+    import re
+    with open(path) as f:
+        xml = f.read()
+    xml = re.sub(r'<geom[^>]*type="mesh"[^>]*/>', "", xml)
+    xml = re.sub(r'<mesh [^>]*/>', "", xml)
+    xml = re.sub(r'(<geom[^>]*type="cylinder")', r'\1 contype="0" conaffinity="0"', xml)
+    return xml
+
+
 def _scale_vector():
     out = []
     for _, size, scale in OBS_TERMS:
@@ -126,7 +139,7 @@ class G1PmgEnv(Env):
             action_scale = np.clip(1.2 * dev, 0.25, 1.2)
         self.action_scale = np.asarray(action_scale, np.float32)
 
-        mj = mujoco.MjModel.from_xml_path(cfg.mjcf)
+        mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf))
         mj.opt.timestep = cfg.sim_dt
         mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
         mj.dof_armature[6:] = 0.01
