@@ -1,12 +1,18 @@
-/// pmg_make_clips: builds the shipped PMG clip set for the Unitree G1 from real mocap, in one
-/// command, reproducibly (same input → byte-identical files).
+/// pmg_make_clips: builds the shipped PMG clip set for the Unitree G1 from real human mocap in one
+/// command, reproducibly (same input → byte-identical files):
 ///
 ///   build/bin/pmg_make_clips [--data data/motions] [--robot config/robots/g1/g1.yaml]
-///                            [--out config/clips/g1] [--samples 64]
+///                            [--out config/clips/g1] [--csv-dir DIR]
 ///
-/// Prints one report line per clip (frames used, T, x̄, contacts, clamped joint samples).
+/// Every clip: import (DeepMimic .txt / CMU .bvh) → optimisation-based retargeting
+/// (ceres_keypoints_v1) → contact segmentation and one gait cycle (dynamic) or a monotone posture
+/// sweep (static) → clip file. Mirrored clips use the robot's mirror map. Writes
+/// <out>/report.md (per-clip retargeting quality) and, with --csv-dir, per-clip keypoint CSVs for
+/// scripts/motion_plot_retarget.py.
 #include <cstdio>
 #include <exception>
+#include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -15,106 +21,200 @@
 
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "pmg/motion/bvh.hpp"
 #include "pmg/motion/clip_builder.hpp"
 #include "pmg/motion/clip_io.hpp"
 #include "pmg/motion/deepmimic.hpp"
-#include "pmg/motion/joint_angle_map.hpp"
+#include "pmg/motion/keypoint_retarget.hpp"
 
 namespace {
 
 using namespace pmg;
 using namespace pmg::motion;
 
+constexpr double kCmuUnit = 0.056444;  // CMU BVH units → metres
 const char* kDeepMimicLicense = "MIT (DeepMimic, Copyright (c) 2018 Xue Bin Peng)";
+const char* kCmuLicense =
+    "CMU Graphics Lab Motion Capture Database terms (mocap.cs.cmu.edu: free for all uses, no resale of the data); "
+    "cgspeed BVH conversion adds no restrictions";
 
-/// One clip to cut from a DeepMimic file.
-struct DeepMimicClipSpec {
+/// A mocap source: file (relative to the data root) and the seconds retargeted.
+struct Source {
+  std::string file;
+  double begin_s = 0.0;
+  double end_s = -1.0;  ///< −1 = end of file
+};
+
+struct DynamicSpec {
   std::string name;
-  std::string file;           ///< relative to the data root
+  Source source;
   CommandAxis axis;
-  bool whole_file_cycle;      ///< the file is exactly one closed cycle (Loop: wrap)
-  double search_begin_s = 0;  ///< otherwise: window searched for two anchor events [s]
-  double search_end_s = 0;
+  bool whole_file_cycle = false;  ///< the retargeted range is exactly one closed cycle
+  double search_begin_s = 0.0;    ///< else: cycle between two `event`s of `anchor` in this window
+  double search_end_s = 0.0;      ///<   (seconds relative to source.begin_s)
   Foot anchor = Foot::kLeft;
-  ContactEvent event = ContactEvent::kLiftoff;
+  ContactEvent event = ContactEvent::kTouchdown;
   std::string notes;
 };
 
-int countClamped(const RobotMotion& m, int begin, int end) {
-  int count = 0;
-  for (int k = begin; k <= end; ++k)
-    for (Eigen::Index j = 0; j < m.clamp_excess.cols(); ++j) count += m.clamp_excess(k, j) > 1e-9 ? 1 : 0;
-  return count;
+struct MirrorSpec {
+  std::string source_clip;
+  std::string name;
+};
+
+struct StaticSpec {
+  std::string name;
+  Source source;
+  PostureAxis axis;
+  std::string notes;
+};
+
+std::string license(const std::string& file) { return file.rfind("cmu_bvh/", 0) == 0 ? kCmuLicense : kDeepMimicLicense; }
+
+HumanMotion load(const std::string& root, const Source& s) {
+  const std::string path = root + "/" + s.file;
+  HumanMotion h = s.file.size() > 4 && s.file.substr(s.file.size() - 4) == ".bvh" ? bvhToHuman(readBvh(path), kCmuUnit)
+                                                                                  : deepMimicToHuman(readDeepMimicMotion(path));
+  const int b = static_cast<int>(std::lround(s.begin_s * h.fps));
+  const int e = s.end_s < 0 ? h.numFrames() : std::min(h.numFrames(), static_cast<int>(std::lround(s.end_s * h.fps)) + 1);
+  h = h.slice(b, e);
+  h.source_file = s.file;
+  return h;
 }
 
-std::string clampedJoints(const RobotMotion& m, const RobotConfig& robot, int begin, int end) {
-  std::string out;
-  for (Eigen::Index j = 0; j < m.clamp_excess.cols(); ++j) {
-    const double mx = m.clamp_excess.block(begin, j, end - begin + 1, 1).maxCoeff();
-    if (mx > 1e-9) out += fmt::format("{}{} (max {:.3f} rad)", out.empty() ? "" : ", ", robot.joints[static_cast<std::size_t>(j)].name, mx);
-  }
-  return out.empty() ? "none" : out;
+std::string statsLine(const RetargetStats& st) {
+  return fmt::format("keypoint error mean {:.3f} m / max {:.3f} m; joint-limit violations {}; foot skating {:.1f} mm mean / "
+                     "{:.1f} mm max per stance ({} stances); ground penetration {:.1f} mm",
+                     st.keypoint_error_mean, st.keypoint_error_max, st.joint_limit_violations, st.skate_mean_mm, st.skate_max_mm,
+                     st.stances, st.penetration_max_mm);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Build the PMG clip set for the G1 from mocap (joint_angle_map_v1 retargeting)"};
-  std::string data_root = "data/motions";
-  std::string robot_yaml = "config/robots/g1/g1.yaml";
-  std::string out_dir = "config/clips/g1";
-  int samples = 96;
-  app.add_option("--data", data_root, "mocap data root (holds deepmimic/)");
+  CLI::App app{"Build the PMG clip set for the G1 from human mocap (ceres_keypoints_v1 retargeting)"};
+  std::string data_root = "data/motions", robot_yaml = "config/robots/g1/g1.yaml", out_dir = "config/clips/g1", csv_dir;
+  app.add_option("--data", data_root, "mocap data root (holds deepmimic/ and cmu_bvh/)");
   app.add_option("--robot", robot_yaml, "robot config YAML");
-  app.add_option("--out", out_dir, "output directory for the clip files");
-  app.add_option("--samples", samples, "phase samples per dynamic clip")->check(CLI::Range(8, 4096));
+  app.add_option("--out", out_dir, "output directory for the clip files and report.md");
+  app.add_option("--csv-dir", csv_dir, "also write per-clip retargeting keypoint CSVs here");
   CLI11_PARSE(app, argc, argv);
+
+  const std::vector<DynamicSpec> dynamic_specs = {
+      {"walk_forward", {"deepmimic/humanoid3d_walk.txt"}, CommandAxis::kForward, true, 0, 0, Foot::kLeft, ContactEvent::kTouchdown,
+       "DeepMimic walk: the file is one closed gait cycle (Loop: wrap)"},
+      {"turn_left", {"deepmimic/humanoid3d_long_walk3.txt", 1.5, 3.8}, CommandAxis::kYaw, false, 0.2, 2.0, Foot::kLeft,
+       ContactEvent::kLiftoff, "pivot turn to the left (t = 1.8-3.4 s of the file), cycle between two left-foot liftoffs"},
+      {"walk_lateral_left", {"cmu_bvh/cmu_143_40_sidestep_left_excerpt.bvh"}, CommandAxis::kLateral, false, 0.0, 2.2, Foot::kLeft,
+       ContactEvent::kTouchdown, "CMU 143_40 crossover side-step to the left, cycle between two left-foot touchdowns"},
+      {"walk_backward", {"cmu_bvh/cmu_143_39_walk_backward_excerpt.bvh"}, CommandAxis::kForward, false, 0.0, 1.8, Foot::kLeft,
+       ContactEvent::kTouchdown, "CMU 143_39 walking backward, cycle between two left-foot touchdowns"},
+  };
+  const std::vector<MirrorSpec> mirror_specs = {{"walk_lateral_left", "walk_lateral_right"}, {"turn_left", "turn_right"}};
+  const std::vector<StaticSpec> static_specs = {
+      {"squat", {"cmu_bvh/cmu_115_07_squat_excerpt.bvh", 0.0, 1.05}, PostureAxis::kHeight,
+       "CMU 115_07 squat (pick up a box bending the knees), standing to the bottom at t = 1.05 s"},
+      {"bend", {"cmu_bvh/cmu_115_01_bend_at_waist_excerpt.bvh", 0.0, 1.35}, PostureAxis::kPitch,
+       "CMU 115_01 forward bend at the waist (pick up a box), upright to trunk horizontal at t = 1.35 s"},
+  };
 
   try {
     const RobotConfig robot = loadRobotConfig(robot_yaml);
     const KinematicModel model(robot);
-    const std::vector<DeepMimicClipSpec> specs = {
-        {"walk_forward", "deepmimic/humanoid3d_walk.txt", CommandAxis::kForward, true, 0, 0, Foot::kLeft,
-         ContactEvent::kLiftoff, "whole file = one closed gait cycle (Loop: wrap)"},
-        {"turn_left", "deepmimic/humanoid3d_long_walk3.txt", CommandAxis::kYaw, false, 1.8, 3.4, Foot::kLeft,
-         ContactEvent::kLiftoff, "pivot turn to the left, cycle between two left-foot liftoffs in t = 1.8-3.4 s"},
-    };
-    for (const DeepMimicClipSpec& spec : specs) {
-      const DeepMimicMotion dm = readDeepMimicMotion(data_root + "/" + spec.file);
-      RobotMotion rm = retargetJointAngleMap(dm, model);
-      rm.source_file = spec.file;
-      // Contacts from the human skeleton (the joint-angle map does not preserve foot clearance).
-      rm.p_WS = deepMimicSoleTracks(dm, robotLegLength(model) / kDeepMimicLegLength);
-      const ContactSequence contacts = detectContacts(rm);
+    std::string report =
+        "# G1 clip set: retargeting report\n\n"
+        "Generated by `build/bin/pmg_make_clips` (do not edit). Retargeting: ceres_keypoints_v1 (docs/motion.md).\n"
+        "Keypoint error: robot keypoints vs scaled human targets over the retargeted frames; skating: largest horizontal\n"
+        "drift of the sole centre from its mean during each contact; penetration: deepest sole point below z = 0.\n\n"
+        "| clip | kind | source | frames | T [s] | x̄ | contacts L (μ, σ) / R (μ, σ) | retargeting quality |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+    std::map<std::string, DynamicClip> built;
+    for (const DynamicSpec& spec : dynamic_specs) {
+      const HumanMotion human = load(data_root, spec.source);
+      const RetargetResult res = retargetKeypoints(human, model);
+      RobotMotion rm = res.motion;
+      rm.source_file = spec.source.file;
       CycleWindow window;
       if (spec.whole_file_cycle) {
         window = {0, rm.numFrames() - 1};
       } else {
-        window = findGaitCycle(contacts, spec.anchor, spec.event, static_cast<int>(spec.search_begin_s * rm.fps),
-                               static_cast<int>(spec.search_end_s * rm.fps));
+        window = findGaitCycle(res.contacts, spec.anchor, spec.event, static_cast<int>(std::lround(spec.search_begin_s * rm.fps)),
+                               static_cast<int>(std::lround(spec.search_end_s * rm.fps)));
       }
       DynamicClipOptions opt;
       opt.name = spec.name;
       opt.axis = spec.axis;
-      opt.num_samples = samples;
-      DynamicClip clip = buildDynamicClip(rm, contacts, window, robot, opt);
-      clip.meta.license = kDeepMimicLicense;
+      DynamicClip clip = buildDynamicClip(rm, res.contacts, window, robot, opt);
+      const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
+      clip.meta.frame_begin = window.begin + offset;
+      clip.meta.frame_end = window.end + offset;
+      clip.meta.license = license(spec.source.file);
       clip.meta.provenance = "mocap";
-      clip.meta.retargeting = "joint_angle_map_v1";
-      const int clamped = countClamped(rm, window.begin, window.end);
-      clip.meta.notes = fmt::format("{}; phase 0 = left-foot touchdown; contacts: sole height < 0.02 m and speed < 0.6 m/s "
-                                    "(DeepMimic skeleton forward kinematics, scaled to the G1); clamped to joint limits: {}",
-                                    spec.notes, clampedJoints(rm, robot, window.begin, window.end));
+      clip.meta.retargeting = "ceres_keypoints_v1";
+      const RetargetStats st = retargetStats(res, robot, window.begin, window.end + 1);
+      clip.meta.notes = fmt::format("{}; scale {:.3f}; phase 0 = left-foot touchdown; contacts from the human feet (height < "
+                                    "0.03 m above flat, speed < 0.5 m/s); {}",
+                                    spec.notes, res.scale, statsLine(st));
       validateClip(clip, robot, spec.name);
-      const std::string path = out_dir + "/" + spec.name + ".yaml";
-      writeClip(clip, path);
-      std::printf("%s\n", fmt::format("{:<14} {:>38} frames [{}, {}) @ {:.0f} Hz  T = {:.3f} s  x̄ = {:.3f} ({} {:+d})  "
-                                      "contact L mu={:.3f} sigma={:.3f}  R mu={:.3f} sigma={:.3f}  clamped samples: {}  -> {}",
-                                      spec.name, spec.file, window.begin, window.end, rm.fps, clip.period, clip.nominal_scale,
-                                      toString(clip.axis), clip.direction, clip.contact[0].mu, clip.contact[0].sigma,
-                                      clip.contact[1].mu, clip.contact[1].sigma, clamped, path)
-                              .c_str());
+      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);
+      report += fmt::format("| {} | dynamic {} {:+d} | `{}` | [{}, {}) @ {:.0f} Hz | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | {} |\n",
+                            clip.name, toString(clip.axis), clip.direction, spec.source.file, clip.meta.frame_begin,
+                            clip.meta.frame_end, rm.fps, clip.period, clip.nominal_scale, clip.contact[0].mu, clip.contact[0].sigma,
+                            clip.contact[1].mu, clip.contact[1].sigma, statsLine(st));
+      std::printf("%-20s %s -> T %.3f s, x̄ %.3f (%s %+d), %.1f ms/frame\n", clip.name.c_str(), spec.source.file.c_str(), clip.period,
+                  clip.nominal_scale, toString(clip.axis).c_str(), clip.direction, res.solve_ms_per_frame);
+      built[clip.name] = clip;
     }
+    for (const MirrorSpec& spec : mirror_specs) {
+      const DynamicClip clip = mirrorClip(built.at(spec.source_clip), robot, spec.name);
+      validateClip(clip, robot, spec.name);
+      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      report += fmt::format("| {} | dynamic {} {:+d} | mirror of `{}` | - | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | as {} |\n",
+                            clip.name, toString(clip.axis), clip.direction, spec.source_clip, clip.period, clip.nominal_scale,
+                            clip.contact[0].mu, clip.contact[0].sigma, clip.contact[1].mu, clip.contact[1].sigma, spec.source_clip);
+      std::printf("%-20s mirror of %s\n", clip.name.c_str(), spec.source_clip.c_str());
+    }
+    for (const StaticSpec& spec : static_specs) {
+      const HumanMotion human = load(data_root, spec.source);
+      const RetargetResult res = retargetKeypoints(human, model);
+      RobotMotion rm = res.motion;
+      rm.source_file = spec.source.file;
+      const Eigen::VectorXd values = postureValues(rm, model, spec.axis);
+      // Sweep from the first frame to the extreme value (lowest pelvis / largest pitch or roll).
+      Eigen::Index extreme = 0;
+      if (spec.axis == PostureAxis::kHeight)
+        values.minCoeff(&extreme);
+      else
+        values.maxCoeff(&extreme);
+      StaticClipOptions opt;
+      opt.name = spec.name;
+      opt.axis = spec.axis;
+      StaticClip clip = buildStaticClip(rm, values, 0, static_cast<int>(extreme), robot, opt);
+      const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
+      clip.meta.frame_begin += offset;
+      clip.meta.frame_end += offset;
+      clip.meta.license = license(spec.source.file);
+      clip.meta.provenance = "mocap";
+      clip.meta.retargeting = "ceres_keypoints_v1";
+      const RetargetStats st = retargetStats(res, robot, 0, static_cast<int>(extreme) + 1);
+      clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; {}", spec.notes, res.scale,
+                                    spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", statsLine(st));
+      validateClip(clip, robot, spec.name);
+      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", 0, static_cast<int>(extreme) + 1);
+      report += fmt::format("| {} | static {} | `{}` | [{}, {}) @ {:.0f} Hz | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | {} |\n",
+                            clip.name, toString(clip.axis), spec.source.file, clip.meta.frame_begin, clip.meta.frame_end, rm.fps,
+                            clip.values(0), clip.values(clip.values.size() - 1), clip.neutral, statsLine(st));
+      std::printf("%-20s %s -> %s %.3f .. %.3f (neutral %.3f)\n", clip.name.c_str(), spec.source.file.c_str(),
+                  toString(clip.axis).c_str(), clip.values(0), clip.values(clip.values.size() - 1), clip.neutral);
+    }
+    report +=
+        "\nNot in the set: a side-lean (roll) static clip: the shared mocap has no side-lean capture (CMU 132_35/36\n"
+        "were located but not transcribed), so no roll template is shipped and none is synthesized.\n";
+    std::ofstream f(out_dir + "/report.md", std::ios::binary | std::ios::trunc);
+    if (!f) throw std::runtime_error(out_dir + "/report.md: cannot open for writing");
+    f << report;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_make_clips: %s\n", e.what());
     return 1;

@@ -6,7 +6,6 @@
 ///                          [--begin 0] [--end -1] (seconds) [--mirror] [--csv out.csv]
 #include <cstdio>
 #include <exception>
-#include <fstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -61,19 +60,7 @@ int main(int argc, char** argv) {
                                     st.keypoint_error_max, st.joint_limit_violations, st.skate_mean_mm, st.skate_max_mm,
                                     st.stances, st.penetration_max_mm, st.solve_ms_per_frame)
                             .c_str());
-    if (!csv.empty()) {
-      std::ofstream f(csv);
-      if (!f) throw std::runtime_error(csv + ": cannot open for writing");
-      f << "frame,source,keypoint,x,y,z,contact_left,contact_right\n";
-      for (int k = 0; k < res.motion.numFrames(); ++k)
-        for (std::size_t i = 0; i < kNumKeypoints; ++i) {
-          const auto c = res.contacts[static_cast<std::size_t>(k)];
-          const auto& t = res.targets[static_cast<std::size_t>(k)][i];
-          const auto& a = res.achieved[static_cast<std::size_t>(k)][i];
-          f << fmt::format("{},target,{},{:.4f},{:.4f},{:.4f},{},{}\n", k, keypointName(static_cast<Keypoint>(i)), t.x(), t.y(), t.z(), int(c[0]), int(c[1]));
-          f << fmt::format("{},robot,{},{:.4f},{:.4f},{:.4f},{},{}\n", k, keypointName(static_cast<Keypoint>(i)), a.x(), a.y(), a.z(), int(c[0]), int(c[1]));
-        }
-    }
+    if (!csv.empty()) writeRetargetCsv(res, csv, 0, res.motion.numFrames());
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "pmg_retarget: %s\n", ex.what());
     return 1;

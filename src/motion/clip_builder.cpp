@@ -225,6 +225,13 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
   Eigen::MatrixXd P(M, d);
   const Eigen::RowVectorXd drift = X.row(M) - X.row(0);
   for (int r = 0; r < M; ++r) P.row(r) = X.row(r) - (static_cast<double>(r) / M - 0.5 * (M - 1) / M) * drift;
+  // Clamp to the joint limits before smoothing (the ramp can push a joint that rests on its limit
+  // past it); the convex Gaussian then rounds the approach to the limit instead of a clamp kink.
+  {
+    const Eigen::VectorXd lo = robot.lowerLimits(), hi = robot.upperLimits();
+    for (int r = 0; r < M; ++r)
+      for (Eigen::Index j = 0; j < n; ++j) P(r, j) = std::min(hi(j), std::max(lo(j), P(r, j)));
+  }
   P = circularGaussianSmooth(P, options.smoothing_sigma * motion.fps);
 
   std::vector<std::array<bool, kNumFeet>> cyc(contacts.begin() + window.begin, contacts.begin() + window.end);
@@ -272,6 +279,133 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
   clip.meta.source_fps = motion.fps;
   clip.meta.source_file = motion.source_file;
   return clip;
+}
+
+}  // namespace pmg::motion
+
+namespace pmg::motion {
+
+DynamicClip mirrorClip(const DynamicClip& clip, const RobotConfig& robot, const std::string& new_name) {
+  const auto n = static_cast<Eigen::Index>(robot.numJoints());
+  if (clip.q.cols() != n) throw std::invalid_argument("mirrorClip(" + clip.name + "): joint count differs from the robot config");
+  const std::vector<int> mirror = robot.mirrorIndex();
+  const Eigen::Index N = clip.q.rows();
+  DynamicClip m = clip;
+  m.name = new_name;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double sign = robot.joints[static_cast<std::size_t>(j)].mirror_sign;
+    m.q.col(j) = sign * clip.q.col(mirror[static_cast<std::size_t>(j)]);
+    m.qd.col(j) = sign * clip.qd.col(mirror[static_cast<std::size_t>(j)]);
+  }
+  m.v_base.col(1) *= -1.0;
+  m.omega_base.col(0) *= -1.0;
+  m.omega_base.col(2) *= -1.0;
+  if (clip.axis != CommandAxis::kForward) m.direction = -clip.direction;
+  m.contact = {clip.contact[1], clip.contact[0]};
+  // Rotate so that φ = 0 is the new left foot's touchdown (start of its contact interval).
+  double start = m.contact[0].mu - m.contact[0].sigma;
+  start -= std::floor(start);
+  const Eigen::Index shift = static_cast<Eigen::Index>(std::lround(start * static_cast<double>(N))) % N;
+  if (shift != 0) {
+    auto rotate = [&](Eigen::MatrixXd& x) {
+      const Eigen::MatrixXd y = x;
+      for (Eigen::Index k = 0; k < N; ++k) x.row(k) = y.row((k + shift) % N);
+    };
+    rotate(m.q);
+    rotate(m.qd);
+    rotate(m.v_base);
+    rotate(m.omega_base);
+    Eigen::MatrixXd h = m.base_height;
+    rotate(h);
+    m.base_height = h.col(0);
+    const double dphi = static_cast<double>(shift) / static_cast<double>(N);
+    for (auto& c : m.contact) {
+      c.mu -= dphi;
+      c.mu -= std::floor(c.mu);
+      if (c.mu >= 1.0) c.mu = 0.0;
+    }
+  }
+  if (m.meta.provenance == "mocap") m.meta.provenance = "mocap_mirrored";
+  m.meta.notes = fmt::format("left/right mirror of clip '{}' (robot mirror map), phase rotated by {} samples; {}", clip.name,
+                             shift, clip.meta.notes);
+  return m;
+}
+
+void StaticClipOptions::validate() const {
+  if (name.empty()) throw std::invalid_argument("StaticClipOptions.name: expected a non-empty clip name");
+  if (num_samples < 2) throw std::invalid_argument(fmt::format("StaticClipOptions.num_samples = {}: expected >= 2", num_samples));
+}
+
+Eigen::VectorXd postureValues(const RobotMotion& motion, const KinematicModel& model, PostureAxis axis) {
+  const int F = motion.numFrames();
+  Eigen::VectorXd v(F);
+  if (axis == PostureAxis::kHeight) {
+    for (int k = 0; k < F; ++k) v(k) = motion.p_WB(k, 2);
+    return v;
+  }
+  const LimbChain torso = model.chain(model.config().base_link, "torso_link");
+  ChainFkWorkspace ws(torso);
+  for (int k = 0; k < F; ++k) {
+    Eigen::Isometry3d X_BT;
+    const Eigen::VectorXd q = motion.q.row(k).transpose();
+    if (!ws.tipPose(q, X_BT)) throw std::runtime_error("postureValues: KDL forward kinematics failed");
+    const Eigen::Matrix3d R_WB = motion.R_WB[static_cast<std::size_t>(k)].toRotationMatrix();
+    const double psi = headingOf(motion.R_WB[static_cast<std::size_t>(k)]);
+    const Eigen::Vector3d z_H = Eigen::AngleAxisd(-psi, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_WB * X_BT.linear().col(2);
+    v(k) = axis == PostureAxis::kPitch ? std::atan2(z_H.x(), z_H.z()) : std::atan2(-z_H.y(), z_H.z());
+  }
+  return v;
+}
+
+StaticClip buildStaticClip(const RobotMotion& motion, const Eigen::VectorXd& values, int begin, int end,
+                           const RobotConfig& robot, const StaticClipOptions& options) {
+  options.validate();
+  if (begin < 0 || end >= motion.numFrames() || end <= begin || values.size() != motion.numFrames())
+    throw std::invalid_argument(fmt::format("buildStaticClip({}): frames [{}, {}] invalid for {} frames", options.name, begin, end,
+                                            motion.numFrames()));
+  const double v0 = values(begin), v1 = values(end);
+  const double sign = v1 >= v0 ? 1.0 : -1.0;
+  if (std::abs(v1 - v0) < 1e-3)
+    throw std::invalid_argument(fmt::format("buildStaticClip({}): value changes by {:.2e} only over frames [{}, {}]", options.name,
+                                            v1 - v0, begin, end));
+  // Monotone (running extreme) value along the segment.
+  std::vector<double> mono;
+  double best = v0;
+  for (int k = begin; k <= end; ++k) {
+    best = sign > 0 ? std::max(best, values(k)) : std::min(best, values(k));
+    mono.push_back(best);
+  }
+  const int K = options.num_samples;
+  const auto n = motion.q.cols();
+  StaticClip c;
+  c.name = options.name;
+  c.axis = options.axis;
+  c.values.resize(K);
+  c.q.resize(K, n);
+  for (int i = 0; i < K; ++i) {
+    const double target = v0 + (v1 - v0) * i / (K - 1);
+    std::size_t k = 0;
+    while (k + 1 < mono.size() && sign * (mono[k + 1] - target) < 0.0) ++k;
+    Eigen::RowVectorXd q = motion.q.row(begin + static_cast<int>(k));
+    if (k + 1 < mono.size() && mono[k + 1] != mono[k]) {
+      const double a = std::min(1.0, std::max(0.0, (target - mono[k]) / (mono[k + 1] - mono[k])));
+      q = (1 - a) * motion.q.row(begin + static_cast<int>(k)) + a * motion.q.row(begin + static_cast<int>(k) + 1);
+    }
+    const int row = sign > 0 ? i : K - 1 - i;
+    c.values(row) = target;
+    c.q.row(row) = q;
+  }
+  c.neutral = v0;
+  const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
+  for (Eigen::Index i = 0; i < c.q.rows(); ++i)
+    for (Eigen::Index j = 0; j < n; ++j) c.q(i, j) = std::min(upper(j), std::max(lower(j), c.q(i, j)));
+  c.meta.robot = robot.name;
+  c.meta.joint_names = robot.jointNames();
+  c.meta.frame_begin = begin;
+  c.meta.frame_end = end + 1;
+  c.meta.source_fps = motion.fps;
+  c.meta.source_file = motion.source_file;
+  return c;
 }
 
 }  // namespace pmg::motion

@@ -1,6 +1,7 @@
 #include "pmg/motion/keypoint_retarget.hpp"
 
 #include <chrono>
+#include <fstream>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -508,6 +509,21 @@ RetargetStats retargetStats(const RetargetResult& result, const RobotConfig& rob
   st.skate_mean_mm = st.stances > 0 ? skate_sum / st.stances : 0.0;
   st.penetration_max_mm = std::max(0.0, st.penetration_max_mm);
   return st;
+}
+
+void writeRetargetCsv(const RetargetResult& result, const std::string& path, int begin, int end) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  f << "frame,source,keypoint,x,y,z,contact_left,contact_right\n";
+  for (int k = std::max(0, begin); k < std::min(end, result.motion.numFrames()); ++k)
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) {
+      const auto c = result.contacts[static_cast<std::size_t>(k)];
+      const char* name = keypointName(static_cast<Keypoint>(i));
+      const Eigen::Vector3d& t = result.targets[static_cast<std::size_t>(k)][i];
+      const Eigen::Vector3d& a = result.achieved[static_cast<std::size_t>(k)][i];
+      f << fmt::format("{},target,{},{:.4f},{:.4f},{:.4f},{},{}\n", k - begin, name, t.x(), t.y(), t.z(), int(c[0]), int(c[1]));
+      f << fmt::format("{},robot,{},{:.4f},{:.4f},{:.4f},{},{}\n", k - begin, name, a.x(), a.y(), a.z(), int(c[0]), int(c[1]));
+    }
 }
 
 }  // namespace pmg::motion

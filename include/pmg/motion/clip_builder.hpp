@@ -63,7 +63,7 @@ struct DynamicClipOptions {
   std::string name;                              ///< clip name, e.g. "walk_forward"
   CommandAxis axis = CommandAxis::kForward;      ///< command component realised
   int num_samples = 96;                          ///< N phase samples, ≥ 8
-  double smoothing_sigma = 0.03;                 ///< Gaussian smoothing σ across the cycle [s], ≥ 0
+  double smoothing_sigma = 0.05;                 ///< Gaussian smoothing σ across the cycle [s], ≥ 0
   bool align_on_left_touchdown = true;           ///< φ = 0 at the left foot's touchdown (if it has one)
   /// @throws std::invalid_argument naming the field and range.
   void validate() const;
@@ -86,5 +86,41 @@ Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_sa
 Eigen::MatrixXd resamplePeriodic(const Eigen::MatrixXd& x, int num_samples);
 /// Central difference in phase of N periodic samples, divided by the period: (x[k+1] − x[k−1]) / (2 T / N).
 Eigen::MatrixXd periodicDerivative(const Eigen::MatrixXd& x, double period);
+
+}  // namespace pmg::motion
+
+namespace pmg::motion {
+
+/// Left↔right mirror of a dynamic clip with the robot's mirror map (RobotConfig joints' `mirror`
+/// and `mirror_sign`): q'_j = sign_j · q_mirror(j) (same for q̇); v' = (v_x, −v_y, v_z);
+/// ω' = (−ω_x, ω_y, −ω_z); contacts swapped; lateral and yaw clips change direction. The samples
+/// are rotated so that φ = 0 stays at the (new) left foot's touchdown. Sets provenance
+/// "mocap_mirrored" (a mirrored synthesized clip stays "synthesized") and appends to notes.
+/// @throws std::invalid_argument if the clip's joint count differs from the robot's.
+DynamicClip mirrorClip(const DynamicClip& clip, const RobotConfig& robot, const std::string& new_name);
+
+/// Options of static clip building.
+struct StaticClipOptions {
+  std::string name;                          ///< e.g. "squat"
+  PostureAxis axis = PostureAxis::kHeight;   ///< posture command realised
+  int num_samples = 16;                      ///< K, ≥ 2
+  /// @throws std::invalid_argument naming the field and range.
+  void validate() const;
+};
+
+/// Posture command value of every frame of a robot motion: pelvis height above the ground [m]
+/// (kHeight), torso forward pitch [rad] (kPitch: tilt of torso_link's z axis towards the pelvis
+/// heading, positive forward) or torso roll [rad] (kRoll: tilt towards −y of the heading frame,
+/// positive = lean right). Needs the chain base → torso_link of @p model.
+Eigen::VectorXd postureValues(const RobotMotion& motion, const KinematicModel& model, PostureAxis axis);
+
+/// Builds a static clip from the frames [begin, end] of @p motion, which go from the neutral
+/// posture (frame begin) towards the extreme one (frame end): the posture value is made monotone
+/// (running extreme), K values are spaced evenly between the neutral and the extreme value, and q
+/// is interpolated linearly in the frames where the monotone value crosses each of them. Rows are
+/// sorted by increasing value; `neutral` = the value of frame begin.
+/// @throws std::invalid_argument if the range is empty or the value does not change by > 1e-3.
+StaticClip buildStaticClip(const RobotMotion& motion, const Eigen::VectorXd& values, int begin, int end,
+                           const RobotConfig& robot, const StaticClipOptions& options);
 
 }  // namespace pmg::motion

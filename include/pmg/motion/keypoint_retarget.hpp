@@ -21,6 +21,7 @@
 /// Setup-time/offline code (allocates, throws).
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "pmg/common/kinematics.hpp"
@@ -86,6 +87,10 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
 
 /// Statistics over frames [begin, end) of a result. @throws std::out_of_range.
 RetargetStats retargetStats(const RetargetResult& result, const RobotConfig& robot, int begin, int end);
+
+/// Writes frames [begin, end) of a result as CSV (frame, source = target|robot, keypoint, x, y, z
+/// [m, W], contact_left, contact_right) for scripts/motion_plot_retarget.py. @throws std::runtime_error.
+void writeRetargetCsv(const RetargetResult& result, const std::string& path, int begin, int end);
 
 /// Robot keypoints (same set/meaning as the human ones) for base pose and q, by KDL forward
 /// kinematics: hips = hip roll link origins, knees = knee links, ankles = ankle roll links,
