@@ -3,7 +3,7 @@
 
 Usage: scripts/motion_plot_retarget.py retarget.csv out.png [--frames 0,10,20,30] [--title T]
 The CSV comes from `build/bin/pmg_retarget <mocap> --csv retarget.csv`. Two rows of panels: side
-view (x-z, W) and front view (y-z, W); human target skeleton dashed orange, robot solid blue; the
+view (x-z) and front view (y-z) in the pelvis heading frame; human target skeleton dashed orange, robot solid blue; the
 feet in contact are marked with a black square. Also prints the mean error per keypoint [m].
 """
 import argparse
@@ -47,22 +47,31 @@ def main():
         print(f"{name:16s} mean {np.mean(err[name]):.3f} m  max {np.max(err[name]):.3f} m")
     fig, axes = plt.subplots(2, len(frames), figsize=(3.2 * len(frames), 7), squeeze=False)
     for c, k in enumerate(frames):
-        centre = pts[(k, "robot")]["pelvis"]
+        # View in the robot's heading frame: x along the pelvis heading (perpendicular to the
+        # right-hip -> left-hip line), origin under the pelvis.
+        R = pts[(k, "robot")]
+        lat = R["left_hip"] - R["right_hip"]
+        psi = np.arctan2(-lat[0], lat[1])
+        rot = np.array([[np.cos(psi), np.sin(psi), 0], [-np.sin(psi), np.cos(psi), 0], [0, 0, 1]])
+        origin = R["pelvis"] * np.array([1, 1, 0])
+        for src in ("target", "robot"):
+            pts[(k, src + "_H")] = {name: rot @ (p - origin) for name, p in pts[(k, src)].items()}
+        centre = np.zeros(3)
         for row, (i, lab) in enumerate([(0, "x"), (1, "y")]):
             ax = axes[row][c]
             for src, style in (("target", dict(color="tab:orange", ls="--", lw=2)), ("robot", dict(color="tab:blue", lw=2.5))):
-                P = pts[(k, src)]
+                P = pts[(k, src + "_H")]
                 for b0, b1 in BONES:
                     ax.plot([P[b0][i] - centre[i], P[b1][i] - centre[i]], [P[b0][2], P[b1][2]], **style)
             for side, foot in ((0, "left_ankle"), (1, "right_ankle")):
                 if contact[k][side]:
-                    p = pts[(k, "robot")][foot]
+                    p = pts[(k, "robot_H")][foot]
                     ax.plot([p[i] - centre[i]], [p[2]], "ks", ms=6)
             ax.axhline(0.0, color="0.6", lw=1)
             ax.set_aspect("equal")
             ax.set_xlim(-0.7, 0.7)
             ax.set_ylim(-0.05, 1.5)
-            ax.set_xlabel(f"{lab} - pelvis {lab} [m]")
+            ax.set_xlabel(f"{lab}_H [m] (heading frame)")
             if c == 0:
                 ax.set_ylabel(("side view" if row == 0 else "front view") + "  z [m]")
             if row == 0:
