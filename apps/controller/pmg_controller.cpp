@@ -11,6 +11,7 @@
 
 #include "pmg/controller/controller.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
+#include "pmg/hal/safety/safe_backend.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -38,6 +39,9 @@ int main(int argc, char** argv) {
   app.add_option("--can-transport", can_transport, "udp (towards pmg_sil) or socketcan (robot)")
       ->check(CLI::IsMember({"udp", "socketcan"}));
   app.add_option("--can-port", can_port, "UDP base port of pmg_sil")->check(CLI::Range(1024, 65000));
+  bool hal_safety = false;
+  app.add_flag("--hal-safety", hal_safety, "500 Hz safety supervisor in the HAL (guard mode: per-input watchdogs, "
+                                           "envelope, torque bound, latched damping; docs/hal.md)");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -69,6 +73,15 @@ int main(int argc, char** argv) {
       backend = pmg::hal::bus::makeCanBackend(cs);
       std::printf("pmg_controller: motors over CAN (%s, plan %s)\n", can_transport.c_str(), can_plan.c_str());
     }
+    pmg::hal::safety::SafeBackend* safe = nullptr;
+    if (hal_safety) {
+      if (!backend) backend = std::make_unique<pmg::MujocoBackend>(config.robot, config.mujoco);
+      auto so = pmg::hal::safety::SafetyOptions::fromRobot(config.robot);
+      so.guard_mode = true;
+      auto sb = std::make_unique<pmg::hal::safety::SafeBackend>(std::move(backend), so);
+      safe = sb.get();
+      backend = std::move(sb);
+    }
     pmg::Controller controller(config, std::move(backend));
     const pmg::CommandScript* sp = script_path.empty() ? nullptr : &script;
     const pmg::RunSummary s = rt ? controller.runRealtime(duration, &g_stop, sp) : controller.runLockstep(duration, sp);
@@ -90,6 +103,12 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(s.telemetry_dropped), static_cast<int>(s.final_mode),
                 static_cast<int>(s.fault));
     if (!config.log_file.empty()) std::printf("event log: %s\n", config.log_file.c_str());
+    pmg::hal::safety::SafetyStatus hs;
+    if (safe && safe->status(hs))
+      std::printf("HAL safety: mode %s, fault %s (joint %d), clamped joint-cycles %llu, max |tau|/limit %.2f\n",
+                  pmg::hal::safety::toString(hs.mode), pmg::hal::safety::toString(hs.fault.code), hs.fault.index,
+                  static_cast<unsigned long long>(hs.clamped_joint_ticks), hs.max_tau_ratio);
+    if (safe && hs.mode == pmg::hal::safety::Mode::kDamping) return 3;
     return s.fault == pmg::ControllerFault::kNone ? 0 : 3;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_controller: %s\n", e.what());

@@ -332,6 +332,12 @@ void SafetySupervisor::step(const SafetyInput& in, SafetyOutput& out) noexcept {
     if (!accepted) ++out.refused_requests;
   }
 
+  // 3. Guard mode arms itself.
+  if (opt_.guard_mode && mode_ == Mode::kPassive && mode_ == before) {
+    Fault ignored;
+    if (inputsHealthy(in, true, ignored) && envelopeHealthy(in, ignored)) enter(Mode::kActive, in);
+  }
+
   writeCommand(in, out);
   out.mode = mode_;
   out.mode_changed = mode_ != before;

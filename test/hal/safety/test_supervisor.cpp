@@ -472,3 +472,29 @@ TEST(ModeRequests, LcmCodesAndMailbox) {
   box.post(ModeRequest::kActive);
   EXPECT_EQ(box.take(), ModeRequest::kDamping) << "a pending e-stop is never overwritten";
 }
+
+TEST(Supervisor, GuardModeArmsItselfAndStillLatches) {
+  SafetyOptions o = twoJoints();
+  o.guard_mode = true;
+  Rig r(o);
+  r.in.q = {0.8, 0.1};
+  r.in.cmd_q = {0.8, 0.1};
+  r.in.cmd_kp = {50.0, 20.0};
+  r.tick(ModeRequest::kNone, /*fresh_motors=*/false);
+  EXPECT_EQ(r.out.mode, Mode::kPassive) << "no motor data yet";
+  r.tick();
+  EXPECT_EQ(r.out.mode, Mode::kActive) << "healthy inputs and a valid command arm it";
+  EXPECT_DOUBLE_EQ(r.out.cmd_kp[0], 50.0) << "the loop's command passes through";
+  r.in.cmd_q[0] = kNaN;
+  r.tick();
+  EXPECT_EQ(r.out.mode, Mode::kDamping);
+  EXPECT_EQ(r.out.fault.code, FaultCode::kCommandInvalid);
+  r.in.cmd_q[0] = 0.8;
+  r.ticks(50);
+  EXPECT_EQ(r.out.mode, Mode::kDamping) << "latched even though the input is healthy again";
+  r.ticks(300);
+  r.tick(ModeRequest::kPassive);
+  EXPECT_EQ(r.out.mode, Mode::kPassive);
+  r.tick();
+  EXPECT_EQ(r.out.mode, Mode::kActive) << "re-armed after the reset";
+}

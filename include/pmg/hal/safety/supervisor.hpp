@@ -22,6 +22,8 @@
 ///   kDamping   -> kPassive    request kPassive (reset), only after reset_min_damping_s in damping
 ///                             and with every |qd| < reset_qd_max; clears the latched fault
 /// Any other request is refused and counted in SafetyOutput::refused_requests (not a fault).
+/// Guard mode (SafetyOptions::guard_mode) adds: kPassive -> kActive without a request once every
+/// input, the command stream and the policy output are healthy.
 ///
 /// How the HAL calls it, each 2 ms tick, in the HAL thread:
 ///   1. read the buses; for each joint j write input.q[j], qd[j], tau[j] (joint side) and, if a
@@ -133,6 +135,12 @@ struct SafetyOptions {
   double soft_stand_duration_s = 3.0;      ///< [s]
   double reset_min_damping_s = 1.0;        ///< Minimum time in damping before reset [s].
   double reset_qd_max = 0.5;               ///< Every |qd| below this to reset [rad/s].
+  /// Guard mode, for a loop that runs its own mode sequence (pmg_controller: its own soft stand,
+  /// passive and damping): the supervisor goes passive -> active by itself as soon as every input
+  /// is healthy and a valid command arrived, and then only guards (watchdogs, envelope, slew and
+  /// torque clamps, latched damping). A reset request (kPassive) from damping returns to passive,
+  /// from where it re-arms the same way.
+  bool guard_mode = false;
   WatchdogOptions watchdog;
   EnvelopeOptions envelope;
 
