@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
   double seconds = 8.0, warmup = 3.0, dt = 0.01;
   std::vector<double> vx{-0.6, -0.3, 0.0, 0.3, 0.6, 0.9}, vy{0.0, 0.3}, wz{-0.6, 0.0, 0.6};
   std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
-  std::vector<double> trace{0.6, 0.0, 0.0};
+  std::vector<double> trace{0.6, 0.0, 0.0}, trace_posture{0.0, 0.0, 0.0};
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
   app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory);
   app.add_option("--gco-config", gco_config, "GcoOptions YAML (defaults if omitted)")->check(CLI::ExistingFile);
@@ -124,6 +124,7 @@ int main(int argc, char** argv) {
   app.add_option("--roll", roll, "grid values of the roll command [rad]");
   app.add_option("--height", height, "grid values of the height command [m] (0 = standing height)");
   app.add_option("--trace", trace, "command (v_x v_y ω) whose foot trajectories go to gco_trace.csv")->expected(3);
+  app.add_option("--trace-posture", trace_posture, "posture (pitch roll height) of the traced command")->expected(3);
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -238,7 +239,7 @@ int main(int argc, char** argv) {
                 percentile(tick_us, 50), percentile(tick_us, 99), percentile(tick_us, 100));
 
     if (!out_dir.empty()) {
-      const Command c{{trace[0], trace[1], trace[2]}, {0.0, 0.0, 0.0}};
+      const Command c{{trace[0], trace[1], trace[2]}, {trace_posture[0], trace_posture[1], trace_posture[2]}};
       run(pipe_off, meter_off, c, dt, warm, 300, nullptr, nullptr);
       run(pipe_on, meter_on, c, dt, warm, 300, nullptr, nullptr);
       writeTrace(out_dir + "/gco_trace.csv", meter_on, meter_off);

@@ -7,6 +7,9 @@
 #include <new>
 
 #include "gco_test_util.hpp"
+#include "pmg/common/robot_config.hpp"
+#include "pmg/gco/generator_bridge.hpp"
+#include "pmg/motion/clip_io.hpp"
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -72,6 +75,32 @@ TEST(GcoNoAlloc, SolveAndKinematicsAllocateNothingPerTick) {
   g_counting = false;
   EXPECT_EQ(g_allocations.load(), 0);
   EXPECT_EQ(ok, 3 * static_cast<int>(g.ticks.size()));
+}
+
+TEST(GcoNoAlloc, GeneratorPlusGcoTickAllocatesNothing) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  GeneratorJointSpace js;
+  js.joint_names = robot.jointNames();
+  js.q_stand = robot.defaultPose();
+  js.lower = robot.lowerLimits();
+  js.upper = robot.upperLimits();
+  js.mirror_index = robot.mirrorIndex();
+  for (const auto& j : robot.joints) js.mirror_sign.push_back(j.mirror_sign);
+  js.standing_base_height = robot.standing_base_height;
+  auto model = std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", robot), js);
+  GeneratorWithGco pipe(model, LegModel::fromRobotConfig(robot), GcoOptions{});
+  pipe.step({0.3, 0.0, 0.0}, {}, 0.01);  // warm-up
+  g_allocations = 0;
+  g_counting = true;
+  double sum = 0.0;
+  for (int k = 0; k < 600; ++k) {
+    const double s = k / 600.0;
+    const GcoResult& r = pipe.step({0.9 * s - 0.3, 0.0, 0.5 - s}, {0.0, 0.0, 0.0}, 0.01);
+    sum += r.u_opt.v_x;
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_TRUE(std::isfinite(sum));
 }
 
 }  // namespace

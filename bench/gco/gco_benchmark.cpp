@@ -1,0 +1,71 @@
+// Google Benchmark of the GCO tick: GCO alone (synthetic G1 template), the generator alone and
+// generator + GCO on the shipped G1 clips. Run from the repository root:
+//   build/bin/pmg_gco_benchmark
+// Tail latency (p50/p99/max per tick) is printed by pmg_gco_tick_bench.
+#include <benchmark/benchmark.h>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/gco/generator_bridge.hpp"
+#include "pmg/gco/synthetic_gait.hpp"
+#include "pmg/motion/clip_io.hpp"
+
+namespace {
+
+using namespace pmg;
+using namespace pmg::gco;
+
+std::shared_ptr<const GeneratorModel> generatorModel(const RobotConfig& r) {
+  GeneratorJointSpace js;
+  js.joint_names = r.jointNames();
+  js.q_stand = r.defaultPose();
+  js.lower = r.lowerLimits();
+  js.upper = r.upperLimits();
+  js.mirror_index = r.mirrorIndex();
+  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
+  js.standing_base_height = r.standing_base_height;
+  return std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", r), js);
+}
+
+void BM_GcoSolveSyntheticWalk(benchmark::State& state) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  auto legs = LegModel::fromRobotConfig(robot);
+  LegKinematics kin(legs);
+  SyntheticGaitOptions o;
+  o.v_x_error = -0.1;
+  o.yaw_rate = 0.3;
+  o.height_error = 0.01;
+  const SyntheticGait g = makeSyntheticGait(kin, o);
+  Gco gco(legs, GcoOptions{});
+  GcoResult res;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    gco.solve(g.ticks[k], &res);
+    benchmark::DoNotOptimize(res.u_opt.v_x);
+    k = (k + 1) % g.ticks.size();
+  }
+}
+BENCHMARK(BM_GcoSolveSyntheticWalk);
+
+void BM_GeneratorStep(benchmark::State& state) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  MotionGenerator gen(generatorModel(robot));
+  for (auto _ : state) {
+    gen.step({0.6, 0.0, 0.3}, {}, 0.01);
+    benchmark::DoNotOptimize(gen.output().q_ref.data());
+  }
+}
+BENCHMARK(BM_GeneratorStep);
+
+void BM_GeneratorPlusGco(benchmark::State& state) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  GeneratorWithGco pipe(generatorModel(robot), LegModel::fromRobotConfig(robot), GcoOptions{});
+  for (auto _ : state) {
+    const GcoResult& r = pipe.step({0.6, 0.0, 0.3}, {}, 0.01);
+    benchmark::DoNotOptimize(r.u_opt.v_x);
+  }
+}
+BENCHMARK(BM_GeneratorPlusGco);
+
+}  // namespace
+
+BENCHMARK_MAIN();
