@@ -30,6 +30,8 @@ SilDriverEmulator::SilDriverEmulator(const BusPlan& plan, std::unique_ptr<pmg::H
     if (b < nb) buses_.push_back(std::move(t));
     else imu_ = std::move(t);
   }
+  for (auto& t : buses_) fds_.push_back(::pollfd{t->pollFd(), POLLIN, 0});
+  late_.reserve(64);
   route_.resize(nb);
   for (std::size_t b = 0; b < nb; ++b) {
     route_[b].assign(0x800, -1);
@@ -120,8 +122,6 @@ bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
   std::fill(addressed_.begin(), addressed_.end(), 0);
 
   // 1. Collect this cycle's frames.
-  std::vector<::pollfd> fds;
-  for (auto& t : buses_) fds.push_back(::pollfd{t->pollFd(), POLLIN, 0});
   const double deadline = rt::now() + timeout_s;
   bool any = false;
   CanFrame fr;
@@ -170,7 +170,7 @@ bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
     const double now = rt::now();
     if (now >= deadline) break;
     const timespec ts{0, static_cast<long>(std::min(deadline - now, 1e-3) * 1e9)};
-    ::ppoll(fds.data(), fds.size(), &ts, nullptr);
+    ::ppoll(fds_.data(), fds_.size(), &ts, nullptr);
   }
   if (!any && !step_anyway) return false;
 

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <system_error>
 #include <thread>
 
 #include "alloc_counter.hpp"
@@ -131,21 +132,34 @@ class Peer {
 };
 
 struct Rig {
-  std::uint16_t base = static_cast<std::uint16_t>(32000 + (getpid() % 1000) * 8);
   BusPlan plan = twoBusPlan();
-  Peer peer{plan, base};
+  std::unique_ptr<Peer> peer_ptr;
   std::unique_ptr<CanBackend> can;
   pmg::LowCommand cmd;
   pmg::LowState st;
-  Rig() {
+  Peer& peer;
+  Rig() : peer(bind()) {}
+  // A port block per process; on a collision (ctest runs tests in parallel) move on.
+  Peer& bind() {
     std::unique_ptr<CanTransport> imu;
-    auto ts = makeHostUdpTransports(plan, base, imu);
+    std::vector<std::unique_ptr<CanTransport>> ts;
+    for (int attempt = 0;; ++attempt) {
+      const auto base = static_cast<std::uint16_t>(32000 + ((getpid() + 53 * attempt) % 1000) * 8);
+      try {
+        ts = makeHostUdpTransports(plan, base, imu);
+        peer_ptr = std::make_unique<Peer>(plan, base);
+        break;
+      } catch (const std::system_error&) {
+        if (attempt >= 20) throw;
+      }
+    }
     CanBackendOptions o;
     o.lockstep = true;
     o.lockstep_timeout_s = 0.2;
     o.bus_off_restart_cycles = 3;
     can = std::make_unique<CanBackend>(plan, std::move(ts), std::move(imu), o);
     cmd.num_motors = 4;
+    return *peer_ptr;
   }
   std::vector<std::pair<int, CanFrame>> takeReceived() {
     std::lock_guard<std::mutex> lock(peer.mutex);

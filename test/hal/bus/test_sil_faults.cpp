@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <system_error>
 #include <thread>
 
 #include "pmg/common/robot_config.hpp"
@@ -26,9 +27,9 @@ namespace {
 
 constexpr double kPeriod = 0.002;
 
-std::uint16_t basePort() {
-  static int instance = 0;
-  return static_cast<std::uint16_t>(20000 + (getpid() % 1500) * 20 + 0 * (instance++));
+// A port block per process (ctest runs tests in parallel); on a collision the rig moves on.
+std::uint16_t basePort(int attempt) {
+  return static_cast<std::uint16_t>(20000 + ((getpid() + 37 * attempt) % 1500) * 20);
 }
 
 class SilRig {
@@ -36,17 +37,25 @@ class SilRig {
   explicit SilRig(bool gantry = true) {
     robot_ = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
     BusPlan plan = BusPlan::fromYaml("apps/hal/config/g1_can.yaml");
-    const std::uint16_t base = basePort();
     pmg::MujocoBackendOptions mo;
     mo.gantry.enabled = gantry;
-    auto sim = std::make_unique<pmg::MujocoBackend>(robot_, mo);
-    sim_ = sim.get();
-    sil_ = std::make_unique<SilDriverEmulator>(plan, std::move(sim), base);
+    std::unique_ptr<CanTransport> imu;
+    std::vector<std::unique_ptr<CanTransport>> transports;
+    for (int attempt = 0;; ++attempt) {
+      const std::uint16_t base = basePort(attempt);
+      try {
+        auto sim = std::make_unique<pmg::MujocoBackend>(robot_, mo);
+        sim_ = sim.get();
+        sil_ = std::make_unique<SilDriverEmulator>(plan, std::move(sim), base);
+        transports = makeHostUdpTransports(plan, base, imu);
+        break;
+      } catch (const std::system_error&) {
+        if (attempt >= 20) throw;
+      }
+    }
     sil_thread_ = std::thread([this] {
       while (!stop_.load()) sil_->runCycle(0.02);
     });
-    std::unique_ptr<CanTransport> imu;
-    auto transports = makeHostUdpTransports(plan, base, imu);
     CanBackendOptions co;
     co.lockstep = true;
     auto can = std::make_unique<CanBackend>(plan, std::move(transports), std::move(imu), co);

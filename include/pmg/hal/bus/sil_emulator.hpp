@@ -20,6 +20,8 @@
 ///   3. send the IMU frame (last, which tells a lockstep host that the cycle's replies are out);
 ///   4. step the simulation by one HAL period with the held set-points.
 
+#include <poll.h>
+
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -98,6 +100,7 @@ class SilDriverEmulator {
   std::vector<std::uint8_t> bus_off_;              ///< per bus
   std::vector<std::uint8_t> bus_off_done_;
   std::vector<std::pair<std::size_t, CanFrame>> late_;
+  std::vector<::pollfd> fds_;
   pmg::LowCommand cmd_{};
   pmg::LowState state_{};
   pmg::ImuState frozen_imu_{};
