@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "gco_test_util.hpp"
 
@@ -271,6 +273,56 @@ TEST(GcoOptions, YamlReadsFieldsAndRejectsUnknownKeys) {
   }
   EXPECT_THROW(parseGcoOptionsYaml("enabled: maybe\n", "x.yaml"), std::runtime_error);
   EXPECT_THROW(loadGcoOptionsFile("no/such/gco.yaml"), std::runtime_error);
+}
+
+/// The ```yaml block that starts with "gco:" in docs/gco.md.
+std::string docsYamlBlock() {
+  std::ifstream f("docs/gco.md");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string doc = ss.str();
+  const std::string open = "```yaml\ngco:";
+  const std::size_t a = doc.find(open);
+  if (a == std::string::npos) return {};
+  const std::size_t b = doc.find("```", a + open.size());
+  return doc.substr(a + 8, b - a - 8);
+}
+
+TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
+  const GcoOptions d;
+  const std::string docs_yaml = docsYamlBlock();
+  ASSERT_FALSE(docs_yaml.empty()) << "docs/gco.md has no ```yaml gco: block";
+  for (int source = 0; source < 2; ++source) {
+    const GcoOptions o = source == 0 ? loadGcoOptionsFile("test/gco/data/gco_g1.yaml")
+                                     : parseGcoOptionsYaml(docs_yaml, "docs/gco.md");
+    SCOPED_TRACE(source == 0 ? "test/gco/data/gco_g1.yaml" : "docs/gco.md");
+    EXPECT_EQ(o.enabled, d.enabled);
+    EXPECT_DOUBLE_EQ(o.dt, d.dt);
+    EXPECT_DOUBLE_EQ(o.w_foot_velocity, d.w_foot_velocity);
+    EXPECT_DOUBLE_EQ(o.w_foot_yaw_rate, d.w_foot_yaw_rate);
+    EXPECT_DOUBLE_EQ(o.w_foot_height, d.w_foot_height);
+    EXPECT_DOUBLE_EQ(o.w_prior_velocity, d.w_prior_velocity);
+    EXPECT_DOUBLE_EQ(o.w_prior_yaw_rate, d.w_prior_yaw_rate);
+    EXPECT_DOUBLE_EQ(o.w_prior_height, d.w_prior_height);
+    EXPECT_DOUBLE_EQ(o.w_smooth_velocity, d.w_smooth_velocity);
+    EXPECT_DOUBLE_EQ(o.w_smooth_yaw_rate, d.w_smooth_yaw_rate);
+    EXPECT_DOUBLE_EQ(o.w_smooth_height, d.w_smooth_height);
+    EXPECT_DOUBLE_EQ(o.w_limit, d.w_limit);
+    EXPECT_DOUBLE_EQ(o.contact_ramp_time, d.contact_ramp_time);
+    EXPECT_DOUBLE_EQ(o.max_jump_velocity, d.max_jump_velocity);
+    EXPECT_DOUBLE_EQ(o.max_jump_yaw_rate, d.max_jump_yaw_rate);
+    EXPECT_DOUBLE_EQ(o.max_jump_height, d.max_jump_height);
+    EXPECT_EQ(o.max_iterations, d.max_iterations);
+    EXPECT_DOUBLE_EQ(o.failure_gradient_norm, d.failure_gradient_norm);
+    EXPECT_DOUBLE_EQ(o.limits.v_x_min, d.limits.v_x_min);
+    EXPECT_DOUBLE_EQ(o.limits.v_x_max, d.limits.v_x_max);
+    EXPECT_DOUBLE_EQ(o.limits.v_y_min, d.limits.v_y_min);
+    EXPECT_DOUBLE_EQ(o.limits.v_y_max, d.limits.v_y_max);
+    EXPECT_DOUBLE_EQ(o.limits.yaw_rate_min, d.limits.yaw_rate_min);
+    EXPECT_DOUBLE_EQ(o.limits.yaw_rate_max, d.limits.yaw_rate_max);
+    EXPECT_DOUBLE_EQ(o.limits.height_min, d.limits.height_min);
+    EXPECT_DOUBLE_EQ(o.limits.height_max, d.limits.height_max);
+  }
 }
 
 }  // namespace
