@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   pmg::render::RenderOptions options;
   options.width = 360;
   options.height = 560;
+  options.font_scale = 100;
   bool no_labels = false, no_shadows = false, no_reflections = false;
   app.add_option("--log", log_path, "LCM event log written by pmg_controller --log")->required()->check(CLI::ExistingFile);
   app.add_option("--out-dir", out_dir, "output folder (created)")->required();
@@ -64,6 +65,11 @@ int main(int argc, char** argv) {
   app.add_option("--lookat-dz", options.camera.lookat_dz, "look-at point height relative to the pelvis [m]")
       ->capture_default_str();
   app.add_option("--samples", options.samples, "multisampling (anti-aliasing) samples")->capture_default_str();
+  std::vector<double> tether;
+  app.add_option("--tether", tether, "draw a rope from this world point X Y Z [m] to the pelvis (the SIL gantry)")
+      ->expected(3);
+  app.add_option("--font-scale", options.font_scale, "label font scale [%]: 50, 100, 150, 200, 250 or 300")
+      ->capture_default_str();
   app.add_option("--shadow-size", options.shadow_size, "shadow map size [px]")->capture_default_str();
   app.add_flag("--no-labels", no_labels, "no time/command label on the frames");
   app.add_flag("--no-shadows", no_shadows, "no shadows (faster on software OpenGL)");
@@ -72,6 +78,10 @@ int main(int argc, char** argv) {
   options.show_labels = !no_labels;
   options.shadows = !no_shadows;
   options.reflections = !no_reflections;
+  if (tether.size() == 3) {
+    options.tether = true;
+    options.p_WT = Eigen::Vector3d(tether[0], tether[1], tether[2]);
+  }
 
   try {
     options.validate();

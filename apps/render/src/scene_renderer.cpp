@@ -52,6 +52,7 @@ void RenderOptions::validate() const {
         "font_scale = " + std::to_string(font_scale) + ": expected one of 50, 100, 150, 200, 250, 300");
   check(shadow_size >= 256 && shadow_size <= 8192,
         "shadow_size = " + std::to_string(shadow_size) + ": expected in [256, 8192] px");
+  check(p_WT.allFinite(), "p_WT (tether top): expected finite coordinates [m]");
   camera.validate();
 }
 
@@ -66,6 +67,7 @@ SceneRenderer::SceneRenderer(MjModelPtr model, const RobotConfig& robot, const R
   check(base_joint >= 0 && m->jnt_type[base_joint] == mjJNT_FREE,
         robot.source_file + ": base_link '" + robot.base_link + "' has no free joint in the MuJoCo model");
   base_qpos_ = m->jnt_qposadr[base_joint];
+  base_body_ = base_body;
   qpos_index_.reserve(robot.numJoints());
   for (const JointConfig& j : robot.joints) {
     const int id = mj_name2id(m, mjOBJ_JOINT, j.name.c_str());
@@ -134,6 +136,17 @@ void SceneRenderer::setPose(const StateSample& sample) {
   mj_camlight(model_.get(), data_.get());
 }
 
+void SceneRenderer::addTether() {
+  mjvGeom* g = scene_.geoms + scene_.ngeom;
+  const float rgba[4] = {0.15f, 0.15f, 0.15f, 1.0f};
+  mjv_initGeom(g, mjGEOM_CAPSULE, nullptr, nullptr, nullptr, rgba);
+  g->category = mjCAT_DECOR;
+  const mjtNum* p_WP = data_->xpos + 3 * base_body_;
+  mjv_makeConnector(g, mjGEOM_CAPSULE, 0.006, options_.p_WT[0], options_.p_WT[1], options_.p_WT[2], p_WP[0], p_WP[1],
+                    p_WP[2]);
+  ++scene_.ngeom;
+}
+
 void SceneRenderer::render(const StateSample& sample, Image& out) {
   if (!options_.show_labels) {
     render(sample, "", "", out);
@@ -153,6 +166,7 @@ void SceneRenderer::render(const StateSample& sample, const std::string& label_l
   const mjrRect viewport{0, 0, options_.width, options_.height};
   MujocoErrorGuard guard;
   mjv_updateScene(model_.get(), data_.get(), &vis_options_, nullptr, &camera_, mjCAT_ALL, &scene_);
+  if (options_.tether && scene_.ngeom < scene_.maxgeom) addTether();
   mjr_setBuffer(mjFB_OFFSCREEN, &context_);
   mjr_render(viewport, &scene_, &context_);
   if (!label_left.empty() || !label_right.empty())

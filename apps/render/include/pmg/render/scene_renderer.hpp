@@ -25,7 +25,7 @@ namespace pmg::render {
 /// pelvis position only, not its yaw, so a turning robot is seen turning.
 struct TrackingCamera {
   double distance = 3.0;        ///< camera to look-at point [m], in (0.2, 50]
-  double azimuth_deg = 140.0;   ///< [deg]; 90 = robot's right side (camera at −y), 180 = front (camera at +x); 140 = front-right quarter
+  double azimuth_deg = 130.0;   ///< [deg]; 90 = robot's right side (camera at −y), 180 = front (camera at +x); 130: right front quarter
   double elevation_deg = -10.0; ///< [deg], in [−89, 89]; negative = camera above the look-at point
   double lookat_dz = -0.25;     ///< look-at point height relative to the pelvis [m] (−0.25: mid-body)
   /// @throws std::invalid_argument naming the field and its range.
@@ -42,6 +42,10 @@ struct RenderOptions {
   bool shadows = true;         ///< shadow mapping (one extra scene pass per light that casts shadows)
   bool reflections = true;     ///< floor reflection (one extra scene pass)
   int shadow_size = 2048;      ///< shadow map size [px], in [256, 8192] (MuJoCo's default 4096)
+  /// Draw a rope (dark capsule, 12 mm) from p_WT down to the pelvis origin, to picture the SIL's
+  /// virtual gantry (which is a spring-damper on the pelvis, not a modelled rope).
+  bool tether = false;
+  Eigen::Vector3d p_WT{0.0, 0.0, 2.5};  ///< upper end of the rope in the world frame W [m], finite
   TrackingCamera camera;
   /// @throws std::invalid_argument naming the field and its range.
   void validate() const;
@@ -74,12 +78,14 @@ class SceneRenderer {
 
  private:
   void setPose(const StateSample& sample);
+  void addTether();
 
   MjModelPtr model_;
   MjDataPtr data_;
   RenderOptions options_;
   std::vector<int> qpos_index_;  // qpos address of each config joint
   int base_qpos_ = 0;            // qpos address of the free joint (position, then w x y z)
+  int base_body_ = 0;            // body id of the base link
   mjvScene scene_{};
   mjvCamera camera_{};
   mjvOption vis_options_{};
