@@ -5,7 +5,8 @@
 //     SCHED_FIFO + mlockall (falls back, and says why, without the privileges), p50/p99/max;
 //  4. optional (--sil-cycles N): round-trip of one CAN HAL cycle over UDP against the SIL emulator.
 //
-//   pmg_bench_hal [--seconds 5] [--fifo 80] [--cpu 1] [--sil-cycles 2000]
+//   pmg_bench_hal [--seconds 5] [--fifo 80] [--cpu 1] [--sil-cycles 2000] [--csv jitter.csv]
+// --csv writes every cycle's wake-up period of both jitter runs (for apps/hal/plot_jitter.py).
 #include <unistd.h>
 
 #include <algorithm>
@@ -107,6 +108,8 @@ int main(int argc, char** argv) {
   app.add_option("--fifo", fifo, "SCHED_FIFO priority for the second run")->check(CLI::Range(1, 99));
   app.add_option("--cpu", cpu, "pin the HAL task to this CPU (-1: no affinity)");
   app.add_option("--sil-cycles", sil_cycles, "also time N CAN HAL cycles over UDP against the SIL (0: skip)");
+  std::string csv;
+  app.add_option("--csv", csv, "write run,period_us of every cycle of the jitter runs");
   CLI11_PARSE(app, argc, argv);
   try {
     std::printf("== 1. Bus load per 2 ms slot (worst-case bit stuffing, MIT command 8 B + reply 6 B, 20 us turnaround)\n");
@@ -125,23 +128,38 @@ int main(int argc, char** argv) {
     std::printf("\n== 3. HAL cycle jitter at 500 Hz, %.1f s per run, on %ld CPUs (load from other processes included)\n",
                 seconds, sysconf(_SC_NPROCESSORS_ONLN));
     const auto cycles = static_cast<std::int64_t>(seconds / 0.002);
-    {
+    // Wake-up times of every cycle, preallocated (the body stays allocation-free).
+    std::vector<double> starts(static_cast<std::size_t>(cycles));
+    std::vector<double> periods[2];
+    std::string labels[2];
+    for (int run = 0; run < 2; ++run) {
       rt::PeriodicOptions o;
       o.cpu = cpu;
-      rt::PeriodicTask task(o, [&work] { work(); });
-      const rt::RtReport r = task.runFor(cycles);
-      printSummary("normal scheduling", task.timing(), r);
-    }
-    {
-      rt::PeriodicOptions o;
-      o.fifo_priority = fifo;
-      o.lock_memory = true;
-      o.cpu = cpu;
-      rt::PeriodicTask task(o, [&work] { work(); });
+      if (run == 1) {
+        o.fifo_priority = fifo;
+        o.lock_memory = true;
+      }
+      std::size_t k = 0;
+      rt::PeriodicTask task(o, [&] {
+        if (k < starts.size()) starts[k++] = rt::now();
+        work();
+      });
       const rt::RtReport r = task.runFor(cycles);
       char label[64];
-      std::snprintf(label, sizeof label, "SCHED_FIFO %d + mlockall%s", fifo, r.fifo ? "" : " (REFUSED)");
+      if (run == 0) std::snprintf(label, sizeof label, "normal scheduling");
+      else std::snprintf(label, sizeof label, "SCHED_FIFO %d + mlockall%s", fifo, r.fifo ? "" : " (REFUSED)");
+      labels[run] = label;
       printSummary(label, task.timing(), r);
+      for (std::size_t i = 1; i < k; ++i) periods[run].push_back(starts[i] - starts[i - 1]);
+    }
+    if (!csv.empty()) {
+      std::FILE* f = std::fopen(csv.c_str(), "w");
+      if (!f) throw std::runtime_error(csv + ": cannot write");
+      std::fprintf(f, "run,period_us\n");
+      for (int run = 0; run < 2; ++run)
+        for (double p : periods[run]) std::fprintf(f, "%s,%.3f\n", labels[run].c_str(), 1e6 * p);
+      std::fclose(f);
+      std::printf("  periods written to %s\n", csv.c_str());
     }
 
     if (sil_cycles > 0) {
