@@ -304,10 +304,11 @@ class G1PmgEnv(Env):
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.concatenate([v_H, jnp.array([height]), contact, jnp.array([pitch, roll])])
         obs = self._obs(data, info, k_noise)
-        metrics = {"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
+        metrics = dict(state.metrics)  # wrappers add their own entries (e.g. "reward")
+        metrics.update({"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
                    "pitch_err": jnp.abs(cmd[3] - pitch), "roll_err": jnp.abs(cmd[4] - roll),
                    "height_err": jnp.sqrt(h_err), "ref_q_err": jnp.sqrt(ref_q_err / LEG),
-                   "contact_match": contact_match, "energy": energy}
+                   "contact_match": contact_match, "energy": energy})
         data = jax.tree_util.tree_map(lambda new, old: jnp.where(jnp.all(jnp.isfinite(data.qpos)), new, old),
                                       data, state.pipeline_state)
         return state.replace(pipeline_state=data, obs=obs, reward=reward, done=done.astype(jnp.float32),
