@@ -2,7 +2,7 @@
 /// quality report; optionally writes per-frame keypoints (human-target and robot) as CSV for
 /// scripts/motion_plot_retarget.py.
 ///
-///   build/bin/pmg_retarget <file.txt|file.bvh> [--robot config/robots/g1/g1.yaml]
+///   build/bin/pmg_retarget <file.txt|file.bvh|file.npz> [--robot config/robots/g1/g1.yaml]
 ///                          [--begin 0] [--end -1] (seconds) [--mirror] [--csv out.csv]
 #include <cstdio>
 #include <exception>
@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "pmg/common/kinematics.hpp"
+#include "pmg/motion/amp_npz.hpp"
 #include "pmg/motion/bvh.hpp"
 #include "pmg/motion/deepmimic.hpp"
 #include "pmg/motion/keypoint_retarget.hpp"
@@ -23,6 +24,7 @@ namespace {
 
 HumanMotion loadHuman(const std::string& path) {
   if (path.size() > 4 && path.substr(path.size() - 4) == ".bvh") return bvhToHuman(readBvh(path), 0.056444);
+  if (path.size() > 4 && path.substr(path.size() - 4) == ".npz") return ampNpzToHuman(path);
   return deepMimicToHuman(readDeepMimicMotion(path));
 }
 
@@ -33,7 +35,7 @@ int main(int argc, char** argv) {
   std::string input, robot_yaml = "config/robots/g1/g1.yaml", csv;
   double begin_s = 0.0, end_s = -1.0;
   bool mirror = false;
-  app.add_option("input", input, "DeepMimic .txt or CMU .bvh file")->required();
+  app.add_option("input", input, "DeepMimic .txt, CMU .bvh or Isaac Lab AMP .npz file")->required();
   app.add_option("--robot", robot_yaml, "robot config YAML");
   app.add_option("--begin", begin_s, "first second used");
   app.add_option("--end", end_s, "last second used (-1 = end of file)");

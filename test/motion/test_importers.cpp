@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "pmg/motion/amp_npz.hpp"
 #include "pmg/motion/bvh.hpp"
 #include "pmg/motion/deepmimic.hpp"
 
@@ -55,6 +56,22 @@ TEST(Importers, CmuBvhSquatGoesDownAndUp) {
   EXPECT_NEAR(lo, 0.56, 0.06);
 }
 
+TEST(Importers, AmpNpzWalk) {
+  const auto arrays = readNpz("data/motions/isaaclab_amp/humanoid_walk.npz");
+  ASSERT_EQ(arrays.count("dof_positions"), 1u);
+  EXPECT_EQ(arrays.at("dof_positions").shape, (std::vector<std::size_t>{154, 28}));
+  EXPECT_EQ(arrays.at("dof_names").descr, "<U16");
+  const HumanMotion h = ampNpzToHuman("data/motions/isaaclab_amp/humanoid_walk.npz");
+  EXPECT_EQ(h.numFrames(), 154);
+  EXPECT_DOUBLE_EQ(h.fps, 60.0);
+  // SOURCE.md: pelvis speed ~1.5 m/s.
+  const Eigen::Vector3d d = h.frames.back().p_WK[0] - h.frames.front().p_WK[0];
+  EXPECT_NEAR(d.head<2>().norm() / ((h.numFrames() - 1) / h.fps), 1.5, 0.2);
+  // A file that is not a ZIP archive is rejected with its name.
+  const std::string bad = tempFile("pmg_bad.npz", "not a zip");
+  EXPECT_NE(errorOf([&] { readNpz(bad); }).find("pmg_bad.npz: not a ZIP/.npz archive"), std::string::npos);
+}
+
 TEST(Importers, MalformedFilesNameFileAndLine) {
   const std::string bvh = tempFile("pmg_bad.bvh",
                                    "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation "
@@ -80,4 +97,19 @@ TEST(Importers, MirroredHumanMotionSwapsSides) {
   }
 }
 
+}  // namespace
+
+// joint_angle_map_v1 building blocks: the Euler decompositions invert their compositions.
+#include "pmg/motion/joint_angle_map.hpp"
+namespace {
+TEST(JointAngleMap, EulerDecompositionsRoundTrip) {
+  using pmg::motion::eulerYXZ;
+  using pmg::motion::eulerZXY;
+  auto R = [](const Eigen::Vector3d& ax, double a) { return Eigen::AngleAxisd(a, ax).toRotationMatrix(); };
+  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(), Z = Eigen::Vector3d::UnitZ();
+  for (const Eigen::Vector3d a : {Eigen::Vector3d(0.3, -0.4, 1.1), Eigen::Vector3d(-2.0, 1.2, -0.1), Eigen::Vector3d(0, 0, 0)}) {
+    EXPECT_LT((eulerYXZ(R(Y, a(0)) * R(X, a(1)) * R(Z, a(2))) - a).norm(), 1e-12);
+    EXPECT_LT((eulerZXY(R(Z, a(0)) * R(X, a(1)) * R(Y, a(2))) - a).norm(), 1e-12);
+  }
+}
 }  // namespace
