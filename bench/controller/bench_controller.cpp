@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/controller/controller.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/motion/clip_io.hpp"
 
 namespace {
@@ -40,14 +41,8 @@ int main(int argc, char** argv) {
 
   // 1. Generator alone: 100k ticks over the script's commands.
   {
-    pmg::GeneratorJointSpace js;
     const auto& r = config.robot;
-    js.joint_names = r.jointNames();
-    js.q_stand = r.defaultPose();
-    js.lower = r.lowerLimits();
-    js.upper = r.upperLimits();
-    js.mirror_index = r.mirrorIndex();
-    for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
+    const pmg::GeneratorJointSpace js = pmg::generatorJointSpace(r);
     auto model = std::make_shared<const pmg::GeneratorModel>(pmg::loadClipLibrary(config.clips_dir, r), js,
                                                              config.generator);
     pmg::MotionGenerator gen(model);

@@ -11,23 +11,12 @@
 #include <pmg_lcm/timing_t.hpp>
 #include <pmg_lcm/velocity_command_t.hpp>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/motion/clip_io.hpp"
 
 namespace pmg {
 namespace {
-
-GeneratorJointSpace jointSpaceOf(const RobotConfig& r) {
-  GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
-  return js;
-}
 
 double wallSeconds() { return monotonicSeconds(); }
 
@@ -44,7 +33,7 @@ Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> back
     throw ConfigError(robot.source_file + ": joints: " + std::to_string(robot.numJoints()) + " joints, at most " +
                       std::to_string(kMaxMotors) + " supported");
   const ClipLibrary clips = loadClipLibrary(config_.clips_dir, robot);
-  generator_model_ = std::make_shared<const GeneratorModel>(clips, jointSpaceOf(robot), config_.generator);
+  generator_model_ = std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), config_.generator);
   generator_ = std::make_unique<MotionGenerator>(generator_model_);
   dt_ = 1.0 / config_.loop_rate_hz;
   if (!backend) backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
