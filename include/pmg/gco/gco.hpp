@@ -36,18 +36,19 @@
 /// After the solve u' is clamped to CommandLimits and its change per tick is bounded by
 /// max_jump (the documented bound on jumps of u' at contact switches and phase wrap).
 ///
-/// Usage (setup may allocate and throw; the tick is noexcept and allocation-free):
+/// Usage (setup may allocate and throw; the tick is noexcept and allocation-free). With the PMG
+/// generator, prefer pmg::gco::GeneratorWithGco (generator_bridge.hpp); by hand:
 /// @code
-///   auto legs = pmg::gco::LegModel::fromUrdfFile("config/robots/g1/g1_29dof_rev_1_0.urdf");
-///   pmg::gco::GcoOptions opt = pmg::gco::loadGcoOptionsFile("config/gco/g1.yaml");  // or defaults
+///   auto legs = pmg::gco::LegModel::fromRobotConfig(robot_config);           // KDL pelvis -> soles
+///   pmg::gco::GcoOptions opt = pmg::gco::loadGcoOptionsFile("test/gco/data/gco_g1.yaml");  // or {}
 ///   pmg::gco::Gco gco(legs, opt);
-///   auto leg_idx = legs->jointIndices(robot_config_joint_names);        // once
-///   // every 100 Hz tick, after the generator produced q_ref, qd_ref, contacts, v, ω, h:
-///   pmg::gco::GcoInput in;  // preallocated member, filled in place
-///   pmg::gco::fillLegState(leg_idx, q_ref, qd_ref, &in);
-///   in.contact = {c_left, c_right}; in.v_HB_H = v; in.w_HB_H = w; in.base_height = h;
-///   in.command = u;
+///   auto leg_idx = legs->jointIndices(robot_config.jointNames());          // once
+///   pmg::gco::GcoInput in;    // preallocated member, filled in place every tick
 ///   pmg::gco::GcoResult res;
+///   // every 100 Hz tick, after the generator produced q_ref, qd_ref, contacts, v, ω, h:
+///   pmg::gco::fillLegState(leg_idx, q_ref, qd_ref, &in);
+///   in.contact = {c_left, c_right}; in.v_HB_H = v; in.w_HB_H = {0, 0, ω}; in.base_height = h;
+///   in.command = u;
 ///   gco.solve(in, &res);      // res.u_opt is the policy's command observation (eq. 19)
 /// @endcode
 
