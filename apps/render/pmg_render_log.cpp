@@ -7,6 +7,7 @@
 //   pmg_render_log --log out/sil_demo/run.lcmlog --out-dir out/sil_demo/render --frames 8
 // Needs an X display with OpenGL (Xvfb + Mesa on machines without a screen; scripts/render_sil.sh
 // starts one). Exit status: 0 done, 1 bad input, 3 no OpenGL context / renderer failure.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   options.width = 360;
   options.height = 560;
   options.font_scale = 100;
+  bool one_cycle = false;
   bool no_labels = false, no_shadows = false, no_reflections = false;
   app.add_option("--log", log_path, "LCM event log written by pmg_controller --log")->required()->check(CLI::ExistingFile);
   app.add_option("--out-dir", out_dir, "output folder (created)")->required();
@@ -52,6 +54,9 @@ int main(int argc, char** argv) {
   app.add_option("--strip", strip_name, "strip file name inside --out-dir")->capture_default_str();
   app.add_option("--t0", t0, "first time shown [s] (default: start of the log)");
   app.add_option("--t1", t1, "last time shown [s] (default: end of the log)");
+  app.add_flag("--one-cycle", one_cycle,
+               "spread the strip's frames over one gait period from --t0 (the log's period there), last frame "
+               "one step before the cycle closes");
   app.add_option("--video-fps", video_fps, "also write numbered frames at this rate to <out-dir>/frames (0: off)")
       ->check(CLI::Range(0.0, 240.0))->capture_default_str();
   app.add_option("--width", options.width, "frame width [px]")->capture_default_str();
@@ -89,7 +94,14 @@ int main(int argc, char** argv) {
     const pmg::render::StateTrack track =
         pmg::render::readStateTrack(log_path, static_cast<int>(robot.numJoints()), channel);
     const double start = t0 < 0.0 ? track.startTime() : t0;
-    const double end = t1 < 0.0 ? track.endTime() : t1;
+    double end = t1 < 0.0 ? track.endTime() : t1;
+    if (one_cycle) {
+      const double period = track.at(start).period;
+      if (!(period > 0.0))
+        throw std::invalid_argument("--one-cycle: the log's gait period at t = " + std::to_string(start) +
+                                    " s is " + std::to_string(period) + " s, expected > 0");
+      end = std::min(start + period * (frames - 1) / frames, track.endTime());
+    }
     if (!(end >= start))
       throw std::invalid_argument("--t0 " + std::to_string(start) + " > --t1 " + std::to_string(end));
     if (start > track.endTime() || end < track.startTime())

@@ -152,10 +152,10 @@ void SceneRenderer::render(const StateSample& sample, Image& out) {
     render(sample, "", "", out);
     return;
   }
-  char right[128];
-  std::snprintf(right, sizeof(right), "%.2f s\n%+.2f m/s\n%+.2f m/s\n%+.2f rad/s", sample.t, sample.command[0],
-                sample.command[1], sample.command[2]);
-  render(sample, "t\nvx\nvy\nwz", right, out);
+  char right[160];
+  std::snprintf(right, sizeof(right), "%.2f s\n%.2f\n%+.2f m/s\n%+.2f m/s\n%+.2f rad/s", sample.t, sample.phase,
+                sample.command[0], sample.command[1], sample.command[2]);
+  render(sample, "t\nphase\nvx\nvy\nwz", right, out);
 }
 
 void SceneRenderer::render(const StateSample& sample, const std::string& label_left, const std::string& label_right,

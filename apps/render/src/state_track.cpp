@@ -71,6 +71,8 @@ StateTrack readStateTrack(const std::string& log_path, int num_joints, const std
     }
     sample.quat_WB /= norm;
     sample.command = Eigen::Vector3d(m.command[0], m.command[1], m.command[2]);
+    sample.phase = m.phase;
+    sample.period = m.period;
     sample.mode = m.mode;
     if (!track.samples.empty() && !(sample.t > track.samples.back().t)) {
       std::ostringstream s;

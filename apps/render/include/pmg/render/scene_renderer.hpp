@@ -65,7 +65,7 @@ class SceneRenderer {
   SceneRenderer& operator=(const SceneRenderer&) = delete;
 
   /// Renders @p sample into @p out (resized to width × height on first use). With labels on, the
-  /// top-left corner shows "t", "vx", "vy", "wz" of the sample.
+  /// top-left corner shows t [s], the gait phase and the command (vx, vy [m/s], wz [rad/s]).
   void render(const StateSample& sample, Image& out);
 
   /// Renders with the label text given explicitly (left and right column, lines separated by

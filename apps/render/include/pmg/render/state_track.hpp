@@ -18,6 +18,8 @@ struct StateSample {
   Eigen::Vector3d p_WB{0, 0, 0};  ///< pelvis (base B) position in the world frame W [m]
   Eigen::Vector4d quat_WB{1, 0, 0, 0};  ///< pelvis orientation in W, unit quaternion (w, x, y, z)
   Eigen::Vector3d command{0, 0, 0};     ///< commanded (vx [m/s], vy [m/s], wz [rad/s]) of that tick
+  double phase = 0.0;             ///< gait phase φ in [0, 1) (PMG generator)
+  double period = 0.0;            ///< gait period T_u [s] of that tick
   int mode = 0;                   ///< controller mode (0 passive, 1 soft stand, 2 PMG, 3 damping)
 };
 
