@@ -8,6 +8,7 @@ Usage: calib_plot.py --report OUT.json --traces TRACES.csv --out OUT.png
 import argparse
 import csv
 import json
+import os
 
 import matplotlib
 matplotlib.use("Agg")
@@ -41,7 +42,7 @@ def main():
         ax.plot(t, col["q_baseline"], "tab:red", lw=1, label="baseline (PD + armature)")
         ax.plot(t, col["q_extended"], "tab:blue", lw=1, ls="--", label=f"extended ({ext_causes})")
         ax.set_ylabel("q [rad]")
-        ax.set_title(names[k] if k < len(names) else f"held-out log {k}", fontsize=9)
+        ax.set_title(os.path.basename(names[k]) if k < len(names) else f"held-out log {k}", fontsize=9)
         if i == 0:
             ax.legend(fontsize=8, loc="upper right")
         ax2 = fig.add_subplot(gs[2 * i + 1, :2], sharex=ax)

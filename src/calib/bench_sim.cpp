@@ -151,6 +151,8 @@ double BenchSimulator::rollout(const BenchLog& log, const RigParams& params, Rol
       last_tau = out.tau_motor_Nm;
       mj_step2(m, d);
       t_sim += dt;
+      // Parameter sets that make the rig unstable are abandoned before MuJoCo's own (logging) check.
+      if (!(std::abs(d->qvel[0]) < 1e3)) return std::numeric_limits<double>::infinity();
     }
     const double r = reading();
     if (!std::isfinite(r) || std::abs(d->qvel[0]) > 1e4) return std::numeric_limits<double>::infinity();

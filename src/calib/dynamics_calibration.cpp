@@ -95,8 +95,8 @@ std::vector<ParamMap> scan_grid(const std::string& c, const RigConfig& rig, cons
   if (c == "viscous_friction")
     for (double f : {0.01, 0.05, 0.15, 0.4}) g.push_back({{"fv_Nms_per_rad", f * tau_ref / sc.w_peak}});
   if (c == "stribeck_friction")
-    for (double f : {0.03, 0.08, 0.15, 0.3})
-      for (double vs : {0.02, 0.1, 0.4}) g.push_back({{"fc_Nm", 0.5 * f * tau_ref}, {"fs_Nm", f * tau_ref}, {"vs_rad_per_s", vs}});
+    for (double f : {0.05, 0.12, 0.25})
+      for (double vs : {0.03, 0.2}) g.push_back({{"fc_Nm", 0.5 * f * tau_ref}, {"fs_Nm", f * tau_ref}, {"vs_rad_per_s", vs}});
   if (c == "load_dependent_friction")
     for (double k : {0.02, 0.05, 0.1, 0.2, 0.4}) g.push_back({{"fc_Nm", 0.005 * tau_ref}, {"kl", k}});
   if (c == "backlash")
@@ -107,7 +107,7 @@ std::vector<ParamMap> scan_grid(const std::string& c, const RigConfig& rig, cons
   if (c == "torque_saturation")
     for (double f : {0.3, 0.5, 0.7, 0.85, 1.0}) g.push_back({{"tau_max_Nm", f * sc.tau_peak}});
   if (c == "torque_speed_limit")
-    for (double f : {0.5, 1.0, 2.0})
+    for (double f : {0.7, 1.5})
       for (double w : {1.0, 2.0, 5.0}) g.push_back({{"tau_stall_Nm", f * sc.tau_peak}, {"w_max_rad_per_s", w * sc.w_peak}});
   if (c == "zero_offset")
     for (double o : {-0.05, -0.02, -0.007, 0.007, 0.02, 0.05}) g.push_back({{"offset_rad", o}});
@@ -238,7 +238,15 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
     local.set_xtol_rel(1e-5);
     local.set_ftol_rel(1e-9);
     std::vector<double> step(n);
-    for (std::size_t i = 0; i < n; ++i) step[i] = std::min({0.08, std::max(u0[i], 1.0 - u0[i]) * 0.5});
+    for (std::size_t i = 0; i < n; ++i) {
+      // ~15 % of the current value (log-scaled parameters) or of the distance to the lower bound,
+      // at least 2 % of the range: coarse enough to leave flat spots, fine enough for 20 evals.
+      const Spec& sp = specs[i];
+      const double v = from_unit(sp, u0[i]);
+      double st = sp.log ? std::log(1.15) / (std::log(sp.hi) - std::log(sp.lo)) : 0.15 * (v - sp.lo) / (sp.hi - sp.lo);
+      st = std::max(st, 0.02);
+      step[i] = std::min(st, 0.45);
+    }
     local.set_initial_step(step);
     local.set_min_objective([](const std::vector<double>& x, std::vector<double>&, void* d) {
       return (*static_cast<std::function<double(const std::vector<double>&)>*>(d))(x);
@@ -338,6 +346,8 @@ void CalibrationOptions::validate() const {
     throw std::invalid_argument(fmt::format("CalibrationOptions.max_evals_baseline = {}: expected >= 10", max_evals_baseline));
   if (max_evals_candidate < 10)
     throw std::invalid_argument(fmt::format("CalibrationOptions.max_evals_candidate = {}: expected >= 10", max_evals_candidate));
+  if (profile_evals < 4)
+    throw std::invalid_argument(fmt::format("CalibrationOptions.profile_evals = {}: expected >= 4", profile_evals));
   for (const auto& c : candidates) catalogue_params(c);
 }
 
@@ -436,20 +446,29 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
     // Coarse scan of the new parameters with the baseline fixed; BOBYQA from the two best points.
     std::vector<std::pair<double, ParamMap>> scanned;
-    // Two baselines: the fitted one and the nominal one (a fitted baseline distorted by the
-    // missing effect can trap the joint fit; the nominal one often starts nearer the truth).
-    ParamMap nominal_base;
-    for (const auto& p : base_names) nominal_base[p] = spec_for(p, rig, sc).init;
-    for (const ParamMap* b : {&base.params, &nominal_base})
-      for (const ParamMap& g : scan_grid(c, rig, sc)) {
-        ParamMap m = *b;
-        for (const auto& [k, v] : g) m[k] = v;
-        scanned.emplace_back(obj(m), m);
+    // Profile scan: at each grid point of the new parameters, the baseline parameters are
+    // re-fitted briefly with the new ones held fixed (effects such as backlash or load-dependent
+    // friction trade off against the gains along curved valleys that a local method started from
+    // the plain baseline does not follow).
+    std::vector<Spec> base_only;
+    for (const auto& p : base_names) base_only.push_back(spec_for(p, rig, sc));
+    for (const ParamMap& g : scan_grid(c, rig, sc)) {
+      ParamMap fixed = g;
+      std::vector<Spec> bs = base_only;
+      for (auto& sp : bs) sp.init = base.params.at(sp.name);
+      if (const auto it = g.find("kl"); it != g.end()) {
+        // While the motor drives the motion, load-dependent friction removes kl |tau|: the same
+        // response needs gains / (1 - kl). Start on that ridge.
+        bs[0].init = std::min(bs[0].init / (1.0 - it->second), bs[0].hi);
+        bs[1].init = std::min(bs[1].init / (1.0 - it->second), bs[1].hi);
       }
+      FitOutcome pf = fit(bs, fixed, obj, Optimizer::kBobyqa, options.profile_evals, options.seed);
+      scanned.emplace_back(pf.mse, pf.params);
+    }
     std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     const std::size_t n_starts = std::min<std::size_t>(2, scanned.size());
     FitOutcome fo;
-    int evals = static_cast<int>(scanned.size());
+    int evals = static_cast<int>(scanned.size()) * options.profile_evals;
     for (std::size_t st = 0; st < n_starts; ++st) {
       const ParamMap& start = scanned[st].second;
       std::vector<Spec> specs;

@@ -125,8 +125,8 @@ HiddenEffect draw_hidden_effect(const std::string& name, std::uint64_t seed, con
     h.params = {{"fv_Nms_per_rad", a.fv_Nms_per_rad}};
   } else if (name == "stribeck_friction") {
     a.fc_Nm = U(0.03, 0.05);
-    a.fs_Nm = a.fc_Nm * U(2.5, 3.5);
-    a.vs_rad_per_s = U(0.03, 0.08);
+    a.fs_Nm = a.fc_Nm * U(3.0, 4.0);
+    a.vs_rad_per_s = U(0.1, 0.25);
     h.params = {{"fc_Nm", a.fc_Nm}, {"fs_Nm", a.fs_Nm}, {"vs_rad_per_s", a.vs_rad_per_s}};
   } else if (name == "load_dependent_friction") {
     a.fc_Nm = 0.005;

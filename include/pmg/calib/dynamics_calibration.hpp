@@ -50,7 +50,8 @@ struct CalibrationOptions {
   double min_gain_per_param = 0.03;
   std::vector<std::string> candidates;  ///< subset of the catalogue to test (empty = all)
   int max_evals_baseline = 400;       ///< objective evaluations for the baseline fit
-  int max_evals_candidate = 200;      ///< objective evaluations per candidate fit
+  int max_evals_candidate = 200;      ///< objective evaluations per candidate fit (after the scan)
+  int profile_evals = 24;             ///< baseline re-fit evaluations per scan point of a candidate
   unsigned seed = 1;                  ///< global optimisers' seed
   bool verbose = false;               ///< progress lines on stderr
   void validate() const;              ///< throws std::invalid_argument naming the field
