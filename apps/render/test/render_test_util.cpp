@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
@@ -88,6 +89,61 @@ Difference difference(const Image& a, const Image& b, int tolerance) {
     d.centroid_y = sy / static_cast<double>(d.count);
   }
   return d;
+}
+
+}  // namespace pmg::render::test
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace pmg::render::test {
+
+std::string ScopedXvfb::start() {
+  int fds[2];
+  if (pipe(fds) != 0) return "pipe() failed";
+  // The write end goes to Xvfb as its -displayfd; the read end must not leak into it.
+  fcntl(fds[0], F_SETFD, FD_CLOEXEC);
+  const std::string fd_arg = std::to_string(fds[1]);
+  std::vector<std::string> args = {"Xvfb", "-displayfd", fd_arg, "-screen", "0", "640x480x24", "-nolisten", "tcp"};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = -1;
+  const int rc = posix_spawnp(&pid, "Xvfb", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(fds[1]);
+  if (rc != 0) {
+    close(fds[0]);
+    return "cannot start Xvfb (" + std::string(std::strerror(rc)) + "; Debian package xvfb)";
+  }
+  pid_ = pid;
+  // Xvfb writes "<display number>\n" once it accepts connections.
+  std::string number;
+  pollfd pfd{fds[0], POLLIN, 0};
+  char c = 0;
+  while (poll(&pfd, 1, 10000) > 0 && read(fds[0], &c, 1) == 1 && c != '\n') number += c;
+  close(fds[0]);
+  if (number.empty()) return "Xvfb started but reported no display number within 10 s";
+  setenv("DISPLAY", (":" + number).c_str(), 1);
+  return "";
+}
+
+ScopedXvfb::~ScopedXvfb() {
+  if (pid_ <= 0) return;
+  unsetenv("DISPLAY");
+  kill(pid_, SIGTERM);
+  int status = 0;
+  waitpid(pid_, &status, 0);
 }
 
 }  // namespace pmg::render::test

@@ -27,4 +27,20 @@ struct Difference {
 };
 Difference difference(const Image& a, const Image& b, int tolerance = 8);
 
+/// A private Xvfb X server for tests on machines without a display (CI). start() launches
+/// `Xvfb -displayfd` (the server picks a free display number) and sets $DISPLAY for this process;
+/// the destructor stops the server and restores $DISPLAY.
+class ScopedXvfb {
+ public:
+  ScopedXvfb() = default;
+  ~ScopedXvfb();
+  ScopedXvfb(const ScopedXvfb&) = delete;
+  ScopedXvfb& operator=(const ScopedXvfb&) = delete;
+  /// @return "" on success, else why the server could not be started (e.g. Xvfb not installed).
+  std::string start();
+
+ private:
+  int pid_ = -1;
+};
+
 }  // namespace pmg::render::test

@@ -4,8 +4,7 @@
 /// the pose is written into qpos, forward kinematics (mj_kinematics, mj_comPos, mj_camlight) places
 /// the bodies, mjv_updateScene/mjr_render draw the scene into the offscreen framebuffer
 /// (mjFB_OFFSCREEN) and mjr_readPixels reads it back. The camera follows the pelvis.
-/// Setup code (constructor) allocates and throws; render() allocates nothing after the first call
-/// for a given image size (offline tool, not a real-time path).
+/// Offline tool code, not a real-time path: the constructor and render() may allocate and throw.
 
 #include <string>
 #include <vector>
