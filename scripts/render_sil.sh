@@ -5,7 +5,8 @@
 # (--frames, --t0, --t1, --azimuth, ...; see docs/render.md).
 #   scripts/render_sil.sh out/sil_demo/run.lcmlog out/sil_demo/render --frames 8 --t0 2 --t1 14
 # MuJoCo's renderer needs an OpenGL context on an X display: when $DISPLAY is unset, this script
-# starts a private Xvfb (Mesa llvmpipe renders in software) and stops it again at exit.
+# starts a private Xvfb (Mesa llvmpipe renders in software) on a free display number and stops it
+# again at exit.
 # Environment: PMG_BUILD_DIR (default build) picks the build folder.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -24,7 +25,11 @@ if [ ! -x "$exe" ]; then
 fi
 
 xvfb_pid=""
-cleanup() { if [ -n "$xvfb_pid" ]; then kill "$xvfb_pid" 2>/dev/null || true; fi; }
+tmp=""
+cleanup() {
+  if [ -n "$xvfb_pid" ]; then kill "$xvfb_pid" 2>/dev/null || true; wait "$xvfb_pid" 2>/dev/null || true; fi
+  if [ -n "$tmp" ]; then rm -rf "$tmp"; fi
+}
 trap cleanup EXIT
 if [ -z "${DISPLAY:-}" ]; then
   if ! command -v Xvfb >/dev/null; then
@@ -32,19 +37,24 @@ if [ -z "${DISPLAY:-}" ]; then
          "scripts/setup.sh installs it)" >&2
     exit 1
   fi
-  # First display number without a lock file; Xvfb itself refuses a number that is in use.
-  n=99
-  while [ -e "/tmp/.X${n}-lock" ] || [ -e "/tmp/.X11-unix/X${n}" ]; do n=$((n + 1)); done
-  Xvfb ":$n" -screen 0 1280x1024x24 -nolisten tcp >"${TMPDIR:-/tmp}/render_sil_xvfb_$n.log" 2>&1 &
+  # -displayfd: Xvfb picks a free display number and writes it (one line) to fd 3 when ready.
+  tmp="$(mktemp -d)"
+  Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$tmp/display" >"$tmp/xvfb.log" 2>&1 &
   xvfb_pid=$!
   for _ in $(seq 100); do
-    [ -e "/tmp/.X11-unix/X${n}" ] && break
+    [ "$(wc -l <"$tmp/display")" -ge 1 ] && break
     if ! kill -0 "$xvfb_pid" 2>/dev/null; then
-      echo "render_sil.sh: Xvfb :$n exited; its log: ${TMPDIR:-/tmp}/render_sil_xvfb_$n.log" >&2
+      echo "render_sil.sh: Xvfb exited at start-up; its log:" >&2
+      cat "$tmp/xvfb.log" >&2
       exit 1
     fi
     sleep 0.1
   done
+  n="$(head -n 1 "$tmp/display")"
+  if [ -z "$n" ]; then
+    echo "render_sil.sh: Xvfb reported no display number within 10 s" >&2
+    exit 1
+  fi
   export DISPLAY=":$n"
   echo "render_sil.sh: started Xvfb on $DISPLAY (pid $xvfb_pid)"
 fi

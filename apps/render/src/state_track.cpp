@@ -45,8 +45,22 @@ StateTrack readStateTrack(const std::string& log_path, int num_joints, const std
     }
     std::ostringstream where;
     where << channel << " message #" << track.samples.size() << " (event " << ev->eventnum << ")";
-    if (m.decode(ev->data, 0, ev->datalen) < 0)
-      throw fail(log_path, where.str() + " does not decode as pmg_lcm::controller_state_t");
+    if (m.decode(ev->data, 0, ev->datalen) < 0) {
+      // LCM messages start with the type's 64-bit fingerprint (big-endian).
+      int64_t hash = 0;
+      if (ev->datalen >= 8) {
+        const auto* b = static_cast<const uint8_t*>(ev->data);
+        uint64_t h = 0;
+        for (int i = 0; i < 8; ++i) h = (h << 8) | b[i];
+        hash = static_cast<int64_t>(h);
+      }
+      if (ev->datalen >= 8 && hash != pmg_lcm::controller_state_t::getHash())
+        throw fail(log_path, where.str() +
+                                 " has another pmg_lcm::controller_state_t fingerprint than this build: the log was "
+                                 "written by a pmg_controller built from another version of "
+                                 "lcmtypes/controller_state_t.lcm (record it again, or render it with a matching build)");
+      throw fail(log_path, where.str() + " does not decode as pmg_lcm::controller_state_t (truncated or corrupt)");
+    }
     if (m.num_joints != num_joints) {
       std::ostringstream s;
       s << where.str() << ": num_joints = " << m.num_joints << ", expected " << num_joints

@@ -12,6 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include <lcm/lcm-cpp.hpp>
+#include <pmg_lcm/controller_state_t.hpp>
+
 #include "pmg/render/image.hpp"
 #include "pmg/render/state_track.hpp"
 #include "render_test_util.hpp"
@@ -97,6 +100,30 @@ TEST(StateTrack, RejectsNonFiniteValuesBadQuaternionsAndTimeGoingBack) {
   writeStateLog(dir + "/back.lcmlog", {sampleAt(1.0, 29, 0.0), sampleAt(0.5, 29, 0.0)});
   what = messageOf([&] { readStateTrack(dir + "/back.lcmlog", 29); });
   EXPECT_NE(what.find("time is not increasing"), std::string::npos) << what;
+}
+
+TEST(StateTrack, NamesAMessageTypeMismatchAndCorruptMessages) {
+  const std::string dir = tempDir("fingerprint");
+  for (const bool other_type : {true, false}) {
+    const std::string path = dir + (other_type ? "/other_type.lcmlog" : "/truncated.lcmlog");
+    {
+      lcm::LogFile log(path, "w");
+      pmg_lcm::controller_state_t m{};
+      m.num_joints = 2;
+      for (auto* v : {&m.q, &m.qd, &m.tau, &m.q_ref, &m.qd_ref}) v->assign(2, 0.0);
+      std::vector<uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+      ASSERT_GT(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+      if (other_type) bytes[3] ^= 0x5a;  // as if the .lcm file had changed
+      else bytes.resize(bytes.size() / 2);
+      lcm::LogEvent ev{0, 0, "PMG_STATE", static_cast<int32_t>(bytes.size()), bytes.data()};
+      ASSERT_EQ(log.writeEvent(&ev), 0);
+    }
+    const std::string what = messageOf([&] { readStateTrack(path, 2); });
+    EXPECT_NE(what.find(path + ": PMG_STATE message #0"), std::string::npos) << what;
+    EXPECT_NE(what.find(other_type ? "another pmg_lcm::controller_state_t fingerprint" : "truncated or corrupt"),
+              std::string::npos)
+        << what;
+  }
 }
 
 TEST(StateTrack, RejectsALogWithoutStateMessagesAndAMissingFile) {
