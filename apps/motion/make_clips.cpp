@@ -48,7 +48,7 @@ struct Source {
 struct DynamicSpec {
   std::string name;
   Source source;
-  CommandAxis axis;
+  CommandAxis axis = CommandAxis::kForward;
   bool whole_file_cycle = false;  ///< the retargeted range is exactly one closed cycle
   double search_begin_s = 0.0;    ///< else: cycle between two `event`s of `anchor` in this window
   double search_end_s = 0.0;      ///<   (seconds relative to source.begin_s)
@@ -65,7 +65,7 @@ struct MirrorSpec {
 struct StaticSpec {
   std::string name;
   Source source;
-  PostureAxis axis;
+  PostureAxis axis = PostureAxis::kHeight;
   std::string notes;
 };
 
@@ -100,23 +100,53 @@ int main(int argc, char** argv) {
   app.add_option("--csv-dir", csv_dir, "also write per-clip retargeting keypoint CSVs here");
   CLI11_PARSE(app, argc, argv);
 
-  const std::vector<DynamicSpec> dynamic_specs = {
-      {"walk_forward", {"deepmimic/humanoid3d_walk.txt"}, CommandAxis::kForward, true, 0, 0, Foot::kLeft, ContactEvent::kTouchdown,
-       "DeepMimic walk: the file is one closed gait cycle (Loop: wrap)"},
-      {"turn_left", {"deepmimic/humanoid3d_long_walk3.txt", 1.5, 3.8}, CommandAxis::kYaw, false, 0.2, 2.0, Foot::kLeft,
-       ContactEvent::kLiftoff, "pivot turn to the left (t = 1.8-3.4 s of the file), cycle between two left-foot liftoffs"},
-      {"walk_lateral_left", {"cmu_bvh/cmu_143_40_sidestep_left_excerpt.bvh"}, CommandAxis::kLateral, false, 0.0, 2.2, Foot::kLeft,
-       ContactEvent::kTouchdown, "CMU 143_40 crossover side-step to the left, cycle between two left-foot touchdowns"},
-      {"walk_backward", {"cmu_bvh/cmu_143_39_walk_backward_excerpt.bvh"}, CommandAxis::kForward, false, 0.0, 1.8, Foot::kLeft,
-       ContactEvent::kTouchdown, "CMU 143_39 walking backward, cycle between two left-foot touchdowns"},
+  // The clip set (built with push_back of named specs: GCC 12 warns falsely on nested brace
+  // initialisation of aggregates holding strings).
+  std::vector<DynamicSpec> dynamic_specs;
+  auto dynamic = [&](const char* name, const char* file, double begin_s, double end_s, CommandAxis axis, bool whole,
+                     double search_begin_s, double search_end_s, ContactEvent event, const char* notes) {
+    DynamicSpec d;
+    d.name = name;
+    d.source.file = file;
+    d.source.begin_s = begin_s;
+    d.source.end_s = end_s;
+    d.axis = axis;
+    d.whole_file_cycle = whole;
+    d.search_begin_s = search_begin_s;
+    d.search_end_s = search_end_s;
+    d.anchor = Foot::kLeft;
+    d.event = event;
+    d.notes = notes;
+    dynamic_specs.push_back(d);
   };
-  const std::vector<MirrorSpec> mirror_specs = {{"walk_lateral_left", "walk_lateral_right"}, {"turn_left", "turn_right"}};
-  const std::vector<StaticSpec> static_specs = {
-      {"squat", {"cmu_bvh/cmu_115_07_squat_excerpt.bvh", 0.0, 1.05}, PostureAxis::kHeight,
-       "CMU 115_07 squat (pick up a box bending the knees), standing to the bottom at t = 1.05 s"},
-      {"bend", {"cmu_bvh/cmu_115_01_bend_at_waist_excerpt.bvh", 0.0, 1.35}, PostureAxis::kPitch,
-       "CMU 115_01 forward bend at the waist (pick up a box), upright to trunk horizontal at t = 1.35 s"},
+  dynamic("walk_forward", "deepmimic/humanoid3d_walk.txt", 0.0, -1.0, CommandAxis::kForward, true, 0, 0, ContactEvent::kTouchdown,
+          "DeepMimic walk: the file is one closed gait cycle (Loop: wrap)");
+  dynamic("turn_left", "deepmimic/humanoid3d_long_walk3.txt", 1.5, 3.8, CommandAxis::kYaw, false, 0.2, 2.0, ContactEvent::kLiftoff,
+          "pivot turn to the left (t = 1.8-3.4 s of the file), cycle between two left-foot liftoffs");
+  dynamic("walk_lateral_left", "cmu_bvh/cmu_143_40_sidestep_left_excerpt.bvh", 0.0, -1.0, CommandAxis::kLateral, false, 0.0, 2.2,
+          ContactEvent::kTouchdown, "CMU 143_40 crossover side-step to the left, cycle between two left-foot touchdowns");
+  dynamic("walk_backward", "cmu_bvh/cmu_143_39_walk_backward_excerpt.bvh", 0.0, -1.0, CommandAxis::kForward, false, 0.0, 1.8,
+          ContactEvent::kTouchdown, "CMU 143_39 walking backward, cycle between two left-foot touchdowns");
+  std::vector<MirrorSpec> mirror_specs(2);
+  mirror_specs[0].source_clip = "walk_lateral_left";
+  mirror_specs[0].name = "walk_lateral_right";
+  mirror_specs[1].source_clip = "turn_left";
+  mirror_specs[1].name = "turn_right";
+  std::vector<StaticSpec> static_specs;
+  auto posture = [&](const char* name, const char* file, double begin_s, double end_s, PostureAxis axis, const char* notes) {
+    StaticSpec st;
+    st.name = name;
+    st.source.file = file;
+    st.source.begin_s = begin_s;
+    st.source.end_s = end_s;
+    st.axis = axis;
+    st.notes = notes;
+    static_specs.push_back(st);
   };
+  posture("squat", "cmu_bvh/cmu_115_07_squat_excerpt.bvh", 0.0, 1.05, PostureAxis::kHeight,
+          "CMU 115_07 squat (pick up a box bending the knees), standing to the bottom at t = 1.05 s");
+  posture("bend", "cmu_bvh/cmu_115_01_bend_at_waist_excerpt.bvh", 0.0, 1.35, PostureAxis::kPitch,
+          "CMU 115_01 forward bend at the waist (pick up a box), upright to trunk horizontal at t = 1.35 s");
 
   try {
     const RobotConfig robot = loadRobotConfig(robot_yaml);
