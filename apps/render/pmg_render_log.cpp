@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   std::string log_path, out_dir, robot_path = "config/robots/g1/g1.yaml", channel = "PMG_STATE";
   std::string strip_name = "strip.png";
   int frames = 6;
-  double t0 = -1.0, t1 = -1.0, video_fps = 0.0;
+  double t0 = 0.0, t1 = 0.0, video_fps = 0.0;
   pmg::render::RenderOptions options;
   options.width = 360;
   options.height = 560;
@@ -52,8 +52,8 @@ int main(int argc, char** argv) {
   app.add_option("--frames", frames, "frames in the strip, evenly spaced over [t0, t1]")
       ->check(CLI::Range(1, 64))->capture_default_str();
   app.add_option("--strip", strip_name, "strip file name inside --out-dir")->capture_default_str();
-  app.add_option("--t0", t0, "first time shown [s] (default: start of the log)");
-  app.add_option("--t1", t1, "last time shown [s] (default: end of the log)");
+  CLI::Option* t0_option = app.add_option("--t0", t0, "first time shown [s] (default: start of the log)");
+  CLI::Option* t1_option = app.add_option("--t1", t1, "last time shown [s] (default: end of the log)");
   app.add_flag("--one-cycle", one_cycle,
                "spread the strip's frames over one gait period from --t0 (the log's period there), last frame "
                "one step before the cycle closes");
@@ -93,21 +93,21 @@ int main(int argc, char** argv) {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const pmg::render::StateTrack track =
         pmg::render::readStateTrack(log_path, static_cast<int>(robot.numJoints()), channel);
-    const double start = t0 < 0.0 ? track.startTime() : t0;
-    double end = t1 < 0.0 ? track.endTime() : t1;
+    const double start = t0_option->count() > 0 ? t0 : track.startTime();
+    double end = t1_option->count() > 0 ? t1 : track.endTime();
     if (one_cycle) {
       const double period = track.at(start).period;
       if (!(period > 0.0))
         throw std::invalid_argument("--one-cycle: the log's gait period at t = " + std::to_string(start) +
-                                    " s is " + std::to_string(period) + " s, expected > 0");
+                                    " s is " + std::to_string(period) + " s, expected > 0 (is the PMG generator running?)");
       end = std::min(start + period * (frames - 1) / frames, track.endTime());
     }
-    if (!(end >= start))
-      throw std::invalid_argument("--t0 " + std::to_string(start) + " > --t1 " + std::to_string(end));
-    if (start > track.endTime() || end < track.startTime())
-      throw std::invalid_argument("[--t0, --t1] = [" + std::to_string(start) + ", " + std::to_string(end) +
-                                  "] s lies outside the log's span [" + std::to_string(track.startTime()) + ", " +
-                                  std::to_string(track.endTime()) + "] s");
+    if (start > track.endTime() || end < track.startTime() || !(end >= start)) {
+      char buf[200];
+      std::snprintf(buf, sizeof(buf), "[--t0, --t1] = [%.3f, %.3f] s: expected t0 <= t1 inside the log's span [%.3f, %.3f] s",
+                    start, end, track.startTime(), track.endTime());
+      throw std::invalid_argument(buf);
+    }
     fs::create_directories(out_dir);
 
     const auto gl = pmg::render::GlContext::create();

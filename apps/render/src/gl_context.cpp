@@ -75,15 +75,6 @@ std::unique_ptr<GlContext> GlContext::create() {
   return context;
 }
 
-std::string GlContext::probe() {
-  try {
-    create();
-    return "";
-  } catch (const RenderError& e) {
-    return e.what();
-  }
-}
-
 bool GlContext::isCurrent() { return glfwGetCurrentContext() != nullptr; }
 
 GlContext::~GlContext() {

@@ -29,10 +29,6 @@ class GlContext {
   ///   under Xvfb (scripts/render_sil.sh starts one)" or GLFW's own message.
   static std::unique_ptr<GlContext> create();
 
-  /// Tries create() and releases the context again. @return "" if a context can be made here,
-  /// else the reason (RenderError::what()). Lets tests skip cleanly on machines without GL.
-  static std::string probe();
-
   /// Whether a GlContext's OpenGL context is current on the calling thread.
   static bool isCurrent();
 
