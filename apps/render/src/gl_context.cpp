@@ -13,11 +13,9 @@ namespace {
 std::string g_last_glfw_error;  // set by the GLFW error callback (set-up code, one thread)
 
 void onGlfwError(int code, const char* description) {
-  g_last_glfw_error = std::string(description ? description : "unknown error") + " (GLFW error 0x" + [code] {
-    char buf[16];
-    std::snprintf(buf, sizeof(buf), "%x", code);
-    return std::string(buf);
-  }() + ")";
+  char buf[512];
+  std::snprintf(buf, sizeof(buf), "%s (GLFW error 0x%x)", description ? description : "unknown error", code);
+  g_last_glfw_error = buf;
 }
 
 const char* kXvfbHint =
