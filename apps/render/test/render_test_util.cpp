@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include <unistd.h>
+
 #include <lcm/lcm-cpp.hpp>
 #include <pmg_lcm/controller_state_t.hpp>
 
@@ -44,10 +46,25 @@ void writeStateLog(const std::string& path, const std::vector<StateSample>& samp
   }
 }
 
+namespace {
+// Removes the folders made by tempDir() when the test process exits.
+struct TempDirCleaner {
+  std::vector<std::filesystem::path> dirs;
+  ~TempDirCleaner() {
+    std::error_code ignored;
+    for (const auto& d : dirs) std::filesystem::remove_all(d, ignored);
+  }
+};
+TempDirCleaner g_temp_dirs;
+}  // namespace
+
 std::string tempDir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("pmg_render_test_" + name);
+  // The process id keeps parallel test processes (ctest -j, several build folders) apart.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("pmg_render_test_" + std::to_string(getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  g_temp_dirs.dirs.push_back(dir);
   return dir.string();
 }
 

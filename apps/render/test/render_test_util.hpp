@@ -12,7 +12,8 @@ namespace pmg::render::test {
 /// unless @p num_joints_override ≥ 0) and, before each, one message on channel "OTHER".
 void writeStateLog(const std::string& path, const std::vector<StateSample>& samples, int num_joints_override = -1);
 
-/// A fresh, empty temporary folder for one test (removed first if it exists).
+/// A fresh, empty temporary folder for one test of this process (removed first if it exists, and
+/// again when the process exits).
 std::string tempDir(const std::string& name);
 
 /// Standard deviation of the pixel luminance (0.299 r + 0.587 g + 0.114 b) [0..255].
