@@ -2,7 +2,7 @@
 // written by pmg_controller --log) into a CSV table for plotting and analysis.
 //
 //   pmg_log_export --log run.lcmlog --csv run.csv
-// Columns: t, mode, phase, vx, vy, wz, pitch, roll, height, contact_l, contact_r, base_x/y/z,
+// Columns: t, mode, phase, vx, vy, wz, pitch, roll, height, opt_* (u' after GCO), gco_status, contact_l, contact_r, base_x/y/z,
 // then q_<joint>, q_ref_<joint>, tau_<joint> for every joint of the robot config.
 #include <cstdio>
 #include <fstream>
@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
     if (!log.good()) throw std::runtime_error(log_path + ": cannot open LCM log");
     std::ofstream csv(csv_path);
     if (!csv) throw std::runtime_error(csv_path + ": cannot write");
-    csv << "t,mode,phase,vx,vy,wz,pitch,roll,height,contact_l,contact_r,base_x,base_y,base_z,fault";
+    csv << "t,mode,phase,vx,vy,wz,pitch,roll,height,opt_vx,opt_vy,opt_wz,opt_pitch,opt_roll,opt_height,gco_status,"
+           "contact_l,contact_r,base_x,base_y,base_z,fault";
     for (const auto& prefix : {"q_", "q_ref_", "tau_"})
       for (const auto& j : robot.joints) csv << ',' << prefix << j.name;
     csv << '\n';
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
       char buf[64];
       csv << 1e-6 * static_cast<double>(m.utime) << ',' << int(m.mode) << ',' << m.phase;
       for (double c : m.command) csv << ',' << c;
+      for (double c : m.command_opt) csv << ',' << c;
+      csv << ',' << m.gco_status;
       csv << ',' << int(m.in_contact[0]) << ',' << int(m.in_contact[1]);
       for (double p : m.base_position) csv << ',' << p;
       csv << ',' << m.fault;

@@ -34,7 +34,7 @@ Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> back
                       std::to_string(kMaxMotors) + " supported");
   const ClipLibrary clips = loadClipLibrary(config_.clips_dir, robot);
   generator_model_ = std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), config_.generator);
-  generator_ = std::make_unique<MotionGenerator>(generator_model_);
+  pmg_ = std::make_unique<gco::GeneratorWithGco>(generator_model_, gco::LegModel::fromRobotConfig(robot), config_.gco);
   dt_ = 1.0 / config_.loop_rate_hz;
   if (!backend) backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
   hal_ = std::make_unique<HalRunner>(std::move(backend), static_cast<int>(robot.numJoints()), config_.hal);
@@ -113,7 +113,7 @@ void Controller::tick(double now) noexcept {
       }
       if (req == static_cast<std::int8_t>(ControllerMode::kActive) && mode_ == ControllerMode::kSoftStand) {
         mode_ = ControllerMode::kActive;
-        generator_->reset(0.0);
+        pmg_->reset(0.0);
       }
     }
   }
@@ -138,14 +138,15 @@ void Controller::tick(double now) noexcept {
       }
       if (s >= 1.0) {  // standing reached: hand over to PMG
         mode_ = ControllerMode::kActive;
-        generator_->reset(0.0);
+        pmg_->reset(0.0);
         shaper_.reset();
       }
       break;
     }
     case ControllerMode::kActive: {
-      gen_status = generator_->step(shaper_.velocity(), shaper_.posture(), dt_);
-      const GeneratorOutput& out = generator_->output();
+      pmg_->step(shaper_.velocity(), shaper_.posture(), dt_);
+      const GeneratorOutput& out = pmg_->generatorOutput();
+      gen_status = out.status;
       for (int i = 0; i < n; ++i) {
         const auto k = static_cast<std::size_t>(i);
         const JointConfig& j = robot.joints[k];
@@ -169,7 +170,7 @@ void Controller::tick(double now) noexcept {
   f.tick = ticks_;
   f.mode = static_cast<std::int8_t>(mode_);
   f.num_joints = n;
-  const GeneratorOutput& out = generator_->output();
+  const GeneratorOutput& out = pmg_->generatorOutput();
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     f.q[k] = state_.motors[k].q;
@@ -184,6 +185,9 @@ void Controller::tick(double now) noexcept {
   const VelocityCommand& v = shaper_.velocity();
   const PostureCommand& p = shaper_.posture();
   f.command = {v.vx, v.vy, v.wz, p.pitch, p.roll, p.height};
+  const gco::GcoResult& g = pmg_->gcoResult();
+  f.command_opt = {g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch, g.u_opt.roll, g.u_opt.height};
+  f.gco_status = static_cast<std::int32_t>(g.status);
   f.base_position = state_.base_position;
   f.base_quat = state_.base_quat_wxyz;
   f.imu_gyro = state_.imu.gyro;
@@ -219,7 +223,11 @@ void Controller::drainTelemetry() {
     msg.period = f.period;
     msg.in_contact[0] = f.in_contact[0];
     msg.in_contact[1] = f.in_contact[1];
-    for (int i = 0; i < 6; ++i) msg.command[i] = f.command[static_cast<std::size_t>(i)];
+    for (int i = 0; i < 6; ++i) {
+      msg.command[i] = f.command[static_cast<std::size_t>(i)];
+      msg.command_opt[i] = f.command_opt[static_cast<std::size_t>(i)];
+    }
+    msg.gco_status = f.gco_status;
     for (int i = 0; i < 3; ++i) {
       msg.base_position[i] = f.base_position[static_cast<std::size_t>(i)];
       msg.imu_gyro[i] = f.imu_gyro[static_cast<std::size_t>(i)];

@@ -96,6 +96,12 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.generator.max_command = getArray<3>(gen, "max_command", c.generator.max_command, path + ": generator");
   if (const std::string e = c.generator.validate(); !e.empty()) throw ConfigError(f + e);
 
+  if (root["gco"]) {
+    c.gco_file = (dir / get<std::string>(root, "gco", "", path + ": gco")).lexically_normal().string();
+    c.gco = gco::loadGcoOptionsFile(c.gco_file);  // throws naming the file and field
+  }
+  if (root["gco_enabled"]) c.gco.enabled = get<bool>(root, "gco_enabled", true, path + ": gco_enabled");
+
   const YAML::Node cmd = root["commands"];
   const std::string cw = path + ": commands";
   c.commands.timeout = get<double>(cmd, "timeout_s", c.commands.timeout, cw);

@@ -231,3 +231,30 @@ TEST(SilScenario, TickDoesNotAllocate) {
 
 }  // namespace
 }  // namespace pmg
+
+namespace pmg {
+namespace {
+
+// The seed's "PMG w/o GCO" ablation is a config switch: u' is then the template's own base state.
+TEST(SilScenario, GcoAblationIsSwitchableFromConfig) {
+  for (bool enabled : {true, false}) {
+    ControllerConfig config = silConfig();
+    config.gco.enabled = enabled;
+    Controller controller(config);
+    CommandSample sample;
+    sample.velocity = {0.5, 0.0, 0.0};
+    double now = 0;
+    for (int k = 0; k < 250; ++k, now += 0.01) {
+      sample.velocity_time = now;
+      controller.setInput(sample);
+      controller.tick(now);
+      for (int c = 0; c < 5; ++c) controller.hal().cycle();
+    }
+    ASSERT_EQ(controller.mode(), ControllerMode::kActive);
+    EXPECT_EQ(controller.gcoResult().status, enabled ? gco::GcoStatus::kOk : gco::GcoStatus::kDisabled);
+    if (!enabled) EXPECT_NEAR(controller.gcoResult().u_opt.v_x, controller.generator().output().v_base.x(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace pmg

@@ -293,9 +293,9 @@ TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
   const std::string docs_yaml = docsYamlBlock();
   ASSERT_FALSE(docs_yaml.empty()) << "docs/gco.md has no ```yaml gco: block";
   for (int source = 0; source < 2; ++source) {
-    const GcoOptions o = source == 0 ? loadGcoOptionsFile("test/gco/data/gco_g1.yaml")
+    const GcoOptions o = source == 0 ? loadGcoOptionsFile("config/gco/g1.yaml")
                                      : parseGcoOptionsYaml(docs_yaml, "docs/gco.md");
-    SCOPED_TRACE(source == 0 ? "test/gco/data/gco_g1.yaml" : "docs/gco.md");
+    SCOPED_TRACE(source == 0 ? "config/gco/g1.yaml" : "docs/gco.md");
     EXPECT_EQ(o.enabled, d.enabled);
     EXPECT_DOUBLE_EQ(o.dt, d.dt);
     EXPECT_DOUBLE_EQ(o.w_foot_velocity, d.w_foot_velocity);

@@ -17,6 +17,7 @@
 #include "pmg/controller/commands.hpp"
 #include "pmg/controller/controller_config.hpp"
 #include "pmg/controller/spsc_ring.hpp"
+#include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/hal_runner.hpp"
 #include "pmg/hal/latest_value.hpp"
@@ -46,6 +47,8 @@ struct TelemetryFrame {
   double phase = 0, period = 0;
   std::array<bool, 2> in_contact{};
   std::array<double, 6> command{};
+  std::array<double, 6> command_opt{};  ///< u' after GCO (eq. 19)
+  std::int32_t gco_status = 0;
   std::array<double, 3> base_position{};
   std::array<double, 4> base_quat{1, 0, 0, 0};
   std::array<double, 3> imu_gyro{}, imu_acc{};
@@ -96,7 +99,9 @@ class Controller {
 
   ControllerMode mode() const noexcept { return mode_; }
   ControllerFault fault() const noexcept { return fault_; }
-  const MotionGenerator& generator() const noexcept { return *generator_; }
+  const MotionGenerator& generator() const noexcept { return pmg_->generator(); }
+  /// GCO result of the last active tick (u' = the policy's command observation, PMG eq. 19).
+  const gco::GcoResult& gcoResult() const noexcept { return pmg_->gcoResult(); }
   HalRunner& hal() noexcept { return *hal_; }
   const ControllerConfig& config() const noexcept { return config_; }
   const LowCommand& lastCommand() const noexcept { return command_; }
@@ -111,7 +116,7 @@ class Controller {
 
   ControllerConfig config_;
   std::shared_ptr<const GeneratorModel> generator_model_;
-  std::unique_ptr<MotionGenerator> generator_;
+  std::unique_ptr<gco::GeneratorWithGco> pmg_;  // PMG generator + GCO (the complete generator)
   std::unique_ptr<HalRunner> hal_;
   CommandShaper shaper_;
   LatestValue<CommandSample> input_;

@@ -8,6 +8,7 @@
 
 #include "pmg/common/robot_config.hpp"
 #include "pmg/controller/commands.hpp"
+#include "pmg/gco/gco.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/hal_runner.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
@@ -33,6 +34,8 @@ struct ControllerConfig {
   HalRunnerOptions hal;          ///< HAL thread priority / CPU
   MujocoBackendOptions mujoco;
   GeneratorParams generator;
+  std::string gco_file;          ///< absolute path of the GCO options ("" = defaults)
+  gco::GcoOptions gco;           ///< Ground-aware Command Optimization; gco.enabled = false: "PMG w/o GCO"
   CommandLimits commands;
   double soft_stand_duration = 1.0;   ///< interpolation time from the measured to the standing pose [s]
   double damping_kd_scale = 1.0;      ///< damping mode: kd = scale · config kd

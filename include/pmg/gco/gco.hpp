@@ -40,7 +40,7 @@
 /// generator, prefer pmg::gco::GeneratorWithGco (generator_bridge.hpp); by hand:
 /// @code
 ///   auto legs = pmg::gco::LegModel::fromRobotConfig(robot_config);           // KDL pelvis -> soles
-///   pmg::gco::GcoOptions opt = pmg::gco::loadGcoOptionsFile("test/gco/data/gco_g1.yaml");  // or {}
+///   pmg::gco::GcoOptions opt = pmg::gco::loadGcoOptionsFile("config/gco/g1.yaml");  // or {}
 ///   pmg::gco::Gco gco(legs, opt);
 ///   auto leg_idx = legs->jointIndices(robot_config.jointNames());          // once
 ///   pmg::gco::GcoInput in;    // preallocated member, filled in place every tick
