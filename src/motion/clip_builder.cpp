@@ -233,6 +233,9 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
       for (Eigen::Index j = 0; j < n; ++j) P(r, j) = std::min(hi(j), std::max(lo(j), P(r, j)));
   }
   P = circularGaussianSmooth(P, options.smoothing_sigma * motion.fps);
+  // A closed cycle returns to the same pelvis height, roll and pitch: v_z, ω_x and ω_y have zero
+  // mean (their raw means come from capture drift and from the despiked root jumps).
+  for (const Eigen::Index c : {n + 2, n + 3, n + 4}) P.col(c).array() -= P.col(c).mean();
 
   std::vector<std::array<bool, kNumFeet>> cyc(contacts.begin() + window.begin, contacts.begin() + window.end);
   int shift = 0;

@@ -62,6 +62,10 @@ TEST_F(ShippedClips, WithinJointLimitsAndPlausible) {
                         : c.axis == pmg::CommandAxis::kLateral ? c.v_base.col(1).mean()
                                                                 : c.omega_base.col(2).mean();
     EXPECT_NEAR(c.direction * mean, c.nominal_scale, 0.1 * c.nominal_scale);
+    // A closed cycle returns to the same pelvis height, roll and pitch.
+    EXPECT_NEAR(c.v_base.col(2).mean(), 0.0, 1e-5);
+    EXPECT_NEAR(c.omega_base.col(0).mean(), 0.0, 1e-5);
+    EXPECT_NEAR(c.omega_base.col(1).mean(), 0.0, 1e-5);
   }
 }
 

@@ -73,7 +73,8 @@ struct DynamicClipOptions {
 /// base velocities (heading frame H: yaw of the pelvis, z up) and base height are made periodic
 /// by removing the linear drift x(end) − x(begin) over the cycle and smoothing with a circular
 /// Gaussian; they are then resampled to N phases with periodic cubic (Catmull-Rom) interpolation
-/// and clamped to the joint limits. q̇ = central difference in phase / T. direction = sign of the
+/// and clamped to the joint limits. v_z, ω_x, ω_y get zero cycle mean (height, roll and pitch
+/// close). q̇ = central difference in phase / T. direction = sign of the
 /// mean command component, x̄ = its magnitude. Metadata other than frames/fps/joint names is left
 /// to the caller. @throws std::invalid_argument / std::runtime_error.
 DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& contacts, const CycleWindow& window,
