@@ -1,0 +1,62 @@
+// pmg_make_clips is reproducible: two runs give byte-identical files, and they match the shipped
+// set in config/clips/g1 (values within 1e-4; bytes may differ only if another compiler/CPU
+// rounds the solver differently in the 6th decimal). Slow (two full runs): label "sil".
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/motion/clip_io.hpp"
+
+#ifndef PMG_MAKE_CLIPS_EXE
+#error "PMG_MAKE_CLIPS_EXE must name the pmg_make_clips executable"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
+  const fs::path tmp = fs::temp_directory_path() / ("pmg_make_clips_" + std::to_string(::getpid()));
+  for (const char* run : {"a", "b"}) {
+    fs::create_directories(tmp / run);
+    const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  const pmg::RobotConfig robot = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
+  int files = 0;
+  for (const auto& e : fs::directory_iterator("config/clips/g1")) {
+    if (!e.is_regular_file()) continue;
+    const std::string name = e.path().filename().string();
+    SCOPED_TRACE(name);
+    ++files;
+    EXPECT_EQ(slurp(tmp / "a" / name), slurp(tmp / "b" / name)) << "not deterministic";
+    if (e.path().extension() != ".yaml") continue;
+    const std::string fresh = (tmp / "a" / name).string();
+    if (pmg::readClipKind(fresh) == pmg::ClipKind::kDynamic) {
+      const auto a = pmg::readDynamicClip(fresh, robot), s = pmg::readDynamicClip(e.path().string(), robot);
+      EXPECT_LT((a.q - s.q).cwiseAbs().maxCoeff(), 1e-4);
+      EXPECT_LT((a.v_base - s.v_base).cwiseAbs().maxCoeff(), 1e-4);
+      EXPECT_NEAR(a.nominal_scale, s.nominal_scale, 1e-4);
+    } else {
+      const auto a = pmg::readStaticClip(fresh, robot), s = pmg::readStaticClip(e.path().string(), robot);
+      EXPECT_LT((a.q - s.q).cwiseAbs().maxCoeff(), 1e-4);
+      EXPECT_LT((a.values - s.values).cwiseAbs().maxCoeff(), 1e-4);
+    }
+  }
+  EXPECT_GE(files, 9);  // 8 clips + report.md
+  fs::remove_all(tmp);
+}
+
+}  // namespace
