@@ -16,6 +16,7 @@ namespace pmg::hal::bus {
 std::string CanBackendOptions::validate() const {
   if (!(reply_window_s >= 0.0)) return "reply_window_s: expected >= 0 s";
   if (!(lockstep_timeout_s > 0.0)) return "lockstep_timeout_s: expected > 0 s";
+  if (!(lockstep_imu_grace_s >= 0.0)) return "lockstep_imu_grace_s: expected >= 0 s";
   if (bus_off_restart_cycles < 1) return "bus_off_restart_cycles: expected >= 1";
   return {};
 }
@@ -149,6 +150,7 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
   // 3. Replies.
   const double t0 = rt::now();
   const double deadline = t0 + (opt_.lockstep ? opt_.lockstep_timeout_s : window_s_);
+  double motors_done_at = -1.0;
   for (;;) {
     for (std::size_t b = 0; b < nb; ++b) {
       while (transports_[b]->receive(f) == RxStatus::kFrame) handleFrame(b, f, state, false);
@@ -165,7 +167,12 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
       }
     }
     const bool motors_done = allReplied();
-    if (opt_.lockstep ? (imu_ ? imu_got_ : motors_done) : motors_done) {
+    if (opt_.lockstep && motors_done && imu_ && !imu_got_ && motors_done_at < 0.0) {
+      // Every reply is in; the IMU frame follows at once unless the IMU is silent: wait briefly.
+      motors_done_at = rt::now();
+    }
+    const bool imu_overdue = motors_done_at >= 0.0 && rt::now() - motors_done_at > opt_.lockstep_imu_grace_s;
+    if (opt_.lockstep ? (imu_ ? (imu_got_ || imu_overdue) : motors_done) : motors_done) {
       // In lockstep the SIL sends the IMU frame after all its replies: once it is here, every reply
       // that will come this cycle is already in the socket buffers; drain them once more.
       if (opt_.lockstep) {

@@ -214,7 +214,7 @@ namespace {
 // Bound: the watchdog's timeout in cycles + 2 (one cycle of measurement delay in SafeBackend, one
 // for the step that detects it).
 void expectDamping(const std::function<void(SilRig&)>& inject, FaultCode code, int index, int max_cycles,
-                   bool gantry = true) {
+                   bool gantry = true, int cycles_after = 100) {
   SilRig rig(gantry);
   rig.toActive();
   inject(rig);
@@ -225,7 +225,7 @@ void expectDamping(const std::function<void(SilRig&)>& inject, FaultCode code, i
     EXPECT_EQ(rig.status_.fault.index, index);
   }
   // Damping is latched and keeps the telemetry going.
-  for (int i = 0; i < 100; ++i) rig.cycle();
+  for (int i = 0; i < cycles_after; ++i) rig.cycle();
   EXPECT_EQ(rig.mode(), Mode::kDamping);
   rig.expectHealthyLogs();
 }
@@ -284,7 +284,8 @@ TEST(SilFaults, SilentImuLatchesDamping) {
     SilFaults f;
     f.imu_silent = true;
     r.sil_->setFaults(f);
-  }, FaultCode::kImuStale, -1, static_cast<int>(pmg::hal::safety::WatchdogOptions{}.imu_timeout_s / kPeriod) + 2);
+  }, FaultCode::kImuStale, -1, static_cast<int>(pmg::hal::safety::WatchdogOptions{}.imu_timeout_s / kPeriod) + 2,
+                true, /*cycles_after=*/10);  // each cycle waits the lockstep timeout for the IMU frame
 }
 
 TEST(SilFaults, NanBurstFromPolicyLatchesDampingAndNeverReachesTheBus) {

@@ -35,7 +35,12 @@ struct CanBackendOptions {
   /// Lockstep with pmg_sil: wait for every motor reply and the IMU frame (the SIL sends it last),
   /// up to lockstep_timeout_s, instead of the real-time reply window.
   bool lockstep = false;
-  double lockstep_timeout_s = 0.05;  ///< [s]
+  /// [s]; generous because a loaded machine can take tens of ms for one SIL physics step, and a
+  /// reply that misses the wait counts as missing.
+  double lockstep_timeout_s = 0.25;
+  /// Lockstep: once every motor replied, wait at most this long for the IMU frame [s] (the SIL
+  /// sends it right after the replies; the slack covers a descheduled SIL on a loaded machine).
+  double lockstep_imu_grace_s = 0.1;
   int bus_off_restart_cycles = 50;   ///< Cycles in bus-off before restart() (100 ms at 500 Hz).
   std::string validate() const;
 };
