@@ -4,7 +4,7 @@
 ///
 /// Unitree's G1 MJCF targets newer MuJoCo releases; MuJoCo 2.2.2 rejects it as shipped
 /// (config/robots/g1/SOURCE.md). adaptMjcfForMujoco22() is the one reproducible, documented
-/// transform (docs/mujoco22.md) applied in memory at load time; the shipped file stays pristine:
+/// transform (docs/robot_model.md) applied in memory at load time; the shipped file stays pristine:
 ///  1. delete every `actuatorfrcrange` / `actuatorfrclimited` attribute (2.2 does not know them;
 ///     torque limits are enforced by the motor model from the robot config instead);
 ///  2. `<compiler autolimits="true">` (2.2 otherwise rejects `range` without `limited`), and an

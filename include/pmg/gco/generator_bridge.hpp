@@ -18,7 +18,7 @@ namespace pmg::gco {
 
 /// Copies one generator tick into the GCO input (noexcept, no allocation):
 /// q_leg/qd_leg from q_ref/qd_ref through `leg_idx`, c_f = in_contact, v = v_base,
-/// ω = (0, 0, yaw_rate), h = base_height, pelvis level (roll = pitch = 0: clips carry joint angles
+/// ω = the template's pelvis angular velocity (heading frame; z = yaw rate), h = base_height, pelvis level (roll = pitch = 0: clips carry joint angles
 /// relative to the pelvis and no pelvis orientation), command = (u_d, u_s) with a "standing"
 /// height (u_s.height <= 0) replaced by the template height.
 inline void fillFromGenerator(const GeneratorOutput& g, const LegJointIndex& leg_idx, const VelocityCommand& u_d,
@@ -26,7 +26,7 @@ inline void fillFromGenerator(const GeneratorOutput& g, const LegJointIndex& leg
   fillLegState(leg_idx, g.q_ref, g.qd_ref, in);
   in->contact = g.in_contact;
   in->v_HB_H = g.v_base;
-  in->w_HB_H = Eigen::Vector3d(0.0, 0.0, g.yaw_rate);
+  in->w_HB_H = g.omega_base;
   in->base_height = g.base_height;
   in->base_roll = 0.0;
   in->base_pitch = 0.0;

@@ -123,7 +123,8 @@ struct GeneratorOutput {
   std::array<FootContact, kNumFeet> contact{};    ///< blended μ_f, σ_f (eqs. 8–9)
   std::array<bool, kNumFeet> in_contact{};        ///< c_f(φ): foot f in stance
   Eigen::Vector3d v_base{0, 0, 0};    ///< template base linear velocity, heading frame [m/s]
-  double yaw_rate = 0.0;              ///< template base yaw rate [rad/s]
+  double yaw_rate = 0.0;              ///< template base yaw rate [rad/s] (= omega_base.z())
+  Eigen::Vector3d omega_base{0, 0, 0};  ///< template pelvis angular velocity, heading frame [rad/s]
   double base_height = 0.0;           ///< template pelvis height above ground [m] (incl. posture)
   int clamped_joints = 0;             ///< joints clamped to their limits this tick
   GeneratorStatus status = GeneratorStatus::kOk;
@@ -381,7 +382,7 @@ class MotionGenerator {
                            out_.contact[f].sigma >= 0.5;
     }
     out_.v_base.setZero();
-    out_.yaw_rate = 0.0;
+    out_.omega_base.setZero();
     double height = out_.standing_weight * js.standing_base_height;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
       if (!clip[i]) continue;
@@ -391,10 +392,12 @@ class MotionGenerator {
       const auto K0 = static_cast<Eigen::Index>(k0), K1 = static_cast<Eigen::Index>(k1);
       const double wa = out_.weight[i] * out_.alpha[i];
       for (int a = 0; a < 3; ++a) out_.v_base[a] += wa * ((1 - t) * clip[i]->v_base(K0, a) + t * clip[i]->v_base(K1, a));
-      out_.yaw_rate += wa * ((1 - t) * clip[i]->omega_base(K0, 2) + t * clip[i]->omega_base(K1, 2));
+      for (int a = 0; a < 3; ++a)
+        out_.omega_base[a] += wa * ((1 - t) * clip[i]->omega_base(K0, a) + t * clip[i]->omega_base(K1, a));
       const double h_clip = (1 - t) * clip[i]->base_height[K0] + t * clip[i]->base_height[K1];
       height += out_.weight[i] * (out_.alpha[i] * h_clip + (1 - out_.alpha[i]) * js.standing_base_height);
     }
+    out_.yaw_rate = out_.omega_base.z();
     out_.base_height = height + posture_height_offset_;
 
     // q_ref = q_d + q_s (eq. 10), clamped to the limits; q̇_ref by central difference in phase.
