@@ -336,6 +336,9 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
   res.scale = s;
   res.contacts = detectHumanContacts(human, options);
   res.targets.resize(static_cast<std::size_t>(F));
+  res.human.resize(static_cast<std::size_t>(F));
+  for (int k = 0; k < F; ++k)
+    for (std::size_t i = 0; i < kNumKeypoints; ++i) res.human[static_cast<std::size_t>(k)][i] = s * human.frames[static_cast<std::size_t>(k)].p_WK[i];
   for (int k = 0; k < F; ++k) {
     const HumanFrame& h = human.frames[static_cast<std::size_t>(k)];
     KeypointTargets& t = res.targets[static_cast<std::size_t>(k)];
@@ -360,6 +363,8 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
       std::nth_element(dz.begin(), dz.begin() + static_cast<std::ptrdiff_t>(dz.size() / 2), dz.end());
       const double shift = dz[dz.size() / 2];
       for (KeypointTargets& t : res.targets)
+        for (auto& p : t) p.z() += shift;
+      for (KeypointTargets& t : res.human)
         for (auto& p : t) p.z() += shift;
     }
   }
@@ -521,6 +526,8 @@ void writeRetargetCsv(const RetargetResult& result, const std::string& path, int
       const char* name = keypointName(static_cast<Keypoint>(i));
       const Eigen::Vector3d& t = result.targets[static_cast<std::size_t>(k)][i];
       const Eigen::Vector3d& a = result.achieved[static_cast<std::size_t>(k)][i];
+      const Eigen::Vector3d& hu = result.human[static_cast<std::size_t>(k)][i];
+      f << fmt::format("{},human,{},{:.4f},{:.4f},{:.4f},{},{}\n", k - begin, name, hu.x(), hu.y(), hu.z(), int(c[0]), int(c[1]));
       f << fmt::format("{},target,{},{:.4f},{:.4f},{:.4f},{},{}\n", k - begin, name, t.x(), t.y(), t.z(), int(c[0]), int(c[1]));
       f << fmt::format("{},robot,{},{:.4f},{:.4f},{:.4f},{},{}\n", k - begin, name, a.x(), a.y(), a.z(), int(c[0]), int(c[1]));
     }

@@ -74,6 +74,7 @@ struct RetargetResult {
   ContactSequence contacts;              ///< human contacts the solve enforced
   std::vector<KeypointTargets> targets;  ///< (F) targets, robot scale
   std::vector<KeypointTargets> achieved; ///< (F) robot keypoints after the solve
+  std::vector<KeypointTargets> human;    ///< (F) the human keypoints × scale (same vertical shift), for plots
   double scale = 1.0;                    ///< the s used
   double solve_ms_per_frame = 0.0;
 };
@@ -88,8 +89,8 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
 /// Statistics over frames [begin, end) of a result. @throws std::out_of_range.
 RetargetStats retargetStats(const RetargetResult& result, const RobotConfig& robot, int begin, int end);
 
-/// Writes frames [begin, end) of a result as CSV (frame, source = target|robot, keypoint, x, y, z
-/// [m, W], contact_left, contact_right) for scripts/motion_plot_retarget.py. @throws std::runtime_error.
+/// Writes frames [begin, end) of a result as CSV (frame, source = human|target|robot, keypoint, x,
+/// y, z [m, W], contact_left, contact_right) for scripts/motion_plot_retarget.py. @throws std::runtime_error.
 void writeRetargetCsv(const RetargetResult& result, const std::string& path, int begin, int end);
 
 /// Robot keypoints (same set/meaning as the human ones) for base pose and q, by KDL forward
