@@ -5,8 +5,10 @@
 
 namespace pmg::hal::safety {
 
-SafeBackend::SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options)
-    : inner_(std::move(inner)), sup_(std::move(options)) {
+SafeBackend::SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options,
+                         SafeBackendOptions backend_options)
+    : inner_(std::move(inner)), sup_(std::move(options)), bopt_(backend_options) {
+  held_at_.fill(-1e9);
   if (!inner_) throw std::invalid_argument("SafeBackend: wrapped backend is null");
   if (sup_.numJoints() > static_cast<std::size_t>(pmg::kMaxMotors))
     throw std::invalid_argument("SafeBackend: more joints than pmg::kMaxMotors");
@@ -72,7 +74,27 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
   }
   safe_.sequence = command.sequence;
   const pmg::BackendStatus st = inner_->exchange(safe_, state);
-  last_ = state;
+  last_ = state;  // the supervisor sees the raw replies (its watchdogs count the missing ones)
+  if (bopt_.hold_missing) {
+    const WatchdogOptions& w = sup_.options().watchdog;
+    for (std::size_t j = 0; j < n; ++j) {
+      pmg::MotorState& m = state.motors[j];
+      if (m.valid) {
+        held_.motors[j] = m;
+        held_at_[j] = now;
+      } else if (now - held_at_[j] <= w.motor_timeout_s) {
+        m = held_.motors[j];
+        ++held_count_;
+      }
+    }
+    if (state.imu.valid) {
+      held_.imu = state.imu;
+      imu_held_at_ = now;
+    } else if (now - imu_held_at_ <= w.imu_timeout_s) {
+      state.imu = held_.imu;
+      ++held_count_;
+    }
+  }
   ++cycles_;
 
   SafetyStatus s;
@@ -85,6 +107,7 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
   s.refused_requests = out_.refused_requests;
   s.clamped_joint_ticks = out_.clamped_joint_ticks;
   s.nonfinite_commands = nonfinite_;
+  s.held_replies = held_count_;
   s.fault_counts = out_.fault_counts;
   status_.write(s);
   return st;

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # pmg_controller against the pmg_sil process through the real bus code (UDP CAN, MIT codec,
 # CanBackend) with the HAL safety supervisor: (1) the demo script runs clean and ends active;
-# (2) with a motor that stops replying after 4 s the HAL latches damping and names the joint.
+# (2) with 2 % dropped, late, duplicated and corrupted replies it still ends active (the HAL holds
+# a missing reply within the watchdog); (3) with a motor that stops replying after 4 s the HAL
+# latches damping and names the joint.
 # Usage: sil_process_smoke.sh <pmg_sil> <pmg_controller>   (run from the repository root)
 set -u
 sil="$1"
@@ -31,10 +33,15 @@ if run clean; then
 else
   echo "clean run failed:"; cat "$out/clean.ctl.log"; fail=1
 fi
+if run lossy --drop 0.02 --late 0.02 --dup 0.02 --corrupt 0.02 --faults-after 2; then
+  grep -q "HAL safety: mode active, fault none" "$out/lossy.ctl.log" || { echo "lossy run: HAL not active"; fail=1; }
+else
+  echo "lossy run failed:"; cat "$out/lossy.ctl.log"; cat "$out/lossy.sil.log"; fail=1
+fi
 run silent --silent-joint 3 --faults-after 4
 rc=$?
 [ "$rc" -eq 3 ] || { echo "silent motor: expected exit 3 (damping), got $rc"; fail=1; }
 grep -q "HAL safety: mode damping, fault motor reply timeout (joint 3)" "$out/silent.ctl.log" ||
   { echo "silent motor: damping cause not recorded"; cat "$out/silent.ctl.log"; fail=1; }
-[ $fail -eq 0 ] && echo "pmg_controller <-> pmg_sil over UDP CAN: clean run active, silent motor -> damping (joint 3)"
+[ $fail -eq 0 ] && echo "pmg_controller <-> pmg_sil over UDP CAN: clean and lossy runs active, silent motor -> damping (joint 3)"
 exit $fail

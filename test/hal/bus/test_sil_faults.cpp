@@ -94,6 +94,7 @@ class SilRig {
     for (int j = 0; j < st.num_motors; ++j) {
       const auto& m = st.motors[static_cast<std::size_t>(j)];
       if (m.valid && !(std::isfinite(m.q) && std::isfinite(m.qd) && std::isfinite(m.tau))) nan_ = true;
+      if (!m.valid) ++invalid_seen_by_loop_;
     }
     pmg::hal::safety::SafetyStatus s;
     safe_->status(s);
@@ -141,6 +142,7 @@ class SilRig {
   int gaps_ = 0;
   bool nan_ = false;
   double max_tau_ratio_ = 0.0;
+  std::uint64_t invalid_seen_by_loop_ = 0;  ///< Motor states the loop received with valid = false.
 
  private:
   std::thread sil_thread_;
@@ -180,7 +182,12 @@ TEST(SilFaults, CleanBusStaysActiveWithAllReplies) {
 TEST(SilFaults, DroppedFramesAreRiddenThrough) {
   SilFaults f;
   f.drop_prob = 0.05;
-  expectStaysActive(f, [](SilRig& r) { EXPECT_GT(sum(r, &MotorLinkCounters::missing), 200u); });
+  expectStaysActive(f, [](SilRig& r) {
+    EXPECT_GT(sum(r, &MotorLinkCounters::missing), 200u);
+    // SafeBackend held the last valid reply: the 100 Hz loop never saw a gap.
+    EXPECT_EQ(r.invalid_seen_by_loop_, 0u);
+    EXPECT_GT(r.status_.held_replies, 200u);
+  });
 }
 
 TEST(SilFaults, LateFramesAreRiddenThrough) {
@@ -238,6 +245,20 @@ TEST(SilFaults, SilentMotorLatchesDamping) {
     f.silent_joint = 9;  // right knee
     r.sil_->setFaults(f);
   }, FaultCode::kMotorStale, 9, kMotorBound);
+}
+
+TEST(SilFaults, SilentMotorReachesTheLoopAsInvalidAfterTheTimeout) {
+  SilRig rig;
+  rig.toActive();
+  SilFaults f;
+  f.silent_joint = 9;
+  rig.sil_->setFaults(f);
+  rig.cyclesUntil(Mode::kDamping, kMotorBound);
+  for (int i = 0; i < 5; ++i) rig.cycle();
+  pmg::LowState st;
+  rig.hal_->latest(st);
+  EXPECT_FALSE(st.motors[9].valid) << "held no longer than the motor watchdog";
+  EXPECT_TRUE(st.motors[8].valid);
 }
 
 TEST(SilFaults, BusOffLatchesDampingAndTheBusIsRestarted) {

@@ -13,7 +13,11 @@
 ///     output);
 ///  2. takes the pending mode request from requests() (gamepad / LCM threads post there);
 ///  3. steps the supervisor and sends only its clamped command to the wrapped backend;
-///  4. publishes a SafetyStatus for telemetry through a lock-free LatestValue.
+///  4. with SafeBackendOptions::hold_missing, hands the loop the last valid reply of a motor (and the
+///     last IMU sample) for a cycle in which it did not arrive, as long as that input's watchdog
+///     has not expired: a single lost CAN frame is the HAL's business, not the loop's. Once the
+///     watchdog expires the loop sees valid = false (and the HAL is already in damping);
+///  5. publishes a SafetyStatus for telemetry through a lock-free LatestValue.
 /// Time is counted in HAL cycles (now = cycle * period), so lockstep runs are deterministic and
 /// the watchdogs measure "cycles without news" exactly.
 
@@ -39,13 +43,18 @@ struct SafetyStatus {
   std::uint64_t refused_requests = 0;
   std::uint64_t clamped_joint_ticks = 0;
   std::uint64_t nonfinite_commands = 0;  ///< Loop commands that contained NaN/Inf.
+  std::uint64_t held_replies = 0;        ///< Missing motor replies / IMU samples replaced by the last valid one.
   std::array<std::uint32_t, kNumFaultCodes> fault_counts{};
+};
+
+struct SafeBackendOptions {
+  bool hold_missing = true;  ///< See step 4 above.
 };
 
 class SafeBackend final : public pmg::HalBackend {
  public:
   /// Throws std::invalid_argument if `inner` is null or the options are invalid.
-  SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options);
+  SafeBackend(std::unique_ptr<pmg::HalBackend> inner, SafetyOptions options, SafeBackendOptions backend_options = {});
   const char* name() const noexcept override { return "safe"; }
   double cyclePeriod() const noexcept override { return inner_->cyclePeriod(); }
   pmg::BackendStatus exchange(const pmg::LowCommand& command, pmg::LowState& state) noexcept override;
@@ -71,6 +80,11 @@ class SafeBackend final : public pmg::HalBackend {
   std::uint64_t cycles_ = 0;
   std::uint64_t last_sequence_ = ~0ull;
   std::uint64_t nonfinite_ = 0;
+  SafeBackendOptions bopt_;
+  pmg::LowState held_{};                ///< Last valid value per motor and of the IMU.
+  std::array<double, pmg::kMaxMotors> held_at_{};  ///< When each was valid [s] (cycle time).
+  double imu_held_at_ = -1e9;
+  std::uint64_t held_count_ = 0;
 };
 
 }  // namespace pmg::hal::safety
