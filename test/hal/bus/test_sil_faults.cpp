@@ -11,6 +11,7 @@
 #include <system_error>
 #include <thread>
 
+#include "alloc_counter.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
@@ -177,6 +178,26 @@ TEST(SilFaults, CleanBusStaysActiveWithAllReplies) {
   EXPECT_EQ(rig.can_->motorCounters(3).missing, 0u);
   EXPECT_GE(rig.can_->imuFrames() + 1, rig.can_->cycles()) << "one IMU frame per cycle";
   rig.expectHealthyLogs();
+}
+
+TEST(SilFaults, HalCycleDoesNotAllocate) {
+  // HalRunner::cycle() -> SafeBackend -> CanBackend -> UDP, counted on this (the HAL's) thread only.
+  SilRig rig;
+  rig.toActive();
+  SilFaults f;
+  f.drop_prob = 0.05;
+  f.dup_prob = 0.05;
+  f.corrupt_prob = 0.05;
+  rig.sil_->setFaults(f);
+  rig.cycle();
+  long allocs = 0;
+  {
+    pmg_test::AllocScope scope;
+    for (int i = 0; i < 200; ++i) rig.cycle();
+    allocs = scope.allocations();
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_EQ(rig.mode(), Mode::kActive);
 }
 
 TEST(SilFaults, DroppedFramesAreRiddenThrough) {

@@ -8,10 +8,12 @@
 #include <poll.h>
 #include <sys/socket.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <deque>
 #include <system_error>
+#include <thread>
 
 #include "alloc_counter.hpp"
 #include "pmg/hal/bus/ethercat_bridge.hpp"
@@ -317,4 +319,25 @@ TEST(EthercatBridge, ChannelsBehaveAsTransports) {
   EXPECT_EQ(c0.send(frame(1, {1})), TxStatus::kOk);
   EXPECT_EQ(c0.counters().tx_queue_full, 1u);
   EXPECT_EQ(c0.counters().restarts, 1u);
+}
+
+TEST(AllocCounter, CountsThisThreadsAllocations) {
+  // The "no allocation" tests rely on this counter: it must see an allocation on this thread and
+  // none of another thread's.
+  std::atomic<bool> go{false}, done{false};
+  std::thread other([&] {
+    while (!go) std::this_thread::yield();
+    auto q = std::make_unique<int>(2);
+    done = true;
+  });
+  long n = 0;
+  {
+    pmg_test::AllocScope scope;
+    go = true;
+    while (!done) std::this_thread::yield();
+    auto p = std::make_unique<int>(1);
+    n = scope.allocations();
+  }
+  other.join();
+  EXPECT_EQ(n, 1);
 }

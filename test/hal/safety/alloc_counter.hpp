@@ -19,17 +19,19 @@ struct AllocScope {
 };
 }  // namespace pmg_test
 
-void* operator new(std::size_t n) {
+// noinline: GCC 12 otherwise pairs the inlined malloc/free with new/delete and warns
+// (-Wmismatched-new-delete) although they match.
+[[gnu::noinline]] void* operator new(std::size_t n) {
   if (pmg_test::g_count_allocs) ++pmg_test::g_allocs;
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void* operator new[](std::size_t n) {
+[[gnu::noinline]] void* operator new[](std::size_t n) {
   if (pmg_test::g_count_allocs) ++pmg_test::g_allocs;
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete[](void* p) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
