@@ -43,6 +43,16 @@ CanBackend::CanBackend(BusPlan plan, std::vector<std::unique_ptr<CanTransport>> 
     pollfds_.push_back(::pollfd{transports_[b]->pollFd(), POLLIN, 0});
   }
   if (imu_) pollfds_.push_back(::pollfd{imu_->pollFd(), POLLIN, 0});
+  // Send events of one slot: queued mode keeps plan order bus by bus; paced mode sorts by offset.
+  for (std::size_t b = 0; b < nb; ++b) {
+    for (const SlotEntry& e : plan_.schedule()[b])
+      events_.push_back(SendEvent{e.send_offset_s, b, static_cast<std::size_t>(e.motor)});
+  }
+  if (opt_.paced) {
+    std::stable_sort(events_.begin(), events_.end(),
+                     [](const SendEvent& a, const SendEvent& c) { return a.offset_s < c.offset_s; });
+  }
+  skip_bus_.assign(nb, 0);
   motor_counters_.resize(static_cast<std::size_t>(num_joints_));
   got_.assign(static_cast<std::size_t>(num_joints_), 0);
   bus_off_cycles_.assign(nb, 0);
@@ -120,7 +130,9 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
   for (int j = 0; j < num_joints_; ++j) state.motors[static_cast<std::size_t>(j)].valid = false;
   state.imu.valid = false;
 
-  // 2. Sends, bus by bus in plan order; bus-off handling.
+  // 2. Sends: bus-off handling, then every motor's frame, either queued at once (bus by bus in plan
+  //    order) or paced at its slot offset from the plan's schedule.
+  const double t0 = rt::now();
   for (std::size_t b = 0; b < nb; ++b) {
     CanTransport& t = *transports_[b];
     if (t.state() == BusState::kBusOff) {
@@ -128,27 +140,40 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
         t.restart();
         bus_off_cycles_[b] = 0;
       }
+      skip_bus_[b] = 1;
       continue;
     }
+    skip_bus_[b] = 0;
     bus_off_cycles_[b] = 0;
-    const MotorProtocol& p = *protocols_[b];
-    for (const MotorSpec& m : plan_.buses()[b].motors) {
-      if (cycles_ == 0) {
-        p.encodeControl(m, ControlRequest::kEnable, f);
-      } else {
-        const pmg::MotorCommand& jc = command.motors[static_cast<std::size_t>(m.joint_index)];
-        const MotorCommand mc = toMotorSide(m, MotorCommand{jc.q, jc.qd, jc.kp, jc.kd, jc.tau_ff});
-        if (!p.encodeCommand(m, mc, f)) {
-          ++nonfinite_commands_;
-          p.encodeCommand(m, MotorCommand{m.offset, 0.0, 0.0, 0.0, 0.0}, f);
-        }
+  }
+  for (const SendEvent& e : events_) {
+    if (skip_bus_[e.bus]) continue;
+    if (opt_.paced) {
+      // Until the send time, keep collecting replies (of the motors served before on any bus).
+      for (double now = rt::now(); now < t0 + e.offset_s; now = rt::now()) {
+        for (std::size_t b = 0; b < nb; ++b)
+          while (transports_[b]->receive(f) == RxStatus::kFrame) handleFrame(b, f, state, false);
+        const double wait = std::min(t0 + e.offset_s - now, 1e-3);
+        const timespec ts{0, static_cast<long>(wait * 1e9)};
+        ::ppoll(pollfds_.data(), transports_.size(), &ts, nullptr);
       }
-      t.send(f);
     }
+    const MotorProtocol& p = *protocols_[e.bus];
+    const MotorSpec& m = plan_.buses()[e.bus].motors[e.motor];
+    if (cycles_ == 0) {
+      p.encodeControl(m, ControlRequest::kEnable, f);
+    } else {
+      const pmg::MotorCommand& jc = command.motors[static_cast<std::size_t>(m.joint_index)];
+      const MotorCommand mc = toMotorSide(m, MotorCommand{jc.q, jc.qd, jc.kp, jc.kd, jc.tau_ff});
+      if (!p.encodeCommand(m, mc, f)) {
+        ++nonfinite_commands_;
+        p.encodeCommand(m, MotorCommand{m.offset, 0.0, 0.0, 0.0, 0.0}, f);
+      }
+    }
+    transports_[e.bus]->send(f);
   }
 
   // 3. Replies.
-  const double t0 = rt::now();
   const double deadline = t0 + (opt_.lockstep ? opt_.lockstep_timeout_s : window_s_);
   double motors_done_at = -1.0;
   for (;;) {
@@ -210,6 +235,7 @@ std::unique_ptr<CanBackend> makeCanBackend(const CanBackendSetup& setup) {
   BusPlan plan = BusPlan::fromYaml(setup.plan_file);
   CanBackendOptions o;
   o.lockstep = setup.lockstep;
+  o.paced = setup.paced;
   std::unique_ptr<CanTransport> imu;
   std::vector<std::unique_ptr<CanTransport>> transports;
   if (setup.transport == "udp") {

@@ -16,6 +16,7 @@
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
+#include "pmg/hal/bus/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 
 using namespace pmg::hal::bus;
@@ -66,6 +67,7 @@ class Peer {
   std::atomic<int> late_joint{-1};
   std::mutex mutex;
   std::vector<std::pair<int, CanFrame>> received;  // (joint, frame)
+  std::vector<double> arrival;                     // CLOCK_MONOTONIC [s] per received frame
   UdpCanTransport& bus(int b) { return *buses_[b]; }
 
  private:
@@ -86,6 +88,7 @@ class Peer {
           {
             std::lock_guard<std::mutex> lock(mutex);
             received.emplace_back(m.joint_index, f);
+            arrival.push_back(pmg::hal::rt::now());
           }
           any = true;
           if (addressed++ == 0) first = std::chrono::steady_clock::now();
@@ -137,8 +140,9 @@ struct Rig {
   std::unique_ptr<CanBackend> can;
   pmg::LowCommand cmd;
   pmg::LowState st;
+  bool paced_;
   Peer& peer;
-  Rig() : peer(bind()) {}
+  explicit Rig(bool paced = false) : paced_(paced), peer(bind()) {}
   // A port block per process; on a collision (ctest runs tests in parallel) move on.
   Peer& bind() {
     std::unique_ptr<CanTransport> imu;
@@ -157,6 +161,10 @@ struct Rig {
     o.lockstep = true;
     o.lockstep_timeout_s = 0.2;
     o.bus_off_restart_cycles = 3;
+    if (paced_) {
+      o.paced = true;
+      o.lockstep = false;  // real-time reply window
+    }
     can = std::make_unique<CanBackend>(plan, std::move(ts), std::move(imu), o);
     cmd.num_motors = 4;
     return *peer_ptr;
@@ -274,6 +282,29 @@ TEST(CanBackend, BusOffSkipsTheBusAndRestartsIt) {
   EXPECT_EQ(r.can->transport(1).state(), BusState::kErrorActive);
   r.can->exchange(r.cmd, r.st);
   EXPECT_TRUE(r.st.motors[2].valid) << "replies resume after the restart";
+}
+
+TEST(CanBackend, PacedSendsFollowTheSlotSchedule) {
+  Rig r(/*paced=*/true);
+  r.can->exchange(r.cmd, r.st);
+  {
+    std::lock_guard<std::mutex> lock(r.peer.mutex);
+    r.peer.received.clear();
+    r.peer.arrival.clear();
+  }
+  r.can->exchange(r.cmd, r.st);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::lock_guard<std::mutex> lock(r.peer.mutex);
+  ASSERT_EQ(r.peer.received.size(), 4u);
+  // Slot order: both buses' first motors, then both second motors (offset = per-motor round).
+  const double per_motor = r.plan.loads()[0].per_motor_s;
+  double first[4] = {0, 0, 0, 0};
+  for (std::size_t i = 0; i < 4; ++i) first[r.peer.received[i].first] = r.peer.arrival[i];
+  EXPECT_TRUE(r.peer.received[0].first == 0 || r.peer.received[0].first == 2);
+  EXPECT_TRUE(r.peer.received[3].first == 1 || r.peer.received[3].first == 3);
+  // A frame never leaves before its offset (loopback can only add delay).
+  EXPECT_GE(first[1] - first[0], 0.9 * per_motor);
+  EXPECT_GE(first[3] - first[2], 0.9 * per_motor);
 }
 
 TEST(CanBackend, ExchangeDoesNotAllocate) {

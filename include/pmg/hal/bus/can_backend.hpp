@@ -5,9 +5,14 @@
 ///
 /// exchange(), once per 2 ms HAL cycle (noexcept, allocation-free):
 ///  1. drain frames left over from the previous cycle (counted as late replies, not used);
-///  2. per bus, in plan order: joint command -> motor side (direction, offset) -> protocol frame ->
-///     send (the first cycle sends ControlRequest::kEnable instead). A non-finite command is never
-///     encoded: the motor gets a zero-torque command instead (counted in nonfinite_commands);
+///  2. per motor: joint command -> motor side (direction, offset) -> protocol frame -> send (the
+///     first cycle sends ControlRequest::kEnable instead). A non-finite command is never encoded:
+///     the motor gets a zero-torque command instead (counted in nonfinite_commands). By default
+///     all frames are queued at the slot start, bus by bus in plan order: the controller's TX
+///     queue and CAN arbitration serialise them, and the plan's schedule bounds when each goes out.
+///     With Options::paced each frame is sent at its slot offset from the plan's schedule
+///     (BusPlan::schedule()), collecting replies meanwhile, for drivers that cannot take
+///     back-to-back frames or interfaces with a short TX queue;
 ///  3. poll all channels until every motor has replied and (lockstep) the IMU frame arrived, or
 ///     until the reply window closes; decode and check each reply (id, length, range); route it by
 ///     motor id; duplicates and rejected frames are counted, not used;
@@ -42,6 +47,9 @@ struct CanBackendOptions {
   /// sends it right after the replies; the slack covers a descheduled SIL on a loaded machine).
   double lockstep_imu_grace_s = 0.1;
   int bus_off_restart_cycles = 50;   ///< Cycles in bus-off before restart() (100 ms at 500 Hz).
+  /// Send each motor's frame at its offset in the slot (BusPlan::schedule()) instead of queueing
+  /// all at the slot start. Occupies the HAL thread for the busiest bus's round (<= 80 % of 2 ms).
+  bool paced = false;
   std::string validate() const;
 };
 
@@ -91,6 +99,13 @@ class CanBackend final : public pmg::HalBackend {
   std::vector<std::uint8_t> got_;                     ///< replied this cycle (num joints)
   std::vector<int> bus_off_cycles_;
   std::vector<::pollfd> pollfds_;
+  struct SendEvent {
+    double offset_s;
+    std::size_t bus;
+    std::size_t motor;
+  };
+  std::vector<SendEvent> events_;     ///< One slot's sends, in sending order.
+  std::vector<std::uint8_t> skip_bus_;  ///< Bus in bus-off this cycle.
   int num_joints_ = 0;
   double window_s_ = 0.0;
   bool imu_got_ = false;
@@ -103,6 +118,7 @@ struct CanBackendSetup {
   std::string transport = "udp";    ///< "socketcan" (robot: interface = bus name) or "udp" (pmg_sil).
   std::uint16_t udp_base_port = 47000;  ///< UDP port layout base (see sil_emulator.hpp).
   bool lockstep = false;            ///< Lockstep with pmg_sil (see CanBackendOptions::lockstep).
+  bool paced = false;               ///< Paced sends (see CanBackendOptions::paced).
 };
 
 /// Build a CanBackend from a setup (setup code: throws std::runtime_error / std::system_error
