@@ -10,6 +10,24 @@
 //
 // Frames and signs: every angle, velocity and torque is about the joint axis, positive in the
 // joint's positive direction; q is the motor-side (encoder-side) joint angle.
+//
+// Use in a MuJoCo backend (per joint i with dof index v, one ActuatorState per joint, parameters
+// from an `actuator:` block, see actuator_yaml.hpp), with the split step so that the friction
+// sees this step's inertia and bias forces:
+//
+//   mj_step1(m, d);
+//   JointSample j;
+//   j.q_rad = d->qpos[qpos_adr]; j.dq_rad_per_s = d->qvel[v]; j.dt_s = m->opt.timestep;
+//   j.inertia_kgm2 = d->qM[m->dof_Madr[v]];               // diagonal of M, includes armature
+//   j.tau_other_Nm = -d->qfrc_bias[v] + d->qfrc_passive[v];
+//   MotorCommand c{q_des, dq_des, kp * block.kp_scale, kd * block.kd_scale, tau_ff, enabled};
+//   d->qfrc_applied[v] = ActuatorModel::step(block.params, state[i], c, j).tau_applied_Nm;
+//   mj_step2(m, d);
+//   reported_q = ActuatorModel::encoder(block.params, d->qpos[qpos_adr]);
+//
+// and set m->dof_armature[v] = *block.armature_kgm2 and m->dof_frictionloss[v] = 0 (this model
+// replaces MuJoCo's dry friction). With several DOFs the diagonal of M makes stiction approximate
+// (exact for one DOF, as on the bench rig).
 #pragma once
 
 #include <algorithm>
