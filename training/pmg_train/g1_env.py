@@ -74,6 +74,7 @@ class EnvConfig:
     p_delay: float = 0.5           # probability of one control period of action latency
     arm_perturb: float = 0.3       # rad, max amplitude of smooth arm-target perturbations
     noise: dict = dataclasses.field(default_factory=lambda: {"gyro": 0.1, "gravity": 0.03, "q": 0.01, "qd": 0.5})
+    deterministic_reset: bool = False  # evaluation: default pose, phase 0, nominal motors, no latency
     # Reward weights (per control step).
     w: dict = dataclasses.field(default_factory=lambda: {
         "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
@@ -194,18 +195,21 @@ class G1PmgEnv(Env):
         k = jax.random.split(rng, 12)
         qpos = jnp.asarray(self.mj_model.qpos0).at[7:].set(self.q_default)
         qpos = qpos.at[2].set(0.79)
-        qpos = qpos.at[7:].add(jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
+        if not c.deterministic_reset:
+            qpos = qpos.at[7:].add(jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
         data = mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv))
         data = mjx.forward(self.sys, data)
         info = {
             "rng": k[1],
             "step": jnp.zeros((), jnp.int32),
-            "phase": jax.random.uniform(k[2]),
+            "phase": jnp.float32(0.0) if c.deterministic_reset else jax.random.uniform(k[2]),
             "command": self._sample_command(k[3]),
             "last_action": jnp.zeros(LEG),
             "prev_action": jnp.zeros(LEG),
-            "kp_scale": jax.random.uniform(k[4], (), minval=c.kp_scale[0], maxval=c.kp_scale[1]),
-            "delay": (jax.random.uniform(k[5]) < c.p_delay).astype(jnp.float32),
+            "kp_scale": jnp.float32(1.0) if c.deterministic_reset else
+                        jax.random.uniform(k[4], (), minval=c.kp_scale[0], maxval=c.kp_scale[1]),
+            "delay": jnp.float32(0.0) if c.deterministic_reset else
+                     (jax.random.uniform(k[5]) < c.p_delay).astype(jnp.float32),
             "arm_amp": jax.random.uniform(k[6], (14,), minval=0.0, maxval=c.arm_perturb) *
                        (jax.random.uniform(k[7]) < 0.7),
             "arm_freq": jax.random.uniform(k[8], (14,), minval=0.2, maxval=1.0),
