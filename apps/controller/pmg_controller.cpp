@@ -105,9 +105,10 @@ int main(int argc, char** argv) {
     if (!config.log_file.empty()) std::printf("event log: %s\n", config.log_file.c_str());
     pmg::hal::safety::SafetyStatus hs;
     if (safe && safe->status(hs))
-      std::printf("HAL safety: mode %s, fault %s (joint %d), clamped joint-cycles %llu, held replies %llu, "
+      std::printf("HAL safety: mode %s, fault %s (joint %d, at %.3f s), clamped joint-cycles %llu, held replies %llu, "
                   "max |tau|/limit %.2f\n",
                   pmg::hal::safety::toString(hs.mode), pmg::hal::safety::toString(hs.fault.code), hs.fault.index,
+                  hs.fault.time_s,
                   static_cast<unsigned long long>(hs.clamped_joint_ticks),
                   static_cast<unsigned long long>(hs.held_replies), hs.max_tau_ratio);
     if (safe && hs.mode == pmg::hal::safety::Mode::kDamping) return 3;

@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
   app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile);
   app.add_option("--port", port, "UDP base port (bus b: host base+2b, SIL base+2b+1; IMU after the buses)")
       ->check(CLI::Range(1024, 65000));
-  app.add_flag("--realtime", realtime, "step every 2 ms of wall time even without commands (default: lockstep, "
-                                       "step when the host's commands arrive)");
+  app.add_flag("--realtime", realtime, "step every 2 ms of wall time and answer every command at once, like "
+                                       "the drivers (default: lockstep, step when a cycle's commands arrived)");
   app.add_flag("--no-gantry", no_gantry, "robot stands on the ground instead of hanging in the virtual gantry");
   app.add_option("--duration", duration, "stop after this much simulated time [s]; 0 = until Ctrl-C");
   app.add_option("--fifo", fifo, "SCHED_FIFO priority in --realtime (0 = normal)")->check(CLI::Range(0, 99));
@@ -95,10 +95,9 @@ int main(int argc, char** argv) {
         pushed = true;
       }
       if (realtime) {
-        sil.runCycle(0.8 * period, true);
         next += period;
-        if (rt::now() > next + period) next = rt::now();
-        rt::sleepUntil(next);
+        if (rt::now() > next + period) next = rt::now();  // overran a whole period: re-anchor
+        sil.runRealtimeCycle(next);
       } else {
         sil.runCycle(0.5);
       }

@@ -101,7 +101,7 @@ void SilDriverEmulator::reply(std::size_t b, std::size_t k, const SilFaults& f) 
   }
 }
 
-bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
+void SilDriverEmulator::beginCycle() {
   if (faults_changed_.exchange(false)) {
     std::lock_guard<std::mutex> lock(faults_mutex_);
     const bool reseed = pending_faults_.seed != faults_.seed;
@@ -110,82 +110,68 @@ bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
     for (auto& a : actions_) a(*sim_);
     actions_.clear();
   }
-  const SilFaults f = faults_;
   const std::size_t nb = buses_.size();
-  if (f.bus_off_bus >= 0 && static_cast<std::size_t>(f.bus_off_bus) < nb &&
-      !bus_off_done_[static_cast<std::size_t>(f.bus_off_bus)]) {
-    const auto b = static_cast<std::size_t>(f.bus_off_bus);
+  if (faults_.bus_off_bus >= 0 && static_cast<std::size_t>(faults_.bus_off_bus) < nb &&
+      !bus_off_done_[static_cast<std::size_t>(faults_.bus_off_bus)]) {
+    const auto b = static_cast<std::size_t>(faults_.bus_off_bus);
     bus_off_[b] = bus_off_done_[b] = 1;
     buses_[b]->sendErrorIndication(kErrorBusOff);
     ++counters_.bus_off_injected;
   }
   std::fill(addressed_.begin(), addressed_.end(), 0);
+}
 
-  // 1. Collect this cycle's frames.
-  const double deadline = rt::now() + timeout_s;
+bool SilDriverEmulator::pollFrames(bool reply_now) {
   bool any = false;
   CanFrame fr;
-  for (;;) {
-    for (std::size_t b = 0; b < nb; ++b) {
-      while (buses_[b]->receive(fr) == RxStatus::kFrame) {
-        if (fr.error) {
-          if (fr.id & kErrorRestarted) {
-            bus_off_[b] = 0;
-            ++counters_.restarts_seen;
-          }
-          continue;
+  for (std::size_t b = 0; b < buses_.size(); ++b) {
+    while (buses_[b]->receive(fr) == RxStatus::kFrame) {
+      if (fr.error) {
+        if (fr.id & kErrorRestarted) {
+          bus_off_[b] = 0;
+          ++counters_.restarts_seen;
         }
-        if (bus_off_[b] || fr.extended || fr.id >= 0x800) continue;
-        const int k = route_[b][fr.id];
-        if (k < 0) continue;
-        const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];
-        const auto j = static_cast<std::size_t>(m.joint_index);
-        ControlRequest cr{};
-        MotorCommand mc;
-        if (MitProtocol::decodeControl(fr, cr)) {
-          if (cr == ControlRequest::kEnable) enabled_[j] = 1;
-          if (cr == ControlRequest::kDisable) enabled_[j] = 0;
-          ++counters_.controls;
-        } else if (MitProtocol::decodeCommand(m, fr, mc)) {
-          pmg::MotorCommand& c = cmd_.motors[j];
-          c.q = m.direction * (mc.q - m.offset);
-          c.qd = m.direction * mc.qd;
-          c.kp = mc.kp;
-          c.kd = mc.kd;
-          c.tau_ff = m.direction * mc.tau_ff;
-          ++counters_.commands;
-        } else {
-          continue;
-        }
-        addressed_[j] = 1;
-        any = true;
+        continue;
       }
+      if (bus_off_[b] || fr.extended || fr.id >= 0x800) continue;
+      const int k = route_[b][fr.id];
+      if (k < 0) continue;
+      const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];
+      const auto j = static_cast<std::size_t>(m.joint_index);
+      ControlRequest cr{};
+      MotorCommand mc;
+      if (MitProtocol::decodeControl(fr, cr)) {
+        if (cr == ControlRequest::kEnable) enabled_[j] = 1;
+        if (cr == ControlRequest::kDisable) enabled_[j] = 0;
+        ++counters_.controls;
+      } else if (MitProtocol::decodeCommand(m, fr, mc)) {
+        pmg::MotorCommand& c = cmd_.motors[j];
+        c.q = m.direction * (mc.q - m.offset);
+        c.qd = m.direction * mc.qd;
+        c.kp = mc.kp;
+        c.kd = mc.kd;
+        c.tau_ff = m.direction * mc.tau_ff;
+        ++counters_.commands;
+      } else {
+        continue;
+      }
+      addressed_[j] = 1;
+      any = true;
+      if (reply_now) reply(b, static_cast<std::size_t>(k), faults_);
     }
-    bool all = true;
-    for (std::size_t b = 0; b < nb && all; ++b) {
-      if (bus_off_[b]) continue;
-      for (const MotorSpec& m : plan_.buses()[b].motors) all = all && addressed_[static_cast<std::size_t>(m.joint_index)];
-    }
-    if (all && any) break;
-    const double now = rt::now();
-    if (now >= deadline) break;
-    const timespec ts{0, static_cast<long>(std::min(deadline - now, 1e-3) * 1e9)};
-    ::ppoll(fds_.data(), fds_.size(), &ts, nullptr);
   }
-  if (!any && !step_anyway) return false;
+  return any;
+}
 
-  // 2. Replies (late ones from the previous cycle first), measured before this step.
+void SilDriverEmulator::flushLate() {
   for (auto& [b, frame] : late_) {
     if (!bus_off_[b]) buses_[b]->send(frame);
   }
   late_.clear();
-  for (std::size_t b = 0; b < nb; ++b) {
-    if (bus_off_[b]) continue;
-    const auto& motors = plan_.buses()[b].motors;
-    for (std::size_t k = 0; k < motors.size(); ++k)
-      if (addressed_[static_cast<std::size_t>(motors[k].joint_index)]) reply(b, k, f);
-  }
-  // 3. IMU, last.
+}
+
+void SilDriverEmulator::sendImuAndStep() {
+  const SilFaults& f = faults_;
   if (!f.imu_silent) {
     pmg::ImuState imu = state_.imu;
     if (f.imu_frozen) {
@@ -207,13 +193,59 @@ bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
     imu_->send(imu_frame);
     ++counters_.imu_frames;
   }
-  // 4. Step with the held set-points; disabled drivers apply no torque.
+  // Step with the held set-points; disabled drivers apply no torque.
   pmg::LowCommand applied = cmd_;
   for (std::size_t j = 0; j < enabled_.size(); ++j)
     if (!enabled_[j]) applied.motors[j] = pmg::MotorCommand{};
   sim_->exchange(applied, state_);
   ++counters_.cycles;
+}
+
+bool SilDriverEmulator::runCycle(double timeout_s, bool step_anyway) {
+  beginCycle();
+  const std::size_t nb = buses_.size();
+  // 1. Collect this cycle's frames.
+  const double deadline = rt::now() + timeout_s;
+  bool any = false;
+  for (;;) {
+    any = pollFrames(false) || any;
+    bool all = true;
+    for (std::size_t b = 0; b < nb && all; ++b) {
+      if (bus_off_[b]) continue;
+      for (const MotorSpec& m : plan_.buses()[b].motors) all = all && addressed_[static_cast<std::size_t>(m.joint_index)];
+    }
+    if (all && any) break;
+    const double now = rt::now();
+    if (now >= deadline) break;
+    const timespec ts{0, static_cast<long>(std::min(deadline - now, 1e-3) * 1e9)};
+    ::ppoll(fds_.data(), fds_.size(), &ts, nullptr);
+  }
+  if (!any && !step_anyway) return false;
+
+  // 2. Replies (late ones from the previous cycle first), measured before this step.
+  flushLate();
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (bus_off_[b]) continue;
+    const auto& motors = plan_.buses()[b].motors;
+    for (std::size_t k = 0; k < motors.size(); ++k)
+      if (addressed_[static_cast<std::size_t>(motors[k].joint_index)]) reply(b, k, faults_);
+  }
+  // 3. IMU last, 4. step.
+  sendImuAndStep();
   return true;
+}
+
+void SilDriverEmulator::runRealtimeCycle(double step_at) {
+  beginCycle();
+  flushLate();
+  for (;;) {
+    pollFrames(true);
+    const double now = rt::now();
+    if (now >= step_at) break;
+    const timespec ts{0, static_cast<long>(std::min(step_at - now, 1e-3) * 1e9)};
+    ::ppoll(fds_.data(), fds_.size(), &ts, nullptr);
+  }
+  sendImuAndStep();
 }
 
 }  // namespace pmg::hal::bus

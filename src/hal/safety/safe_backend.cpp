@@ -73,7 +73,7 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
     max_tau = std::max(max_tau, std::fabs(predictedTorque(sp, in_.q[j], in_.qd[j])) / sup_.options().joints[j].tau_max);
   }
   safe_.sequence = command.sequence;
-  const pmg::BackendStatus st = inner_->exchange(safe_, state);
+  pmg::BackendStatus st = inner_->exchange(safe_, state);
   last_ = state;  // the supervisor sees the raw replies (its watchdogs count the missing ones)
   if (bopt_.hold_missing) {
     const WatchdogOptions& w = sup_.options().watchdog;
@@ -93,6 +93,13 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
     } else if (now - imu_held_at_ <= w.imu_timeout_s) {
       state.imu = held_.imu;
       ++held_count_;
+    }
+    // A cycle in which nothing arrived but every value could be held is a partial cycle for the
+    // loop, not a backend fault; once a watchdog expires the fault passes through.
+    if (st == pmg::BackendStatus::kFault) {
+      bool all = true;
+      for (std::size_t j = 0; j < n; ++j) all = all && state.motors[j].valid;
+      if (all) st = pmg::BackendStatus::kPartial;
     }
   }
   ++cycles_;

@@ -41,7 +41,7 @@ fi
 run silent --silent-joint 3 --faults-after 4
 rc=$?
 [ "$rc" -eq 3 ] || { echo "silent motor: expected exit 3 (damping), got $rc"; fail=1; }
-grep -q "HAL safety: mode damping, fault motor reply timeout (joint 3)" "$out/silent.ctl.log" ||
+grep -q "HAL safety: mode damping, fault motor reply timeout (joint 3," "$out/silent.ctl.log" ||
   { echo "silent motor: damping cause not recorded"; cat "$out/silent.ctl.log"; fail=1; }
 [ $fail -eq 0 ] && echo "pmg_controller <-> pmg_sil over UDP CAN: clean and lossy runs active, silent motor -> damping (joint 3)"
 exit $fail

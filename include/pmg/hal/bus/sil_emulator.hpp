@@ -73,9 +73,14 @@ class SilDriverEmulator {
   /// ports; throws std::system_error naming the port if one is taken.
   SilDriverEmulator(const BusPlan& plan, std::unique_ptr<pmg::HalBackend> sim, std::uint16_t base_port);
 
-  /// One cycle. Returns false if no frame arrived before `timeout_s` and `step_anyway` is false (no
-  /// step); with `step_anyway` the physics advances regardless (free-running real-time SIL).
+  /// One lockstep cycle (steps 1-4 above). Returns false if no frame arrived before `timeout_s`
+  /// and `step_anyway` is false (no step); with `step_anyway` the physics advances regardless.
   bool runCycle(double timeout_s, bool step_anyway = false);
+  /// One real-time cycle: until the absolute CLOCK_MONOTONIC time `step_at` [s], answer every
+  /// command at once with the latest measured state (as a driver does, so the host's reply window
+  /// is met whatever the phase between the two clocks), then send the IMU frame and step the
+  /// physics. Call it with step_at advancing by the period.
+  void runRealtimeCycle(double step_at);
   /// Replace the active faults (thread-safe; taken at the start of the next cycle).
   void setFaults(const SilFaults& faults);
   /// Run `action` on the simulation at the start of the next cycle, on the SIL thread (thread-safe),
@@ -91,6 +96,10 @@ class SilDriverEmulator {
 
  private:
   void reply(std::size_t bus, std::size_t k, const SilFaults& f);
+  void beginCycle();
+  bool pollFrames(bool reply_now);
+  void flushLate();
+  void sendImuAndStep();
   BusPlan plan_;
   std::unique_ptr<pmg::HalBackend> sim_;
   std::vector<std::unique_ptr<UdpCanTransport>> buses_;

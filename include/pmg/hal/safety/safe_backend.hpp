@@ -16,7 +16,8 @@
 ///  4. with SafeBackendOptions::hold_missing, hands the loop the last valid reply of a motor (and the
 ///     last IMU sample) for a cycle in which it did not arrive, as long as that input's watchdog
 ///     has not expired: a single lost CAN frame is the HAL's business, not the loop's. Once the
-///     watchdog expires the loop sees valid = false (and the HAL is already in damping);
+///     watchdog expires the loop sees valid = false (and the HAL is already in damping). A cycle
+///     with no reply at all whose values could all be held is returned as kPartial, not kFault;
 ///  5. publishes a SafetyStatus for telemetry through a lock-free LatestValue.
 /// Time is counted in HAL cycles (now = cycle * period), so lockstep runs are deterministic and
 /// the watchdogs measure "cycles without news" exactly.
