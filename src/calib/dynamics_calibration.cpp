@@ -71,8 +71,8 @@ Spec spec_for(const std::string& p, const RigConfig& rig, const Scales& sc) {
     const double hi = std::max(20.0 * rig.armature_kgm2, 2.0 * rig.link_inertia_about_axis());
     return {p, 0.0, hi, rig.armature_kgm2, false};
   }
-  if (p == "fc_Nm") return {p, 0.0, 0.5 * tau_ref, 0.02 * tau_ref, false};
-  if (p == "fs_Nm") return {p, 0.0, 0.8 * tau_ref, 0.05 * tau_ref, false};
+  if (p == "fc_Nm") return {p, 0.0, tau_ref, 0.02 * tau_ref, false};
+  if (p == "fs_Nm") return {p, 0.0, 1.5 * tau_ref, 0.05 * tau_ref, false};
   if (p == "vs_rad_per_s") return {p, 0.002, 2.0, 0.05, true};
   if (p == "kl") return {p, 0.0, 0.6, 0.02, false};
   if (p == "fv_Nms_per_rad") return {p, 0.0, 2.0 * tau_ref / sc.w_peak, 0.02 * tau_ref / sc.w_peak, false};
