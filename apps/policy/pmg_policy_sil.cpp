@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   std::string clips_dir = "config/clips/g1", commands = "config/policies/eval_commands.yaml", out = "out/policy_sil";
   int seeds = 3;
   bool noise = true;
-  double duration = -1;
+  double duration = -1, frame_period = 0.1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract");
   app.add_option("--robot", robot_path, "robot config YAML");
   app.add_option("--clips", clips_dir, "PMG clip directory");
@@ -120,6 +120,7 @@ int main(int argc, char** argv) {
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
   app.add_option("--duration", duration, "override the sequence duration [s]");
   app.add_option("--out", out, "output directory");
+  app.add_option("--frame-period", frame_period, "period of the body-position log <out>/frames<k>.csv [s] (frame strips)");
   CLI11_PARSE(app, argc, argv);
   try {
     namespace pp = pmg::policy;
@@ -175,6 +176,11 @@ int main(int argc, char** argv) {
       for (int j = 0; j < na; ++j) csv << ",q" << j;
       for (int j = 0; j < na; ++j) csv << ",qref" << j;
       csv << "\n";
+      std::ofstream frames(out + "/frames" + std::to_string(seed) + ".csv");
+      frames << "t";
+      for (int b = 1; b < m->nbody; ++b) frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
+      frames << "\n";
+      const int frame_every = std::max(1, static_cast<int>(std::lround(frame_period / 0.01)));
       Totals tot;
       std::vector<double> buf(64);
       const int ticks = static_cast<int>(std::lround(T / 0.01));
@@ -258,6 +264,11 @@ int main(int argc, char** argv) {
         for (int j = 0; j < na; ++j) csv << ',' << state.motors[static_cast<std::size_t>(j)].q;
         for (int j = 0; j < na; ++j) csv << ',' << g.q_ref[j];
         csv << '\n';
+        if (k % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
+          frames << t;
+          for (int b = 1; b < m->nbody; ++b) frames << ',' << d->xpos[3 * b] << ' ' << d->xpos[3 * b + 1] << ' ' << d->xpos[3 * b + 2];
+          frames << '\n';
+        }
         tot.survived = t + 0.01;
         if (fallen) {
           tot.fell = true;
