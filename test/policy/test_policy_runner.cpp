@@ -128,5 +128,27 @@ TEST(PolicyRunner, TighterToleranceThanFloatNoiseStillPasses) {
   EXPECT_NO_THROW(PolicyRunner(kDataDir + "g1_legs_ok.onnx", g1Spec(), opt));
 }
 
+// The shipped, trained policy must stay consistent with the robot config (joint order, default
+// pose, PD gains, 100 Hz period): a change to config/robots/g1/g1.yaml that breaks it fails here,
+// which means the policy has to be retrained or re-exported.
+TEST(PolicyRunner, ShippedPolicyMatchesRobotConfig) {
+  PolicyRobotSpec spec = loadPolicyRobotSpec("config/robots/g1/g1.yaml", 0.01);
+  spec.pmg = {{"enabled", "true"}, {"gco", "false"}};
+  PolicyRunner runner("config/policies/g1_pmg_policy.onnx", spec);
+  EXPECT_EQ(runner.actionSize(), 12);
+  EXPECT_EQ(runner.observationSize(), 62);
+  EXPECT_LT(runner.referenceMaxAbsError(), 1e-5f);
+  // Standing observation at the default pose: finite actions within the tanh range.
+  std::vector<float> obs(62, 0.0f);
+  obs[5] = -1.0f;                      // projected gravity: upright
+  obs[11] = 0.78f;                     // command height [m] x scale 1
+  obs[61] = 1.0f;                      // cos(2*pi*phase) at phase 0
+  ASSERT_TRUE(runner.step(obs.data()).ok());
+  for (int i = 0; i < 12; ++i) {
+    EXPECT_TRUE(std::isfinite(runner.action()[i]));
+    EXPECT_LE(std::abs(runner.action()[i]), 1.0f);
+  }
+}
+
 }  // namespace
 }  // namespace pmg::policy::test
