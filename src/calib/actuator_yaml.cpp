@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-#include "pmg/calib/dynamics_calibration.hpp"
 
 namespace pmg::calib {
 namespace {
@@ -129,13 +128,27 @@ void write_actuator_file(const std::string& path, const ActuatorBlock& block, co
 }
 
 ActuatorBlock actuator_block_from_params(const RigConfig& rig, const std::map<std::string, double>& params) {
-  const RigParams rp = rig_params_from(rig, params);
+  auto get = [&](const char* k, double dflt) {
+    const auto it = params.find(k);
+    return it == params.end() ? dflt : it->second;
+  };
   ActuatorBlock b;
-  b.params = rp.act;
-  b.params.rate_hz = rig.rate_hz;
-  b.armature_kgm2 = rp.armature_kgm2;
-  b.kp_scale = rp.kp_scale;
-  b.kd_scale = rp.kd_scale;
+  ActuatorParams& a = b.params;
+  a.rate_hz = rig.rate_hz;
+  a.torque_limit_Nm = get("tau_max_Nm", rig.torque_limit_Nm);
+  a.tau_stall_Nm = get("tau_stall_Nm", 0.0);
+  a.w_max_rad_per_s = get("w_max_rad_per_s", 0.0);
+  a.fc_Nm = get("fc_Nm", 0.0);
+  a.fs_Nm = get("fs_Nm", 0.0);
+  a.vs_rad_per_s = get("vs_rad_per_s", 0.1);
+  a.kl = get("kl", 0.0);
+  a.fv_Nms_per_rad = get("fv_Nms_per_rad", 0.0);
+  a.delay_s = get("delay_s", 0.0);
+  a.offset_rad = get("offset_rad", 0.0);
+  a.backlash_gap_rad = get("gap_rad", 0.0);
+  b.armature_kgm2 = get("armature", rig.armature_kgm2);
+  b.kp_scale = get("kp_scale", 1.0);
+  b.kd_scale = get("kd_scale", 1.0);
   return b;
 }
 
