@@ -43,7 +43,8 @@ class OnnxSession {
   /// Binds a float32 output tensor over `data` (ORT writes the result there at each run()).
   void bindOutput(const std::string& name, float* data, const std::vector<std::int64_t>& shape);
 
-  /// Runs the bound graph once. Real-time path: noexcept, no exceptions escape.
+  /// Runs the bound graph once. Real-time path: noexcept, no exceptions escape; ONNX Runtime
+  /// allocates a few small bookkeeping objects per run (test_policy_alloc counts them).
   /// @return true on success; on failure errorMessage() holds ORT's message (truncated).
   bool run() noexcept;
   /// Last run() error text ("" after a success). Fixed buffer, no allocation.

@@ -10,8 +10,11 @@
 ///   5. re-runs every stored reference pair and refuses to start if any action element differs
 ///      beyond |a - a_ref| <= atol + rtol * |a_ref|;
 ///   6. runs `warmup_runs` inferences so the first real tick pays no lazy initialisation.
-/// Loop: step() is noexcept, allocation-free (test/policy proves it with an operator-new
-/// counter) and returns a status; on any failure it keeps the last good action and counts it.
+/// Loop: step() is noexcept, takes no locks, does no I/O and returns a status; on any failure it
+/// keeps the last good action and counts it. pmg's code in step() allocates nothing; ONNX
+/// Runtime 1.24's Run itself performs a constant 16 small operator-new calls per inference
+/// (execution-frame bookkeeping; tensors are the bound buffers). test_policy_alloc pins both
+/// facts; docs/policy.md discusses the consequence for the real-time loop.
 ///
 /// Action -> targets (actuated order): q_des[i] = offset[i] + scale[i] * clamp(a[i], ±clip) [rad].
 
@@ -68,7 +71,8 @@ class PolicyRunner {
   int observationSize() const noexcept { return static_cast<int>(input_.size()); }
   int actionSize() const noexcept { return static_cast<int>(output_.size()); }
 
-  /// One actor inference. Real-time path: noexcept, no allocation.
+  /// One actor inference. Real-time path: noexcept; allocations only inside ONNX Runtime's Run
+  /// (see the file comment).
   /// @param obs (observationSize() x 1) actor input, already scaled (ObservationAssembler::data()).
   PolicyStepStatus step(const float* obs) noexcept;
 
