@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
   std::string model_path = "config/policies/g1_pmg_policy.onnx", robot_path = "config/robots/g1/g1.yaml";
   std::string clips_dir = "config/clips/g1", commands = "config/policies/eval_commands.yaml", out = "out/policy_sil";
   int seeds = 3;
-  bool noise = true;
+  bool noise = true, native = false;
   double duration = -1, frame_period = 0.1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract");
   app.add_option("--robot", robot_path, "robot config YAML");
@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
   app.add_option("--commands", commands, "command sequence YAML");
   app.add_option("--seeds", seeds, "runs (seed k perturbs the initial pose and phase, and the sensor noise)")->check(CLI::Range(1, 100));
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
+  app.add_option("--native", native, "evaluate the actor with the allocation-free native backend instead of ONNX Runtime");
   app.add_option("--duration", duration, "override the sequence duration [s]");
   app.add_option("--out", out, "output directory");
   app.add_option("--frame-period", frame_period, "period of the body-position log <out>/frames<k>.csv [s] (frame strips)");
@@ -130,7 +131,9 @@ int main(int argc, char** argv) {
     const auto gen_model = std::make_shared<const pmg::GeneratorModel>(pmg::loadClipLibrary(clips_dir, robot), jointSpaceOf(robot));
     pp::PolicyRobotSpec spec = pp::makePolicyRobotSpec(robot, 0.01);
     spec.pmg = {{"enabled", "true"}, {"gco", "false"}};
-    pp::PolicyRunner runner(model_path, spec);
+    pp::PolicyRunnerOptions ropt;
+    ropt.backend = native ? pp::PolicyBackend::kNative : pp::PolicyBackend::kOnnxRuntime;
+    pp::PolicyRunner runner(model_path, spec, ropt);
     const auto& contract = runner.contract();
     pp::LimbSeparation split(contract);
     std::filesystem::create_directories(out);

@@ -1,5 +1,6 @@
-// Latency of the policy tick: PolicyRunner::step (ONNX Runtime, 1 thread) for the committed test
-// actors, plus observation assembly and limb separation. Prints p50 / p99 / max per call in
+// Latency of the policy tick: PolicyRunner::step with each backend (ONNX Runtime with 1 thread,
+// and the allocation-free native evaluator) for the committed actors, plus observation assembly
+// and limb separation. Prints p50 / p99 / max per call in
 // microseconds over N calls after warm-up (run from the repository root):
 //   build-policy/bin/bench_policy_latency [--iterations 20000]
 #include <algorithm>
@@ -24,9 +25,11 @@ void report(const char* what, std::vector<double>& us) {
   std::printf("%-44s n=%zu  p50 %8.2f us  p99 %8.2f us  max %8.2f us\n", what, us.size(), at(0.5), at(0.99), us.back());
 }
 
-void benchModel(const std::string& path, const pmg::policy::PolicyRobotSpec& spec, int n) {
+void benchModel(const std::string& path, const pmg::policy::PolicyRobotSpec& spec, int n, bool native) {
   using namespace pmg::policy;
-  PolicyRunner runner(path, spec);
+  PolicyRunnerOptions opt;
+  opt.backend = native ? PolicyBackend::kNative : PolicyBackend::kOnnxRuntime;
+  PolicyRunner runner(path, spec, opt);
   ObservationAssembler obs(runner.contract().observation);
   LimbSeparation split(runner.contract());
   JointCommand cmd;
@@ -48,8 +51,9 @@ void benchModel(const std::string& path, const pmg::policy::PolicyRobotSpec& spe
     t_step.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
     t_tick.push_back(std::chrono::duration<double, std::micro>(t3 - t0).count());
   }
-  std::printf("%s: obs %d, actions %d\n", path.c_str(), runner.observationSize(), runner.actionSize());
-  report("  PolicyRunner::step (ONNX Runtime)", t_step);
+  std::printf("%s: obs %d, actions %d, backend %s\n", path.c_str(), runner.observationSize(), runner.actionSize(),
+              native ? "native" : "ONNX Runtime");
+  report("  PolicyRunner::step", t_step);
   report("  full tick (assemble + step + compose)", t_tick);
 }
 
@@ -66,7 +70,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     auto spec = pmg::policy::loadPolicyRobotSpec(robot, 0.01);
-    for (const auto& m : models) benchModel(m, spec, n);
+    for (const auto& m : models) {
+      benchModel(m, spec, n, false);
+      benchModel(m, spec, n, true);
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

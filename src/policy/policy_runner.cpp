@@ -98,10 +98,35 @@ PolicyRunner::PolicyRunner(const std::string& onnx_path, const PolicyRobotSpec& 
       reference_max_abs_error_ = std::max(reference_max_abs_error_, err);
     }
   }
+  if (options.backend == PolicyBackend::kNative) {
+    native_ = std::make_unique<NativeGraph>(onnx_path, in.name, out.name, static_cast<int>(n_obs));
+    if (native_->outputSize() != n_act) {
+      throw std::runtime_error(onnx_path + ": native backend computes " + std::to_string(native_->outputSize()) +
+                               " outputs, contract has " + std::to_string(n_act));
+    }
+    std::vector<float> ours(output_.size());
+    for (std::size_t p = 0; p < contract_.reference_pairs.size(); ++p) {
+      const ReferencePair& ref = contract_.reference_pairs[p];
+      std::copy(ref.obs.begin(), ref.obs.end(), input_.begin());
+      if (!session_->run()) throw std::runtime_error(onnx_path + ": inference failed: " + session_->errorMessage());
+      native_->run(input_.data(), ours.data());
+      for (std::size_t i = 0; i < ours.size(); ++i) {
+        const float tol_ref = options.reference_atol + options.reference_rtol * std::abs(ref.action[i]);
+        const float tol_ort = options.reference_atol + options.reference_rtol * std::abs(output_[i]);
+        if (!(std::abs(ours[i] - ref.action[i]) <= tol_ref) || !(std::abs(ours[i] - output_[i]) <= tol_ort)) {
+          std::ostringstream o;
+          o.precision(9);
+          o << "native backend gives " << ours[i] << ", ONNX Runtime " << output_[i] << ", stored action " << ref.action[i];
+          throw ContractError(onnx_path, "reference_pairs[" + std::to_string(p) + "].action[" + std::to_string(i) + "] (native backend)", o.str());
+        }
+      }
+    }
+  }
   for (int w = 0; w < options.warmup_runs; ++w) {
     const ReferencePair& ref = contract_.reference_pairs[static_cast<std::size_t>(w) % contract_.reference_pairs.size()];
     std::copy(ref.obs.begin(), ref.obs.end(), input_.begin());
     if (!session_->run()) throw std::runtime_error(onnx_path + ": warm-up inference failed: " + session_->errorMessage());
+    if (native_) native_->run(input_.data(), output_.data());
   }
   resetAction();
 }
@@ -125,10 +150,13 @@ PolicyStepStatus PolicyRunner::step(const float* obs) noexcept {
   if (!allFinite(input_)) {
     ++counters_.nonfinite_observation;
     status.code = PolicyStepCode::kNonFiniteObservation;
+  } else if (native_) {
+    native_->run(input_.data(), output_.data());
   } else if (!session_->run()) {
     ++counters_.inference_errors;
     status.code = PolicyStepCode::kInferenceError;
-  } else if (!allFinite(output_)) {
+  }
+  if (status.ok() && !allFinite(output_)) {
     ++counters_.nonfinite_action;
     status.code = PolicyStepCode::kNonFiniteAction;
   }

@@ -135,5 +135,31 @@ TEST(PolicyAllocation, FullTickAllocatesOnlyWhatOnnxRuntimeRunDoes) {
   EXPECT_EQ(runner.counters().steps, static_cast<std::uint64_t>(kTicks));
 }
 
+// With the native backend the whole tick, inference included, allocates nothing.
+TEST(PolicyAllocation, NativeBackendTickIsAllocationFree) {
+  PolicyRunnerOptions opt;
+  opt.backend = PolicyBackend::kNative;
+  PolicyRunner runner(kDataDir + "g1_legs_512_256_128.onnx", g1Spec(), opt);
+  ObservationAssembler obs(runner.contract().observation);
+  LimbSeparation split(runner.contract());
+  JointCommand cmd;
+  cmd.resize(split.numJoints());
+  std::vector<double> raw(64, 0.0), upper_q(29, 0.0);
+  long allocations = 0;
+  {
+    Counting c;
+    for (int tick = 0; tick < 200; ++tick) {
+      for (double& r : raw) r = 0.01 * tick;
+      for (int i = 0; i < static_cast<int>(runner.contract().observation.terms.size()); ++i) obs.setTerm(i, raw.data());
+      ASSERT_TRUE(obs.commit());
+      ASSERT_TRUE(runner.step(obs.data()).ok());
+      split.compose(runner.jointTargets(), upper_q.data(), nullptr, cmd);
+    }
+    allocations = c.count();
+  }
+  EXPECT_EQ(allocations, 0) << "operator new calls in 200 ticks with the native backend";
+  EXPECT_EQ(runner.counters().steps, 200u);
+}
+
 }  // namespace
 }  // namespace pmg::policy::test

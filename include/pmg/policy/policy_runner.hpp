@@ -9,7 +9,9 @@
 ///   4. preallocates input/output buffers and binds them once;
 ///   5. re-runs every stored reference pair and refuses to start if any action element differs
 ///      beyond |a - a_ref| <= atol + rtol * |a_ref|;
-///   6. runs `warmup_runs` inferences so the first real tick pays no lazy initialisation.
+///   6. runs `warmup_runs` inferences so the first real tick pays no lazy initialisation;
+///   7. with PolicyBackend::kNative: builds the allocation-free NativeGraph and requires it to
+///      reproduce both ONNX Runtime and the reference actions to the same tolerance.
 /// Loop: step() is noexcept, takes no locks, does no I/O and returns a status; on any failure it
 /// keeps the last good action and counts it. pmg's code in step() allocates nothing; ONNX
 /// Runtime 1.24's Run itself performs a constant 16 small operator-new calls per inference
@@ -24,11 +26,19 @@
 #include <vector>
 
 #include "pmg/policy/contract.hpp"
+#include "pmg/policy/native_graph.hpp"
 #include "pmg/policy/onnx_session.hpp"
 
 namespace pmg::policy {
 
+/// Which engine evaluates the actor in step(). Both are set up and cross-checked at load.
+enum class PolicyBackend : std::uint8_t {
+  kOnnxRuntime = 0,  ///< ONNX Runtime C API (IoBinding); allocates a little inside Run
+  kNative,           ///< NativeGraph: allocation-free, supports the exporter's op set only
+};
+
 struct PolicyRunnerOptions {
+  PolicyBackend backend = PolicyBackend::kOnnxRuntime;
   int warmup_runs = 20;          ///< inferences run at setup, >= 0
   float reference_atol = 1e-5f;  ///< absolute tolerance on reference actions, > 0
   float reference_rtol = 1e-4f;  ///< relative tolerance on reference actions, >= 0
@@ -95,6 +105,7 @@ class PolicyRunner {
   void updateTargets() noexcept;
 
   std::unique_ptr<OnnxSession> session_;
+  std::unique_ptr<NativeGraph> native_;  // set iff options.backend == kNative
   PolicyContract contract_;
   std::vector<float> input_;   // bound to the graph input
   std::vector<float> output_;  // bound to the graph output

@@ -99,6 +99,22 @@ def main():
               extra_metadata={"pmg.contract": "version: 1\njoint_names: [a, b\n"})
     gn, cn, _ = build(1, legs, False, 1, nan_model=True)
     save_onnx(os.path.join(OUT, "nan_output.onnx"), gn, cn)
+    # A graph with an op the native backend does not implement (Softplus): ORT runs it, the
+    # native backend must refuse it at load, naming the op.
+    import onnx
+    from onnx import helper
+    gs = copy.deepcopy(g)
+    out = gs.output[0].name
+    for node in gs.node:
+        if out in node.output:
+            node.output[0] = "pre_softplus"
+    gs.node.append(helper.make_node("Softplus", ["pre_softplus"], [out]))
+    cs = copy.deepcopy(c)
+    _, _, layers = build(1, legs, False, 1)
+    for pair in cs["reference_pairs"]:
+        a = np.asarray(pair["action"], np.float32)
+        pair["action"] = [float(v) for v in np.log1p(np.exp(a)).astype(np.float32)]
+    save_onnx(os.path.join(OUT, "softplus_ok_for_ort.onnx"), gs, cs)
     # Actor of the usual deployed size (512-256-128 ELU/tanh MLP) for bench/policy.
     gb, cb, _ = build(3, legs, False, 1, hidden=(512, 256, 128))
     save_onnx(os.path.join(OUT, "g1_legs_512_256_128.onnx"), gb, cb)
