@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
   std::string clips_dir = "config/clips/g1";
   std::string gco_config;
   std::string out_dir;
-  double seconds = 8.0, warmup = 3.0, dt = 0.01;
+  double seconds = 5.0, warmup = 2.0, dt = 0.01;  // the grid of docs/gco.md
   std::vector<double> vx{-0.6, -0.3, 0.0, 0.3, 0.6, 0.9}, vy{0.0, 0.3}, wz{-0.6, 0.0, 0.6};
   std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
   std::vector<double> trace{0.6, 0.0, 0.0}, trace_posture{0.0, 0.0, 0.0};
@@ -164,6 +164,8 @@ int main(int argc, char** argv) {
     double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
     double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
     int n_walk = 0, n_all = 0;
+    std::vector<double> h_sum0(height.size(), 0.0), h_sumG(height.size(), 0.0);
+    std::vector<int> h_n(height.size(), 0);
     std::uint64_t failures = 0, jump_limited = 0, ticks = 0;
     for (double a : vx)
       for (double b : vy)
@@ -195,6 +197,10 @@ int main(int argc, char** argv) {
                            << sG.mean_double_support_speed << '\n';
                 }
                 ++n_all;
+                const auto hi = static_cast<std::size_t>(std::find(height.begin(), height.end(), h) - height.begin());
+                h_sum0[hi] += s0.mean_height_error;
+                h_sumG[hi] += sG.mean_height_error;
+                ++h_n[hi];
                 sum_spd0 += s0.mean_stance_speed;
                 sum_spdG += sG.mean_stance_speed;
                 sum_h0 += s0.mean_height_error;
@@ -228,6 +234,11 @@ int main(int argc, char** argv) {
                 1e3 * sum_dsG / n_all);
     std::printf("  stance height error     without GCO %8.2f mm     with GCO %8.3f mm (max %.3f mm)\n",
                 1e3 * sum_h0 / n_all, 1e3 * sum_hG / n_all, 1e3 * max_hG);
+    for (std::size_t i = 0; i < height.size(); ++i)
+      if (h_n[i] > 0)
+        std::printf("    height command %-8s    without GCO %8.2f mm     with GCO %8.3f mm (%d commands)\n",
+                    height[i] > 0.0 ? (std::to_string(height[i]).substr(0, 4) + " m").c_str() : "standing",
+                    1e3 * h_sum0[i] / h_n[i], 1e3 * h_sumG[i] / h_n[i], h_n[i]);
     std::printf("  kinematic consistency: mean |v implied by stance feet - commanded v|: without %.3f m/s, with %.3f m/s\n",
                 sum_cons0 / n_all, sum_consG / n_all);
     std::printf("  GCO solver failures %llu, jump-limited ticks %llu of %llu\n",

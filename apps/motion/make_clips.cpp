@@ -9,6 +9,8 @@
 /// sweep (static) → clip file. Mirrored clips use the robot's mirror map. Writes
 /// <out>/report.md (per-clip retargeting quality) and, with --csv-dir, per-clip keypoint CSVs for
 /// scripts/motion_plot_retarget.py.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -89,6 +91,26 @@ std::string statsLine(const RetargetStats& st) {
                      st.stances, st.penetration_max_mm);
 }
 
+/// Sole tracks of a built clip (phase, height [m], speed [m/s], contact label per foot) as CSV.
+void writeSoleTracks(const DynamicClip& clip, const KinematicModel& model, const std::string& path) {
+  const ClipSoleTracks t = clipSoleTracks(clip, model);
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  f << "phase,height_left,speed_left,contact_left,height_right,speed_right,contact_right,relative_speed\n";
+  const Eigen::Index N = t.height.rows();
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const double phi = static_cast<double>(k) / static_cast<double>(N);
+    f << fmt::format("{:.6f}", phi);
+    for (std::size_t ft = 0; ft < kNumFeet; ++ft) {
+      const double d = std::abs(phi - clip.contact[ft].mu), dist = std::min(d, 1.0 - d);
+      const bool c = dist < clip.contact[ft].sigma || clip.contact[ft].sigma >= 0.5;
+      f << fmt::format(",{:.6f},{:.6f},{}", t.height(k, static_cast<Eigen::Index>(ft)), t.speed(k, static_cast<Eigen::Index>(ft)),
+                       c ? 1 : 0);
+    }
+    f << fmt::format(",{:.6f}\n", t.relative_speed(k));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -98,6 +120,8 @@ int main(int argc, char** argv) {
   app.add_option("--robot", robot_yaml, "robot config YAML");
   app.add_option("--out", out_dir, "output directory for the clip files and report.md");
   app.add_option("--csv-dir", csv_dir, "also write per-clip retargeting keypoint CSVs here");
+  std::string tracks_dir;
+  app.add_option("--sole-tracks-dir", tracks_dir, "also write per-clip sole height/speed CSVs (phase, labels) here");
   CLI11_PARSE(app, argc, argv);
 
   // The clip set (built with push_back of named specs: GCC 12 warns falsely on nested brace
@@ -148,6 +172,7 @@ int main(int argc, char** argv) {
   posture("bend", "cmu_bvh/cmu_115_01_bend_at_waist_excerpt.bvh", 0.0, 1.35, PostureAxis::kPitch,
           "CMU 115_01 forward bend at the waist (pick up a box), upright to trunk horizontal at t = 1.35 s");
 
+  const RobotContactOptions robot_contacts;
   try {
     const RobotConfig robot = loadRobotConfig(robot_yaml);
     const KinematicModel model(robot);
@@ -161,7 +186,9 @@ int main(int argc, char** argv) {
     std::map<std::string, DynamicClip> built;
     for (const DynamicSpec& spec : dynamic_specs) {
       const HumanMotion human = load(data_root, spec.source);
-      const RetargetResult res = retargetKeypoints(human, model);
+      KeypointRetargetOptions rt_opt;
+      rt_opt.level_pelvis = true;  // played with a level pelvis (clip format: no pelvis orientation)
+      const RetargetResult res = retargetKeypoints(human, model, rt_opt);
       RobotMotion rm = res.motion;
       rm.source_file = spec.source.file;
       CycleWindow window;
@@ -175,6 +202,10 @@ int main(int argc, char** argv) {
       opt.name = spec.name;
       opt.axis = spec.axis;
       DynamicClip clip = buildDynamicClip(rm, res.contacts, window, robot, opt);
+      // Stance = the robot sole low and still as the generator plays the clip (the human labels
+      // of the retargeting start stance while the robot sole is still up and moving).
+      relabelContactsFromRobotFeet(clip, model, robot_contacts);
+      if (!tracks_dir.empty()) writeSoleTracks(clip, model, tracks_dir + "/" + spec.name + "_soles.csv");
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin = window.begin + offset;
       clip.meta.frame_end = window.end + offset;
@@ -182,9 +213,11 @@ int main(int argc, char** argv) {
       clip.meta.provenance = "mocap";
       clip.meta.retargeting = "ceres_keypoints_v1";
       const RetargetStats st = retargetStats(res, robot, window.begin, window.end + 1);
-      clip.meta.notes = fmt::format("{}; scale {:.3f}; phase 0 = left-foot touchdown; contacts from the human feet (height < "
-                                    "0.03 m above flat, speed < 0.5 m/s); {}",
-                                    spec.notes, res.scale, statsLine(st));
+      clip.meta.notes = fmt::format("{}; scale {:.3f}; phase 0 = left-foot touchdown; contacts from the robot soles (level "
+                                    "pelvis; touchdown < {} m above the lower sole, lift-off > {} m; double support only while the "
+                                    "soles slide < {}/{} m/s against each other); {}",
+                                    spec.notes, res.scale, robot_contacts.enter_height, robot_contacts.exit_height,
+                                    robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st));
       validateClip(clip, robot, spec.name);
       writeClip(clip, out_dir + "/" + spec.name + ".yaml");
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);
@@ -207,7 +240,11 @@ int main(int argc, char** argv) {
     }
     for (const StaticSpec& spec : static_specs) {
       const HumanMotion human = load(data_root, spec.source);
-      const RetargetResult res = retargetKeypoints(human, model);
+      // The height template is played with a level pelvis like the dynamic clips; the pitch
+      // template needs the pelvis tilt (the waist pitch alone reaches 0.52 rad, the bend 1.31 rad).
+      KeypointRetargetOptions rt_opt;
+      rt_opt.level_pelvis = spec.axis == PostureAxis::kHeight;
+      const RetargetResult res = retargetKeypoints(human, model, rt_opt);
       RobotMotion rm = res.motion;
       rm.source_file = spec.source.file;
       const Eigen::VectorXd values = postureValues(rm, model, spec.axis);
@@ -221,6 +258,8 @@ int main(int argc, char** argv) {
       opt.name = spec.name;
       opt.axis = spec.axis;
       StaticClip clip = buildStaticClip(rm, values, 0, static_cast<int>(extreme), robot, opt);
+      // A posture template moves both legs alike: average with its left/right mirror.
+      symmetrizeStaticClip(clip, robot);
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin += offset;
       clip.meta.frame_end += offset;
@@ -228,7 +267,7 @@ int main(int argc, char** argv) {
       clip.meta.provenance = "mocap";
       clip.meta.retargeting = "ceres_keypoints_v1";
       const RetargetStats st = retargetStats(res, robot, 0, static_cast<int>(extreme) + 1);
-      clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; {}", spec.notes, res.scale,
+      clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; joints averaged with their left/right mirror (symmetric posture); {}", spec.notes, res.scale,
                                     spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", statsLine(st));
       validateClip(clip, robot, spec.name);
       writeClip(clip, out_dir + "/" + spec.name + ".yaml");

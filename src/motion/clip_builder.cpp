@@ -412,3 +412,159 @@ StaticClip buildStaticClip(const RobotMotion& motion, const Eigen::VectorXd& val
 }
 
 }  // namespace pmg::motion
+
+namespace pmg::motion {
+
+void RobotContactOptions::validate() const {
+  if (!(enter_height > 0.0) || !std::isfinite(enter_height))
+    throw std::invalid_argument(fmt::format("RobotContactOptions.enter_height = {}: expected finite > 0 [m]", enter_height));
+  if (!(exit_height >= enter_height) || !std::isfinite(exit_height))
+    throw std::invalid_argument(
+        fmt::format("RobotContactOptions.exit_height = {}: expected finite >= enter_height = {} [m]", exit_height, enter_height));
+  if (!(enter_relative_speed > 0.0) || !std::isfinite(enter_relative_speed))
+    throw std::invalid_argument(
+        fmt::format("RobotContactOptions.enter_relative_speed = {}: expected finite > 0 [m/s]", enter_relative_speed));
+  if (!(exit_relative_speed >= enter_relative_speed) || !std::isfinite(exit_relative_speed))
+    throw std::invalid_argument(fmt::format(
+        "RobotContactOptions.exit_relative_speed = {}: expected finite >= enter_relative_speed = {} [m/s]", exit_relative_speed,
+        enter_relative_speed));
+}
+
+ClipSoleTracks clipSoleTracks(const DynamicClip& clip, const KinematicModel& model) {
+  const Eigen::Index N = clip.q.rows();
+  if (clip.q.cols() != static_cast<Eigen::Index>(model.config().numJoints()))
+    throw std::invalid_argument(fmt::format("clipSoleTracks({}): clip has {} joints, robot config {}", clip.name, clip.q.cols(),
+                                            model.config().numJoints()));
+  if (N < 3 || clip.v_base.rows() != N || clip.omega_base.rows() != N || clip.base_height.size() != N || !(clip.period > 0))
+    throw std::invalid_argument(fmt::format("clipSoleTracks({}): expected >= 3 samples with matching base tracks and period > 0",
+                                            clip.name));
+  Eigen::Vector3d p_FS = Eigen::Vector3d::Zero();
+  for (const auto& s : g1SolePoints_F()) p_FS += 0.25 * s;
+  const LimbChain legs[2] = {model.leftLeg(), model.rightLeg()};
+  ChainFkWorkspace ws_left(legs[0]), ws_right(legs[1]);
+  ChainFkWorkspace* ws[2] = {&ws_left, &ws_right};
+  // Sole centre relative to the pelvis, level pelvis: p_BS = p_HS (H axes), per sample and foot.
+  std::array<Eigen::MatrixXd, 2> r{Eigen::MatrixXd(N, 3), Eigen::MatrixXd(N, 3)};
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const Eigen::VectorXd q = clip.q.row(k).transpose();
+    for (int f = 0; f < 2; ++f) {
+      Eigen::Isometry3d X_BF;
+      if (!ws[f]->tipPose(q, X_BF))
+        throw std::runtime_error(fmt::format("clipSoleTracks({}): KDL forward kinematics failed at sample {}", clip.name, k));
+      r[static_cast<std::size_t>(f)].row(k) = (X_BF * p_FS).transpose();
+    }
+  }
+  ClipSoleTracks t;
+  t.height.resize(N, 2);
+  t.speed.resize(N, 2);
+  t.relative_speed.resize(N);
+  const double h = clip.period / static_cast<double>(N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const double zl = r[0](k, 2), zr = r[1](k, 2), z_ground = std::min(zl, zr);
+    const double wz = clip.omega_base(k, 2);
+    Eigen::Vector2d v_feet[2];
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::MatrixXd& rf = r[static_cast<std::size_t>(f)];
+      t.height(k, f) = rf(k, 2) - z_ground;
+      // v_S = v_B + ω_z e_z × r + d r / dt (H axes), horizontal part.
+      const Eigen::Vector2d dr = (rf.row((k + 1) % N).head<2>() - rf.row((k + N - 1) % N).head<2>()).transpose() / (2.0 * h);
+      const Eigen::Vector2d v(clip.v_base(k, 0) - wz * rf(k, 1) + dr.x(), clip.v_base(k, 1) + wz * rf(k, 0) + dr.y());
+      t.speed(k, f) = v.norm();
+      v_feet[f] = v;
+    }
+    t.relative_speed(k) = (v_feet[0] - v_feet[1]).norm();
+  }
+  return t;
+}
+
+std::array<std::vector<bool>, kNumFeet> robotContactLabels(const ClipSoleTracks& tracks, const RobotContactOptions& options) {
+  options.validate();
+  const Eigen::Index N = tracks.height.rows();
+  if (N == 0 || tracks.height.cols() != 2 || tracks.speed.rows() != N || tracks.relative_speed.size() != N)
+    throw std::invalid_argument(fmt::format("robotContactLabels: {} height rows, {} speed rows, {} relative speeds: expected "
+                                            "equal sizes > 0 and two feet",
+                                            N, tracks.speed.rows(), tracks.relative_speed.size()));
+  std::array<std::vector<bool>, kNumFeet> out{std::vector<bool>(static_cast<std::size_t>(N)),
+                                              std::vector<bool>(static_cast<std::size_t>(N))};
+  std::array<bool, kNumFeet> c{false, false};
+  std::array<long, kNumFeet> since{0, 0};  // sample index (over both laps) where the stance started
+  for (int lap = 0; lap < 2; ++lap)
+    for (Eigen::Index k = 0; k < N; ++k) {
+      const long t = lap * static_cast<long>(N) + static_cast<long>(k);
+      const double s_rel = tracks.relative_speed(k);
+      for (int f = 0; f < 2; ++f)  // rule 1
+        if (c[static_cast<std::size_t>(f)] && !(tracks.height(k, f) < options.exit_height)) c[static_cast<std::size_t>(f)] = false;
+      if (c[0] && c[1] && !(s_rel < options.exit_relative_speed)) {  // rule 2: the older stance ends
+        const std::size_t older = since[0] <= since[1] ? 0 : 1;
+        c[older] = false;
+      }
+      for (int f = 0; f < 2; ++f) {  // rule 3
+        const auto F = static_cast<std::size_t>(f);
+        if (c[F] || !(tracks.height(k, f) < options.enter_height)) continue;
+        if (!c[1 - F] || s_rel < options.enter_relative_speed) {
+          c[F] = true;
+          since[F] = t;
+        }
+      }
+      if (lap == 1)
+        for (std::size_t f = 0; f < kNumFeet; ++f) out[f][static_cast<std::size_t>(k)] = c[f];
+    }
+  return out;
+}
+
+void rotateClipPhase(DynamicClip& clip, Eigen::Index shift) {
+  const Eigen::Index N = clip.q.rows();
+  if (N == 0) return;
+  shift = ((shift % N) + N) % N;
+  if (shift == 0) return;
+  auto rotate = [&](Eigen::MatrixXd& x) {
+    const Eigen::MatrixXd y = x;
+    for (Eigen::Index k = 0; k < N; ++k) x.row(k) = y.row((k + shift) % N);
+  };
+  rotate(clip.q);
+  rotate(clip.qd);
+  rotate(clip.v_base);
+  rotate(clip.omega_base);
+  Eigen::MatrixXd hgt = clip.base_height;
+  rotate(hgt);
+  clip.base_height = hgt.col(0);
+  const double dphi = static_cast<double>(shift) / static_cast<double>(N);
+  for (auto& c : clip.contact) {
+    c.mu -= dphi;
+    c.mu -= std::floor(c.mu);
+    if (c.mu >= 1.0) c.mu = 0.0;
+  }
+}
+
+void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model, const RobotContactOptions& options) {
+  options.validate();
+  const ClipSoleTracks tracks = clipSoleTracks(clip, model);
+  const Eigen::Index N = clip.q.rows();
+  const auto labels = robotContactLabels(tracks, options);
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    const std::vector<bool>& flags = labels[f];
+    if (std::none_of(flags.begin(), flags.end(), [](bool b) { return b; }))
+      throw std::runtime_error(fmt::format("relabelContactsFromRobotFeet({}): the {} sole is never in contact (never within {} m "
+                                           "of the lower sole)",
+                                           clip.name, footName(static_cast<Foot>(f)), options.enter_height));
+    clip.contact[f] = contactModel(flags);
+  }
+  // φ = 0 at the left foot's touchdown (start of its contact interval), as in every shipped clip.
+  double start = clip.contact[0].mu - clip.contact[0].sigma;
+  start -= std::floor(start);
+  rotateClipPhase(clip, static_cast<Eigen::Index>(std::lround(start * static_cast<double>(N))) % N);
+}
+
+void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot) {
+  const auto n = static_cast<Eigen::Index>(robot.numJoints());
+  if (clip.q.cols() != n)
+    throw std::invalid_argument(fmt::format("symmetrizeStaticClip({}): clip has {} joints, robot config {}", clip.name, clip.q.cols(), n));
+  const std::vector<int> mirror = robot.mirrorIndex();
+  const Eigen::MatrixXd q = clip.q;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double sign = robot.joints[static_cast<std::size_t>(j)].mirror_sign;
+    clip.q.col(j) = 0.5 * (q.col(j) + sign * q.col(mirror[static_cast<std::size_t>(j)]));
+  }
+}
+
+}  // namespace pmg::motion

@@ -418,6 +418,7 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
     if (k == 0) {
       const Eigen::Vector3d rpy = matrixToRpy(t.R_pelvis);
       base << t.p[0].x(), t.p[0].y(), t.p[0].z(), rpy.x(), rpy.y(), rpy.z();
+      if (options.level_pelvis) base(3) = base(4) = 0.0;
     } else {
       // Keep yaw continuous: the solver's yaw stays near the previous one.
       base(5) = wrapTo(base(5), base(5));
@@ -429,6 +430,7 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
     cost->SetNumResiduals(functor->numResiduals());
     ceres::Problem problem;
     problem.AddResidualBlock(cost, nullptr, base.data(), q.data());
+    if (options.level_pelvis) problem.SetManifold(base.data(), new ceres::SubsetManifold(kBaseDim, {3, 4}));
     for (Eigen::Index j = 0; j < n; ++j) {
       q(j) = std::min(upper(j), std::max(lower(j), q(j)));
       problem.SetParameterLowerBound(q.data(), static_cast<int>(j), lower(j));

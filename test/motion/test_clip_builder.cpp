@@ -1,6 +1,9 @@
 // Clip building: contact segmentation on a motion with known contacts, gait-cycle cutting, the
 // contact model {μ, σ}, periodic helpers, and mirroring.
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -107,3 +110,123 @@ TEST(ClipBuilder, MirrorSwapsSidesAndIsAnInvolution) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace pmg;
+using namespace pmg::motion;
+
+ClipSoleTracks tracksOf(const std::vector<double>& hl, const std::vector<double>& hr, const std::vector<double>& rel) {
+  ClipSoleTracks t;
+  const auto N = static_cast<Eigen::Index>(hl.size());
+  t.height.resize(N, 2);
+  t.speed.setZero(N, 2);
+  t.relative_speed.resize(N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    t.height(k, 0) = hl[static_cast<std::size_t>(k)];
+    t.height(k, 1) = hr[static_cast<std::size_t>(k)];
+    t.relative_speed(k) = rel[static_cast<std::size_t>(k)];
+  }
+  return t;
+}
+
+std::string labels(const std::vector<bool>& v) {
+  std::string s;
+  for (bool b : v) s += b ? '1' : '0';
+  return s;
+}
+
+}  // namespace
+
+TEST(ClipBuilder, RobotContactLabelsFollowTheDocumentedRules) {
+  RobotContactOptions opt;  // enter 5 mm, exit 10 mm; relative speed enter 0.2, exit 0.3 m/s
+  // Left foot on the ground; the right foot comes down (8 mm: above enter, no touchdown), reaches
+  // 2 mm while sliding at 0.5 m/s against the left (no double support), slows to 0.25 (still no
+  // touchdown: enter needs < 0.2), then 0.1 (touchdown). Relative speed then grows to 0.35 >= exit:
+  // the older stance (left) lifts off although it is still low; back at 4 mm it does not touch down
+  // again while it slides at 0.5 m/s against the right foot.
+  const std::vector<double> hl{0, 0, 0, 0, 0, 0.004, 0.02, 0.05, 0.02, 0.004};
+  const std::vector<double> hr{0.05, 0.008, 0.002, 0.002, 0.0, 0.0, 0.0, 0.0, 0.0, 0.003};
+  const std::vector<double> rel{1.0, 0.6, 0.5, 0.25, 0.1, 0.35, 0.9, 1.2, 0.9, 0.5};
+  const auto c = robotContactLabels(tracksOf(hl, hr, rel), opt);
+  EXPECT_EQ(labels(c[0]), "1111100000");
+  EXPECT_EQ(labels(c[1]), "0000111111");
+  // Hysteresis on height: a foot in contact stays up to exit_height; a foot in swing needs enter_height.
+  const std::vector<double> hl2{0, 0.007, 0.009, 0.011, 0.007, 0.004, 0, 0, 0, 0};
+  const std::vector<double> hr2{0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  const std::vector<double> rel2(10, 0.0);
+  const auto c2 = robotContactLabels(tracksOf(hl2, hr2, rel2), opt);
+  EXPECT_EQ(labels(c2[0]), "1110011111");
+  EXPECT_EQ(labels(c2[1]), "1111111111");
+  // Periodic: rotating the input rotates the labels.
+  std::vector<double> hl3(hl), hr3(hr), rel3(rel);
+  std::rotate(hl3.begin(), hl3.begin() + 3, hl3.end());
+  std::rotate(hr3.begin(), hr3.begin() + 3, hr3.end());
+  std::rotate(rel3.begin(), rel3.begin() + 3, rel3.end());
+  const auto c3 = robotContactLabels(tracksOf(hl3, hr3, rel3), opt);
+  std::string l0 = labels(c[0]);
+  std::rotate(l0.begin(), l0.begin() + 3, l0.end());
+  EXPECT_EQ(labels(c3[0]), l0);
+  // Options are validated with the field named.
+  RobotContactOptions bad;
+  bad.exit_height = 0.001;
+  try {
+    robotContactLabels(tracksOf(hl, hr, rel), bad);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("exit_height"), std::string::npos) << e.what();
+  }
+  ClipSoleTracks mismatched = tracksOf({0, 0}, {0, 0}, {0, 0});
+  mismatched.relative_speed.resize(1);
+  EXPECT_THROW(robotContactLabels(mismatched, opt), std::invalid_argument);
+}
+
+TEST(ClipBuilder, RotateClipPhaseKeepsTheMotion) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const ClipLibrary lib = loadClipLibrary("config/clips/g1", robot);
+  const DynamicClip& c = lib.dynamic_clips.front();
+  DynamicClip r = c;
+  const Eigen::Index N = c.q.rows();
+  rotateClipPhase(r, 5);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    EXPECT_EQ(r.q.row(k), c.q.row((k + 5) % N));
+    EXPECT_EQ(r.v_base.row(k), c.v_base.row((k + 5) % N));
+    EXPECT_EQ(r.base_height(k), c.base_height((k + 5) % N));
+  }
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    double expect = c.contact[f].mu - 5.0 / static_cast<double>(N);
+    expect -= std::floor(expect);
+    EXPECT_NEAR(r.contact[f].mu, expect, 1e-12);
+    EXPECT_EQ(r.contact[f].sigma, c.contact[f].sigma);
+  }
+  rotateClipPhase(r, N - 5);
+  EXPECT_EQ(r.q, c.q);
+}
+
+TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const std::vector<int> mirror = robot.mirrorIndex();
+  StaticClip s;
+  s.name = "lopsided";
+  s.values = Eigen::VectorXd::LinSpaced(3, 0.5, 0.7);
+  s.q = Eigen::MatrixXd::Zero(3, static_cast<Eigen::Index>(robot.numJoints()));
+  for (Eigen::Index j = 0; j < s.q.cols(); ++j) s.q.col(j) = Eigen::Vector3d(0.1, 0.2, 0.3) * static_cast<double>(j % 7 - 3);
+  const StaticClip before = s;
+  symmetrizeStaticClip(s, robot);
+  double change = 0.0;
+  for (Eigen::Index j = 0; j < s.q.cols(); ++j) {
+    const double sign = robot.joints[static_cast<std::size_t>(j)].mirror_sign;
+    const Eigen::Index m = mirror[static_cast<std::size_t>(j)];
+    EXPECT_TRUE(s.q.col(j).isApprox(sign * s.q.col(m), 1e-15) || s.q.col(j).norm() < 1e-15) << robot.joints[static_cast<std::size_t>(j)].name;
+    EXPECT_TRUE(s.q.col(j).isApprox(0.5 * (before.q.col(j) + sign * before.q.col(m)), 1e-15) || s.q.col(j).norm() < 1e-15);
+    change += (s.q.col(j) - before.q.col(j)).norm();
+  }
+  EXPECT_GT(change, 0.1);  // the lopsided input did change
+  const StaticClip once = s;
+  symmetrizeStaticClip(s, robot);  // idempotent
+  EXPECT_TRUE(s.q.isApprox(once.q, 1e-15));
+  EXPECT_EQ(s.values, before.values);
+  StaticClip wrong = before;
+  wrong.q.resize(3, 5);
+  EXPECT_THROW(symmetrizeStaticClip(wrong, robot), std::invalid_argument);
+}

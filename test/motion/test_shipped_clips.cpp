@@ -1,6 +1,10 @@
 // The shipped G1 clip set (config/clips/g1/): loads and validates, stays within joint limits,
-// is continuous across the cycle boundary φ = 1 → 0, and re-writes byte-identically.
+// is continuous across the cycle boundary φ = 1 → 0, re-writes byte-identically, has contact labels
+// where the played clip's soles are down and do not slide against each other, and symmetric
+// posture templates.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -9,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/common/kinematics.hpp"
+#include "pmg/motion/clip_builder.hpp"
 #include "pmg/motion/clip_io.hpp"
 
 namespace {
@@ -121,3 +127,47 @@ TEST_F(ShippedClips, RewriteIsByteIdentical) {
 }
 
 }  // namespace
+
+// The contact schedule {μ, σ} of every dynamic clip, played as the generator plays it (level
+// pelvis), marks soles that are on the ground, and double support only where the two soles do not
+// slide against each other (docs/motion.md, "Contact labels"). The clips of commit 9c26475 (human
+// labels) fail this: stance started with the sole 17-30 mm up, sliding 0.4-0.7 m/s.
+TEST_F(ShippedClips, ContactScheduleMatchesTheRobotSoles) {
+  const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
+  const pmg::KinematicModel model(robot_);
+  const pmg::motion::RobotContactOptions opt;
+  for (const auto& c : lib.dynamic_clips) {
+    SCOPED_TRACE(c.name);
+    const pmg::motion::ClipSoleTracks t = pmg::motion::clipSoleTracks(c, model);
+    const Eigen::Index N = c.q.rows();
+    int double_support = 0;
+    for (Eigen::Index k = 0; k < N; ++k) {
+      const double phi = static_cast<double>(k) / static_cast<double>(N);
+      bool in[2];
+      for (std::size_t f = 0; f < 2; ++f) {
+        const double d = std::abs(phi - c.contact[f].mu), dist = std::min(d, 1.0 - d);
+        in[f] = dist < c.contact[f].sigma - 1e-9;
+        if (in[f]) EXPECT_LT(t.height(k, static_cast<Eigen::Index>(f)), opt.exit_height) << "foot " << f << " sample " << k;
+      }
+      if (in[0] && in[1]) {
+        ++double_support;
+        EXPECT_LT(t.relative_speed(k), opt.exit_relative_speed) << "sample " << k;
+      }
+    }
+    EXPECT_LT(double_support, N / 2);
+  }
+}
+
+TEST_F(ShippedClips, PostureTemplatesAreLeftRightSymmetric) {
+  const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
+  const std::vector<int> mirror = robot_.mirrorIndex();
+  ASSERT_FALSE(lib.static_clips.empty());
+  for (const auto& s : lib.static_clips) {
+    SCOPED_TRACE(s.name);
+    for (Eigen::Index i = 0; i < s.q.rows(); ++i)
+      for (std::size_t j = 0; j < robot_.numJoints(); ++j) {
+        const double mirrored = robot_.joints[j].mirror_sign * s.q(i, mirror[j]);
+        EXPECT_NEAR(s.q(i, static_cast<Eigen::Index>(j)), mirrored, 2e-6) << robot_.joints[j].name << " row " << i;
+      }
+  }
+}

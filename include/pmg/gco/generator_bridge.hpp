@@ -18,15 +18,21 @@ namespace pmg::gco {
 
 /// Copies one generator tick into the GCO input (noexcept, no allocation):
 /// q_leg/qd_leg from q_ref/qd_ref through `leg_idx`, c_f = in_contact, v = v_base,
-/// ω = the template's pelvis angular velocity (heading frame; z = yaw rate), h = base_height, pelvis level (roll = pitch = 0: clips carry joint angles
+/// ω = (0, 0, yaw_rate), h = base_height, pelvis level (roll = pitch = 0: clips carry joint angles
 /// relative to the pelvis and no pelvis orientation), command = (u_d, u_s) with a "standing"
 /// height (u_s.height <= 0) replaced by the template height.
+/// The roll and pitch rates of GeneratorOutput::omega_base are not passed on: with the pelvis held
+/// level (eq. 13 positions), a roll/pitch rate in eq. 14 makes the sole velocity differ from the
+/// time derivative of the sole position by ω_xy × r (0.1 rad/s × 0.7 m = 70 mm/s), and GCO would
+/// then hold still a foot that in fact slides (measured: 31 mm slip per stance over the grid with
+/// them, docs/gco.md). A clip format with pelvis roll/pitch would pass both the angles
+/// (base_roll/base_pitch) and their rates.
 inline void fillFromGenerator(const GeneratorOutput& g, const LegJointIndex& leg_idx, const VelocityCommand& u_d,
                               const PostureCommand& u_s, GcoInput* in) noexcept {
   fillLegState(leg_idx, g.q_ref, g.qd_ref, in);
   in->contact = g.in_contact;
   in->v_HB_H = g.v_base;
-  in->w_HB_H = g.omega_base;
+  in->w_HB_H = Eigen::Vector3d(0.0, 0.0, g.omega_base.z());
   in->base_height = g.base_height;
   in->base_roll = 0.0;
   in->base_pitch = 0.0;

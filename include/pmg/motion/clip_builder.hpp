@@ -125,3 +125,70 @@ StaticClip buildStaticClip(const RobotMotion& motion, const Eigen::VectorXd& val
                            const RobotConfig& robot, const StaticClipOptions& options);
 
 }  // namespace pmg::motion
+
+namespace pmg::motion {
+
+/// Contact labelling of a built dynamic clip from the robot's own feet, as the generator plays the
+/// clip: pelvis level (the clip format carries no pelvis roll/pitch), base moved with the clip's
+/// v_base and yaw rate. Per phase sample, with h_f the height of sole centre f above the lower of
+/// the two sole centres [m] (the lower foot carries the robot: walking always keeps a foot on the
+/// ground) and s_rel the horizontal speed of one sole relative to the other [m/s]:
+///   1. a foot in contact stays while h_f < exit_height;
+///   2. if both feet are then in contact and s_rel >= exit_relative_speed, the foot whose stance
+///      started first lifts off (the template legs slide against each other: no base motion can
+///      keep both soles still, so it is not double support);
+///   3. a foot not in contact touches down when h_f < enter_height and either the other foot is
+///      in swing or s_rel < enter_relative_speed.
+/// The absolute sole speed is not a criterion: the clip's base velocity differs from the one its
+/// stance feet imply by up to 0.7 m/s (pelvis roll/pitch are not in the clip, eqs. 4–5 scale the
+/// motion), and making the stance foot still by correcting the base velocity is GCO's job. The
+/// relative speed is the part of the foot motion that no base correction removes. The human labels
+/// of the retargeting (3 cm, 0.5 m/s on the human foot) put the robot's touchdown while its sole
+/// is still 5–30 mm up and slides at 0.2–0.7 m/s against the other foot (docs/motion.md).
+struct RobotContactOptions {
+  double enter_height = 0.005;         ///< [m], > 0
+  double exit_height = 0.010;          ///< [m], >= enter_height
+  double enter_relative_speed = 0.20;  ///< [m/s], > 0
+  double exit_relative_speed = 0.30;   ///< [m/s], >= enter_relative_speed
+  /// @throws std::invalid_argument naming the field and range.
+  void validate() const;
+};
+
+/// Sole centre tracks of a dynamic clip over its N phase samples (see RobotContactOptions):
+/// height(k, f) [m] above the lower sole, speed(k, f) [m/s] horizontal in H; f = Foot index.
+struct ClipSoleTracks {
+  Eigen::MatrixXd height;  ///< (N × 2)
+  Eigen::MatrixXd speed;   ///< (N × 2)
+  Eigen::VectorXd relative_speed;  ///< (N) |v_S,left − v_S,right| horizontal [m/s]: no base motion changes it
+};
+
+/// Computes ClipSoleTracks by forward kinematics of the leg chains of @p model (base → foot link)
+/// with the sole centre of g1SolePoints_F(). @throws std::invalid_argument if the clip's joint
+/// count differs from the model's robot, std::runtime_error if forward kinematics fails.
+ClipSoleTracks clipSoleTracks(const DynamicClip& clip, const KinematicModel& model);
+
+/// Contact labels of both feet over the N samples of @p tracks (rules of RobotContactOptions),
+/// index [Foot][sample]. The state at sample 0 is taken from a first lap around the cycle, so the
+/// labels are periodic. @throws std::invalid_argument if the track sizes differ or are 0.
+std::array<std::vector<bool>, kNumFeet> robotContactLabels(const ClipSoleTracks& tracks, const RobotContactOptions& options);
+
+/// Replaces the contact model {μ, σ} of both feet of @p clip by the longest run of the robot-foot
+/// labels (robotContactLabels on clipSoleTracks), then rotates the samples so that φ = 0 is
+/// the left foot's touchdown. @throws std::runtime_error naming the clip and foot if a foot is
+/// never in contact, and what clipSoleTracks throws.
+void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model, const RobotContactOptions& options = {});
+
+/// Rotates the N samples of a dynamic clip by @p shift samples (new sample k = old sample k + shift)
+/// and moves the contact centres μ by −shift / N, so the clip describes the same motion.
+void rotateClipPhase(DynamicClip& clip, Eigen::Index shift);
+
+/// Left/right-symmetric static clip: every row q becomes ½ (q + M q), where (M q)_j =
+/// mirror_sign_j · q_mirror(j) (robot config mirror map). A posture template should move both legs
+/// alike; the captured squat and bend are lopsided (e.g. the squat's right hip yaw −0.22 rad against
+/// the left +0.01), and added to a walking template in joint space, a lopsided offset lengthens one
+/// leg and shortens the other. Joints that mirror onto themselves with sign −1 (waist yaw/roll)
+/// become 0. Values and neutral are kept (the capture's pelvis height / torso pitch).
+/// @throws std::invalid_argument if the clip's joint count differs from the robot's.
+void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot);
+
+}  // namespace pmg::motion

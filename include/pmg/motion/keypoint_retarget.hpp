@@ -48,6 +48,12 @@ struct KeypointRetargetOptions {
   double w_smooth = 0.01;          ///< change from the previous frame [1/rad, 1/m]
   double w_posture = 0.003;        ///< pull to the default pose [1/rad]
   int max_iterations = 60;         ///< Ceres iterations per frame, ≥ 1
+  /// true: pelvis roll and pitch held at 0 (the solve moves only the pelvis position and yaw; the
+  /// legs, waist and arms take up the human pelvis tilt). Used for the dynamic clips: the clip
+  /// format has no pelvis orientation and the generator and GCO play a clip with a level pelvis,
+  /// so with a tilting pelvis in the retargeting the feet of the played clip would not be where
+  /// the retargeting put them (stances slide, double support vanishes).
+  bool level_pelvis = false;
   double contact_height = 0.03;    ///< human foot (min of ankle, toe) above its flat height [m]
   double contact_speed = 0.5;      ///< human ankle horizontal speed [m/s]
   /// @throws std::invalid_argument naming the field and range.
