@@ -15,8 +15,8 @@
 /// Loop: step() is noexcept, takes no locks, does no I/O and returns a status; on any failure it
 /// keeps the last good action and counts it. pmg's code in step() allocates nothing; ONNX
 /// Runtime 1.24's Run itself performs a constant 16 small operator-new calls per inference
-/// (execution-frame bookkeeping; tensors are the bound buffers). test_policy_alloc pins both
-/// facts; docs/policy.md discusses the consequence for the real-time loop.
+/// (execution-frame bookkeeping; tensors are the bound buffers); with PolicyBackend::kNative the
+/// whole tick allocates nothing. test_policy_alloc pins these facts (docs/policy.md).
 ///
 /// Action -> targets (actuated order): q_des[i] = offset[i] + scale[i] * clamp(a[i], ±clip) [rad].
 
@@ -82,7 +82,7 @@ class PolicyRunner {
   int actionSize() const noexcept { return static_cast<int>(output_.size()); }
 
   /// One actor inference. Real-time path: noexcept; allocations only inside ONNX Runtime's Run
-  /// (see the file comment).
+  /// (see the file comment), none at all with PolicyBackend::kNative.
   /// @param obs (observationSize() x 1) actor input, already scaled (ObservationAssembler::data()).
   PolicyStepStatus step(const float* obs) noexcept;
 
