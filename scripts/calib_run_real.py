@@ -56,6 +56,16 @@ def table():
         skip = ("kp_scale", "kd_scale", "kp_per_log_unit", "kd_per_log_unit")
         params = ", ".join(f"{k} {v:.4g}" for k, v in r["extended"]["params"].items() if k not in skip)
         rows.append(f"| {name} | {b:.4f} | {e:.4f} | {1 - e / b:.2f} | {causes} | {params} |")
+    rows += ["", "Held-out RMSE [rad] per residual region, baseline → extended (share of samples):", "",
+             "| run | velocity reversals | high torque | steady holds | fast moves |", "|---|---|---|---|---|"]
+    for name, *_ in experiments():
+        path = os.path.join(ROOT, OUT, name + ".json")
+        if not os.path.exists(path):
+            continue
+        reg = {g["region"]: g for g in json.load(open(path))["residual_regions"]}
+        cells = [f"{reg[k]['baseline_rmse_rad']:.3f} → {reg[k]['extended_rmse_rad']:.3f} ({100 * reg[k]['fraction_of_samples']:.0f} %)"
+                 for k in ("velocity_reversal", "high_torque", "steady_hold", "fast_move")]
+        rows.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
 
 

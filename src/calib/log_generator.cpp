@@ -1,5 +1,6 @@
 #include "pmg/calib/log_generator.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -68,8 +69,10 @@ BenchLog generate_bench_log(const RigConfig& rig, const RigParams& truth, const 
   o.validate();
   truth.act.validate();
   const std::size_t n = static_cast<std::size_t>(o.duration_s * o.log_rate_hz) + 1;
-  const double t_lift = 0.7 * o.duration_s;   // motion ends, lift to +1 rad
-  const double t_off = t_lift + 0.1 * o.duration_s;  // torque off
+  // Motion for 70 % of the log (at most up to 4 s before the end), then lift to +1 rad and switch
+  // the torque off for the free swing (at most ~3 s of it).
+  const double t_lift = std::max(0.7 * o.duration_s, o.duration_s - 4.0);
+  const double t_off = t_lift + std::min(0.1 * o.duration_s, 1.0);
   BenchLog log;
   log.name = "synthetic";
   std::mt19937_64 rng(o.seed);
