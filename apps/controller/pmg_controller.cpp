@@ -10,7 +10,6 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/controller/controller.hpp"
-#include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/safety/safe_backend.hpp"
 
 namespace {
@@ -34,7 +33,7 @@ int main(int argc, char** argv) {
   // Motor buses (docs/hal.md): the same loop over the CAN backend, towards pmg_sil or the robot.
   std::string can_plan, can_transport = "udp";
   int can_port = 47000;
-  app.add_option("--can-plan", can_plan, "drive the motors over CAN with this bus plan (apps/hal/config/*.yaml)")
+  app.add_option("--can-plan", can_plan, "drive the motors over CAN with this bus plan (config/hal/*.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--can-transport", can_transport, "udp (towards pmg_sil) or socketcan (robot)")
       ->check(CLI::IsMember({"udp", "socketcan"}));
@@ -50,6 +49,14 @@ int main(int argc, char** argv) {
     if (lockstep) config.timing = pmg::TimingMode::kLockstep;
     if (no_lcm) config.lcm_enabled = false;
     if (!log_path.empty()) config.log_file = log_path;
+    if (!can_plan.empty()) {  // command-line override of the config's backend
+      config.backend = pmg::BackendKind::kCan;
+      config.can.plan_file = can_plan;
+      config.can.transport = can_transport;
+      config.can.udp_port = can_port;
+      config.hal_supervisor = true;
+    }
+    if (hal_safety) config.hal_supervisor = true;
     pmg::CommandScript script;
     if (!script_path.empty()) script = pmg::loadCommandScript(script_path);
     if (duration <= 0 && !script_path.empty()) duration = script.duration();
@@ -60,29 +67,15 @@ int main(int argc, char** argv) {
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     const bool rt = config.timing == pmg::TimingMode::kRealtime;
-    std::printf("pmg_controller: robot %s (%zu joints), backend mujoco (gantry %s), %s, %.0f Hz loop / %.0f Hz HAL\n",
-                config.robot.name.c_str(), config.robot.numJoints(), config.mujoco.gantry.enabled ? "on" : "off",
-                rt ? "real time" : "lockstep", config.loop_rate_hz, config.hal_rate_hz);
-    std::unique_ptr<pmg::HalBackend> backend;  // null: the config's backend (in-process MuJoCo)
-    if (!can_plan.empty()) {
-      pmg::hal::bus::CanBackendSetup cs;
-      cs.plan_file = can_plan;
-      cs.transport = can_transport;
-      cs.udp_base_port = static_cast<std::uint16_t>(can_port);
-      cs.lockstep = !rt;
-      backend = pmg::hal::bus::makeCanBackend(cs);
-      std::printf("pmg_controller: motors over CAN (%s, plan %s)\n", can_transport.c_str(), can_plan.c_str());
-    }
-    pmg::hal::safety::SafeBackend* safe = nullptr;
-    if (hal_safety) {
-      if (!backend) backend = std::make_unique<pmg::MujocoBackend>(config.robot, config.mujoco);
-      auto so = pmg::hal::safety::SafetyOptions::fromRobot(config.robot);
-      so.guard_mode = true;
-      auto sb = std::make_unique<pmg::hal::safety::SafeBackend>(std::move(backend), so);
-      safe = sb.get();
-      backend = std::move(sb);
-    }
-    pmg::Controller controller(config, std::move(backend));
+    const bool can = config.backend == pmg::BackendKind::kCan;
+    std::printf("pmg_controller: robot %s (%zu joints), backend %s, %s, %.0f Hz loop / %.0f Hz HAL, HAL supervisor %s\n",
+                config.robot.name.c_str(), config.robot.numJoints(),
+                can ? ("can (" + config.can.transport + ", plan " + config.can.plan_file + ")").c_str()
+                    : (config.mujoco.gantry.enabled ? "mujoco (gantry on)" : "mujoco (gantry off)"),
+                rt ? "real time" : "lockstep", config.loop_rate_hz, config.hal_rate_hz,
+                config.hal_supervisor ? "on" : "off");
+    pmg::Controller controller(config);
+    pmg::hal::safety::SafeBackend* safe = controller.halSafety();
     const pmg::CommandScript* sp = script_path.empty() ? nullptr : &script;
     const pmg::RunSummary s = rt ? controller.runRealtime(duration, &g_stop, sp) : controller.runLockstep(duration, sp);
     std::printf("ran %lld ticks, %.2f s controller time in %.2f s wall (real-time factor %.1f)\n",

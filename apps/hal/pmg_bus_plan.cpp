@@ -1,7 +1,7 @@
 // pmg_bus_plan: check a bus plan against the 2 ms cycle budget and print per-bus load and the
 // send schedule inside the slot. Exit code 0 if the HAL would accept it, 1 if it would refuse it.
 //
-//   pmg_bus_plan apps/hal/config/g1_can.yaml [--schedule] [--csv out.csv]
+//   pmg_bus_plan config/hal/g1_can.yaml [--schedule] [--csv out.csv]
 #include <cstdio>
 #include <fstream>
 

@@ -4,7 +4,7 @@
 // (or any HAL built with the CAN backend) talks to it exactly as to the robot, through the real bus
 // code. Faults can be injected from the command line.
 //
-//   pmg_sil --robot config/robots/g1/g1.yaml --plan apps/hal/config/g1_can.yaml --port 47000
+//   pmg_sil --robot config/robots/g1/g1.yaml --plan config/hal/g1_can.yaml --port 47000
 //           [--realtime] [--no-gantry] [--duration 20] [--drop 0.01] [--silent-joint 3] ...
 #include <atomic>
 #include <csignal>
@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   using namespace pmg::hal::bus;
   namespace rt = pmg::hal::rt;
   CLI::App app{"pmg_sil: MuJoCo 2.2 robot behind emulated CAN motor drivers (UDP loopback)"};
-  std::string robot_path = "config/robots/g1/g1.yaml", plan_path = "apps/hal/config/g1_can.yaml";
+  std::string robot_path = "config/robots/g1/g1.yaml", plan_path = "config/hal/g1_can.yaml";
   int port = 47000, fifo = 0;
   double duration = 0.0, faults_after = 0.0, push_at = -1.0, push_force = 300.0, push_duration = 0.2;
   bool realtime = false, no_gantry = false;

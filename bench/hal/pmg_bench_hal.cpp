@@ -113,11 +113,11 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     std::printf("== 1. Bus load per 2 ms slot (worst-case bit stuffing, MIT command 8 B + reply 6 B, 20 us turnaround)\n");
-    for (const char* p : {"apps/hal/config/g1_can.yaml", "apps/hal/config/g1_canfd.yaml", "apps/hal/config/g1_can_per_limb.yaml"})
+    for (const char* p : {"config/hal/g1_can.yaml", "config/hal/g1_canfd.yaml", "config/hal/g1_can_per_limb.yaml"})
       printLoads(p);
 
     const pmg::RobotConfig robot = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
-    CyclicWork work(bus::BusPlan::fromYaml("apps/hal/config/g1_can.yaml"), safety::SafetyOptions::fromRobot(robot));
+    CyclicWork work(bus::BusPlan::fromYaml("config/hal/g1_can.yaml"), safety::SafetyOptions::fromRobot(robot));
     std::printf("\n== 2. Cyclic HAL work, 29 motors (decode replies + supervisor step + encode commands)\n");
     const int reps = 20000;
     const double t0 = rt::now();
@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
 
     if (sil_cycles > 0) {
       std::printf("\n== 4. CAN HAL cycle over UDP loopback against the SIL emulator (lockstep round trip)\n");
-      bus::BusPlan plan = bus::BusPlan::fromYaml("apps/hal/config/g1_can.yaml");
+      bus::BusPlan plan = bus::BusPlan::fromYaml("config/hal/g1_can.yaml");
       const auto base = static_cast<std::uint16_t>(30000 + (getpid() % 1000) * 20);
       auto sim = std::make_unique<pmg::MujocoBackend>(robot, pmg::MujocoBackendOptions{});
       bus::SilDriverEmulator sil(plan, std::move(sim), base);

@@ -12,7 +12,10 @@
 #include <pmg_lcm/velocity_command_t.hpp>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/hal/bus/can_backend.hpp"
+#include "pmg/hal/bus/realtime.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/safety/safe_backend.hpp"
 #include "pmg/motion/clip_io.hpp"
 
 namespace pmg {
@@ -36,7 +39,26 @@ Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> back
   generator_model_ = std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), config_.generator);
   pmg_ = std::make_unique<gco::GeneratorWithGco>(generator_model_, gco::LegModel::fromRobotConfig(robot), config_.gco);
   dt_ = 1.0 / config_.loop_rate_hz;
-  if (!backend) backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
+  if (!backend) {
+    if (config_.backend == BackendKind::kCan) {
+      hal::bus::CanBackendSetup setup;
+      setup.plan_file = config_.can.plan_file;
+      setup.transport = config_.can.transport;
+      setup.udp_base_port = static_cast<std::uint16_t>(config_.can.udp_port);
+      setup.lockstep = config_.timing == TimingMode::kLockstep;
+      setup.paced = config_.can.paced;
+      backend = hal::bus::makeCanBackend(setup);
+    } else {
+      backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
+    }
+  }
+  if (config_.hal_supervisor) {
+    auto options = hal::safety::SafetyOptions::fromRobot(robot);
+    options.guard_mode = true;  // the loop runs the modes; the HAL guards inputs and the envelope
+    auto safe = std::make_unique<hal::safety::SafeBackend>(std::move(backend), options);
+    hal_safety_ = safe.get();
+    backend = std::move(safe);
+  }
   hal_ = std::make_unique<HalRunner>(std::move(backend), static_cast<int>(robot.numJoints()), config_.hal);
   command_.num_motors = static_cast<int>(robot.numJoints());
 
@@ -88,11 +110,17 @@ void Controller::tick(double now) noexcept {
   }
   for (double v : state_.imu.quat_wxyz) valid = valid && std::isfinite(v);
   for (double v : state_.imu.gyro) valid = valid && std::isfinite(v);
-  if (!valid) enterDamping(ControllerFault::kInvalidState);
-  if (hal_->faultCycles() > backend_faults_seen_) {
-    backend_faults_seen_ = hal_->faultCycles();
-    enterDamping(ControllerFault::kBackendFault);
+  // A few invalid ticks in a row are tolerated (the last valid command is held, below); longer
+  // runs latch damping. Backend faults (simulation diverged, bus down) count the same way.
+  const bool backend_fault = hal_->faultCycles() > backend_faults_seen_;
+  backend_faults_seen_ = hal_->faultCycles();
+  if (!valid || backend_fault) {
+    if (++invalid_ticks_ > config_.max_invalid_ticks)
+      enterDamping(valid ? ControllerFault::kBackendFault : ControllerFault::kInvalidState);
+  } else {
+    invalid_ticks_ = 0;
   }
+  const bool hold = invalid_ticks_ > 0 && mode_ != ControllerMode::kDamping;
 
   // Operator mode requests.
   if (sample_.mode_request >= 0 && sample_.mode_request_seq != last_mode_seq_) {
@@ -100,10 +128,12 @@ void Controller::tick(double now) noexcept {
     const auto req = sample_.mode_request;
     if (req == static_cast<std::int8_t>(ControllerMode::kDamping)) {
       enterDamping(ControllerFault::kEstopRequest);
+      if (hal_safety_) hal_safety_->requests().post(hal::safety::ModeRequest::kDamping);
     } else if (req == 4) {  // clear the latch: only to passive, and only with a valid state
       if (mode_ == ControllerMode::kDamping && valid) {
         mode_ = ControllerMode::kPassive;
         fault_ = ControllerFault::kNone;
+        if (hal_safety_) hal_safety_->requests().post(hal::safety::ModeRequest::kPassive);
       }
     } else if (mode_ != ControllerMode::kDamping) {
       if (req == static_cast<std::int8_t>(ControllerMode::kPassive)) mode_ = ControllerMode::kPassive;
@@ -119,7 +149,8 @@ void Controller::tick(double now) noexcept {
   }
 
   GeneratorStatus gen_status = GeneratorStatus::kOk;
-  switch (mode_) {
+  // While an invalid state is being tolerated the last command is held unchanged.
+  if (!hold) switch (mode_) {
     case ControllerMode::kPassive:
       for (int i = 0; i < n; ++i) command_.motors[static_cast<std::size_t>(i)] = MotorCommand{};
       break;
@@ -372,6 +403,8 @@ RunSummary Controller::runRealtime(double duration, const std::atomic<bool>* sto
     input_thread_ = std::thread([this] { lcmInputMain(); });
   }
   std::string error;
+  if (config_.lock_memory && !hal::rt::lockMemory(&error))
+    std::fprintf(stderr, "[pmg_controller] warning: mlockall failed: %s\n", error.c_str());
   if (!hal_->start(&error)) std::fprintf(stderr, "[pmg_controller] warning: %s\n", error.c_str());
   if (config_.loop_fifo_priority > 0) {
     sched_param sp{};

@@ -52,8 +52,26 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.robot = loadRobotConfig(c.robot_file);
 
   const std::string backend = get<std::string>(root, "backend", "mujoco", path + ": backend");
-  if (backend != "mujoco")
-    throw ConfigError(f + "backend: '" + backend + "': expected 'mujoco' (CAN buses: see docs/hal.md)");
+  if (backend == "mujoco") {
+    c.backend = BackendKind::kMujoco;
+  } else if (backend == "can") {
+    c.backend = BackendKind::kCan;
+    c.hal_supervisor = true;
+  } else {
+    throw ConfigError(f + "backend: '" + backend + "': expected mujoco or can");
+  }
+  const YAML::Node can = root["can"];
+  const std::string canw = path + ": can";
+  if (can && can["plan"])
+    c.can.plan_file = (dir / get<std::string>(can, "plan", "", canw)).lexically_normal().string();
+  c.can.transport = get<std::string>(can, "transport", c.can.transport, canw);
+  c.can.udp_port = get<int>(can, "udp_port", c.can.udp_port, canw);
+  c.can.paced = get<bool>(can, "paced", false, canw);
+  if (c.can.transport != "udp" && c.can.transport != "socketcan")
+    throw ConfigError(canw + ".transport: '" + c.can.transport + "': expected udp or socketcan");
+  if (c.can.udp_port < 1024 || c.can.udp_port > 65000) throw ConfigError(canw + ".udp_port: expected 1024..65000");
+  if (c.backend == BackendKind::kCan && !fs::exists(c.can.plan_file))
+    throw ConfigError(canw + ".plan: bus plan '" + c.can.plan_file + "' not found (required with backend: can)");
 
   const YAML::Node t = root["timing"];
   const std::string w = path + ": timing";
@@ -69,6 +87,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.loop_fifo_priority = get<int>(t, "loop_fifo_priority", 0, w);
   c.hal.fifo_priority = get<int>(t, "hal_fifo_priority", 0, w);
   c.hal.cpu = get<int>(t, "hal_cpu", -1, w);
+  c.lock_memory = get<bool>(t, "lock_memory", false, w);
   if (!(c.loop_rate_hz >= 10 && c.loop_rate_hz <= 1000)) throw ConfigError(w + ".loop_rate_hz: expected 10..1000 Hz");
   const double ratio = c.hal_rate_hz / c.loop_rate_hz;
   if (!(ratio >= 1 && std::fabs(ratio - std::round(ratio)) < 1e-9 && c.hal_rate_hz <= 4000))
@@ -115,6 +134,10 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   const YAML::Node s = root["safety"];
   c.soft_stand_duration = get<double>(s, "soft_stand_duration_s", 1.0, path + ": safety");
   c.damping_kd_scale = get<double>(s, "damping_kd_scale", 1.0, path + ": safety");
+  c.hal_supervisor = get<bool>(s, "hal_supervisor", c.hal_supervisor, path + ": safety");
+  c.max_invalid_ticks = get<int>(s, "max_invalid_ticks", 3, path + ": safety");
+  if (c.max_invalid_ticks < 0 || c.max_invalid_ticks > 50)
+    throw ConfigError(f + "safety.max_invalid_ticks: expected 0..50 ticks");
   if (!(c.soft_stand_duration >= 0 && c.soft_stand_duration <= 10))
     throw ConfigError(f + "safety.soft_stand_duration_s: expected 0..10 s");
   if (!(c.damping_kd_scale > 0 && c.damping_kd_scale <= 5)) throw ConfigError(f + "safety.damping_kd_scale: expected (0, 5]");

@@ -22,6 +22,10 @@
 #include "pmg/hal/hal_runner.hpp"
 #include "pmg/hal/latest_value.hpp"
 
+namespace pmg::hal::safety {
+class SafeBackend;
+}  // namespace pmg::hal::safety
+
 namespace lcm {
 class LCM;
 class LogFile;
@@ -78,7 +82,8 @@ class Controller {
   /// Setup: loads the clips, builds the generator, the backend and the HAL, opens LCM and the
   /// event log. @throws ConfigError / std::runtime_error naming the file and field.
   explicit Controller(ControllerConfig config);
-  /// Same with an explicit backend (hardware buses, test mocks) instead of the config's.
+  /// Same with an explicit backend (test mocks, custom hardware) instead of the config's; the HAL
+  /// supervisor (config safety.hal_supervisor) still wraps it.
   Controller(ControllerConfig config, std::unique_ptr<HalBackend> backend);
   ~Controller();
   Controller(const Controller&) = delete;
@@ -103,6 +108,8 @@ class Controller {
   /// GCO result of the last active tick (u' = the policy's command observation, PMG eq. 19).
   const gco::GcoResult& gcoResult() const noexcept { return pmg_->gcoResult(); }
   HalRunner& hal() noexcept { return *hal_; }
+  /// The HAL's safety supervisor (config safety.hal_supervisor), or nullptr.
+  hal::safety::SafeBackend* halSafety() noexcept { return hal_safety_; }
   const ControllerConfig& config() const noexcept { return config_; }
   const LowCommand& lastCommand() const noexcept { return command_; }
   const LowState& lastState() const noexcept { return state_; }
@@ -130,6 +137,8 @@ class Controller {
   bool have_stand_start_ = false;
   std::array<double, kMaxMotors> stand_start_{};
   std::uint64_t backend_faults_seen_ = 0;
+  int invalid_ticks_ = 0;                       // consecutive ticks with an invalid state
+  hal::safety::SafeBackend* hal_safety_ = nullptr;  // the HAL's supervisor, if any (owned by hal_)
   std::int64_t ticks_ = 0;
   double last_tick_wall_ = -1;
   std::int64_t deadline_misses_ = 0;

@@ -19,7 +19,7 @@ run() {  # run <name> <sil args...>
   sil_pid=$!
   sleep 1
   "$ctl" --config config/controller/g1_sil.yaml --script config/commands/demo.yaml --no-lcm \
-    --can-plan apps/hal/config/g1_can.yaml --can-port "$port" --hal-safety > "$out/$name.ctl.log" 2>&1
+    --can-plan config/hal/g1_can.yaml --can-port "$port" --hal-safety > "$out/$name.ctl.log" 2>&1
   local rc=$?
   kill "$sil_pid" 2>/dev/null
   wait "$sil_pid" 2>/dev/null

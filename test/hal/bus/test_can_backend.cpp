@@ -326,7 +326,7 @@ TEST(CanBackend, SetupErrors) {
   one.push_back(std::make_unique<UdpCanTransport>(UdpCanTransport::Options{}));
   EXPECT_THROW(CanBackend(plan, std::move(one), nullptr), std::invalid_argument);
   CanBackendSetup s;
-  s.plan_file = "apps/hal/config/g1_can.yaml";
+  s.plan_file = "config/hal/g1_can.yaml";
   s.transport = "carrier-pigeon";
   EXPECT_THROW(makeCanBackend(s), std::runtime_error);
 }

@@ -37,7 +37,7 @@ class SilRig {
  public:
   explicit SilRig(bool gantry = true) {
     robot_ = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
-    BusPlan plan = BusPlan::fromYaml("apps/hal/config/g1_can.yaml");
+    BusPlan plan = BusPlan::fromYaml("config/hal/g1_can.yaml");
     pmg::MujocoBackendOptions mo;
     mo.gantry.enabled = gantry;
     std::unique_ptr<CanTransport> imu;

@@ -114,7 +114,7 @@ class CanBackend final : public pmg::HalBackend {
 
 /// How the CAN backend reaches the buses.
 struct CanBackendSetup {
-  std::string plan_file;            ///< Bus plan YAML (e.g. apps/hal/config/g1_can.yaml).
+  std::string plan_file;            ///< Bus plan YAML (e.g. config/hal/g1_can.yaml).
   std::string transport = "udp";    ///< "socketcan" (robot: interface = bus name) or "udp" (pmg_sil).
   std::uint16_t udp_base_port = 47000;  ///< UDP port layout base (see sil_emulator.hpp).
   bool lockstep = false;            ///< Lockstep with pmg_sil (see CanBackendOptions::lockstep).
