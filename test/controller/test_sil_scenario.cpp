@@ -161,21 +161,23 @@ TEST(SilScenario, NanAndStaleCommandsAreRejectedAndStopTheRobot) {
 // A backend that serves the MuJoCo SIL but, from a chosen cycle on, one motor replies NaN.
 class CorruptingBackend final : public HalBackend {
  public:
-  CorruptingBackend(const RobotConfig& r, MujocoBackendOptions o, std::uint64_t bad_cycle)
-      : sim_(r, std::move(o)), bad_cycle_(bad_cycle) {}
+  CorruptingBackend(const RobotConfig& r, MujocoBackendOptions o, std::uint64_t bad_cycle,
+                    std::uint64_t good_again = ~std::uint64_t{0})
+      : sim_(r, std::move(o)), bad_cycle_(bad_cycle), good_again_(good_again) {}
   const char* name() const noexcept override { return "corrupting"; }
   double cyclePeriod() const noexcept override { return sim_.cyclePeriod(); }
   BackendStatus exchange(const LowCommand& c, LowState& s) noexcept override {
     last_command = c;
     const BackendStatus st = sim_.exchange(c, s);
-    if (++cycles_ >= bad_cycle_) s.motors[3].q = std::nan("");  // from then on: a motor replying NaN
+    ++cycles_;
+    if (cycles_ >= bad_cycle_ && cycles_ < good_again_) s.motors[3].q = std::nan("");  // a motor replying NaN
     return st;
   }
   LowCommand last_command{};
 
  private:
   MujocoBackend sim_;
-  std::uint64_t bad_cycle_, cycles_ = 0;
+  std::uint64_t bad_cycle_, good_again_, cycles_ = 0;
 };
 
 TEST(SilScenario, NanStateLatchesDampingWithKdOnly) {
@@ -201,6 +203,22 @@ TEST(SilScenario, NanStateLatchesDampingWithKdOnly) {
   controller.setInput(req);
   controller.tick(now);
   EXPECT_EQ(controller.mode(), ControllerMode::kDamping);
+}
+
+// A short burst of invalid replies (here 2 loop ticks of NaN from one motor) is tolerated: the
+// last command is held and the robot stays in PMG; safety.max_invalid_ticks = 3.
+TEST(SilScenario, BriefInvalidStateIsToleratedWithoutLatching) {
+  ControllerConfig config = silConfig();
+  ASSERT_EQ(config.max_invalid_ticks, 3);
+  auto backend = std::make_unique<CorruptingBackend>(config.robot, config.mujoco, 1001, 1011);
+  Controller controller(config, std::move(backend));
+  double now = 0;
+  for (int k = 0; k < 400; ++k, now += 0.01) {
+    controller.tick(now);
+    for (int c = 0; c < 5; ++c) controller.hal().cycle();
+  }
+  EXPECT_EQ(controller.mode(), ControllerMode::kActive);
+  EXPECT_EQ(controller.fault(), ControllerFault::kNone);
 }
 
 TEST(SilScenario, TickDoesNotAllocate) {
