@@ -260,6 +260,8 @@ int main(int argc, char** argv) {
       StaticClip clip = buildStaticClip(rm, values, 0, static_cast<int>(extreme), robot, opt);
       // A posture template moves both legs alike: average with its left/right mirror.
       symmetrizeStaticClip(clip, robot);
+      // The height template shortens the legs without turning them about the hips.
+      if (spec.axis == PostureAxis::kHeight) keepLegDirections(clip, model);
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin += offset;
       clip.meta.frame_end += offset;

@@ -568,3 +568,52 @@ void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot) {
 }
 
 }  // namespace pmg::motion
+
+namespace pmg::motion {
+
+void keepLegDirections(StaticClip& clip, const KinematicModel& model) {
+  const RobotConfig& robot = model.config();
+  const auto n = static_cast<Eigen::Index>(robot.numJoints());
+  if (clip.q.cols() != n)
+    throw std::invalid_argument(fmt::format("keepLegDirections({}): clip has {} joints, robot config {}", clip.name, clip.q.cols(), n));
+  const std::vector<std::string> names = robot.jointNames();
+  auto index = [&](const std::string& joint) {
+    const auto it = std::find(names.begin(), names.end(), joint);
+    if (it == names.end()) throw std::invalid_argument(fmt::format("keepLegDirections({}): robot has no joint '{}'", clip.name, joint));
+    return static_cast<Eigen::Index>(it - names.begin());
+  };
+  const Eigen::Index hip[2] = {index("left_hip_pitch_joint"), index("right_hip_pitch_joint")};
+  const Eigen::Index ankle[2] = {index("left_ankle_pitch_joint"), index("right_ankle_pitch_joint")};
+  const LimbChain legs[2] = {model.leftLeg(), model.rightLeg()};
+  ChainFkWorkspace ws_left(legs[0]), ws_right(legs[1]);
+  ChainFkWorkspace* ws[2] = {&ws_left, &ws_right};
+  // Angle of hip → ankle about the pelvis y axis (a rotation +θ about y moves the ankle to −x).
+  auto legAngle = [&](int f, const Eigen::VectorXd& q) {
+    Eigen::Isometry3d X_BH, X_BF;
+    if (!ws[f]->segmentPose(q, 0, X_BH) || !ws[f]->tipPose(q, X_BF))
+      throw std::runtime_error(fmt::format("keepLegDirections({}): KDL forward kinematics failed", clip.name));
+    const Eigen::Vector3d v = X_BF.translation() - X_BH.translation();
+    return std::atan2(-v.x(), -v.z());
+  };
+  Eigen::Index neutral_row = 0;
+  (clip.values.array() - clip.neutral).abs().minCoeff(&neutral_row);
+  const Eigen::VectorXd q0 = clip.q.row(neutral_row).transpose();
+  const double beta0[2] = {legAngle(0, q0), legAngle(1, q0)};
+  const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
+  for (Eigen::Index i = 0; i < clip.q.rows(); ++i) {
+    Eigen::VectorXd q = clip.q.row(i).transpose();
+    for (int f = 0; f < 2; ++f) {
+      // Fixed-point iteration: turning the ankle pitch moves the foot link origin (the ankle roll
+      // axis sits 18 mm below the ankle pitch axis) a little; converges in a few steps.
+      for (int it = 0; it < 50; ++it) {
+        const double delta = legAngle(f, q) - beta0[f];
+        if (std::abs(delta) < 1e-12) break;
+        q(hip[f]) = std::min(upper(hip[f]), std::max(lower(hip[f]), q(hip[f]) - delta));
+        q(ankle[f]) = std::min(upper(ankle[f]), std::max(lower(ankle[f]), q(ankle[f]) + delta));
+      }
+    }
+    clip.q.row(i) = q.transpose();
+  }
+}
+
+}  // namespace pmg::motion

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/motion/clip_builder.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -229,4 +230,48 @@ TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
   StaticClip wrong = before;
   wrong.q.resize(3, 5);
   EXPECT_THROW(symmetrizeStaticClip(wrong, robot), std::invalid_argument);
+}
+
+TEST(ClipBuilder, KeepLegDirectionsShortensWithoutTurningTheLegs) {
+  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const KinematicModel model(robot);
+  const std::vector<std::string> names = robot.jointNames();
+  auto idx = [&](const char* j) { return static_cast<Eigen::Index>(std::find(names.begin(), names.end(), j) - names.begin()); };
+  StaticClip s;
+  s.name = "squat_like";
+  s.axis = PostureAxis::kHeight;
+  s.values = Eigen::Vector2d(0.6, 0.75);
+  s.neutral = 0.75;
+  s.q = robot.defaultPose().transpose().replicate(2, 1);
+  // Row 0: knees bent and both legs turned forward about the hips (hip pitch −0.3 on top of the
+  // knee compensation), as a squat that pushes the hips back.
+  for (const char* side : {"left_", "right_"}) {
+    s.q(0, idx((std::string(side) + "knee_joint").c_str())) += 0.6;
+    s.q(0, idx((std::string(side) + "hip_pitch_joint").c_str())) += -0.3 - 0.3;
+    s.q(0, idx((std::string(side) + "ankle_pitch_joint").c_str())) += -0.3;
+  }
+  const StaticClip before = s;
+  keepLegDirections(s, model);
+  const LimbChain legs[2] = {model.leftLeg(), model.rightLeg()};
+  for (int f = 0; f < 2; ++f) {
+    ChainFkWorkspace ws(legs[f]);
+    auto angle = [&](const Eigen::RowVectorXd& row) {
+      const Eigen::VectorXd q = row.transpose();
+      Eigen::Isometry3d X_BH, X_BF;
+      EXPECT_TRUE(ws.segmentPose(q, 0, X_BH) && ws.tipPose(q, X_BF));
+      const Eigen::Vector3d v = X_BF.translation() - X_BH.translation();
+      return std::atan2(-v.x(), -v.z());
+    };
+    const std::string side = f == 0 ? "left_" : "right_";
+    const Eigen::Index hip = idx((side + "hip_pitch_joint").c_str()), ankle = idx((side + "ankle_pitch_joint").c_str()),
+                       knee = idx((side + "knee_joint").c_str());
+    EXPECT_GT(std::abs(angle(before.q.row(0)) - angle(before.q.row(1))), 0.2);  // the input turned the leg
+    EXPECT_NEAR(angle(s.q.row(0)), angle(s.q.row(1)), 1e-9);                     // the output does not
+    EXPECT_EQ(s.q(0, knee), before.q(0, knee));                                  // leg length change kept
+    EXPECT_NEAR(s.q(0, hip) + s.q(0, ankle), before.q(0, hip) + before.q(0, ankle), 1e-12);  // sole pitch kept
+  }
+  EXPECT_EQ(s.q.row(1), before.q.row(1));  // the neutral row is the reference
+  StaticClip wrong = before;
+  wrong.q.resize(2, 3);
+  EXPECT_THROW(keepLegDirections(wrong, model), std::invalid_argument);
 }

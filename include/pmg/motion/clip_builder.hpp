@@ -192,3 +192,21 @@ void rotateClipPhase(DynamicClip& clip, Eigen::Index shift);
 void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot);
 
 }  // namespace pmg::motion
+
+namespace pmg::motion {
+
+/// Leg-direction-preserving posture template (for the height axis). Per row and leg, δ = angle
+/// of the vector hip pitch joint → ankle (foot link origin) about the pelvis y axis, minus the
+/// same angle in the neutral row; then hip pitch −= δ and ankle pitch += δ (the sole keeps its
+/// pitch). The template's leg offsets then change the leg length only, not its direction. Why:
+/// the generator adds the template's offset to the walking joints of both legs (eq. 10); an
+/// offset that also turns the legs about the hips (the captured squat pushes the hips back, so
+/// the feet move ahead of them) lowers a leg that trails behind the pelvis less than one in
+/// front, and in double support the two soles end up tens of millimetres apart vertically
+/// (docs/gco.md, "Limits"). Needs the leg chains of @p model (first joint = hip pitch about y).
+/// @throws std::invalid_argument if the clip's joint count differs from the robot's or a leg joint
+/// (`<side>_hip_pitch_joint`, `<side>_ankle_pitch_joint`) is missing; std::runtime_error if
+/// forward kinematics fails.
+void keepLegDirections(StaticClip& clip, const KinematicModel& model);
+
+}  // namespace pmg::motion
