@@ -130,8 +130,8 @@ TEST_F(ShippedClips, RewriteIsByteIdentical) {
 
 // The contact schedule {μ, σ} of every dynamic clip, played as the generator plays it (level
 // pelvis), marks soles that are on the ground, and double support only where the two soles do not
-// slide against each other (docs/motion.md, "Contact labels"). The clips of commit 9c26475 (human
-// labels) fail this: stance started with the sole 17-30 mm up, sliding 0.4-0.7 m/s.
+// slide against each other (docs/motion.md, "Contact labels of the clips"). With the human labels
+// (clips up to commit 484c9a4) the played walk_forward sole touched down 17-30 mm up.
 TEST_F(ShippedClips, ContactScheduleMatchesTheRobotSoles) {
   const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
   const pmg::KinematicModel model(robot_);
