@@ -17,6 +17,7 @@
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/safety/safe_backend.hpp"
 #include "pmg/motion/clip_io.hpp"
+#include "pmg/policy/policy_stage.hpp"
 
 namespace pmg {
 namespace {
@@ -39,6 +40,13 @@ Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> back
   generator_model_ = std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), config_.generator);
   pmg_ = std::make_unique<gco::GeneratorWithGco>(generator_model_, gco::LegModel::fromRobotConfig(robot), config_.gco);
   dt_ = 1.0 / config_.loop_rate_hz;
+  if (!config_.policy_file.empty()) {
+    policy::PolicyStageOptions po;
+    po.backend = config_.policy_native ? policy::PolicyBackend::kNative : policy::PolicyBackend::kOnnxRuntime;
+    po.control_period = dt_;
+    po.gco = config_.gco.enabled;
+    policy_ = std::make_unique<policy::PolicyStage>(config_.policy_file, robot, po);
+  }
   if (!backend) {
     if (config_.backend == BackendKind::kCan) {
       hal::bus::CanBackendSetup setup;
@@ -144,6 +152,7 @@ void Controller::tick(double now) noexcept {
       if (req == static_cast<std::int8_t>(ControllerMode::kActive) && mode_ == ControllerMode::kSoftStand) {
         mode_ = ControllerMode::kActive;
         pmg_->reset(0.0);
+        if (policy_) policy_->reset();
       }
     }
   }
@@ -167,10 +176,11 @@ void Controller::tick(double now) noexcept {
         const JointConfig& j = robot.joints[k];
         command_.motors[k] = MotorCommand{(1 - s) * stand_start_[k] + s * j.default_position, 0.0, j.kp, j.kd, 0.0};
       }
-      if (s >= 1.0) {  // standing reached: hand over to PMG
+      if (s >= 1.0) {  // standing reached: hand over to PMG (and the policy)
         mode_ = ControllerMode::kActive;
         pmg_->reset(0.0);
         shaper_.reset();
+        if (policy_) policy_->reset();
       }
       break;
     }
@@ -178,10 +188,23 @@ void Controller::tick(double now) noexcept {
       pmg_->step(shaper_.velocity(), shaper_.posture(), dt_);
       const GeneratorOutput& out = pmg_->generatorOutput();
       gen_status = out.status;
-      for (int i = 0; i < n; ++i) {
-        const auto k = static_cast<std::size_t>(i);
-        const JointConfig& j = robot.joints[k];
-        command_.motors[k] = MotorCommand{out.q_ref[i], out.qd_ref[i], j.kp, j.kd, 0.0};
+      if (policy_) {
+        // The actor observes u' (PMG eq. 19) when GCO runs, else the shaped command.
+        const gco::GcoResult& g = pmg_->gcoResult();
+        const VelocityCommand& v = shaper_.velocity();
+        const PostureCommand& p = shaper_.posture();
+        const std::array<double, 6> u =
+            config_.gco.enabled
+                ? std::array<double, 6>{g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch, g.u_opt.roll,
+                                        g.u_opt.height}
+                : std::array<double, 6>{v.vx, v.vy, v.wz, p.pitch, p.roll, p.height > 0 ? p.height : out.base_height};
+        policy_->step(state_, u, out, command_);
+      } else {
+        for (int i = 0; i < n; ++i) {
+          const auto k = static_cast<std::size_t>(i);
+          const JointConfig& j = robot.joints[k];
+          command_.motors[k] = MotorCommand{out.q_ref[i], out.qd_ref[i], j.kp, j.kd, 0.0};
+        }
       }
       break;
     }

@@ -142,6 +142,16 @@ ControllerConfig loadControllerConfig(const std::string& path) {
     throw ConfigError(f + "safety.soft_stand_duration_s: expected 0..10 s");
   if (!(c.damping_kd_scale > 0 && c.damping_kd_scale <= 5)) throw ConfigError(f + "safety.damping_kd_scale: expected (0, 5]");
 
+  const YAML::Node pol = root["policy"];
+  if (pol && pol["model"]) {
+    c.policy_file = (dir / get<std::string>(pol, "model", "", path + ": policy")).lexically_normal().string();
+    if (!fs::exists(c.policy_file)) throw ConfigError(f + "policy.model: '" + c.policy_file + "' not found");
+    const std::string engine = get<std::string>(pol, "backend", "native", path + ": policy");
+    if (engine != "native" && engine != "onnxruntime")
+      throw ConfigError(f + "policy.backend: '" + engine + "': expected native or onnxruntime");
+    c.policy_native = engine == "native";
+  }
+
   const YAML::Node tel = root["telemetry"];
   c.lcm_enabled = get<bool>(tel, "lcm", true, path + ": telemetry");
   c.lcm_url = get<std::string>(tel, "lcm_url", c.lcm_url, path + ": telemetry");

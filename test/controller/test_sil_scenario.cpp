@@ -276,3 +276,43 @@ TEST(SilScenario, GcoAblationIsSwitchableFromConfig) {
 
 }  // namespace
 }  // namespace pmg
+
+namespace pmg {
+namespace {
+
+// pmg_controller with the shipped policy and no gantry (config/controller/g1_sil_policy.yaml):
+// the actor keeps the G1 upright and walks it forward on command; the 100 Hz tick (PMG + policy
+// with the native evaluator) and the HAL cycle allocate nothing.
+TEST(SilScenario, PolicyWalksTheG1WithoutGantry) {
+  ControllerConfig config = loadControllerConfig("config/controller/g1_sil_policy.yaml");
+  config.lcm_enabled = false;
+  ASSERT_FALSE(config.mujoco.gantry.enabled);
+  Controller controller(config);
+  ASSERT_NE(controller.policy(), nullptr);
+  CommandSample sample;
+  double now = 0;
+  double min_height = 10;
+  std::size_t allocations = 0;
+  for (int k = 0; k < 700; ++k, now += 0.01) {
+    sample.velocity = {now < 1.5 ? 0.0 : 0.4, 0.0, 0.0};
+    sample.velocity_time = now;
+    controller.setInput(sample);
+    if (k == 300) test::startCountingAllocations();
+    controller.tick(now);
+    for (int c = 0; c < 5; ++c) controller.hal().cycle();
+    if (k == 400) {
+      test::stopCountingAllocations();
+      allocations = test::allocationCount();
+    }
+    min_height = std::min(min_height, controller.lastState().base_position[2]);
+  }
+  EXPECT_EQ(controller.fault(), ControllerFault::kNone);
+  EXPECT_GT(min_height, 0.6) << "the robot fell";
+  EXPECT_GT(controller.lastState().base_position[0], 0.5) << "the robot did not walk forward";
+  EXPECT_EQ(allocations, 0u);
+  std::printf("[ SIL ] policy: walked %.2f m forward in 5.5 s, lowest pelvis %.2f m\n",
+              controller.lastState().base_position[0], min_height);
+}
+
+}  // namespace
+}  // namespace pmg

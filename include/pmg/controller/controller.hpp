@@ -25,6 +25,9 @@
 namespace pmg::hal::safety {
 class SafeBackend;
 }  // namespace pmg::hal::safety
+namespace pmg::policy {
+class PolicyStage;
+}  // namespace pmg::policy
 
 namespace lcm {
 class LCM;
@@ -108,6 +111,8 @@ class Controller {
   /// GCO result of the last active tick (u' = the policy's command observation, PMG eq. 19).
   const gco::GcoResult& gcoResult() const noexcept { return pmg_->gcoResult(); }
   HalRunner& hal() noexcept { return *hal_; }
+  /// The policy stage, or nullptr when the motors follow PMG directly.
+  const policy::PolicyStage* policy() const noexcept { return policy_.get(); }
   /// The HAL's safety supervisor (config safety.hal_supervisor), or nullptr.
   hal::safety::SafeBackend* halSafety() noexcept { return hal_safety_; }
   const ControllerConfig& config() const noexcept { return config_; }
@@ -124,6 +129,7 @@ class Controller {
   ControllerConfig config_;
   std::shared_ptr<const GeneratorModel> generator_model_;
   std::unique_ptr<gco::GeneratorWithGco> pmg_;  // PMG generator + GCO (the complete generator)
+  std::unique_ptr<policy::PolicyStage> policy_;  // trained actor (legs), if configured
   std::unique_ptr<HalRunner> hal_;
   CommandShaper shaper_;
   LatestValue<CommandSample> input_;

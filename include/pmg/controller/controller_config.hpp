@@ -58,6 +58,10 @@ struct ControllerConfig {
   /// Consecutive loop ticks with an invalid state (missing reply, NaN) or a backend fault that are
   /// tolerated (the last valid command is held) before damping latches. 0 = latch at once.
   int max_invalid_ticks = 3;
+  /// Trained actor (ONNX with its pmg contract); "" = none (PMG references go to the motors
+  /// directly, as in the gantry bring-up). With a policy the gantry is normally off.
+  std::string policy_file;
+  bool policy_native = true;     ///< allocation-free native evaluator (else ONNX Runtime)
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool lcm_enabled = true;       ///< receive commands / publish telemetry over LCM
   std::string log_file;          ///< LCM event log to record ("" = none)
