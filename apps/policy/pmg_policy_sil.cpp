@@ -37,6 +37,8 @@
 #include "pmg/policy/limb_separation.hpp"
 #include "pmg/policy/observation.hpp"
 #include "pmg/policy/policy_runner.hpp"
+#include "pmg/policy/policy_stage.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 
 namespace {
 
@@ -74,18 +76,6 @@ Schedule loadSchedule(const std::string& path) {
   }
   if (s.segments.empty() || s.segments[0].t != 0.0) throw std::runtime_error(path + ": segments: first must start at t: 0");
   return s;
-}
-
-pmg::GeneratorJointSpace jointSpaceOf(const pmg::RobotConfig& r) {
-  pmg::GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
-  return js;
 }
 
 void quatToRot(const double* q, double R[9]) {
@@ -128,18 +118,9 @@ int main(int argc, char** argv) {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const Schedule sched = loadSchedule(commands);
     const double T = duration > 0 ? duration : sched.duration;
-    const auto gen_model = std::make_shared<const pmg::GeneratorModel>(pmg::loadClipLibrary(clips_dir, robot), jointSpaceOf(robot));
-    pp::PolicyRobotSpec spec = pp::makePolicyRobotSpec(robot, 0.01);
-    spec.pmg = {{"enabled", "true"}, {"gco", "false"}};
-    pp::PolicyRunnerOptions ropt;
-    ropt.backend = native ? pp::PolicyBackend::kNative : pp::PolicyBackend::kOnnxRuntime;
-    pp::PolicyRunner runner(model_path, spec, ropt);
-    const auto& contract = runner.contract();
-    pp::LimbSeparation split(contract);
+    const auto gen_model = std::make_shared<const pmg::GeneratorModel>(pmg::loadClipLibrary(clips_dir, robot), pmg::generatorJointSpace(robot));
     std::filesystem::create_directories(out);
     const int nj = static_cast<int>(robot.numJoints());
-    const int na = runner.actionSize();
-    const auto q_default = robot.defaultPose();
     std::vector<Totals> totals;
 
     for (int seed = 0; seed < seeds; ++seed) {
@@ -160,15 +141,15 @@ int main(int argc, char** argv) {
 
       pmg::MotionGenerator gen(gen_model);
       gen.reset(seed > 0 ? 0.5 * (uni(rng) + 1.0) : 0.0);
-      pp::ObservationAssembler obs(contract.observation);
-      std::vector<int> term(contract.observation.terms.size());
-      for (std::size_t i = 0; i < term.size(); ++i) term[i] = obs.termIndex(contract.observation.terms[i].name);
-      const int i_gyro = obs.termIndex("base_ang_vel_B"), i_grav = obs.termIndex("projected_gravity_B"),
-                i_cmd = obs.termIndex("command"), i_q = obs.termIndex("joint_pos_rel"), i_qd = obs.termIndex("joint_vel"),
-                i_act = obs.termIndex("last_action"), i_ref = obs.termIndex("pmg_ref_q_rel"), i_ph = obs.termIndex("pmg_phase");
-      runner.resetAction();
-      pp::JointCommand cmd;
-      cmd.resize(static_cast<std::size_t>(nj));
+      pp::PolicyStageOptions so;
+      so.backend = native ? pp::PolicyBackend::kNative : pp::PolicyBackend::kOnnxRuntime;
+      so.noise_gyro = noise ? 0.1 : 0.0;
+      so.noise_gravity = noise ? 0.03 : 0.0;
+      so.noise_q = noise ? 0.01 : 0.0;
+      so.noise_qd = noise ? 0.5 : 0.0;
+      so.noise_seed = static_cast<unsigned>(2000 + seed);
+      pp::PolicyStage stage(model_path, robot, so);  // observation, actor, limb separation as in training
+      const int na = stage.runner().actionSize();
       pmg::LowCommand low;
       low.num_motors = nj;
       pmg::LowState state;
@@ -185,7 +166,6 @@ int main(int argc, char** argv) {
       frames << "\n";
       const int frame_every = std::max(1, static_cast<int>(std::lround(frame_period / 0.01)));
       Totals tot;
-      std::vector<double> buf(64);
       const int ticks = static_cast<int>(std::lround(T / 0.01));
       for (int k = 0; k < ticks; ++k) {
         const double t = k * 0.01;
@@ -195,33 +175,7 @@ int main(int argc, char** argv) {
         gen.step({u[0], u[1], u[2]}, {u[3], u[4], u[5]}, 0.01);
         const pmg::GeneratorOutput& g = gen.output();
 
-        double R[9];
-        quatToRot(state.imu.quat_wxyz.data(), R);
-        const double n_gyro = noise ? 0.1 : 0.0, n_grav = noise ? 0.03 : 0.0, n_q = noise ? 0.01 : 0.0, n_qd = noise ? 0.5 : 0.0;
-        for (int i = 0; i < 3; ++i) buf[static_cast<std::size_t>(i)] = state.imu.gyro[static_cast<std::size_t>(i)] + n_gyro * gauss(rng);
-        obs.setTerm(i_gyro, buf.data());
-        for (int i = 0; i < 3; ++i) buf[static_cast<std::size_t>(i)] = -R[6 + i] + n_grav * gauss(rng);  // R^T (0,0,-1)
-        obs.setTerm(i_grav, buf.data());
-        obs.setTerm(i_cmd, u);
-        for (int j = 0; j < na; ++j) buf[static_cast<std::size_t>(j)] = state.motors[static_cast<std::size_t>(j)].q - q_default[j] + n_q * gauss(rng);
-        obs.setTerm(i_q, buf.data());
-        for (int j = 0; j < na; ++j) buf[static_cast<std::size_t>(j)] = state.motors[static_cast<std::size_t>(j)].qd + n_qd * gauss(rng);
-        obs.setTerm(i_qd, buf.data());
-        obs.setTerm(i_act, runner.action());
-        for (int j = 0; j < na; ++j) buf[static_cast<std::size_t>(j)] = g.q_ref[j] - q_default[j];
-        obs.setTerm(i_ref, buf.data());
-        const double ph[2] = {std::sin(2 * M_PI * g.phase), std::cos(2 * M_PI * g.phase)};
-        obs.setTerm(i_ph, ph);
-        if (obs.commit()) runner.step(obs.data());
-        split.compose(runner.jointTargets(), g.q_ref.data(), g.qd_ref.data(), cmd);
-        for (int j = 0; j < nj; ++j) {
-          auto& mc = low.motors[static_cast<std::size_t>(j)];
-          mc.q = cmd.q_des[static_cast<std::size_t>(j)];
-          mc.qd = cmd.qd_des[static_cast<std::size_t>(j)];
-          mc.kp = cmd.kp[static_cast<std::size_t>(j)];
-          mc.kd = cmd.kd[static_cast<std::size_t>(j)];
-          mc.tau_ff = 0.0;
-        }
+        stage.step(state, {u[0], u[1], u[2], u[3], u[4], u[5]}, g, low);
         ++low.sequence;
         for (int c = 0; c < 5; ++c) sim.exchange(low, state);
 
@@ -284,7 +238,7 @@ int main(int argc, char** argv) {
       std::printf("seed %d: %s after %.2f s | LinVel %.4f m/s  YawVel %.4f rad/s  Roll %.4f rad  Pitch %.4f rad  Height %.4f m  slip %.4f m/s  (policy holds %llu)\n",
                   seed, tot.fell ? "FELL" : "ok", tot.survived, tot.lin / n, tot.yaw / n, tot.roll / n, tot.pitch / n,
                   tot.height / n, tot.slip / std::max<long>(1, tot.slip_n),
-                  static_cast<unsigned long long>(runner.counters().held));
+                  static_cast<unsigned long long>(stage.runner().counters().held));
     }
     std::ofstream js(out + "/summary.json");
     double acc[6] = {0, 0, 0, 0, 0, 0};
