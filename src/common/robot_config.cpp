@@ -194,6 +194,26 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
     j.motor_id = required<int>(n, "motor_id", f, p);
     j.mirror = optional<std::string>(n, "mirror", j.name, f, p);
     j.mirror_sign = optional<int>(n, "mirror_sign", 1, f, p);
+    if (const YAML::Node a = n["actuator"]) {
+      if (a.IsScalar()) {  // path of an actuator file with a top-level `actuator:` map
+        const std::string afile = (dir / a.as<std::string>()).lexically_normal().string();
+        YAML::Node doc;
+        try {
+          doc = YAML::LoadFile(afile);
+        } catch (const YAML::Exception& e) {
+          fail(f, p + "actuator", "cannot read actuator file '" + afile + "': " + e.what());
+        }
+        if (!doc["actuator"] || !doc["actuator"].IsMap())
+          fail(f, p + "actuator", "file '" + afile + "' has no top-level `actuator:` map");
+        j.actuator_yaml = YAML::Dump(doc["actuator"]);
+        j.actuator_source = afile + ": actuator";
+      } else if (a.IsMap()) {
+        j.actuator_yaml = YAML::Dump(a);
+        j.actuator_source = f + ": " + p + "actuator";
+      } else {
+        fail(f, p + "actuator", "expected a map of actuator parameters or the path of an actuator file");
+      }
+    }
     c.joints.push_back(j);
   }
   validate(c);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -68,6 +69,28 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
                         " entries, expected " + std::to_string(n) + " (one per joint)");
     for (std::size_t i = 0; i < n; ++i) offsets_[static_cast<Eigen::Index>(i)] = options_.encoder_offsets[i];
   }
+  // Identified actuator models (robot config `actuator:` blocks).
+  actuator_.resize(n);
+  actuator_state_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const JointConfig& j = robot_.joints[i];
+    if (j.actuator_yaml.empty()) continue;
+    calib::ActuatorBlock block;
+    try {
+      block = calib::parse_actuator_block(YAML::Load(j.actuator_yaml), j.actuator_source);
+    } catch (const std::exception& e) {
+      throw ConfigError(std::string(e.what()) + " (joint " + j.name + ")");
+    }
+    if (block.params.backlash_gap_rad > 0)
+      throw ConfigError(j.actuator_source + ".backlash_gap_rad: backlash needs a rotor body; the G1 SIL does not "
+                                            "model it (expected 0 for joint " + j.name + ")");
+    block.params.torque_limit_Nm = std::min(block.params.torque_limit_Nm, j.torque_limit);
+    const int v = dof_adr_[i];
+    if (block.armature_kgm2) model_->dof_armature[v] = *block.armature_kgm2;
+    model_->dof_frictionloss[v] = 0.0;  // the actuator model's friction replaces MuJoCo's dry friction
+    actuator_[i] = block;
+    any_actuator_ = true;
+  }
   reset();
 }
 
@@ -83,6 +106,7 @@ void MujocoBackend::reset() noexcept {
   anchor_ = Eigen::Vector3d(0.0, 0.0, z);
   mj_forward(model_.get(), data_.get());
   tau_.setZero();
+  for (auto& st : actuator_state_) st.reset();
   push_until_ = -1.0;
   cycles_ = 0;
 }
@@ -123,21 +147,44 @@ BackendStatus MujocoBackend::exchange(const LowCommand& command, LowState& state
   const int nc = std::min(n, command.num_motors);
   for (int s = 0; s < substeps_; ++s) {
     applyGantry();
+    // Split step: position/velocity stages first, so the actuator model's stiction sees this
+    // step's inertia and bias forces (equivalent to mj_step with the Euler integrator).
+    mj_step1(model_.get(), data_.get());
     for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const int v = dof_adr_[k];
+      const double q_true = data_->qpos[qpos_adr_[k]];
+      const double qd = data_->qvel[v];
+      MotorCommand c{};
+      const bool enabled = i < nc;
+      if (enabled) c = command.motors[k];
       double tau = 0.0;
-      if (i < nc) {
-        const MotorCommand& c = command.motors[static_cast<std::size_t>(i)];
+      if (actuator_[k]) {
+        const calib::ActuatorBlock& b = *actuator_[k];
+        calib::JointSample js;
+        js.q_rad = q_true + offsets_[i];  // hidden zero offsets come on top of the model's own
+        js.dq_rad_per_s = qd;
+        js.dt_s = model_->opt.timestep;
+        js.inertia_kgm2 = data_->qM[model_->dof_Madr[v]];
+        js.tau_other_Nm = -data_->qfrc_bias[v] + data_->qfrc_passive[v];
+        const calib::MotorCommand mc{c.q, c.qd, c.kp * b.kp_scale, c.kd * b.kd_scale, c.tau_ff,
+                                     enabled && std::isfinite(c.q + c.qd + c.kp + c.kd + c.tau_ff)};
+        const calib::ActuatorOutput out = calib::ActuatorModel::step(b.params, actuator_state_[k], mc, js);
+        data_->qfrc_applied[v] = out.tau_applied_Nm;
+        data_->ctrl[i] = 0.0;
+        tau = out.tau_motor_Nm;
+      } else if (enabled) {
         // The driver sees its own (offset) encoder reading.
-        const double q_meas = data_->qpos[qpos_adr_[static_cast<std::size_t>(i)]] + offsets_[i];
-        const double qd_meas = data_->qvel[dof_adr_[static_cast<std::size_t>(i)]];
-        tau = c.kp * (c.q - q_meas) + c.kd * (c.qd - qd_meas) + c.tau_ff;
+        tau = c.kp * (c.q - (q_true + offsets_[i])) + c.kd * (c.qd - qd) + c.tau_ff;
         if (!std::isfinite(tau)) tau = 0.0;
         tau = std::clamp(tau, -torque_limit_[i], torque_limit_[i]);
+        data_->ctrl[i] = tau;  // MJCF <motor> gear 1, in joint order
+      } else {
+        data_->ctrl[i] = 0.0;
       }
       tau_[i] = tau;
-      data_->ctrl[i] = tau;  // MJCF <motor> gear 1, in joint order
     }
-    mj_step(model_.get(), data_.get());
+    mj_step2(model_.get(), data_.get());
   }
   ++cycles_;
   bool diverged = false;
@@ -156,7 +203,8 @@ void MujocoBackend::readState(LowState& state) const noexcept {
   state.num_motors = n;
   for (int i = 0; i < n; ++i) {
     MotorState& m = state.motors[static_cast<std::size_t>(i)];
-    m.q = data_->qpos[qpos_adr_[static_cast<std::size_t>(i)]] + offsets_[i];
+    const auto k = static_cast<std::size_t>(i);
+    m.q = data_->qpos[qpos_adr_[k]] + offsets_[i] + (actuator_[k] ? actuator_[k]->params.offset_rad : 0.0);
     m.qd = data_->qvel[dof_adr_[static_cast<std::size_t>(i)]];
     m.tau = tau_[i];
     m.valid = true;

@@ -35,6 +35,13 @@ struct JointConfig {
   int motor_id = 0;            ///< CAN id of the motor driver on its bus, 1..2047
   std::string mirror;          ///< name of the left/right mirror joint (itself for sagittal joints)
   int mirror_sign = 1;         ///< q_mirror = mirror_sign · q (±1)
+  /// Identified actuator model of this joint (pmg_calib_dynamics output, docs/calibration.md) as
+  /// the YAML text of its `actuator:` map, or "" for the ideal motor. In the file either an inline
+  /// map (`actuator: {fc_Nm: 0.3, delay_s: 0.002}`) or the path of an actuator file (`actuator:
+  /// calib/left_knee.actuator.yaml`, relative to the robot config). Parsed and validated by the
+  /// simulator that applies it (pmg::MujocoBackend, pmg::calib::parse_actuator_block).
+  std::string actuator_yaml;
+  std::string actuator_source;  ///< where the block came from (file and key), for error messages
 };
 
 /// One motor bus (CAN / CAN FD).

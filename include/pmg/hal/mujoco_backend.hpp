@@ -11,14 +11,21 @@
 ///    orientation spring-damper that keeps the torso upright), as robots are commissioned hanging
 ///    from a gantry. A real bring-up mode; it stays in the product;
 ///  - hidden encoder zero offsets: reported q = true q + offset (for zero-point calibration tests);
+///  - the identified actuator model of a joint (robot config `actuator:` block from
+///    pmg_calib_dynamics, pmg::calib::ActuatorModel): transport delay, driver PD rate, zero
+///    offset, torque saturation and torque-speed envelope, Coulomb/Stribeck/load-dependent
+///    friction with true stiction, viscous friction, armature and gain scales (backlash needs a
+///    rotor body and is not applied to the robot: a configured gap is refused with an error);
 ///  - external pushes on a body (fault-injection tests).
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "pmg/calib/actuator_yaml.hpp"
 #include "pmg/common/mujoco_model.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/backend.hpp"
@@ -65,6 +72,8 @@ class MujocoBackend final : public HalBackend {
   int pelvisBody() const noexcept { return pelvis_body_; }
   /// Latest torques applied by the motor model (n) [N·m].
   const Eigen::VectorXd& appliedTorque() const noexcept { return tau_; }
+  /// Whether joint @p i runs an identified actuator model.
+  bool hasActuatorModel(int i) const noexcept { return actuator_[static_cast<std::size_t>(i)].has_value(); }
 
  private:
   void applyGantry() noexcept;
@@ -79,6 +88,9 @@ class MujocoBackend final : public HalBackend {
   std::vector<int> qpos_adr_, dof_adr_;
   int sensor_quat_ = -1, sensor_gyro_ = -1, sensor_acc_ = -1;
   Eigen::VectorXd tau_, torque_limit_, offsets_;
+  std::vector<std::optional<calib::ActuatorBlock>> actuator_;  // per joint, from the robot config
+  std::vector<calib::ActuatorState> actuator_state_;           // per joint (fixed-size delay lines)
+  bool any_actuator_ = false;
   Eigen::Vector3d anchor_{0, 0, 0};
   Eigen::Vector3d push_force_{0, 0, 0};
   int push_body_ = -1;
