@@ -312,9 +312,9 @@ TEST(CanBackend, ExchangeDoesNotAllocate) {
   r.can->exchange(r.cmd, r.st);
   long allocs = 0;
   {
-    pmg_test::AllocScope scope;
+    pmg::test::AllocationGuard scope;
     for (int i = 0; i < 50; ++i) r.can->exchange(r.cmd, r.st);
-    allocs = scope.allocations();
+    allocs = static_cast<long>(scope.count());
   }
   EXPECT_EQ(allocs, 0);
   EXPECT_EQ(r.can->motorCounters(0).replies, 51u);

@@ -192,9 +192,9 @@ TEST(SilFaults, HalCycleDoesNotAllocate) {
   rig.cycle();
   long allocs = 0;
   {
-    pmg_test::AllocScope scope;
+    pmg::test::AllocationGuard scope;
     for (int i = 0; i < 200; ++i) rig.cycle();
-    allocs = scope.allocations();
+    allocs = static_cast<long>(scope.count());
   }
   EXPECT_EQ(allocs, 0);
   EXPECT_EQ(rig.mode(), Mode::kActive);

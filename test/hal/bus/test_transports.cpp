@@ -155,14 +155,14 @@ TEST(UdpCanTransport, CyclicCallsDoNotAllocate) {
   CanFrame out;
   long allocs = 0;
   {
-    pmg_test::AllocScope scope;
+    pmg::test::AllocationGuard scope;
     for (int i = 0; i < 100; ++i) {
       p.a.send(f);
       p.b.receive(out);
     }
     p.b.receive(out);
     p.b.state();
-    allocs = scope.allocations();
+    allocs = static_cast<long>(scope.count());
   }
   EXPECT_EQ(allocs, 0);
   EXPECT_GT(p.b.counters().rx_frames, 0u);
@@ -327,16 +327,18 @@ TEST(AllocCounter, CountsThisThreadsAllocations) {
   std::atomic<bool> go{false}, done{false};
   std::thread other([&] {
     while (!go) std::this_thread::yield();
-    auto q = std::make_unique<int>(2);
+    static std::unique_ptr<int> q;  // escapes: the allocation cannot be elided
+    q = std::make_unique<int>(2);
     done = true;
   });
   long n = 0;
   {
-    pmg_test::AllocScope scope;
+    pmg::test::AllocationGuard scope;
     go = true;
     while (!done) std::this_thread::yield();
-    auto p = std::make_unique<int>(1);
-    n = scope.allocations();
+    static std::unique_ptr<int> p;  // escapes: the allocation cannot be elided
+    p = std::make_unique<int>(1);
+    n = static_cast<long>(scope.count());
   }
   other.join();
   EXPECT_EQ(n, 1);

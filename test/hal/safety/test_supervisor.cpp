@@ -400,7 +400,7 @@ TEST(Supervisor, StepDoesNotAllocate) {
   Rig r;
   long allocs = 0;
   {
-    pmg_test::AllocScope scope;
+    pmg::test::AllocationGuard scope;
     r.tick(ModeRequest::kSoftStand);
     r.ticks(600);
     r.in.q = {0.8, 0.1};
@@ -410,7 +410,7 @@ TEST(Supervisor, StepDoesNotAllocate) {
     r.ticks(300);
     r.in.qd = {0, 0};
     r.tick(ModeRequest::kPassive);
-    allocs = scope.allocations();
+    allocs = static_cast<long>(scope.count());
   }
   EXPECT_EQ(allocs, 0);
   EXPECT_EQ(r.out.mode, Mode::kPassive);
