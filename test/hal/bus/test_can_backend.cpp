@@ -287,6 +287,9 @@ TEST(CanBackend, BusOffSkipsTheBusAndRestartsIt) {
 TEST(CanBackend, PacedSendsFollowTheSlotSchedule) {
   Rig r(/*paced=*/true);
   r.can->exchange(r.cmd, r.st);
+  // Let every frame of the first cycle (enable + command) arrive before clearing: on a loaded
+  // machine they can reach the peer after exchange() returned.
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
   {
     std::lock_guard<std::mutex> lock(r.peer.mutex);
     r.peer.received.clear();
