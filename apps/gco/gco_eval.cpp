@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
@@ -30,18 +31,6 @@ struct Command {
 struct Outcome {
   FootSlipStats with, without;
 };
-
-pmg::GeneratorJointSpace jointSpaceOf(const pmg::RobotConfig& r) {
-  pmg::GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
-  return js;
-}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -130,7 +119,7 @@ int main(int argc, char** argv) {
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
-    auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, jointSpaceOf(robot));
+    auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot));
     auto legs = LegModel::fromRobotConfig(robot);
     GcoOptions on = gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config);
     on.enabled = true;

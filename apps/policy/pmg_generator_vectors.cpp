@@ -19,6 +19,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -65,18 +66,6 @@ class Json {
  private:
   std::FILE* f_;
 };
-
-pmg::GeneratorJointSpace jointSpaceOf(const pmg::RobotConfig& r) {
-  pmg::GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
-  return js;
-}
 
 pmg::DynamicClip syntheticDynamic(const pmg::GeneratorJointSpace& js, const char* name, CommandAxis axis,
                                   int direction, double nominal, double period, int samples, double seed) {
@@ -177,7 +166,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
-    const pmg::GeneratorJointSpace js = jointSpaceOf(robot);
+    const pmg::GeneratorJointSpace js = pmg::generatorJointSpace(robot);
     pmg::ClipLibrary lib;
     if (!clip_files.empty()) {
       lib = pmg::loadClipLibrary(clip_files, robot);

@@ -4,6 +4,7 @@
 // Tail latency (p50/p99/max per tick) is printed by pmg_gco_tick_bench.
 #include <benchmark/benchmark.h>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/gco/synthetic_gait.hpp"
@@ -15,14 +16,7 @@ using namespace pmg;
 using namespace pmg::gco;
 
 std::shared_ptr<const GeneratorModel> generatorModel(const RobotConfig& r) {
-  GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
+  const GeneratorJointSpace js = pmg::generatorJointSpace(r);
   return std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", r), js);
 }
 

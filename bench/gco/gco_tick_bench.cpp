@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -35,14 +36,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     const RobotConfig robot = loadRobotConfig(robot_path);
-    GeneratorJointSpace js;
-    js.joint_names = robot.jointNames();
-    js.q_stand = robot.defaultPose();
-    js.lower = robot.lowerLimits();
-    js.upper = robot.upperLimits();
-    js.mirror_index = robot.mirrorIndex();
-    for (const auto& j : robot.joints) js.mirror_sign.push_back(j.mirror_sign);
-    js.standing_base_height = robot.standing_base_height;
+    const GeneratorJointSpace js = pmg::generatorJointSpace(robot);
     auto model = std::make_shared<const GeneratorModel>(loadClipLibrary(clips_dir, robot), js);
     auto legs = LegModel::fromRobotConfig(robot);
     MotionGenerator gen(model);

@@ -1,6 +1,7 @@
 // Generator + GCO on the shipped G1 clips (config/clips/g1): the complete issue-4 tick.
 #include <gtest/gtest.h>
 
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
@@ -9,22 +10,10 @@
 namespace pmg::gco {
 namespace {
 
-GeneratorJointSpace jointSpaceOf(const RobotConfig& r) {
-  GeneratorJointSpace js;
-  js.joint_names = r.jointNames();
-  js.q_stand = r.defaultPose();
-  js.lower = r.lowerLimits();
-  js.upper = r.upperLimits();
-  js.mirror_index = r.mirrorIndex();
-  for (const auto& j : r.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = r.standing_base_height;
-  return js;
-}
-
 struct Fixture {
   Fixture()
       : robot(loadRobotConfig("config/robots/g1/g1.yaml")),
-        model(std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", robot), jointSpaceOf(robot))),
+        model(std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", robot), pmg::generatorJointSpace(robot))),
         legs(LegModel::fromRobotConfig(robot)) {}
   RobotConfig robot;
   std::shared_ptr<const GeneratorModel> model;

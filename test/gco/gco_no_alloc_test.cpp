@@ -7,6 +7,7 @@
 #include <new>
 
 #include "gco_test_util.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -79,14 +80,7 @@ TEST(GcoNoAlloc, SolveAndKinematicsAllocateNothingPerTick) {
 
 TEST(GcoNoAlloc, GeneratorPlusGcoTickAllocatesNothing) {
   const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
-  GeneratorJointSpace js;
-  js.joint_names = robot.jointNames();
-  js.q_stand = robot.defaultPose();
-  js.lower = robot.lowerLimits();
-  js.upper = robot.upperLimits();
-  js.mirror_index = robot.mirrorIndex();
-  for (const auto& j : robot.joints) js.mirror_sign.push_back(j.mirror_sign);
-  js.standing_base_height = robot.standing_base_height;
+  const GeneratorJointSpace js = pmg::generatorJointSpace(robot);
   auto model = std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", robot), js);
   GeneratorWithGco pipe(model, LegModel::fromRobotConfig(robot), GcoOptions{});
   pipe.step({0.3, 0.0, 0.0}, {}, 0.01);  // warm-up
