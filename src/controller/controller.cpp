@@ -248,6 +248,9 @@ void Controller::tick(double now) noexcept {
   f.imu_acc = state_.imu.acc;
   f.generator_status = static_cast<std::int32_t>(gen_status);
   f.fault = static_cast<std::int32_t>(fault_);
+  f.hal_runtime = state_.hal_runtime;
+  f.hal_period = state_.hal_period;
+  f.hal_overruns = state_.hal_overruns;
   const double wall_end = wallSeconds();
   f.loop_runtime = wall_end - wall_start;
   f.loop_period = last_tick_wall_ > 0 ? wall_start - last_tick_wall_ : 0.0;
@@ -262,6 +265,7 @@ void Controller::drainTelemetry() {
   pmg_lcm::controller_state_t msg;
   while (telemetry_.pop(f)) {
     loop_timing_.record(f.loop_runtime, f.loop_period, f.loop_runtime > dt_);
+    if (f.hal_period > 0) hal_timing_.record(f.hal_runtime, f.hal_period, false);
     if (!lcm_ && !log_) continue;
     msg.utime = toUtime(f.time);
     msg.tick = f.tick;
@@ -304,33 +308,40 @@ void Controller::drainTelemetry() {
       log_->writeEvent(&ev);
     }
     ++telemetry_written_;
-    if (f.tick % 100 == 99) {  // 1 Hz timing report
-      const TimingSummary s = loop_timing_.summary();
-      pmg_lcm::timing_t t;
-      t.utime = msg.utime;
-      t.task = "loop";
-      t.cycles = s.cycles;
-      t.period_target_s = dt_;
-      t.runtime_p50_s = s.runtime_p50;
-      t.runtime_p99_s = s.runtime_p99;
-      t.runtime_max_s = s.runtime_max;
-      t.period_p50_s = s.period_p50;
-      t.period_p99_s = s.period_p99;
-      t.period_max_s = s.period_max;
-      t.deadline_misses = s.deadline_misses;
-      const int ts = t.getEncodedSize();
-      std::vector<std::uint8_t> tb(static_cast<std::size_t>(ts));
-      t.encode(tb.data(), 0, ts);
-      if (lcm_) lcm_->publish("PMG_TIMING", tb.data(), static_cast<unsigned>(ts));
-      if (log_) {
-        lcm::LogEvent ev{};
-        ev.timestamp = t.utime;
-        ev.channel = "PMG_TIMING";
-        ev.datalen = ts;
-        ev.data = tb.data();
-        log_->writeEvent(&ev);
-      }
+    if (f.tick % 100 == 99) {  // 1 Hz timing reports: the loop, and the HAL (real time)
+      publishTiming("loop", loop_timing_.summary(), dt_, msg.utime, loop_timing_.deadlineMisses());
+      if (hal_timing_.cycles() > 0)
+        publishTiming("hal", hal_timing_.summary(), hal_->cyclePeriod(), msg.utime,
+                      static_cast<std::int64_t>(f.hal_overruns));
     }
+  }
+}
+
+void Controller::publishTiming(const char* task, const TimingSummary& s, double period, std::int64_t utime,
+                               std::int64_t misses) {
+  pmg_lcm::timing_t t;
+  t.utime = utime;
+  t.task = task;
+  t.cycles = s.cycles;
+  t.period_target_s = period;
+  t.runtime_p50_s = s.runtime_p50;
+  t.runtime_p99_s = s.runtime_p99;
+  t.runtime_max_s = s.runtime_max;
+  t.period_p50_s = s.period_p50;
+  t.period_p99_s = s.period_p99;
+  t.period_max_s = s.period_max;
+  t.deadline_misses = misses;
+  const int size = t.getEncodedSize();
+  std::vector<std::uint8_t> buffer(static_cast<std::size_t>(size));
+  t.encode(buffer.data(), 0, size);
+  if (lcm_) lcm_->publish("PMG_TIMING", buffer.data(), static_cast<unsigned>(size));
+  if (log_) {
+    lcm::LogEvent ev{};
+    ev.timestamp = utime;
+    ev.channel = "PMG_TIMING";
+    ev.datalen = size;
+    ev.data = buffer.data();
+    log_->writeEvent(&ev);
   }
 }
 

@@ -37,6 +37,9 @@ BackendStatus HalRunner::cycle() noexcept {
   commands_.read(command_);
   const BackendStatus status = backend_->exchange(command_, state_);
   if (status == BackendStatus::kFault) fault_cycles_.fetch_add(1);
+  state_.hal_runtime = last_runtime_;
+  state_.hal_period = last_period_;
+  state_.hal_overruns = overruns_;
   states_.write(state_);
   return status;
 }
@@ -79,6 +82,9 @@ void HalRunner::threadMain() {
     const double end = monotonicSeconds();
     const bool missed = (end - next) > period;  // finished after the next deadline
     timing_.record(end - start, last_start > 0 ? start - last_start : 0.0, missed);
+    last_runtime_ = end - start;
+    last_period_ = last_start > 0 ? start - last_start : 0.0;
+    if (missed) ++overruns_;
     last_start = start;
     next += period;
     if (end > next + period) next = end;  // overran by more than a cycle: re-anchor, count it

@@ -63,6 +63,8 @@ struct TelemetryFrame {
   std::int32_t fault = 0;
   double loop_runtime = 0;   ///< compute time of this tick [s]
   double loop_period = 0;    ///< time since the previous tick start [s] (wall clock)
+  double hal_runtime = 0, hal_period = 0;  ///< the HAL cycle before this tick [s] (real time)
+  std::uint64_t hal_overruns = 0;
 };
 
 /// Summary of a run (printed by pmg_controller, asserted by the SIL tests).
@@ -123,6 +125,8 @@ class Controller {
  private:
   void publisherMain();
   void drainTelemetry();
+  void publishTiming(const char* task, const TimingSummary& summary, double period, std::int64_t utime,
+                     std::int64_t misses);
   void lcmInputMain();
   void enterDamping(ControllerFault why) noexcept;
 
@@ -153,6 +157,7 @@ class Controller {
   SpscRing<TelemetryFrame, 1024> telemetry_;
   TelemetryFrame frame_{};
   TimingStats loop_timing_;  // recorded by the publisher thread from the frames
+  TimingStats hal_timing_;   // HAL cycles sampled once per tick (real time), ditto
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<lcm::LogFile> log_;
   std::atomic<bool> publisher_running_{false};

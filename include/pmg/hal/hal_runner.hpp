@@ -65,6 +65,8 @@ class HalRunner {
   TimingStats timing_;
   std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> fault_cycles_{0};
+  double last_runtime_ = 0.0, last_period_ = 0.0;  // HAL thread only
+  std::uint64_t overruns_ = 0;                      // HAL thread only
   std::thread thread_;
 };
 

@@ -59,6 +59,11 @@ struct LowState {
   std::array<double, 3> base_linear_velocity{}; ///< pelvis linear velocity, world [m/s]
   bool base_truth_valid = false;
   std::uint32_t backend_faults = 0;  ///< cumulative backend error count (bus errors, sim warnings)
+  /// HAL task timing of the previous cycle (real-time mode; 0 in lockstep) [s] and the cumulative
+  /// overrun count, so the loop can put the HAL's timing into telemetry.
+  double hal_runtime = 0.0;
+  double hal_period = 0.0;
+  std::uint64_t hal_overruns = 0;
 };
 
 }  // namespace pmg
