@@ -58,7 +58,7 @@ def main(log_path: str, png_path: str) -> int:
         ax2.set_ylim(-1.2, 1.2)
         ax2.legend(loc="lower right", fontsize=7)
     axes[0, 0].legend(loc="upper left", fontsize=7)
-    fig.suptitle(f"G1 leg joint tracking in the MuJoCo 2.2 SIL (gantry), mean RMS {np.nanmean(rms_all):.4f} rad")
+    fig.suptitle(f"G1 leg joint tracking in the MuJoCo 2.2 SIL ({os.path.basename(log_path)}), mean RMS {np.nanmean(rms_all):.4f} rad")
     fig.tight_layout()
     fig.savefig(png_path, dpi=110)
     print(f"{png_path}: leg tracking RMS per joint [rad]: " + " ".join(f"{r:.4f}" for r in rms_all))
