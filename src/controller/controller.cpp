@@ -230,8 +230,11 @@ void Controller::tick(double now) noexcept {
     f.q[k] = state_.motors[k].q;
     f.qd[k] = state_.motors[k].qd;
     f.tau[k] = state_.motors[k].tau;
-    f.q_ref[k] = command_.motors[k].q;
-    f.qd_ref[k] = command_.motors[k].qd;
+    // q_ref = the PMG reference while active (with a policy the motor targets are the actor's),
+    // else the motor command (soft stand, damping).
+    const bool pmg_ref = mode_ == ControllerMode::kActive;
+    f.q_ref[k] = pmg_ref ? out.q_ref[i] : command_.motors[k].q;
+    f.qd_ref[k] = pmg_ref ? out.qd_ref[i] : command_.motors[k].qd;
   }
   f.phase = out.phase;
   f.period = out.period;
