@@ -388,6 +388,14 @@ void Controller::lcmInputMain() {
   while (input_running_.load()) rx.handleTimeout(20);
 }
 
+void Controller::injectScript(const CommandScript& script, double now, CommandSample& sample) noexcept {
+  const CommandSegment& seg = script.at(now);
+  sample.velocity = seg.velocity;
+  sample.posture = seg.posture;
+  sample.velocity_time = sample.posture_time = now;
+  setInput(sample);
+}
+
 RunSummary Controller::runLockstep(double duration, const CommandScript* script) {
   const int cycles = config_.cyclesPerTick();
   const auto ticks = static_cast<std::int64_t>(std::llround(duration * config_.loop_rate_hz));
@@ -395,13 +403,7 @@ RunSummary Controller::runLockstep(double duration, const CommandScript* script)
   const double wall0 = wallSeconds();
   for (std::int64_t k = 0; k < ticks; ++k) {
     const double now = static_cast<double>(k) * dt_;
-    if (script) {
-      const CommandSegment& seg = script->at(now);
-      sample.velocity = seg.velocity;
-      sample.posture = seg.posture;
-      sample.velocity_time = sample.posture_time = now;
-      setInput(sample);
-    }
+    if (script) injectScript(*script, now, sample);
     tick(now);
     for (int c = 0; c < cycles; ++c) {
       const double h0 = wallSeconds();
@@ -420,17 +422,7 @@ RunSummary Controller::runLockstep(double duration, const CommandScript* script)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
     if (telemetry_written_ + telemetry_.dropped() >= static_cast<std::uint64_t>(ticks_) || (!lcm_ && !log_)) break;
   }
-  publisher_running_ = false;
-  if (publisher_.joinable()) publisher_.join();
-  s.loop = loop_timing_.summary();
-  s.hal = hal_->timing().summary();
-  s.deadline_misses = deadline_misses_;
-  s.commands = shaper_.counters();
-  s.telemetry_dropped = telemetry_.dropped();
-  s.telemetry_written = telemetry_written_;
-  s.fault = fault_;
-  s.final_mode = mode_;
-  if (log_) log_.reset();  // flush and close the event log
+  finishRun(s, /*count_hal_misses=*/false);
   return s;
 }
 
@@ -456,13 +448,7 @@ RunSummary Controller::runRealtime(double duration, const std::atomic<bool>* sto
   while (true) {
     const double now = wallSeconds() - wall0;
     if ((duration > 0 && now >= duration) || (stop && stop->load())) break;
-    if (script) {
-      const CommandSegment& seg = script->at(now);
-      sample.velocity = seg.velocity;
-      sample.posture = seg.posture;
-      sample.velocity_time = sample.posture_time = now;
-      setInput(sample);
-    }
+    if (script) injectScript(*script, now, sample);
     tick(now);
     ++k;
     next += dt_;
@@ -481,18 +467,22 @@ RunSummary Controller::runRealtime(double duration, const std::atomic<bool>* sto
   s.ticks = k;
   s.sim_time = hal_->backend().cyclePeriod() * static_cast<double>(hal_->timing().cycles());
   s.real_time_factor = s.wall_time > 0 ? s.sim_time / s.wall_time : 0;
-  publisher_running_ = false;
+  finishRun(s, /*count_hal_misses=*/true);
+  return s;
+}
+
+void Controller::finishRun(RunSummary& s, bool count_hal_misses) {
+  publisher_running_ = false;  // drain the telemetry, then summarise
   if (publisher_.joinable()) publisher_.join();
   s.loop = loop_timing_.summary();
   s.hal = hal_->timing().summary();
-  s.deadline_misses = deadline_misses_ + s.hal.deadline_misses;
+  s.deadline_misses = deadline_misses_ + (count_hal_misses ? s.hal.deadline_misses : 0);
   s.commands = shaper_.counters();
   s.telemetry_dropped = telemetry_.dropped();
   s.telemetry_written = telemetry_written_;
   s.fault = fault_;
   s.final_mode = mode_;
-  if (log_) log_.reset();
-  return s;
+  if (log_) log_.reset();  // flush and close the event log
 }
 
 }  // namespace pmg

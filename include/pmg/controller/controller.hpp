@@ -129,6 +129,10 @@ class Controller {
                      std::int64_t misses);
   void lcmInputMain();
   void enterDamping(ControllerFault why) noexcept;
+  /// End of a run: stops the publisher (draining the telemetry), fills the summary, closes the log.
+  void finishRun(RunSummary& summary, bool count_hal_misses);
+  /// Writes the script's command at time @p now as operator input (as if received).
+  void injectScript(const CommandScript& script, double now, CommandSample& sample) noexcept;
 
   ControllerConfig config_;
   std::shared_ptr<const GeneratorModel> generator_model_;
