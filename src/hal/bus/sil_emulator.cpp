@@ -21,15 +21,8 @@ SilDriverEmulator::SilDriverEmulator(const BusPlan& plan, std::unique_ptr<pmg::H
       throw std::invalid_argument("SIL: bus '" + b.name + "' uses protocol '" + b.protocol +
                                   "'; the driver emulator speaks 'mit'");
   }
-  const std::size_t nb = plan_.buses().size();
-  for (std::size_t b = 0; b <= nb; ++b) {
-    UdpCanTransport::Options o;
-    o.local_port = udpPorts(base, nb, b).second;
-    o.peer_port = udpPorts(base, nb, b).first;
-    auto t = std::make_unique<UdpCanTransport>(o);
-    if (b < nb) buses_.push_back(std::move(t));
-    else imu_ = std::move(t);
-  }
+  buses_ = makeUdpTransports(plan_, base, UdpSide::kSil, imu_);
+  const std::size_t nb = buses_.size();
   for (auto& t : buses_) fds_.push_back(::pollfd{t->pollFd(), POLLIN, 0});
   late_.reserve(64);
   route_.resize(nb);

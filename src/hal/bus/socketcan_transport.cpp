@@ -161,12 +161,7 @@ RxStatus SocketCanTransport::receive(CanFrame& out) noexcept {
       ++counters_.rx_errors;
       return RxStatus::kError;
     }
-    if (out.error) {
-      applyErrorClass(out.id);
-    } else {
-      ++counters_.rx_frames;
-    }
-    return RxStatus::kFrame;
+    return acceptFrame(out);
   }
 }
 

@@ -25,6 +25,15 @@ const char* toString(TxStatus s) noexcept {
   return "unknown";
 }
 
+RxStatus CanTransport::acceptFrame(const CanFrame& frame) noexcept {
+  if (frame.error) {
+    applyErrorClass(frame.id);
+  } else {
+    ++counters_.rx_frames;
+  }
+  return RxStatus::kFrame;
+}
+
 void CanTransport::applyErrorClass(std::uint32_t mask) noexcept {
   ++counters_.rx_error_frames;
   if (mask & kErrorBusOff) {
@@ -67,12 +76,7 @@ RxStatus EthercatCanTransport::receive(CanFrame& out) noexcept {
   state_ = gw_.channelState(channel_);
   if (state_ == BusState::kBusOff && before != BusState::kBusOff) ++counters_.bus_off_events;
   if (!gw_.popRx(channel_, out)) return RxStatus::kEmpty;
-  if (out.error) {
-    applyErrorClass(out.id);
-  } else {
-    ++counters_.rx_frames;
-  }
-  return RxStatus::kFrame;
+  return acceptFrame(out);
 }
 
 bool EthercatCanTransport::restart() noexcept {

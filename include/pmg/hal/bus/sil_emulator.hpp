@@ -63,7 +63,12 @@ inline std::pair<std::uint16_t, std::uint16_t> udpPorts(std::uint16_t base, std:
   return {static_cast<std::uint16_t>(base + 2 * b), static_cast<std::uint16_t>(base + 2 * b + 1)};
 }
 
-/// Host-side UDP transports for `plan` (one per bus) and the IMU channel, bound to the port layout.
+/// UDP transports for `plan` (one per bus) and the IMU channel, bound to the port layout, for the
+/// host (controller) side or the SIL (driver emulator) side.
+enum class UdpSide { kHost, kSil };
+std::vector<std::unique_ptr<UdpCanTransport>> makeUdpTransports(const BusPlan& plan, std::uint16_t base_port,
+                                                                UdpSide side, std::unique_ptr<UdpCanTransport>& imu_out);
+/// Host-side transports (makeUdpTransports with UdpSide::kHost).
 std::vector<std::unique_ptr<CanTransport>> makeHostUdpTransports(const BusPlan& plan, std::uint16_t base_port,
                                                                  std::unique_ptr<CanTransport>& imu_out);
 

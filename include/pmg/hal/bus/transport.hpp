@@ -75,6 +75,9 @@ class CanTransport {
  protected:
   /// Update state and counters from an error indication (ErrorClass mask). Shared by all transports.
   void applyErrorClass(std::uint32_t mask) noexcept;
+  /// Counts a decoded frame: an error indication updates the state, a data frame the rx counter.
+  /// Returns RxStatus::kFrame (the common end of every receive()).
+  RxStatus acceptFrame(const CanFrame& frame) noexcept;
   std::string name_;
   BusState state_ = BusState::kErrorActive;
   TransportCounters counters_;
