@@ -309,25 +309,7 @@ DynamicClip mirrorClip(const DynamicClip& clip, const RobotConfig& robot, const 
   double start = m.contact[0].mu - m.contact[0].sigma;
   start -= std::floor(start);
   const Eigen::Index shift = static_cast<Eigen::Index>(std::lround(start * static_cast<double>(N))) % N;
-  if (shift != 0) {
-    auto rotate = [&](Eigen::MatrixXd& x) {
-      const Eigen::MatrixXd y = x;
-      for (Eigen::Index k = 0; k < N; ++k) x.row(k) = y.row((k + shift) % N);
-    };
-    rotate(m.q);
-    rotate(m.qd);
-    rotate(m.v_base);
-    rotate(m.omega_base);
-    Eigen::MatrixXd h = m.base_height;
-    rotate(h);
-    m.base_height = h.col(0);
-    const double dphi = static_cast<double>(shift) / static_cast<double>(N);
-    for (auto& c : m.contact) {
-      c.mu -= dphi;
-      c.mu -= std::floor(c.mu);
-      if (c.mu >= 1.0) c.mu = 0.0;
-    }
-  }
+  rotateClipPhase(m, shift);
   if (m.meta.provenance == "mocap") m.meta.provenance = "mocap_mirrored";
   m.meta.notes = fmt::format("left/right mirror of clip '{}' (robot mirror map), phase rotated by {} samples; {}", clip.name,
                              shift, clip.meta.notes);
