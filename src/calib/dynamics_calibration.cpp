@@ -19,6 +19,8 @@
 #include <pagmo/population.hpp>
 #include <pagmo/problem.hpp>
 
+#include "pmg/calib/cmaes.hpp"
+
 namespace pmg::calib {
 namespace {
 
@@ -166,6 +168,8 @@ struct FitOutcome {
 };
 
 using Objective = std::function<double(const ParamMap&)>;
+/// Objective evaluated on one worker's private simulators (worker in [0, threads)).
+using WorkerObjective = std::function<double(const ParamMap&, int worker)>;
 
 /// pagmo user-defined problem on the unit box.
 struct PagmoProblem {
@@ -178,8 +182,10 @@ struct PagmoProblem {
 };
 
 /// Minimises `obj` over `specs` (other parameters fixed in `fixed`), starting from the specs' init.
+/// With Optimizer::kCmaes and a `wobj`, each generation is evaluated with wobj on `threads` workers
+/// concurrently (results recorded in candidate order, so the outcome does not depend on threads).
 FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Objective& obj, Optimizer opt,
-               int max_evals, unsigned seed) {
+               int max_evals, unsigned seed, const WorkerObjective* wobj = nullptr, int threads = 1) {
   const std::size_t n = specs.size();
   FitOutcome best;
   best.params = fixed;
@@ -188,14 +194,17 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
     for (std::size_t i = 0; i < n; ++i) m[specs[i].name] = from_unit(specs[i], u[i]);
     return m;
   };
-  std::function<double(const std::vector<double>&)> f = [&](const std::vector<double>& u) {
-    ParamMap m = to_map(u);
-    const double v = obj(m);
+  auto record = [&](ParamMap&& m, double v) {
     ++best.evals;
     if (v < best.mse) {
       best.mse = v;
       best.params = std::move(m);
     }
+  };
+  std::function<double(const std::vector<double>&)> f = [&](const std::vector<double>& u) {
+    ParamMap m = to_map(u);
+    const double v = obj(m);
+    record(std::move(m), v);
     return v;
   };
   std::vector<double> u0(n);
@@ -203,6 +212,28 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
   f(u0);
   int left = max_evals - 1;
   if (opt == Optimizer::kCmaes && left > 20) {
+    CmaesOptions co;
+    co.sigma0 = 0.25;
+    co.max_evals = left / 2;
+    co.seed = seed;
+    co.x_tol = 1e-6;   // unit box; BOBYQA polishes below that
+    co.f_tol = 1e-14;  // rad^2, far below encoder resolution
+    co.threads = std::max(1, threads);
+    const Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(u0.data(), static_cast<Eigen::Index>(n));
+    auto to_map_e = [&](const Eigen::VectorXd& x) { return to_map(std::vector<double>(x.data(), x.data() + x.size())); };
+    cmaes_minimize(
+        [&](const std::vector<Eigen::VectorXd>& X) {
+          std::vector<double> fx;
+          if (wobj)
+            fx = evaluate_parallel(X, [&](const Eigen::VectorXd& x, int w) { return (*wobj)(to_map_e(x), w); }, co.threads);
+          else
+            for (const auto& x : X) fx.push_back(obj(to_map_e(x)));
+          for (std::size_t k = 0; k < X.size(); ++k) record(to_map_e(X[k]), fx[k]);  // candidate order
+          return fx;
+        },
+        x0, co);
+    left = max_evals - best.evals;
+  } else if (opt == Optimizer::kCmaesPagmo && left > 20) {
     PagmoProblem pp{&f, n};
     pagmo::problem prob{pp};
     const unsigned pop_size = 4 + static_cast<unsigned>(3.0 * std::log(static_cast<double>(n))) + 4;
@@ -261,11 +292,34 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
   return best;
 }
 
+/// Baseline fit eta = [Kp, Kd, I] on the training logs. BOBYQA / CRS2 / pagmo evaluate one point
+/// at a time with the logs' rollouts spread over the workers; CMA-ES spreads each generation's
+/// candidates over the workers instead, and each candidate's logs run serially on its worker (one
+/// level of parallelism, no oversubscription).
+FitOutcome run_baseline_fit(const RigConfig& rig, const std::vector<const BenchLog*>& tr, const std::vector<Spec>& specs,
+                            const CalibrationOptions& options, std::vector<WorkerSims*>& workers) {
+  Objective train_obj = [&](const ParamMap& m) { return mse(rig, tr, m, workers); };
+  {
+    ParamMap nominal;
+    for (const auto& sp : specs) nominal[sp.name] = sp.init;
+    const double v = train_obj(nominal);
+    if (!std::isfinite(v) || v >= 1e6)
+      throw std::runtime_error("calibrate_dynamics: the rig simulation diverges at the nominal parameters; check the rig file");
+  }
+  WorkerObjective per_worker = [&](const ParamMap& m, int w) {
+    std::vector<WorkerSims*> one{workers.at(static_cast<std::size_t>(w))};
+    return mse(rig, tr, m, one);
+  };
+  return fit(specs, {}, train_obj, options.optimizer, options.max_evals_baseline, options.seed, &per_worker,
+             static_cast<int>(workers.size()));
+}
+
 const char* optimizer_name(Optimizer o) {
   switch (o) {
     case Optimizer::kBobyqa: return "bobyqa";
     case Optimizer::kCrs2: return "crs2";
     case Optimizer::kCmaes: return "cmaes";
+    case Optimizer::kCmaesPagmo: return "cmaes_pagmo";
   }
   return "?";
 }
@@ -315,7 +369,8 @@ Optimizer parse_optimizer(const std::string& name) {
   if (name == "bobyqa") return Optimizer::kBobyqa;
   if (name == "crs2") return Optimizer::kCrs2;
   if (name == "cmaes") return Optimizer::kCmaes;
-  throw std::invalid_argument("--optimizer = '" + name + "': expected bobyqa, crs2 or cmaes");
+  if (name == "cmaes_pagmo") return Optimizer::kCmaesPagmo;
+  throw std::invalid_argument("--optimizer = '" + name + "': expected bobyqa, crs2, cmaes or cmaes_pagmo");
 }
 
 const std::vector<std::string>& catalogue_names() {
@@ -372,6 +427,31 @@ RigParams rig_params_from(const RigConfig& rig, const std::map<std::string, doub
   return r;
 }
 
+FittedModel fit_baseline(const RigConfig& rig, const std::vector<BenchLog>& train, const CalibrationOptions& options) {
+  options.validate();
+  rig.validate();
+  if (train.empty()) throw std::invalid_argument("fit_baseline: at least one training log is required (--train)");
+  const int nthreads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<const BenchLog*> tr;
+  for (const auto& l : train) tr.push_back(&l);
+  std::vector<std::unique_ptr<WorkerSims>> sims_owned;
+  std::vector<WorkerSims*> workers;
+  for (int i = 0; i < nthreads; ++i) {
+    sims_owned.push_back(std::make_unique<WorkerSims>(rig));
+    workers.push_back(sims_owned.back().get());
+  }
+  Scales sc;
+  sc.dt = rig.sim_dt_s;
+  std::vector<Spec> specs;
+  for (const char* p : {"kp_scale", "kd_scale", "armature"}) specs.push_back(spec_for(p, rig, sc));
+  const FitOutcome fo = run_baseline_fit(rig, tr, specs, options, workers);
+  FittedModel m;
+  m.params = fo.params;
+  m.train_rmse_rad = std::sqrt(fo.mse);
+  m.evaluations = fo.evals;
+  return m;
+}
+
 CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<BenchLog>& train,
                                      const std::vector<BenchLog>& heldout, const CalibrationOptions& options) {
   options.validate();
@@ -405,14 +485,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   const std::vector<std::string> base_names = {"kp_scale", "kd_scale", "armature"};
   std::vector<Spec> base_specs;
   for (const auto& p : base_names) base_specs.push_back(spec_for(p, rig, sc));
-  Objective train_obj = [&](const ParamMap& m) { return mse(rig, tr, m, all_workers); };
-  {
-    ParamMap nominal;
-    for (const auto& s : base_specs) nominal[s.name] = s.init;
-    if (!std::isfinite(train_obj(nominal)) || train_obj(nominal) >= 1e6)
-      throw std::runtime_error("calibrate_dynamics: the rig simulation diverges at the nominal parameters; check the rig file");
-  }
-  FitOutcome base = fit(base_specs, {}, train_obj, options.optimizer, options.max_evals_baseline, options.seed);
+  FitOutcome base = run_baseline_fit(rig, tr, base_specs, options, all_workers);
   rep.baseline.params = base.params;
   rep.baseline.train_rmse_rad = std::sqrt(base.mse);
   rep.baseline.heldout_rmse_rad = std::sqrt(mse(rig, ho, base.params, all_workers));

@@ -23,9 +23,18 @@ namespace pmg::calib {
 enum class Optimizer {
   kBobyqa,  ///< NLopt LN_BOBYQA from the nominal values (local)
   kCrs2,    ///< NLopt GN_CRS2_LM (global, for rough starts), then BOBYQA polish
-  kCmaes,   ///< pagmo CMA-ES (the PMG seed's choice), then BOBYQA polish
+  /// (mu/mu_w, lambda)-CMA-ES (cmaes.hpp, Hansen 2016; the PMG seed's choice) on half the budget
+  /// from the nominal values (sigma0 = 0.25 of the unit box), then BOBYQA polish. Each generation's
+  /// lambda candidates are evaluated concurrently, one worker (own MuJoCo mjData) per thread; each
+  /// candidate's loss then runs its logs serially on that worker (no nested threads). Results do
+  /// not depend on the thread count (same seed -> bit-identical fit with 1 or N threads).
+  kCmaes,
+  /// pagmo::cmaes (libpagmo-dev) as a cross-check, then BOBYQA polish: serial population (pagmo's
+  /// cmaes has no batch-fitness hook), random initial population in the box, rollouts of
+  /// different logs in parallel.
+  kCmaesPagmo,
 };
-/// "bobyqa" | "crs2" | "cmaes"; throws std::invalid_argument otherwise.
+/// "bobyqa" | "crs2" | "cmaes" | "cmaes_pagmo"; throws std::invalid_argument otherwise.
 Optimizer parse_optimizer(const std::string& name);
 
 /// Catalogue entry names, in report order:
@@ -97,6 +106,13 @@ struct CalibrationReport {
 
 /// Rollout parameters from a report parameter map (missing keys: rig nominal / effect off).
 RigParams rig_params_from(const RigConfig& rig, const std::map<std::string, double>& params);
+
+/// Step 1 of calibrate_dynamics alone: fits the baseline eta = [Kp, Kd, I] (params kp_scale,
+/// kd_scale, armature) on `train` with options.optimizer, options.max_evals_baseline,
+/// options.seed and options.threads; train_rmse_rad and evaluations are set, heldout_rmse_rad = 0.
+/// @throws std::invalid_argument on bad options or empty `train`, std::runtime_error if a rollout
+/// diverges at the nominal parameters.
+FittedModel fit_baseline(const RigConfig& rig, const std::vector<BenchLog>& train, const CalibrationOptions& options);
 
 /// Runs the whole calibration. `train` and `heldout` must be non-empty.
 /// @throws std::invalid_argument on bad options, std::runtime_error if a rollout diverges at the
