@@ -33,8 +33,10 @@ int main(int argc, char** argv) {
   app.add_option("--heldout", heldout_specs, "held-out logs (same formats)")->required();
   app.add_option("--report", report_path, "output report JSON")->required();
   app.add_option("--plot", plot_path, "output PNG: measured vs baseline vs extended on the held-out logs");
-  app.add_option("--optimizer", optimizer, "baseline optimiser: bobyqa (local), crs2 (NLopt global), cmaes (pagmo)")
-      ->check(CLI::IsMember({"bobyqa", "crs2", "cmaes"}));
+  app.add_option("--optimizer", optimizer,
+                 "baseline optimiser: bobyqa (local), crs2 (NLopt global), cmaes (CMA-ES, population evaluated in "
+                 "parallel threads), cmaes_pagmo (pagmo's CMA-ES, serial population; cross-check)")
+      ->check(CLI::IsMember({"bobyqa", "crs2", "cmaes", "cmaes_pagmo"}));
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)");
   app.add_option("--candidates", candidates, "catalogue entries to test (default: all)")->delimiter(',');
   app.add_option("--min-gain-per-param", opt.min_gain_per_param, "held-out RMSE gain required per extra parameter");
