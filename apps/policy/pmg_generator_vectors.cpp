@@ -8,6 +8,11 @@
 // The JSON holds everything the port needs: the joint space (from the robot config), the
 // generator parameters, the clips as given to GeneratorModel (missing directions are derived by
 // both implementations), dt, and per tick the commands and every GeneratorOutput field.
+// Since the full-PMG training configuration, the document also carries GCO (PMG eqs. 13-19):
+// the KDL leg chains (pelvis -> sole, one entry per segment: pose at q = 0, joint axis and
+// origin in the segment's base frame), the resolved GCO options (--gco file), forward-kinematics
+// checks at random leg configurations, and per tick GeneratorWithGco's result (u', Δ, s_f), so
+// the JAX GCO port (training/pmg_train/gco.py) is proven equal the same way.
 // Synthetic clips (default) are smooth periodic joint trajectories around the default pose,
 // declared provenance "synthesized"; they exercise every code path (time reversal, mirroring,
 // all three static axes, clamping) independently of the motion-preprocessing clips.
@@ -21,6 +26,7 @@
 
 #include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/motion/clip_io.hpp"
 
@@ -128,6 +134,78 @@ pmg::StaticClip syntheticStatic(const pmg::GeneratorJointSpace& js, const char* 
   return s;
 }
 
+/// Leg chains, resolved GCO options and FK checks (see the file comment).
+void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const pmg::gco::GcoOptions& o) {
+  j.key("gco_options");
+  std::fprintf(f, "{\"enabled\":%s,", o.enabled ? "true" : "false");
+  const std::pair<const char*, double> fields[] = {
+      {"dt", o.dt}, {"ground_height", o.ground_height}, {"w_foot_velocity", o.w_foot_velocity},
+      {"w_foot_yaw_rate", o.w_foot_yaw_rate}, {"w_foot_height", o.w_foot_height},
+      {"w_prior_velocity", o.w_prior_velocity}, {"w_prior_yaw_rate", o.w_prior_yaw_rate},
+      {"w_prior_height", o.w_prior_height}, {"w_smooth_velocity", o.w_smooth_velocity},
+      {"w_smooth_yaw_rate", o.w_smooth_yaw_rate}, {"w_smooth_height", o.w_smooth_height}, {"w_limit", o.w_limit},
+      {"contact_ramp_time", o.contact_ramp_time}, {"max_jump_velocity", o.max_jump_velocity},
+      {"max_jump_yaw_rate", o.max_jump_yaw_rate}, {"max_jump_height", o.max_jump_height}};
+  for (const auto& [k, v] : fields) {
+    j.key(k);
+    j.num(v);
+    j.raw(",");
+  }
+  j.key("limits_lo");
+  j.list(std::vector<double>{o.limits.v_x_min, o.limits.v_y_min, o.limits.yaw_rate_min, o.limits.height_min});
+  j.raw(",");
+  j.key("limits_hi");
+  j.list(std::vector<double>{o.limits.v_x_max, o.limits.v_y_max, o.limits.yaw_rate_max, o.limits.height_max});
+  j.raw("},");
+  j.key("leg_chains");
+  j.raw("[");
+  for (std::size_t foot = 0; foot < pmg::kNumFeet; ++foot) {
+    const KDL::Chain& chain = legs.chain(static_cast<pmg::Foot>(foot));
+    j.raw(foot ? ",[" : "[");
+    for (unsigned sidx = 0; sidx < chain.getNrOfSegments(); ++sidx) {
+      const KDL::Segment& seg = chain.getSegment(sidx);
+      const KDL::Joint& jt = seg.getJoint();
+      const KDL::Frame X = seg.pose(0.0);
+      Eigen::MatrixXd T = Eigen::MatrixXd::Identity(4, 4);
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) T(r, c) = X.M(r, c);
+        T(r, 3) = X.p(r);
+      }
+      const bool moving = jt.getType() != KDL::Joint::None;
+      const KDL::Vector axis = moving ? jt.JointAxis() : KDL::Vector::Zero();
+      const KDL::Vector origin = moving ? jt.JointOrigin() : KDL::Vector::Zero();
+      j.raw(sidx ? ",{" : "{");
+      std::fprintf(f, "\"joint\":\"%s\",\"revolute\":%s,", jt.getName().c_str(), moving ? "true" : "false");
+      j.key("pose0"); j.mat(T); j.raw(",");
+      j.key("axis"); j.list(std::vector<double>{axis.x(), axis.y(), axis.z()}); j.raw(",");
+      j.key("origin"); j.list(std::vector<double>{origin.x(), origin.y(), origin.z()}); j.raw("}");
+    }
+    j.raw("]");
+  }
+  j.raw("],");
+  // FK checks: sole position, velocity and foot angular velocity in the pelvis frame.
+  pmg::gco::LegKinematics kin(std::shared_ptr<const pmg::gco::LegModel>(&legs, [](const pmg::gco::LegModel*) {}));
+  j.key("fk_checks");
+  j.raw("[");
+  for (int k = 0; k < 8; ++k) {
+    const std::size_t foot = static_cast<std::size_t>(k % 2);
+    pmg::gco::LegVector q, qd;
+    for (int i = 0; i < pmg::gco::kLegDofs; ++i) {
+      q(i) = 0.4 * std::sin(1.3 * k + 0.7 * i);
+      qd(i) = 2.0 * std::cos(0.9 * k + 1.1 * i);
+    }
+    pmg::gco::FootKinematics fk;
+    kin.compute(static_cast<pmg::Foot>(foot), q, qd, &fk);
+    std::fprintf(f, "%s{\"foot\":%zu,", k ? "," : "", foot);
+    j.key("q"); j.vec(q); j.raw(",");
+    j.key("qd"); j.vec(qd); j.raw(",");
+    j.key("p_BS_B"); j.vec(fk.p_BS_B); j.raw(",");
+    j.key("v_BS_B"); j.vec(fk.v_BS_B); j.raw(",");
+    j.key("w_BF_B"); j.vec(fk.w_BF_B); j.raw("}");
+  }
+  j.raw("],");
+}
+
 /// Command schedule: 14 segments covering standing, every axis and sign, combinations,
 /// clamping, posture axes, height "no command" (0), and smooth transitions between them.
 void commandAt(int tick, int ticks_per_segment, pmg::VelocityCommand& u_d, pmg::PostureCommand& u_s) {
@@ -156,6 +234,7 @@ int main(int argc, char** argv) {
   std::string robot_path = "config/robots/g1/g1.yaml", out = "pmg_vectors.json";
   std::vector<std::string> clip_files;
   int ticks = 1400;
+  std::string gco_path = "config/gco/g1.yaml";
   double dt = 0.01, phase0 = 0.3;
   app.add_option("--robot", robot_path, "robot config YAML");
   app.add_option("--clips", clip_files, "clip files (default: synthetic clips)");
@@ -163,6 +242,7 @@ int main(int argc, char** argv) {
   app.add_option("--ticks", ticks, "generator ticks")->check(CLI::Range(1, 1000000));
   app.add_option("--dt", dt, "tick period [s]")->check(CLI::PositiveNumber);
   app.add_option("--phase0", phase0, "initial phase")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--gco", gco_path, "GCO options YAML (the controller's)");
   CLI11_PARSE(app, argc, argv);
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
@@ -182,7 +262,10 @@ int main(int argc, char** argv) {
     }
     const pmg::GeneratorParams params;
     auto model = std::make_shared<const pmg::GeneratorModel>(lib, js, params);
-    pmg::MotionGenerator gen(model);
+    const auto legs = pmg::gco::LegModel::fromRobotConfig(robot);
+    pmg::gco::GcoOptions gco_options = pmg::gco::loadGcoOptionsFile(gco_path);
+    gco_options.enabled = true;
+    pmg::gco::GeneratorWithGco gen(model, legs, gco_options);
     gen.reset(phase0);
 
     std::FILE* f = std::fopen(out.c_str(), "w");
@@ -229,6 +312,14 @@ int main(int argc, char** argv) {
       j.key("q"); j.mat(s.q); j.raw("}");
     }
     j.raw("],");
+    writeGcoModel(j, f, *legs, gco_options);
+    j.key("leg_joint_index");
+    j.raw("[");
+    for (std::size_t foot = 0; foot < pmg::kNumFeet; ++foot) {
+      j.raw(foot ? "," : "");
+      j.list(gen.legJointIndex()[foot]);
+    }
+    j.raw("],");
     j.key("dt"); j.num(dt); j.raw(",");
     j.key("phase0"); j.num(phase0); j.raw(",");
     j.key("ticks");
@@ -238,8 +329,8 @@ int main(int argc, char** argv) {
       pmg::VelocityCommand u_d;
       pmg::PostureCommand u_s;
       commandAt(t, per_segment, u_d, u_s);
-      gen.step(u_d, u_s, dt);
-      const pmg::GeneratorOutput& o = gen.output();
+      const pmg::gco::GcoResult& r = gen.step(u_d, u_s, dt);
+      const pmg::GeneratorOutput& o = gen.generatorOutput();
       j.raw(t ? ",\n{" : "{");
       j.key("u_d"); j.list(std::vector<double>{u_d.vx, u_d.vy, u_d.wz}); j.raw(",");
       j.key("u_s"); j.list(std::vector<double>{u_s.pitch, u_s.roll, u_s.height}); j.raw(",");
@@ -258,7 +349,13 @@ int main(int argc, char** argv) {
       j.key("v_base"); j.vec(o.v_base); j.raw(",");
       j.key("yaw_rate"); j.num(o.yaw_rate); j.raw(",");
       j.key("base_height"); j.num(o.base_height); j.raw(",");
-      j.key("clamped_joints"); j.num(o.clamped_joints); j.raw("}");
+      j.key("clamped_joints"); j.num(o.clamped_joints); j.raw(",");
+      j.key("gco_u_opt");
+      j.list(std::vector<double>{r.u_opt.v_x, r.u_opt.v_y, r.u_opt.yaw_rate, r.u_opt.pitch, r.u_opt.roll, r.u_opt.height});
+      j.raw(",");
+      j.key("gco_delta"); j.vec(r.delta); j.raw(",");
+      j.key("gco_s"); j.list(r.contact_weight); j.raw(",");
+      j.key("gco_status"); j.num(static_cast<double>(r.status)); j.raw("}");
     }
     j.raw("]}\n");
     std::fclose(f);

@@ -59,6 +59,8 @@ GcoOptions parseNode(const YAML::Node& root, const std::string& source) {
       readScalar(kv.second, key, source, &o.enabled);
     } else if (key == "max_iterations") {
       readScalar(kv.second, key, source, &o.max_iterations);
+    } else if (key == "newton_polish_iterations") {
+      readScalar(kv.second, key, source, &o.newton_polish_iterations);
     } else if (auto it = doubles.find(key); it != doubles.end()) {
       readScalar(kv.second, key, source, it->second);
     } else if (key == "limits") {

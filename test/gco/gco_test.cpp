@@ -192,6 +192,7 @@ TEST(Gco, SolverFailureFallsBackToLastGoodSolutionAndCounts) {
   GcoOptions strict = opt;
   strict.max_iterations = 1;
   strict.failure_gradient_norm = 0.0;
+  strict.newton_polish_iterations = 0;  // the polish alone would already reach the minimiser
   Gco bad(g1Legs(), strict);
   GcoResult res;
   EXPECT_EQ(bad.solve(g.ticks[0], &res), GcoStatus::kSolverFailure);
@@ -313,6 +314,7 @@ TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
     EXPECT_DOUBLE_EQ(o.max_jump_yaw_rate, d.max_jump_yaw_rate);
     EXPECT_DOUBLE_EQ(o.max_jump_height, d.max_jump_height);
     EXPECT_EQ(o.max_iterations, d.max_iterations);
+    EXPECT_EQ(o.newton_polish_iterations, d.newton_polish_iterations);
     EXPECT_DOUBLE_EQ(o.failure_gradient_norm, d.failure_gradient_norm);
     EXPECT_DOUBLE_EQ(o.limits.v_x_min, d.limits.v_x_min);
     EXPECT_DOUBLE_EQ(o.limits.v_x_max, d.limits.v_x_max);

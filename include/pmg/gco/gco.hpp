@@ -107,6 +107,10 @@ struct GcoOptions {
   double max_jump_yaw_rate = 0.20;  ///< [rad/s per tick]
   double max_jump_height = 0.010;   ///< [m per tick]
 
+  /// Newton steps on the active hinge set that polish the warm start before the LM solve, 0..20
+  /// (0 = plain Levenberg-Marquardt from the projected last iterate). The residuals are affine per
+  /// active set, so a few steps reach the exact minimiser; LM alone zig-zags across hinge kinks.
+  int newton_polish_iterations = 6;
   int max_iterations = 20;                 ///< Levenberg-Marquardt iteration cap per tick, 1..100
   double failure_gradient_norm = 1e-6;     ///< HIT_MAX_ITERATIONS with a larger max |gradient| = failure
 

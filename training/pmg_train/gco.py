@@ -1,0 +1,194 @@
+"""Python/JAX port of Ground-aware Command Optimization (include/pmg/gco/gco.hpp, PMG eqs. 13-19).
+
+The full-PMG training configuration observes u' (eq. 19) exactly as the C++ controller computes it
+(pmg::gco::GeneratorWithGco). This module re-implements Gco::solve for one robot as pure functions
+of (generator output, GCO state) that run on NumPy (float64, for the equality test) or JAX (vmap
+over environments; pass ``xp=jax.numpy``). ``training/tests/test_gco_port.py`` (ctest
+``gco_port_equals_cpp``) steps this port next to the C++ GeneratorWithGco on the vectors of
+apps/policy/pmg_generator_vectors and requires u', Δ and the contact weights to agree to 1e-5.
+
+Model (frames as in gco.hpp: H heading frame, B pelvis, F foot, S sole point; the pelvis is held
+level, R_HB = I, as fillFromGenerator() does):
+  r_f = p_BS_B(q_f)                       (eq. 13, leg forward kinematics, KDL chain pelvis -> sole)
+  v_f(x) = v + x_v + (ω + x_ω) e_z × r_f + J_v,f q̇_f      (eq. 14)
+  ω_f,z(x) = ω + x_ω + (J_ω,f q̇_f)_z
+  z_f(x) = h + x_h + r_f,z − h_ground
+Residuals (eqs. 16-18): s_f-weighted foot velocity / yaw-rate / height, prior w_prior x, smoothness
+w_smooth (x − x_prev), limit hinges w_limit · (u − bound) where u = base + x is outside the limits.
+Every residual is affine in x (the hinges piecewise affine), so the cost is a convex piecewise
+quadratic with a unique minimum (the prior makes it strictly convex). The C++ code finds it with
+ceres::TinySolver (Levenberg-Marquardt, <= 20 iterations); this port solves the 4x4 normal
+equations on the active hinge set and re-solves until the active set is stable (4 passes, which
+covers every change of the active set the 4 hinges allow). Both converge to the same point; the
+C++ fallback to the last good solution on a solver failure never triggers on finite input of this
+linear problem and is not ported. After the solve u' is clamped to the limits and to the per-tick
+jump bound, as in C++.
+
+Leg kinematics: the KDL chain exported by pmg_generator_vectors (per segment the pose at q = 0,
+the joint axis and a point on it, both in the segment's base frame). A revolute segment at angle q
+is the rotation by q about that axis line followed by its q = 0 pose.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+
+NUM_FEET = 2
+LEG_DOFS = 6
+
+
+@dataclasses.dataclass
+class LegChains:
+    """Per foot: list of segments (pose0 (4,4), axis (3,), origin (3,), revolute bool)."""
+    segments: list
+    leg_joint_index: np.ndarray  # (2, 6) column of each chain joint in the robot joint vector
+
+    @staticmethod
+    def from_doc(doc):
+        segs = []
+        for chain in doc["leg_chains"]:
+            segs.append([(np.array(s["pose0"], float), np.array(s["axis"], float), np.array(s["origin"], float),
+                          bool(s["revolute"])) for s in chain])
+        return LegChains(segs, np.array(doc["leg_joint_index"], int))
+
+
+@dataclasses.dataclass
+class GcoOptions:
+    dt: float
+    ground_height: float
+    w_foot_velocity: float
+    w_foot_yaw_rate: float
+    w_foot_height: float
+    w_prior: np.ndarray    # (4,) v_x, v_y, ω, h
+    w_smooth: np.ndarray   # (4,)
+    w_limit: float
+    lo: np.ndarray         # (4,) limits of (v'_x, v'_y, ω', h')
+    hi: np.ndarray
+    contact_ramp_time: float
+    jump: np.ndarray       # (4,) per-tick bound on the change of u'
+
+    @staticmethod
+    def from_doc(doc):
+        o = doc["gco_options"]
+        return GcoOptions(o["dt"], o["ground_height"], o["w_foot_velocity"], o["w_foot_yaw_rate"], o["w_foot_height"],
+                          np.array([o["w_prior_velocity"], o["w_prior_velocity"], o["w_prior_yaw_rate"],
+                                    o["w_prior_height"]]),
+                          np.array([o["w_smooth_velocity"], o["w_smooth_velocity"], o["w_smooth_yaw_rate"],
+                                    o["w_smooth_height"]]),
+                          o["w_limit"], np.array(o["limits_lo"], float), np.array(o["limits_hi"], float),
+                          o["contact_ramp_time"],
+                          np.array([o["max_jump_velocity"], o["max_jump_velocity"], o["max_jump_yaw_rate"],
+                                    o["max_jump_height"]]))
+
+
+def load_model(path):
+    """(LegChains, GcoOptions) from a JSON written by pmg_generator_vectors (--gco-model-out)."""
+    with open(path) as f:
+        doc = json.load(f)
+    return LegChains.from_doc(doc), GcoOptions.from_doc(doc)
+
+
+def _rot(xp, axis, q):
+    """Rotation matrix by angle q about the unit vector axis (Rodrigues)."""
+    k = xp.asarray(axis)
+    K = xp.asarray([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    c, s = xp.cos(q), xp.sin(q)
+    return c * xp.eye(3) + s * K + (1.0 - c) * xp.outer(k, k)
+
+
+def foot_kinematics(chains: LegChains, foot: int, q, qd, xp=np):
+    """Sole position p_BS_B [m], sole velocity J_v q̇ [m/s] and foot angular velocity J_ω q̇
+    [rad/s] relative to the pelvis, pelvis frame B. q, qd: (6,) chain order [rad], [rad/s]."""
+    R = xp.eye(3)
+    p = xp.zeros(3)
+    axes, points = [], []
+    i = 0
+    for pose0, axis, origin, revolute in chains.segments[foot]:
+        if revolute:
+            axes.append(R @ xp.asarray(axis))           # joint axis in B
+            points.append(p + R @ xp.asarray(origin))   # a point on the axis in B
+            Rq = _rot(xp, axis, q[i])
+            Rs = Rq @ xp.asarray(pose0[:3, :3])
+            ps = Rq @ (xp.asarray(pose0[:3, 3]) - xp.asarray(origin)) + xp.asarray(origin)
+            i += 1
+        else:
+            Rs, ps = xp.asarray(pose0[:3, :3]), xp.asarray(pose0[:3, 3])
+        p = p + R @ ps
+        R = R @ Rs
+    v = xp.zeros(3)
+    w = xp.zeros(3)
+    for k in range(len(axes)):
+        w = w + axes[k] * qd[k]
+        v = v + xp.cross(axes[k], p - points[k]) * qd[k]
+    return p, v, w
+
+
+def initial_state(xp=np):
+    """GCO state after construction / reset(): no contact ramps, no previous solution."""
+    return {"s": xp.zeros(2), "x": xp.zeros(4), "u_prev": xp.zeros(4), "have_prev": xp.asarray(False)}
+
+
+def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
+    """One GCO tick after one generator tick (GeneratorWithGco::step without the generator).
+
+    gen_out: the generator port's output dict (q_ref, qd_ref, in_contact, v_base, yaw_rate,
+    base_height); u_s: posture command (pitch, roll, height) [rad, rad, m]; state: dict from
+    initial_state() or the previous call. Returns (u_opt (6,) = (v'_x, v'_y, ω', pitch, roll, h')
+    in H [m/s, m/s, rad/s, rad, rad, m], delta (4,), s (2,), new state).
+    """
+    q_ref, qd_ref = gen_out["q_ref"], gen_out["qd_ref"]
+    v = xp.asarray(gen_out["v_base"])
+    wz = gen_out["yaw_rate"]
+    h = gen_out["base_height"]
+    contact = xp.asarray(gen_out["in_contact"]).astype(bool)
+    have_prev = state["have_prev"]
+
+    # Contact weights s_f (ramp after touchdown, 0 at lift-off).
+    if opt.contact_ramp_time > 0:
+        ramped = xp.minimum(1.0, state["s"] + opt.dt / opt.contact_ramp_time)
+        s_on = xp.where(have_prev, ramped, 1.0)
+    else:
+        s_on = xp.ones(2)
+    s = xp.where(contact, s_on, 0.0)
+
+    rows, consts = [], []
+    for f in range(NUM_FEET):
+        idx = chains.leg_joint_index[f]
+        r, v_rel, w_rel = foot_kinematics(chains, f, q_ref[idx], qd_ref[idx], xp=xp)
+        v0 = v + xp.asarray([-wz * r[1], wz * r[0], 0.0]) + v_rel
+        wz0 = wz + w_rel[2]
+        z0 = h + r[2] - opt.ground_height
+        sv, sy, sh = s[f] * opt.w_foot_velocity, s[f] * opt.w_foot_yaw_rate, s[f] * opt.w_foot_height
+        rows += [sv * xp.asarray([1.0, 0.0, -r[1], 0.0]), sv * xp.asarray([0.0, 1.0, r[0], 0.0]),
+                 sy * xp.asarray([0.0, 0.0, 1.0, 0.0]), sh * xp.asarray([0.0, 0.0, 0.0, 1.0])]
+        consts += [sv * v0[0], sv * v0[1], sy * wz0, sh * z0]
+    A = xp.stack(rows)                 # (8, 4)
+    b = xp.stack(consts)               # (8,)
+    w_prior, w_smooth = xp.asarray(opt.w_prior), xp.asarray(opt.w_smooth)
+    H0 = A.T @ A + xp.diag(w_prior ** 2 + w_smooth ** 2)
+    g0 = A.T @ b - w_smooth ** 2 * state["x"]
+    base = xp.stack([v[0], v[1], wz, h])
+    lo, hi = xp.asarray(opt.lo), xp.asarray(opt.hi)
+    wl2 = opt.w_limit ** 2
+
+    def solve(active_hi, active_lo):
+        act = (active_hi | active_lo).astype(H0.dtype)
+        bound = xp.where(active_hi, hi, lo)
+        H = H0 + xp.diag(wl2 * act)
+        g = g0 + wl2 * act * (base - bound)
+        return -xp.linalg.solve(H, g)
+
+    x = solve(xp.zeros(4, bool), xp.zeros(4, bool))
+    for _ in range(4):
+        u = base + x
+        x = solve(u >= hi, u <= lo)
+
+    u = xp.clip(base + x, lo, hi)
+    jump = xp.asarray(opt.jump)
+    u = xp.where(have_prev, xp.clip(u, state["u_prev"] - jump, state["u_prev"] + jump), u)
+    x = u - base
+    u_opt = xp.stack([u[0], u[1], u[2], xp.asarray(u_s[0], u.dtype), xp.asarray(u_s[1], u.dtype), u[3]])
+    new_state = {"s": s, "x": x, "u_prev": u, "have_prev": xp.asarray(True)}
+    return u_opt, x, s, new_state
