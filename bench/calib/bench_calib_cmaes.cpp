@@ -11,8 +11,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
+#include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -26,6 +29,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double cpu_since(std::clock_t c0) { return static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC; }
+std::string load_average() {
+  std::ifstream f("/proc/loadavg");
+  double a = -1.0;
+  f >> a;
+  return a >= 0 ? fmt::format("{:.2f}", a) : std::string("n/a");
+}
 
 }  // namespace
 
@@ -60,8 +70,9 @@ int main(int argc, char** argv) {
   o.trajectory = Trajectory::kSines;
   o.seed = 2;
   train.push_back(generate_bench_log(rig, truth, o));
-  fmt::print("CMA-ES baseline fit: 2 training logs of {:.0f} s at {:.0f} Hz, physics step {} ms\n", duration, rate,
-             rig.sim_dt_s * 1e3);
+  fmt::print("CMA-ES baseline fit: 2 training logs of {:.0f} s at {:.0f} Hz, physics step {} ms; {} hardware threads, "
+             "load average {} (wall-time speed-up needs idle cores)\n",
+             duration, rate, rig.sim_dt_s * 1e3, std::thread::hardware_concurrency(), load_average());
 
   // 1. CMA-ES phase alone: the training loss of [kp_scale, kd_scale, armature] in the unit box
   // (log scale for the gains as in pmg_calib_dynamics), one simulator per worker.
@@ -90,14 +101,15 @@ int main(int argc, char** argv) {
     x0 << 0.5, 0.5, 0.05;
     co.max_evals = generations * Cmaes(x0, co).lambda();
     const auto t0 = Clock::now();
+    const std::clock_t c0 = std::clock();
     const CmaesResult r = cmaes_minimize_parallel(loss, x0, co);
-    const double wall = since(t0);
+    const double wall = since(t0), cpu = cpu_since(c0);
     if (nt == 1) {
       wall1 = wall;
       x1 = r.x;
     }
-    fmt::print("  CMA-ES phase, {} generations x lambda {} = {} rollout sets, {} thread(s): wall {:.2f} s{}{}\n",
-               r.generations, co.max_evals / generations, r.evaluations, nt, wall,
+    fmt::print("  CMA-ES phase, {} generations x lambda {} = {} rollout sets, {} thread(s): wall {:.2f} s, CPU {:.2f} s{}{}\n",
+               r.generations, co.max_evals / generations, r.evaluations, nt, wall, cpu,
                nt == 1 ? "" : fmt::format(" (speed-up x{:.2f})", wall1 / wall),
                nt == 1 ? "" : (r.x == x1 ? ", best point bit-identical to 1 thread" : ", best point DIFFERS"));
   }
@@ -111,15 +123,16 @@ int main(int argc, char** argv) {
       opt.optimizer = parse_optimizer(name);
       opt.threads = nt;
       const auto t0 = Clock::now();
+      const std::clock_t c0 = std::clock();
       const FittedModel f = fit_baseline(rig, train, opt);
-      const double wall = since(t0);
+      const double wall = since(t0), cpu = cpu_since(c0);
       if (nt == 1) {
         w1 = wall;
         f1 = f;
       }
-      fmt::print("  fit_baseline --optimizer {:<11} {} thread(s): wall {:.2f} s, {} evaluations, kp_scale {:.4f} "
+      fmt::print("  fit_baseline --optimizer {:<11} {} thread(s): wall {:.2f} s, CPU {:.2f} s, {} evaluations, kp_scale {:.4f} "
                  "kd_scale {:.4f} armature {:.5f}, train RMSE {:.3g} rad{}\n",
-                 name, nt, wall, f.evaluations, f.params.at("kp_scale"), f.params.at("kd_scale"), f.params.at("armature"),
+                 name, nt, wall, cpu, f.evaluations, f.params.at("kp_scale"), f.params.at("kd_scale"), f.params.at("armature"),
                  f.train_rmse_rad,
                  nt == 1 ? "" : fmt::format(" (speed-up x{:.2f}{})", w1 / wall, f.params == f1.params ? ", identical fit" : ", fit differs"));
     }
