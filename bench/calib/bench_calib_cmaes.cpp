@@ -108,10 +108,12 @@ int main(int argc, char** argv) {
       wall1 = wall;
       x1 = r.x;
     }
-    fmt::print("  CMA-ES phase, {} generations x lambda {} = {} rollout sets, {} thread(s): wall {:.2f} s, CPU {:.2f} s{}{}\n",
-               r.generations, co.max_evals / generations, r.evaluations, nt, wall, cpu,
-               nt == 1 ? "" : fmt::format(" (speed-up x{:.2f})", wall1 / wall),
-               nt == 1 ? "" : (r.x == x1 ? ", best point bit-identical to 1 thread" : ", best point DIFFERS"));
+    const std::string vs1 = nt == 1 ? ""
+                                    : fmt::format(" (speed-up x{:.2f}, best point {} 1 thread)", wall1 / wall,
+                                                  r.x == x1 ? "bit-identical to" : "DIFFERS from");
+    fmt::print("  CMA-ES phase, {} generations x lambda {} = {} rollout sets, {} thread(s): "
+               "wall {:.2f} s, CPU {:.2f} s{}\n",
+               r.generations, co.max_evals / generations, r.evaluations, nt, wall, cpu, vs1);
   }
 
   // 2. The whole baseline fit as pmg_calib_dynamics runs it.
@@ -130,11 +132,13 @@ int main(int argc, char** argv) {
         w1 = wall;
         f1 = f;
       }
-      fmt::print("  fit_baseline --optimizer {:<11} {} thread(s): wall {:.2f} s, CPU {:.2f} s, {} evaluations, kp_scale {:.4f} "
-                 "kd_scale {:.4f} armature {:.5f}, train RMSE {:.3g} rad{}\n",
-                 name, nt, wall, cpu, f.evaluations, f.params.at("kp_scale"), f.params.at("kd_scale"), f.params.at("armature"),
-                 f.train_rmse_rad,
-                 nt == 1 ? "" : fmt::format(" (speed-up x{:.2f}{})", w1 / wall, f.params == f1.params ? ", identical fit" : ", fit differs"));
+      const std::string vs1 = nt == 1 ? ""
+                                      : fmt::format(" (speed-up x{:.2f}, {})", w1 / wall,
+                                                    f.params == f1.params ? "identical fit" : "fit DIFFERS");
+      fmt::print("  fit_baseline --optimizer {:<11} {} thread(s): wall {:.2f} s, CPU {:.2f} s, {} evals, "
+                 "kp_scale {:.4f} kd_scale {:.4f} armature {:.5f}, RMSE {:.3g} rad{}\n",
+                 name, nt, wall, cpu, f.evaluations, f.params.at("kp_scale"), f.params.at("kd_scale"),
+                 f.params.at("armature"), f.train_rmse_rad, vs1);
     }
   }
   return 0;

@@ -120,7 +120,9 @@ void Cmaes::tell(const std::vector<double>& f_in) {
   double w_pen = 0.0, f_range = inf;
   if (!finite.empty()) {
     std::sort(finite.begin(), finite.end());
-    const auto q = [&](double p) { return finite[static_cast<std::size_t>(p * static_cast<double>(finite.size() - 1) + 0.5)]; };
+    const auto q = [&](double p) {
+      return finite[static_cast<std::size_t>(p * static_cast<double>(finite.size() - 1) + 0.5)];
+    };
     w_pen = std::max(q(0.75) - q(0.25), 1e-12 * (1.0 + std::abs(q(0.5))));
     f_range = finite.back() - finite.front();
   }
@@ -177,7 +179,8 @@ void Cmaes::tell(const std::vector<double>& f_in) {
     stop_reason_ = "condition";
 }
 
-std::vector<double> evaluate_parallel(const std::vector<Eigen::VectorXd>& points, const PointObjective& f, int threads) {
+std::vector<double> evaluate_parallel(const std::vector<Eigen::VectorXd>& points, const PointObjective& f,
+                                      int threads) {
   if (threads < 1) throw std::invalid_argument(fmt::format("evaluate_parallel: threads = {}: expected >= 1", threads));
   std::vector<double> out(points.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<std::exception_ptr> errors(points.size());

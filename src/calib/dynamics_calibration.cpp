@@ -220,12 +220,15 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
     co.f_tol = 1e-14;  // rad^2, far below encoder resolution
     co.threads = std::max(1, threads);
     const Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(u0.data(), static_cast<Eigen::Index>(n));
-    auto to_map_e = [&](const Eigen::VectorXd& x) { return to_map(std::vector<double>(x.data(), x.data() + x.size())); };
+    auto to_map_e = [&](const Eigen::VectorXd& x) {
+      return to_map(std::vector<double>(x.data(), x.data() + x.size()));
+    };
     cmaes_minimize(
         [&](const std::vector<Eigen::VectorXd>& X) {
           std::vector<double> fx;
           if (wobj)
-            fx = evaluate_parallel(X, [&](const Eigen::VectorXd& x, int w) { return (*wobj)(to_map_e(x), w); }, co.threads);
+            fx = evaluate_parallel(
+                X, [&](const Eigen::VectorXd& x, int w) { return (*wobj)(to_map_e(x), w); }, co.threads);
           else
             for (const auto& x : X) fx.push_back(obj(to_map_e(x)));
           for (std::size_t k = 0; k < X.size(); ++k) record(to_map_e(X[k]), fx[k]);  // candidate order
@@ -296,15 +299,17 @@ FitOutcome fit(const std::vector<Spec>& specs, const ParamMap& fixed, const Obje
 /// at a time with the logs' rollouts spread over the workers; CMA-ES spreads each generation's
 /// candidates over the workers instead, and each candidate's logs run serially on its worker (one
 /// level of parallelism, no oversubscription).
-FitOutcome run_baseline_fit(const RigConfig& rig, const std::vector<const BenchLog*>& tr, const std::vector<Spec>& specs,
-                            const CalibrationOptions& options, std::vector<WorkerSims*>& workers) {
+FitOutcome run_baseline_fit(const RigConfig& rig, const std::vector<const BenchLog*>& tr,
+                            const std::vector<Spec>& specs, const CalibrationOptions& options,
+                            std::vector<WorkerSims*>& workers) {
   Objective train_obj = [&](const ParamMap& m) { return mse(rig, tr, m, workers); };
   {
     ParamMap nominal;
     for (const auto& sp : specs) nominal[sp.name] = sp.init;
     const double v = train_obj(nominal);
     if (!std::isfinite(v) || v >= 1e6)
-      throw std::runtime_error("calibrate_dynamics: the rig simulation diverges at the nominal parameters; check the rig file");
+      throw std::runtime_error(
+          "calibrate_dynamics: the rig simulation diverges at the nominal parameters; check the rig file");
   }
   WorkerObjective per_worker = [&](const ParamMap& m, int w) {
     std::vector<WorkerSims*> one{workers.at(static_cast<std::size_t>(w))};
