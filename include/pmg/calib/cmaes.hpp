@@ -5,7 +5,7 @@
 /// rollouts run in parallel threads, one MuJoCo mjData per worker).
 ///
 /// Source: N. Hansen, "The CMA Evolution Strategy: A Tutorial", arXiv:1604.00772 (2016). Equation
-/// numbers below are those of its algorithm summary (appendix A) and default parameters (table 1):
+/// numbers below are those of its algorithm summary and default-parameter table (v1, 2016):
 ///   sampling           z_k ~ N(0, I), y_k = B D z_k, x_k = m + sigma y_k          (38)-(40)
 ///   recombination      <y>_w = sum_{i<=mu} w_i y_{i:lambda}, m <- m + c_m sigma <y>_w (41)-(42)
 ///   step-size control  p_sigma (43), sigma <- sigma exp(c_sigma/d_sigma (|p_sigma|/E|N(0,I)| - 1)) (44),
@@ -25,15 +25,16 @@
 /// returns x~_k), it is *ranked* by
 ///   f(x~_k) + w_pen |x_k - x~_k|^2 / (sigma^2 mean(diag C)),
 /// w_pen = inter-quartile range of the generation's finite f values (at least 1e-12 (1 + |median|)),
-/// and the *unrepaired* x_k enters the update (38)-(47), so the distribution is not biased by the
-/// repair. The reported best point is always inside the box (best f over all evaluated x~_k).
+/// and the *unrepaired* x_k enters the update (38)-(47) (the update sees the sampled points, not
+/// the repaired ones). The reported best point is always inside the box (best f over all evaluated x~_k).
 ///
 /// Determinism: all random numbers are drawn in ask() (std::mt19937_64 seeded with
 /// CmaesOptions::seed) before any evaluation, and tell() takes the values by candidate index, so
 /// the run does not depend on the order or the thread in which the candidates are evaluated:
 /// same seed -> bit-identical result with 1 or N threads (given a deterministic objective).
 ///
-/// Setup/offline code: allocates, throws std::invalid_argument on bad input.
+/// All coordinates are dimensionless (unit box). Setup/offline code: allocates, throws
+/// std::invalid_argument on bad input.
 
 #include <cstdint>
 #include <functional>
