@@ -33,11 +33,12 @@ def load_actor(path):
     z = np.load(path)
     n = len([k for k in z.files if k.startswith("w")])
     layers = [(z[f"w{i}"], z[f"b{i}"]) for i in range(n)]
-    return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]]
+    mode = str(z["mode"]) if "mode" in z.files else "pmg"  # actors saved before the ablation modes: PMG w/o GCO
+    return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]], mode
 
 
 def export(npz, out_path, brax_check=None, robot_yaml=os.path.join(ROOT, "config/robots/g1/g1.yaml")):
-    mean, std, layers, action_scale, clips = load_actor(npz)
+    mean, std, layers, action_scale, clips, mode = load_actor(npz)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)
     joints = robot["joints"]
@@ -51,7 +52,8 @@ def export(npz, out_path, brax_check=None, robot_yaml=os.path.join(ROOT, "config
         control_period=CONTROL_PERIOD, default_pose=default, kp=[j["kp"] for j in joints],
         kd=[j["kd"] for j in joints], action_scale=action_scale, action_offset=default[:LEG], action_clip=1.0,
         obs_terms=OBS_TERMS, history_length=1, obs_clip=OBS_CLIP,
-        pmg={"enabled": True, "gco": False, "clips": ",".join(clips), "epsilon": EPSILON},
+        pmg={"enabled": True, "gco": mode == "pmg_gco", "mode": "single_gait" if mode == "single_gait" else "pmg",
+             "clips": ",".join(clips), "epsilon": EPSILON},
         reference_pairs=list(zip(obs, act)))
     meta = {"pmg.training": json.dumps({"brax_vs_numpy_max_abs": brax_check, "source": os.path.basename(npz)})}
     save_onnx(out_path, actor_graph(mean, std, layers, LEG), contract, extra_metadata=meta)

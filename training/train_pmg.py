@@ -71,7 +71,7 @@ def save_params(params, out, env, clip_names):
     norm, policy = params_np[0], params_np[1]
     p = policy["params"]
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
-              "clips": np.array(clip_names)}
+              "clips": np.array(clip_names), "mode": np.array(env.cfg.mode)}
     for i in range(len(p)):
         arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
         arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]
@@ -84,7 +84,7 @@ def check_against_brax(params, make_inference_fn, env, out):
     import jax.numpy as jnp
     from export_onnx import load_actor
     from pmg_train.contract import actor_forward
-    mean, std, layers, _, _ = load_actor(os.path.join(out, "actor.npz"))
+    mean, std, layers, _, _, _ = load_actor(os.path.join(out, "actor.npz"))
     rng = np.random.default_rng(0)
     obs = (mean + std * rng.standard_normal((64, mean.size))).astype(np.float32)
     ours = actor_forward(mean, std, layers, env.action_size, obs)
@@ -106,6 +106,8 @@ def main():
     ap.add_argument("--restore", default=None)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--smoke", action="store_true")
+    ap.add_argument("--mode", default="pmg_gco", choices=["pmg_gco", "pmg", "single_gait"],
+                    help="Table I configuration: full PMG (GCO), PMG without GCO, single-gait imitation")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
 
@@ -122,8 +124,9 @@ def main():
 
     clip_files = sorted(glob.glob("config/clips/g1/*.yaml"))
     log("clips:", clip_files)
-    cfg = EnvConfig()
+    cfg = EnvConfig(mode=args.mode)
     env = G1PmgEnv(cfg, clip_files)
+    clip_files = env.clip_files
     if args.smoke:
         smoke(env, args.out)
         return

@@ -7,8 +7,17 @@ frictionloss 0.2 N m), motor PD with the robot config's kp/kd, the controller's 
 Limb separation (PMG paper): the actor commands the 12 leg joints (q_des = default + scale * a);
 the waist and arms follow the PMG reference open-loop (plus smooth random perturbations of the
 arm targets during training). PMG references come from training/pmg_train/pmg_generator.py, the
-port proven equal to the C++ generator (test/policy: pmg_port_*). GCO is not in the loop (see
-training/README.md).
+port proven equal to the C++ generator (test/policy: pmg_port_*).
+
+Configurations (EnvConfig.mode; the seed's Table I ablation, trained alike):
+  "pmg_gco"     full PMG: generator + GCO (pmg_train/gco.py, equal to the C++ GeneratorWithGco,
+                ctest gco_port_equals_cpp); the actor observes u' (PMG eq. 19) as its command and
+                the velocity / yaw-rate / height rewards track u'.
+  "pmg"         PMG without GCO: the actor observes the command u; rewards track u (height: the
+                template's height).
+  "single_gait" single-gait imitation: the reference is the generator run on the walk_forward clip
+                alone at its nominal speed, whatever the command (no blending, no posture clips);
+                the actor observes u; rewards track u (height: the commanded height).
 
 Observation (actor, 62 values, order = policy contract terms):
   base_ang_vel_B (3)  projected_gravity_B (3)  command (6: vx, vy, wz, pitch, roll, height)
@@ -30,6 +39,7 @@ import numpy as np
 from brax.envs.base import Env, State
 from mujoco import mjx
 
+from . import gco as gco_port
 from . import pmg_generator as pg
 
 LEG = 12
@@ -48,6 +58,8 @@ OBS_CLIP = 100.0
 
 @dataclasses.dataclass
 class EnvConfig:
+    mode: str = "pmg_gco"          # "pmg_gco" | "pmg" | "single_gait" (see the module docstring)
+    gco_model: str = "training/pmg_train/gco_g1.json"
     mjcf: str = "config/robots/g1/g1_29dof_rev_1_0.xml"
     robot_yaml: str = "config/robots/g1/g1.yaml"
     control_dt: float = 0.01       # s, controller period (contract control_period)
@@ -117,8 +129,14 @@ def _scale_vector():
 
 class G1PmgEnv(Env):
     def __init__(self, cfg: EnvConfig, clip_files, action_scale=None):
+        if cfg.mode not in ("pmg_gco", "pmg", "single_gait"):
+            raise ValueError(f"EnvConfig.mode = {cfg.mode!r}: expected 'pmg_gco', 'pmg' or 'single_gait'")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
+        if cfg.mode == "single_gait":
+            clip_files = [f for f in clip_files if f.endswith("walk_forward.yaml")]
+            if len(clip_files) != 1:
+                raise ValueError("single_gait: needs exactly one walk_forward.yaml among the clips")
         clips = [pg.load_clip_file(f) for f in clip_files]
         self.clip_files = list(clip_files)
         self.pmg = pg.GeneratorModel([c for c in clips if isinstance(c, pg.Clip)],
@@ -130,6 +148,10 @@ class G1PmgEnv(Env):
         self.kd = np.array([j["kd"] for j in joints], np.float32)
         self.tau_max = np.array([j["torque_limit"] for j in joints], np.float32)
         self.q_default = np.asarray(self.js.q_stand, np.float32)
+        # Single gait: the generator always runs the forward clip at its nominal speed.
+        self.single_gait_ud = np.array([self.pmg.dynamic[0].nominal_scale, 0.0, 0.0], np.float32)
+        if cfg.mode == "pmg_gco":
+            self.gco_chains, self.gco_opt = gco_port.load_model(cfg.gco_model)
 
         if action_scale is None:
             dev = np.zeros(LEG)
@@ -190,6 +212,27 @@ class G1PmgEnv(Env):
         posture = jnp.where(jax.random.uniform(k[8]) < c.p_posture, posture, neutral)
         return jnp.concatenate([v, posture])
 
+    def _reference(self, phase, command, gco_state):
+        """Generator (+ GCO) tick as the controller runs it. Returns (ref dict, command the actor
+        observes and the rewards track (6,), new GCO state)."""
+        c = self.cfg
+        if c.mode == "single_gait":
+            ref = pg.step(self.pmg, phase, jnp.asarray(self.single_gait_ud), jnp.zeros(3), c.control_dt, xp=jnp)
+            return ref, command, gco_state
+        ref = pg.step(self.pmg, phase, command[:3], command[3:], c.control_dt, xp=jnp)
+        if c.mode == "pmg":
+            return ref, command, gco_state
+        u_opt, _, _, gco_state = gco_port.step(self.gco_chains, self.gco_opt, ref, command[3:], gco_state, xp=jnp)
+        return ref, u_opt.astype(jnp.float32), gco_state
+
+    def _height_target(self, ref, tracked):
+        c = self.cfg
+        if c.mode == "pmg_gco":
+            return tracked[5]                                  # h' of u'
+        if c.mode == "single_gait":
+            return tracked[5]                                  # the commanded height
+        return jnp.asarray(ref["base_height"], jnp.float32)   # the template's height
+
     def reset(self, rng):
         c = self.cfg
         k = jax.random.split(rng, 12)
@@ -215,11 +258,15 @@ class G1PmgEnv(Env):
             "arm_freq": jax.random.uniform(k[8], (14,), minval=0.2, maxval=1.0),
             "arm_off": jax.random.uniform(k[9], (14,), minval=0.0, maxval=2 * math.pi),
         }
-        ref = pg.step(self.pmg, info["phase"], info["command"][:3], info["command"][3:], c.control_dt, xp=jnp)
+        ref, tracked, info["gco"] = self._reference(info["phase"], info["command"],
+                                                    jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32)
+                                                                           if x.dtype != bool else x,
+                                                                           gco_port.initial_state(xp=jnp)))
+        info["tracked"] = jnp.asarray(tracked, jnp.float32)
         info["ref_q"] = ref["q_ref"].astype(jnp.float32)
         info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
         info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
-        info["ref_height"] = jnp.asarray(ref["base_height"], jnp.float32)
+        info["ref_height"] = self._height_target(ref, info["tracked"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.zeros(8)
         obs = self._obs(data, info, k[10])
@@ -261,7 +308,8 @@ class G1PmgEnv(Env):
         resample = (info["step"] % c.command_resample) == 0
         info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
         ref_prev_contact = info["ref_contact"]
-        ref = pg.step(self.pmg, phase, info["command"][:3], info["command"][3:], c.control_dt, xp=jnp)
+        tracked_prev = info["tracked"]
+        ref, tracked, info["gco"] = self._reference(phase, info["command"], info["gco"])
         info["phase"] = phase
 
         # Measurements.
@@ -276,7 +324,7 @@ class G1PmgEnv(Env):
         height = data.qpos[2]
         contact = self._foot_contacts(data)
 
-        cmd = info["command"]
+        cmd = tracked_prev  # what the actor observed when it chose this action (u' with GCO)
         lin_err = jnp.sum((cmd[:2] - v_H[:2]) ** 2)
         yaw_err = (cmd[2] - w_W[2]) ** 2
         ori_err = (cmd[3] - pitch) ** 2 + (cmd[4] - roll) ** 2
@@ -304,7 +352,8 @@ class G1PmgEnv(Env):
         info["ref_q"] = ref["q_ref"].astype(jnp.float32)
         info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
         info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
-        info["ref_height"] = jnp.asarray(ref["base_height"], jnp.float32)
+        info["tracked"] = jnp.asarray(tracked, jnp.float32)
+        info["ref_height"] = self._height_target(ref, info["tracked"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.concatenate([v_H, jnp.array([height]), contact, jnp.array([pitch, roll])])
         obs = self._obs(data, info, k_noise)
@@ -340,7 +389,7 @@ class G1PmgEnv(Env):
         qd = data.qvel[6:6 + LEG]
         ref_rel = info["ref_q"][:LEG] - jnp.asarray(self.q_default[:LEG])
         ph = 2 * math.pi * info["phase"]
-        return [gyro_B, grav_B, info["command"], q_rel, qd, info["last_action"], ref_rel,
+        return [gyro_B, grav_B, info["tracked"], q_rel, qd, info["last_action"], ref_rel,
                 jnp.array([jnp.sin(ph), jnp.cos(ph)])]
 
     def _obs(self, data, info, rng):
