@@ -1,0 +1,185 @@
+// pmg_calib_zero: zero-point (encoder offset) calibration of the 12 leg joints by Motor-IMU alignment
+// (PMG eqs. 21-25, issue 6). Drives the robot through the protocol of config/calib/zero_poses_g1.yaml via
+// a pmg::HalBackend (MuJoCo SIL or the motor buses), then runs the estimator and writes the offsets.
+// docs/calibration.md, "Zero-point calibration".
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <random>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "pmg/calib/zero_calibration.hpp"
+#include "pmg/calib/zero_io.hpp"
+#include "pmg/common/robot_config.hpp"
+#include "pmg/controller/controller_config.hpp"
+#include "pmg/hal/bus/can_backend.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+
+namespace {
+
+/// Paces a hardware backend to its cycle period on the wall clock (the SIL runs in lockstep).
+class PacedBackend final : public pmg::HalBackend {
+ public:
+  explicit PacedBackend(std::unique_ptr<pmg::HalBackend> inner) : inner_(std::move(inner)) {}
+  const char* name() const noexcept override { return inner_->name(); }
+  double cyclePeriod() const noexcept override { return inner_->cyclePeriod(); }
+  pmg::BackendStatus exchange(const pmg::LowCommand& c, pmg::LowState& s) noexcept override {
+    const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(inner_->cyclePeriod()));
+    if (next_ == std::chrono::steady_clock::time_point{}) next_ = std::chrono::steady_clock::now();
+    next_ += period;
+    std::this_thread::sleep_until(next_);
+    return inner_->exchange(c, s);
+  }
+
+ private:
+  std::unique_ptr<pmg::HalBackend> inner_;
+  std::chrono::steady_clock::time_point next_{};
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pmg_calib_zero: leg zero-point calibration by Motor-IMU alignment (PMG eqs. 21-25)"};
+  std::string config_path, backend_name = "mujoco", protocol_path, out_path, inject_file, plot_path, history_csv;
+  int inject_seed = -1;
+  double max_offset = 0.05;
+  pmg::calib::ZeroEstimatorOptions eo;
+  app.add_option("--config", config_path, "controller config (with robot:) or robot config YAML")->required();
+  app.add_option("--backend", backend_name, "mujoco (SIL, no gantry) | can (controller config's can: settings)")
+      ->check(CLI::IsMember({"mujoco", "can"}));
+  app.add_option("--protocol", protocol_path, "pose protocol YAML (default config/calib/zero_poses_g1.yaml)");
+  app.add_option("--out", out_path, "result YAML (zero_offset per joint, robot-config form)");
+  app.add_option("--inject-offsets", inject_file, "SIL: hidden encoder offsets YAML {joint_name: rad}");
+  app.add_option("--inject-random", inject_seed, "SIL: random hidden offsets on the 12 leg joints, this seed");
+  app.add_option("--max-offset", max_offset, "SIL: |offset| bound of --inject-random [rad]")->check(CLI::Range(0.0, 0.3));
+  app.add_option("--tau", eo.tau, "tau: IMU agreement gate [rad]");
+  app.add_option("--alpha", eo.alpha, "alpha: update gain");
+  app.add_option("--epsilon", eo.epsilon, "epsilon: convergence threshold on |alpha delta| [rad]");
+  app.add_option("--consecutive", eo.consecutive, "M: consecutive iterations below epsilon");
+  app.add_option("--max-iterations", eo.max_iterations, "iteration limit");
+  bool sil_truth = false;
+  app.add_flag("--sil-truth", sil_truth, "SIL: print the true foot poses after each pose (slip check)");
+  app.add_option("--history-csv", history_csv, "convergence history CSV (iteration, z per joint)");
+  app.add_option("--plot", plot_path, "convergence plot PNG (needs python3 + matplotlib; implies a history CSV)");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    eo.validate();
+    // Config: a controller config names its robot config; else it is the robot config.
+    pmg::RobotConfig robot;
+    std::unique_ptr<pmg::ControllerConfig> cc;
+    if (YAML::LoadFile(config_path)["robot"].IsScalar()) {
+      cc = std::make_unique<pmg::ControllerConfig>(pmg::loadControllerConfig(config_path));
+      robot = cc->robot;
+    } else {
+      robot = pmg::loadRobotConfig(config_path);
+    }
+    if (protocol_path.empty()) protocol_path = std::string(PMG_SOURCE_DIR) + "/config/calib/zero_poses_g1.yaml";
+    const pmg::calib::ZeroProtocol protocol = pmg::calib::loadZeroProtocol(protocol_path);
+    auto model = pmg::gco::LegModel::fromRobotConfig(robot);
+    const auto idx = pmg::calib::zeroJointIndices(*model, robot);
+
+    std::unique_ptr<pmg::HalBackend> backend;
+    std::vector<double> injected;
+    if (backend_name == "mujoco") {
+      pmg::MujocoBackendOptions bo = cc ? cc->mujoco : pmg::MujocoBackendOptions{};
+      bo.gantry.enabled = false;  // standing on the ground: the protocol needs the feet planted
+      bo.encoder_offsets.assign(robot.numJoints(), 0.0);
+      if (inject_seed >= 0)
+        bo.encoder_offsets = pmg::calib::randomLegOffsets(robot, *model, static_cast<unsigned>(inject_seed), max_offset);
+      if (!inject_file.empty()) bo.encoder_offsets = pmg::calib::loadJointValues(inject_file, robot);
+      injected = bo.encoder_offsets;
+      backend = std::make_unique<pmg::MujocoBackend>(robot, bo);
+    } else {
+      if (!cc || cc->backend != pmg::BackendKind::kCan)
+        throw pmg::ConfigError(config_path + ": --backend can needs a controller config with backend: can");
+      if (inject_seed >= 0 || !inject_file.empty())
+        throw std::invalid_argument("--inject-offsets / --inject-random only apply to --backend mujoco");
+      pmg::hal::bus::CanBackendSetup setup;
+      setup.plan_file = cc->can.plan_file;
+      setup.transport = cc->can.transport;
+      setup.udp_base_port = static_cast<std::uint16_t>(cc->can.udp_port);
+      setup.paced = cc->can.paced;
+      backend = std::make_unique<PacedBackend>(pmg::hal::bus::makeCanBackend(setup));
+    }
+
+    auto* sil = dynamic_cast<pmg::MujocoBackend*>(backend.get());
+    const auto feet = [&](const char* tag) {
+      if (sil == nullptr || !sil_truth) return;
+      for (const std::string& b : {robot.left_foot_link, robot.right_foot_link}) {
+        const int id = mj_name2id(sil->model(), mjOBJ_BODY, b.c_str());
+        const double* x = sil->data()->xpos + 3 * id;
+        const double* R = sil->data()->xmat + 9 * id;
+        fmt::print("SIL truth {}: {} at ({:.5f}, {:.5f}, {:.5f}) yaw {:.5f}\n", tag, b, x[0], x[1], x[2], std::atan2(R[3], R[0]));
+      }
+    };
+    feet("before");
+    const auto t0 = std::chrono::steady_clock::now();
+    fmt::print("capture: {} poses from {} via backend '{}'\n", protocol.poses.size(), protocol.source, backend->name());
+    const pmg::calib::ZeroCapture cap = pmg::calib::captureZeroPoses(
+        *backend, robot, model, protocol, [&](const std::string& s) {
+          fmt::print("  {}\n", s);
+          if (s.rfind("pose ", 0) == 0 || s.rfind("home", 0) == 0) feet(s.substr(0, 18).c_str());
+        });
+    feet("after");
+    const double t_capture = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (cap.feet_moved)
+      throw std::runtime_error(fmt::format("the feet moved during the capture (home orientation drift {:.4f} rad > "
+                                           "max_home_drift {}): repeat on a non-slippery floor",
+                                           cap.home_drift, protocol.max_home_drift));
+
+    pmg::calib::ZeroEstimator est(model, eo);
+    const pmg::calib::ZeroObservability obs = est.observability(cap.samples, pmg::calib::ZeroVector::Zero(),
+                                                                est.placementOf(cap.samples.front().readings));
+    fmt::print("observability: rank {} of 15, sigma_max {:.3g}, sigma_min {:.3g}\n", obs.rank, obs.singular_values(0),
+               obs.singular_values(obs.singular_values.size() - 1));
+    const auto t1 = std::chrono::steady_clock::now();
+    const pmg::calib::ZeroEstimate res =
+        est.estimate(cap.samples, pmg::calib::ZeroVector::Zero(), [](int it, const pmg::calib::ZeroVector& z, double step, int used) {
+          if (it <= 10 || it % 10 == 0)
+            fmt::print("iter {:4d}  |alpha delta|max {:.3e} rad  poses {:2d}  z = [{:.4f}]\n", it, step, used,
+                       fmt::join(z.data(), z.data() + z.size(), ", "));
+        });
+    const double t_est = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    fmt::print("{}\n", res.message);
+    for (int k : res.rejected_capture)
+      fmt::print("  refused at capture: {} ({})\n", cap.samples[static_cast<std::size_t>(k)].name,
+                 cap.samples[static_cast<std::size_t>(k)].reason);
+    for (int k : res.rejected_tau)
+      fmt::print("  excluded by tau: {} (IMU disagreement {:.4f} rad > tau {})\n",
+                 cap.samples[static_cast<std::size_t>(k)].name, res.imu_disagreement[static_cast<std::size_t>(k)], eo.tau);
+    fmt::print("{:<26} {:>12}{}\n", "joint", "offset [rad]", injected.empty() ? "" : "  injected   error");
+    double max_err = 0.0;
+    for (int j = 0; j < pmg::calib::kZeroJoints; ++j) {
+      const auto i = static_cast<std::size_t>(idx[static_cast<std::size_t>(j)]);
+      const double off = -res.z(j);
+      if (injected.empty()) {
+        fmt::print("{:<26} {:>12.5f}\n", robot.joints[i].name, off);
+      } else {
+        max_err = std::max(max_err, std::abs(off - injected[i]));
+        fmt::print("{:<26} {:>12.5f} {:>10.5f} {:>7.5f}\n", robot.joints[i].name, off, injected[i], off - injected[i]);
+      }
+    }
+    if (!injected.empty()) fmt::print("max |estimated - injected| = {:.5f} rad\n", max_err);
+    fmt::print("time: capture {:.2f} s wall ({:.1f} s robot time), estimate {:.2f} s\n", t_capture, cap.duration_s, t_est);
+
+    if (!out_path.empty()) pmg::calib::writeZeroResult(out_path, robot, *model, res, cap, eo);
+    if (!plot_path.empty() && history_csv.empty()) history_csv = plot_path + ".csv";
+    if (!history_csv.empty()) pmg::calib::writeZeroHistoryCsv(history_csv, robot, *model, res);
+    if (!plot_path.empty()) {
+      const std::string cmd = fmt::format("python3 '{}/apps/calib/pmg_plot_zero.py' '{}' '{}'", PMG_SOURCE_DIR,
+                                          history_csv, plot_path);
+      if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plot failed: " << cmd << "\n";
+    }
+    return res.converged ? 0 : 2;
+  } catch (const std::exception& e) {
+    std::cerr << "pmg_calib_zero: " << e.what() << "\n";
+    return 1;
+  }
+}
