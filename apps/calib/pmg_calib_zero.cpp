@@ -3,6 +3,7 @@
 // a pmg::HalBackend (MuJoCo SIL or the motor buses), then runs the estimator and writes the offsets.
 // docs/calibration.md, "Zero-point calibration".
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -67,6 +68,9 @@ int main(int argc, char** argv) {
   app.add_flag("--sil-truth", sil_truth, "SIL: print the true foot poses after each pose (slip check)");
   app.add_option("--history-csv", history_csv, "convergence history CSV (iteration, z per joint)");
   app.add_option("--plot", plot_path, "convergence plot PNG (needs python3 + matplotlib; implies a history CSV)");
+  bool analyze = false;
+  app.add_flag("--analyze", analyze, "print the observability (singular values) of the protocol and of subsets, on the "
+                                     "nominal model, and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -85,6 +89,32 @@ int main(int argc, char** argv) {
     auto model = pmg::gco::LegModel::fromRobotConfig(robot);
     const auto idx = pmg::calib::zeroJointIndices(*model, robot);
 
+    if (analyze) {
+      pmg::calib::ZeroEstimator est(model, eo);
+      const auto report = [&](const std::string& label, const std::function<bool(const pmg::calib::ZeroPoseSpec&)>& keep) {
+        pmg::calib::ZeroProtocol sub = protocol;
+        sub.poses.clear();
+        for (const auto& p : protocol.poses)
+          if (keep(p)) sub.poses.push_back(p);
+        if (sub.poses.empty()) return;
+        const auto samples = pmg::calib::synthesizeZeroSamples(model, robot, sub, pmg::calib::ZeroVector::Zero());
+        const auto o = est.observability(samples, pmg::calib::ZeroVector::Zero(), est.placementOf(samples.front().readings));
+        const auto& sv = o.singular_values;
+        fmt::print("{:<44} poses {:2d}  rank {:2d}/15  sigma_max {:.3g}  sigma_min {:.3g}  sigma_min/sigma_max {:.2g}\n", label,
+                   sub.poses.size(), o.rank, sv(0), sv(sv.size() - 1), sv(sv.size() - 1) / sv(0));
+        if (o.rank < 15)
+          fmt::print("    weakest direction (12 joints, x, y, yaw): [{:.2f}]\n",
+                     fmt::join(o.weakest_direction.data(), o.weakest_direction.data() + o.weakest_direction.size(), ", "));
+      };
+      report("all poses", [](const auto&) { return true; });
+      report("squats only (dp.xy = 0, rpy = 0)", [](const auto& p) { return p.rpy.isZero() && p.dp.template head<2>().isZero(); });
+      report("no yaw (rpy.z = 0)", [](const auto& p) { return p.rpy.z() == 0.0; });
+      report("no roll (rpy.x = 0)", [](const auto& p) { return p.rpy.x() == 0.0; });
+      report("no pitch (rpy.y = 0)", [](const auto& p) { return p.rpy.y() == 0.0; });
+      report("symmetric only (dp.y = 0, roll = yaw = 0)", [](const auto& p) { return p.dp.y() == 0.0 && p.rpy.x() == 0.0 && p.rpy.z() == 0.0; });
+      report("without the twist_* poses", [](const auto& p) { return p.name.rfind("twist", 0) != 0; });
+      return 0;
+    }
     std::unique_ptr<pmg::HalBackend> backend;
     std::vector<double> injected;
     if (backend_name == "mujoco") {
@@ -116,7 +146,8 @@ int main(int argc, char** argv) {
         const int id = mj_name2id(sil->model(), mjOBJ_BODY, b.c_str());
         const double* x = sil->data()->xpos + 3 * id;
         const double* R = sil->data()->xmat + 9 * id;
-        fmt::print("SIL truth {}: {} at ({:.5f}, {:.5f}, {:.5f}) yaw {:.5f}\n", tag, b, x[0], x[1], x[2], std::atan2(R[3], R[0]));
+        fmt::print("SIL truth {}: {} at ({:.5f}, {:.5f}, {:.5f}) yaw {:.5f} tilt {:.5f}\n", tag, b, x[0], x[1], x[2],
+                   std::atan2(R[3], R[0]), std::acos(std::min(1.0, R[8])));
       }
     };
     feet("before");

@@ -305,10 +305,6 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
       X.translation() = (1 - s) * from.translation() + s * to.translation();
       setPelvis(X, pose_name);
       exchange(true);
-      if (std::getenv("PMG_ZERO_DEBUG") && c % 50 == 0)
-        say(fmt::format("  dbg {} s {:.2f} base x {:.3f} z {:.3f} quat {:.3f} {:.3f} {:.3f} {:.3f} tgt L [{:.3f}] R [{:.3f}]", pose_name, s,
-                        st.base_position[0], st.base_position[2], st.base_quat_wxyz[0], st.base_quat_wxyz[1], st.base_quat_wxyz[2],
-                        st.base_quat_wxyz[3], fmt::join(ql.data(), ql.data() + 6, " "), fmt::join(qr.data(), qr.data() + 6, " ")));
     }
   };
 
@@ -389,10 +385,6 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   Eigen::Isometry3d current = X_home;
   for (const ZeroPoseSpec& pose : protocol.poses) {
     const Eigen::Isometry3d X = planPose(pose);
-    if (std::getenv("PMG_ZERO_DEBUG"))
-      say(fmt::format("  plan {}: pelvis {:.3f} {:.3f} {:.3f} (home {:.3f} {:.3f} {:.3f})", pose.name, X.translation().x(),
-                      X.translation().y(), X.translation().z(), X_MB0.translation().x(), X_MB0.translation().y(),
-                      X_MB0.translation().z()));
     moveTo(current, X, pose.name);
     current = X;
     ZeroSample s;
