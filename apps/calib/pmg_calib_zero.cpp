@@ -102,8 +102,7 @@ int main(int argc, char** argv) {
         const auto& sv = o.singular_values;
         fmt::print("{:<44} poses {:2d}  rank {:2d}/15  sigma_max {:.3g}  sigma_min {:.3g}  sigma_min/sigma_max {:.2g}\n", label,
                    sub.poses.size(), o.rank, sv(0), sv(sv.size() - 1), sv(sv.size() - 1) / sv(0));
-        if (o.rank < 15)
-          fmt::print("    weakest direction (12 joints, x, y, yaw): [{:.2f}]\n",
+        fmt::print("    weakest direction (12 joints, x, y, yaw): [{:.2f}]\n",
                      fmt::join(o.weakest_direction.data(), o.weakest_direction.data() + o.weakest_direction.size(), ", "));
       };
       report("all poses", [](const auto&) { return true; });
