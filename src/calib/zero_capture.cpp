@@ -175,7 +175,8 @@ std::vector<ZeroSample> synthesizeZeroSamples(std::shared_ptr<const gco::LegMode
 }
 
 ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std::shared_ptr<const gco::LegModel> model,
-                             const ZeroProtocol& protocol, const std::function<void(const std::string&)>& log) {
+                             const ZeroProtocol& protocol, const std::function<void(const std::string&)>& log,
+                             const ZeroVector& z_guess) {
   protocol.validate();
   const auto say = [&](const std::string& s) {
     if (log) log(s);
@@ -262,7 +263,8 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
 
   // Stance frame M from the home pose on the nominal model (z = 0), levelled by the IMU.
   Eigen::Isometry3d X_BL, X_BR;
-  if (!kin.forward(Foot::kLeft, home.readings.head<6>(), &X_BL) || !kin.forward(Foot::kRight, home.readings.tail<6>(), &X_BR))
+  const ZeroVector q_home = home.readings + z_guess;  // model angles of the home pose
+  if (!kin.forward(Foot::kLeft, q_home.head<6>(), &X_BL) || !kin.forward(Foot::kRight, q_home.tail<6>(), &X_BR))
     throw std::runtime_error("captureZeroPoses: forward kinematics of the home pose failed");
   Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();  // W: level, yaw of B
   X_WB.linear() = Eigen::Quaterniond::FromTwoVectors(home.up_I, Eigen::Vector3d::UnitZ()).toRotationMatrix();  // IMU = pelvis axes
@@ -279,7 +281,7 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
                   (X_MR.translation() - X_ML.translation()).norm(), X_MB0.translation().z(),
                   angleBetween(home.up_I, Eigen::Vector3d::UnitZ())));
 
-  gco::LegVector ql = home.readings.head<6>(), qr = home.readings.tail<6>();
+  gco::LegVector ql = q_home.head<6>(), qr = q_home.tail<6>();  // model angles
   // Puts the leg targets at the IK solution for pelvis pose X_MB (feet at X_ML, X_MR).
   const auto setPelvis = [&](const Eigen::Isometry3d& X_MB, const std::string& pose_name) {
     gco::LegVector sl, sr;
@@ -291,8 +293,8 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
     ql = sl;
     qr = sr;
     for (int j = 0; j < 6; ++j) {
-      target(idx[static_cast<std::size_t>(j)]) = ql(j);
-      target(idx[static_cast<std::size_t>(6 + j)]) = qr(j);
+      target(idx[static_cast<std::size_t>(j)]) = ql(j) - z_guess(j);  // reading space
+      target(idx[static_cast<std::size_t>(6 + j)]) = qr(j) - z_guess(6 + j);
     }
   };
   const auto moveTo = [&](const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, const std::string& pose_name) {

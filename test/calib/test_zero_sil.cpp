@@ -118,24 +118,59 @@ TEST_F(ZeroSilTest, PushDuringHoldIsRefusedOrAborts) {
 }
 
 // Issue #6 acceptance: random hidden offsets |o| <= 0.05 rad on the 12 leg joints, recovered within
-// 0.005 rad. NOT MET YET in this SIL (docs/calibration.md: errors 0.02-0.06 rad, from sole tilt of
-// 0.003-0.04 rad on MuJoCo's soft point contacts and foot yaw creep under the internal stress of the
-// offsets, against a weakest singular value of 0.028 of the protocol). Disabled until then.
+// 0.005 rad (two capture passes, the second planned with the first estimate, as `pmg_calib_zero --passes 2`).
+// NOT MET YET in this SIL (docs/calibration.md: 0.014-0.03 rad after two passes; the floor without offsets
+// is 0.014 rad, from sole tilt on MuJoCo's soft point contacts; with offsets also internal stress of the
+// closed chain and foot yaw creep, against a weakest singular value of 0.029 of the protocol). Disabled
+// until then.
 TEST_F(ZeroSilTest, DISABLED_RecoversRandomLegOffsets) {
   for (unsigned seed : {1u, 2u, 3u}) {
     MujocoBackendOptions bo;
     bo.gantry.enabled = false;
     bo.encoder_offsets = randomLegOffsets(robot, *model, seed, 0.05);
     MujocoBackend sim(robot, bo);
-    const ZeroCapture cap = captureZeroPoses(sim, robot, model, protocol);
     ZeroEstimator est(model, {});
-    const ZeroEstimate r = est.estimate(cap.samples);
+    ZeroVector z = ZeroVector::Zero();
+    ZeroEstimate r;
+    for (int pass = 0; pass < 2; ++pass) {
+      const ZeroCapture cap = captureZeroPoses(sim, robot, model, protocol, {}, z);
+      r = est.estimate(cap.samples, z);
+      z = r.z;
+    }
     EXPECT_TRUE(r.converged) << r.message;
     const auto idx = zeroJointIndices(*model, robot);
     for (int j = 0; j < kZeroJoints; ++j)
       EXPECT_LT(std::abs(-r.z(j) - bo.encoder_offsets[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])]), 0.005)
           << "seed " << seed << " joint " << robot.joints[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])].name;
   }
+}
+
+// The second pass plans its targets with the first estimate: on hidden offsets it must not be worse than
+// the first (measured: 0.032 -> 0.014 rad on seed 3).
+TEST_F(ZeroSilTest, SecondPassWithFirstEstimateImprovesRecovery) {
+  MujocoBackendOptions bo;
+  bo.gantry.enabled = false;
+  bo.encoder_offsets = randomLegOffsets(robot, *model, 3, 0.05);
+  MujocoBackend sim(robot, bo);
+  const auto idx = zeroJointIndices(*model, robot);
+  const auto error = [&](const ZeroVector& z) {
+    double e = 0.0;
+    for (int j = 0; j < kZeroJoints; ++j)
+      e = std::max(e, std::abs(-z(j) - bo.encoder_offsets[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])]));
+    return e;
+  };
+  ZeroEstimator est(model, {});
+  const ZeroCapture c1 = captureZeroPoses(sim, robot, model, protocol);
+  const ZeroEstimate r1 = est.estimate(c1.samples);
+  ASSERT_TRUE(r1.converged) << r1.message;
+  const ZeroCapture c2 = captureZeroPoses(sim, robot, model, protocol, {}, r1.z);
+  const ZeroEstimate r2 = est.estimate(c2.samples, r1.z);
+  ASSERT_TRUE(r2.converged) << r2.message;
+  const double e0 = error(ZeroVector::Zero()), e1 = error(r1.z), e2 = error(r2.z);
+  std::printf("max |offset error|: uncalibrated %.4f, pass 1 %.4f, pass 2 %.4f rad\n", e0, e1, e2);
+  EXPECT_LT(e1, e0);
+  EXPECT_LT(e2, e1);
+  EXPECT_LT(e2, 0.5 * e0);
 }
 
 }  // namespace

@@ -213,12 +213,15 @@ struct ZeroCapture {
 
 /// Drives the robot through @p protocol via @p backend (one exchange per backend cycle, lockstep in
 /// the SIL, paced by the backend on hardware) with the robot config's kp/kd, and captures one sample
-/// per pose. Joints other than the legs hold their default pose. Leg IK on the nominal model.
+/// per pose. Joints other than the legs hold their default pose. Leg IK on the nominal model; with
+/// @p z_guess (a previous estimate, model = reading + z_guess) the targets are consistent with it, which
+/// lowers the internal stress of the closed chain in a second pass.
 /// @throws std::runtime_error when the backend faults, the IK of a pose fails or leaves the joint
 /// limits (names the pose), or the IMU says the robot tipped (tilt error > max_tilt_error).
 ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot,
                              std::shared_ptr<const gco::LegModel> model, const ZeroProtocol& protocol,
-                             const std::function<void(const std::string&)>& log = {});
+                             const std::function<void(const std::string&)>& log = {},
+                             const ZeroVector& z_guess = ZeroVector::Zero());
 
 /// Noise-free samples of @p protocol on the nominal leg model, for design-time observability analysis and
 /// tests: home = the robot config's default leg pose levelled (feet flat, pelvis level), each pose's pelvis
