@@ -107,7 +107,7 @@ TEST_F(ZeroEstimatorTest, NaiveSimulationAtReadingsPlusZCarriesNoInformation) {
   // ... and at the true offsets the constraints hold and delta vanishes.
   const ZeroVector q_true = samples[3].readings + z_true;
   const Eigen::Vector3d p_true = est.placementOf(q_true);
-  EXPECT_LT(est.constraint(q_true, p_true, samples[3].up_I).norm(), 1e-8);
+  EXPECT_LT(est.constraint(q_true, p_true, samples[3].up_I).norm(), 1e-6);  // synthetic IK tolerance
   EXPECT_LT((est.solvePose(q_true, p_true, samples[3].up_I, &pk) - q_true).norm(), 1e-6);
 }
 
