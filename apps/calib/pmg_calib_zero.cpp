@@ -20,6 +20,7 @@
 #include "pmg/controller/controller_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/zero_offset_backend.hpp"
 
 namespace {
 
@@ -142,6 +143,14 @@ int main(int argc, char** argv) {
     }
 
     auto* sil = dynamic_cast<pmg::MujocoBackend*>(backend.get());
+    // Offsets already in the robot config are applied below the tool; it estimates what remains and
+    // reports the total (config + residual).
+    pmg::calib::ZeroVector z_config;
+    for (int j = 0; j < pmg::calib::kZeroJoints; ++j) z_config(j) = -robot.joints[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])].zero_offset;
+    if (robot.zeroOffsets().cwiseAbs().maxCoeff() > 0.0) {
+      fmt::print("applying the robot config's zero_offsets below the tool; results are totals\n");
+      backend = std::make_unique<pmg::ZeroOffsetBackend>(std::move(backend), robot.zeroOffsets());
+    }
     const auto feet = [&](const char* tag) {
       if (sil == nullptr || !sil_truth) return;
       for (const std::string& b : {robot.left_foot_link, robot.right_foot_link}) {
@@ -190,7 +199,7 @@ int main(int argc, char** argv) {
       if (!injected.empty()) {
         double e = 0.0;
         for (int j = 0; j < pmg::calib::kZeroJoints; ++j)
-          e = std::max(e, std::abs(-res.z(j) - injected[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])]));
+          e = std::max(e, std::abs(-(res.z(j) + z_config(j)) - injected[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])]));
         fmt::print("pass {}: max |estimated - injected| = {:.5f} rad\n", pass, e);
       }
     }
@@ -205,7 +214,7 @@ int main(int argc, char** argv) {
     double max_err = 0.0;
     for (int j = 0; j < pmg::calib::kZeroJoints; ++j) {
       const auto i = static_cast<std::size_t>(idx[static_cast<std::size_t>(j)]);
-      const double off = -res.z(j);
+      const double off = -(res.z(j) + z_config(j));
       if (injected.empty()) {
         fmt::print("{:<26} {:>12.5f}\n", robot.joints[i].name, off);
       } else {
@@ -216,9 +225,12 @@ int main(int argc, char** argv) {
     if (!injected.empty()) fmt::print("max |estimated - injected| = {:.5f} rad\n", max_err);
     fmt::print("time: capture {:.2f} s wall ({:.1f} s robot time), estimate {:.2f} s\n", t_capture, cap.duration_s, t_est);
 
-    if (!out_path.empty()) pmg::calib::writeZeroResult(out_path, robot, *model, res, cap, eo);
+    pmg::calib::ZeroEstimate total = res;  // z relative to the raw encoders
+    total.z += z_config;
+    for (auto& h : total.history) h += z_config;
+    if (!out_path.empty()) pmg::calib::writeZeroResult(out_path, robot, *model, total, cap, eo);
     if (!plot_path.empty() && history_csv.empty()) history_csv = plot_path + ".csv";
-    if (!history_csv.empty()) pmg::calib::writeZeroHistoryCsv(history_csv, robot, *model, res);
+    if (!history_csv.empty()) pmg::calib::writeZeroHistoryCsv(history_csv, robot, *model, total);
     if (!plot_path.empty()) {
       const std::string cmd = fmt::format("python3 '{}/apps/calib/pmg_plot_zero.py' '{}' '{}'", PMG_SOURCE_DIR,
                                           history_csv, plot_path);

@@ -58,6 +58,7 @@ int RobotConfig::jointIndex(const std::string& joint_name) const {
   }
 PMG_JOINT_VECTOR(defaultPose, default_position)
 PMG_JOINT_VECTOR(lowerLimits, lower)
+PMG_JOINT_VECTOR(zeroOffsets, zero_offset)
 PMG_JOINT_VECTOR(upperLimits, upper)
 PMG_JOINT_VECTOR(velocityLimits, velocity_limit)
 PMG_JOINT_VECTOR(kp, kp)
@@ -215,6 +216,38 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
       }
     }
     c.joints.push_back(j);
+  }
+  if (const YAML::Node z = root["zero_offsets"]) {  // optional: pmg_calib_zero result (map or file)
+    YAML::Node map = z;
+    std::string src = f + ": zero_offsets";
+    if (z.IsScalar()) {
+      const std::string zfile = (dir / z.as<std::string>()).lexically_normal().string();
+      YAML::Node doc;
+      try {
+        doc = YAML::LoadFile(zfile);
+      } catch (const YAML::Exception& e) {
+        fail(f, "zero_offsets", "cannot read zero-offset file '" + zfile + "': " + e.what());
+      }
+      map = doc["zero_offsets"];
+      src = zfile + ": zero_offsets";
+      if (!map || !map.IsMap()) fail(f, "zero_offsets", "file '" + zfile + "' has no top-level `zero_offsets:` map");
+    } else if (!z.IsMap()) {
+      fail(f, "zero_offsets", "expected a map {joint_name: offset_rad} or the path of a pmg_calib_zero result file");
+    }
+    for (const auto& kv : map) {
+      const std::string name = kv.first.as<std::string>();
+      const int i = c.jointIndex(name);
+      if (i < 0) throw ConfigError(src + "." + name + ": not a joint of " + f);
+      double v = 0.0;
+      try {
+        v = kv.second.as<double>();
+      } catch (const YAML::Exception&) {
+        throw ConfigError(src + "." + name + ": expected a number [rad]");
+      }
+      if (!std::isfinite(v) || std::fabs(v) > 0.5)
+        throw ConfigError(src + "." + name + " = " + kv.second.Scalar() + ": expected finite, |offset| <= 0.5 rad");
+      c.joints[static_cast<std::size_t>(i)].zero_offset = v;
+    }
   }
   validate(c);
   return c;

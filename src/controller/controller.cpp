@@ -12,6 +12,7 @@
 #include <pmg_lcm/velocity_command_t.hpp>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/hal/zero_offset_backend.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/realtime.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
@@ -60,6 +61,8 @@ Controller::Controller(ControllerConfig config, std::unique_ptr<HalBackend> back
       backend = std::make_unique<MujocoBackend>(robot, config_.mujoco);
     }
   }
+  if (robot.zeroOffsets().cwiseAbs().maxCoeff() > 0.0)  // calibrated encoder zeros (pmg_calib_zero)
+    backend = std::make_unique<ZeroOffsetBackend>(std::move(backend), robot.zeroOffsets());
   if (config_.hal_supervisor) {
     auto options = hal::safety::SafetyOptions::fromRobot(robot);
     options.guard_mode = true;  // the loop runs the modes; the HAL guards inputs and the envelope

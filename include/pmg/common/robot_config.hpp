@@ -42,6 +42,12 @@ struct JointConfig {
   /// simulator that applies it (pmg::MujocoBackend, pmg::calib::parse_actuator_block).
   std::string actuator_yaml;
   std::string actuator_source;  ///< where the block came from (file and key), for error messages
+  /// Encoder zero offset [rad] = encoder reading − true joint angle, |offset| ≤ 0.5 (pmg_calib_zero,
+  /// docs/calibration.md). From the optional top-level `zero_offsets:` key: a map {joint_name: offset} or
+  /// the path of a file with such a map under `zero_offsets:` (the `--out` file of pmg_calib_zero),
+  /// relative to the robot config. 0 when absent. Applied by pmg::ZeroOffsetBackend (reading − offset,
+  /// command + offset) around any HAL backend.
+  double zero_offset = 0.0;
 };
 
 /// One motor bus (CAN / CAN FD).
@@ -82,6 +88,8 @@ struct RobotConfig {
   std::vector<int> mirrorIndex() const;
   /// Joint names in order.
   std::vector<std::string> jointNames() const;
+  /// Encoder zero offsets (n) [rad] (JointConfig::zero_offset).
+  Eigen::VectorXd zeroOffsets() const;
 };
 
 /// Loads and validates a robot config YAML file. Relative model paths are resolved against the
