@@ -86,7 +86,7 @@ void writeZeroResult(const std::string& path, const RobotConfig& robot, const gc
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot write");
   f << "# Leg zero offsets from pmg_calib_zero (docs/calibration.md, \"Zero-point calibration\").\n"
-    << "# Read by pmg::calib::loadJointValues (e.g. pmg_calib_zero --inject-offsets for a SIL check).\n"
+    << "# Use: robot config key `zero_offsets: <this file>` (applied by pmg::ZeroOffsetBackend).\n"
     << e.c_str() << "\n";
 }
 

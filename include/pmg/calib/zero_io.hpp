@@ -22,8 +22,8 @@ std::vector<double> randomLegOffsets(const RobotConfig& robot, const gco::LegMod
 /// the non-finite / |value| > 0.5 rad entry.
 std::vector<double> loadJointValues(const std::string& path, const RobotConfig& robot);
 
-/// Writes the result: `zero_offsets: {joint: offset}` (the form loadJointValues reads; the robot config
-/// has no zero-offset key yet) plus a `calibration:` block (converged, iterations, options, poses used /
+/// Writes the result: `zero_offsets: {joint: offset}` (the form loadJointValues and the robot config's
+/// optional `zero_offsets:` key read) plus a `calibration:` block (converged, iterations, options, poses used /
 /// refused / excluded, per-pose IMU disagreement). @throws std::runtime_error if the file cannot be written.
 void writeZeroResult(const std::string& path, const RobotConfig& robot, const gco::LegModel& model,
                      const ZeroEstimate& result, const ZeroCapture& capture, const ZeroEstimatorOptions& options);
