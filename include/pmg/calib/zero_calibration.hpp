@@ -20,17 +20,19 @@
 ///     [ position of X_WB X_BR(q_R) − (p_x, p_y, 0)          (3, m)
 ///       log(R_WR(p)^T R_WB R_BR(q_R))                        (3, rad)  closed chain, right foot flat
 ///       xy of R_WB R_BI g_k                                  (2, rad)  model tilt = IMU tilt ]
-/// Estimator (eqs. 21–25): for each iteration and each used pose k,
-///   q_sim_k, p_k = argmin |q − (r_k + z)|² + |p − p̂|² + w_c |c_k(q, p)|²     (the model configuration that
-///                                                                            reproduces the measured IMU
-///                                                                            under the pose's constraints)
-///   δ_k = q_sim_k − (r_k + z)       (eq. 22; and δp_k = p_k − p̂ for the placement)
+/// Estimator (eqs. 21–25): for each iteration, with J_k = ∂c_k/∂(z, p) at the current (z, p̂),
+/// H = Σ_j J_jᵀ J_j and g = Σ_j J_jᵀ c_j over the used poses:
+///   δ_k = −(H − J_kᵀJ_k)⁻¹ (g − J_kᵀ c_k)   (eq. 22, ZeroPerPose::kLeaveOneOut, default: the model
+///                                           correction the other poses imply; all 12 joints + p)
 ///   δ   = median_k δ_k              (eq. 23, per joint)
 ///   z  ← z + α δ,  p̂ ← p̂ + α δp     (eq. 24)
 ///   converged when |α δ_i| < ε for all joints in M consecutive iterations (eq. 25).
-/// Linearised, z − z_true contracts by (I − α mean_k P_k) per iteration, P_k the projector onto the row
-/// space of ∂c_k/∂q: the true z is the unique fixed point iff the stacked Jacobian (observability()) has
-/// full rank 15.
+/// On consistent data every δ_k equals the Gauss–Newton step, so the iteration converges like
+/// Gauss–Newton iff the stacked Jacobian (observability()) has full rank 15. The literal per-pose variant
+/// (ZeroPerPose::kProjection: q_sim_k = argmin |q − (r_k + z)|² + |p − p̂|² + w_c |c_k(q, p)|², the model
+/// configuration nearest to r_k + z that reproduces the measured IMU under the pose's constraints,
+/// δ_k = q_sim_k − (r_k + z)) gives δ_k only in the 8-dim row space of pose k; their per-joint median
+/// does not converge (test MedianNeedsFullCorrectionsPerPose, docs).
 /// τ gate (eq. 21): a pose whose model at the current estimate disagrees with its IMU by more than τ
 /// (tilt angle of the pelvis implied by either leg vs. the measured one) is excluded from the median;
 /// the gate is applied each time the iteration has converged on the current set, until no pose is
