@@ -3,6 +3,13 @@
 //
 //   build-policy/bin/pmg_policy_sil --model config/policies/g1_pmg_policy.onnx --seeds 5 --out out/sil
 //
+// --config selects the Table I configuration the actor was trained for (the contract check refuses
+// a mismatch, naming pmg.gco / pmg.mode):
+//   pmg_gco      full PMG: generator + GCO (pmg::gco::GeneratorWithGco, config/gco/g1.yaml); the
+//                actor observes u' (PMG eq. 19), as pmg_controller does with GCO on
+//   pmg          PMG without GCO: the actor observes the command u
+//   single_gait  single-gait imitation: the generator runs on the walk_forward clip alone at its
+//                nominal speed whatever the command; the actor observes u
 // The loop is the controller's, at its rates: 100 Hz policy tick (PMG generator step ->
 // observation -> PolicyRunner::step -> limb separation: legs from the actor, waist and arms from
 // the PMG reference), 500 Hz HAL cycles of the MuJoCo 2.2 backend (1 kHz physics, motor PD at
@@ -13,7 +20,8 @@
 //   LinVel [m/s]  |v_cmd,xy - v_xy| with v the pelvis velocity in the heading (yaw) frame
 //   YawVel [rad/s] |w_cmd - w_z|, w_z the pelvis yaw rate (world z)
 //   Roll, Pitch [rad] |cmd - torso roll/pitch| (torso_link, ZYX Euler angles in the world frame)
-//   Height [m]   |h_ref - pelvis z|, h_ref = the PMG template's pelvis height (incl. squat)
+//   Height [m]   |h_cmd - pelvis z|, h_cmd = the commanded pelvis height (0.78 m standing/walking)
+//   (all errors against the user's command u, also in the GCO configuration whose actor sees u')
 //   falls        runs in which the pelvis dropped below 0.4 m or tilted more than 60 deg
 //   foot slip [m/s] mean horizontal speed of a foot (ankle_roll_link origin) while it touches the floor
 // Writes <out>/seed<k>.csv (per tick) and <out>/summary.json.
@@ -31,6 +39,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -99,12 +108,16 @@ int main(int argc, char** argv) {
   CLI::App app{"Evaluate a policy in the MuJoCo 2.2 SIL on the preset command sequence"};
   std::string model_path = "config/policies/g1_pmg_policy.onnx", robot_path = "config/robots/g1/g1.yaml";
   std::string clips_dir = "config/clips/g1", commands = "config/policies/eval_commands.yaml", out = "out/policy_sil";
+  std::string config = "pmg_gco", gco_path = "config/gco/g1.yaml";
   int seeds = 3;
   bool noise = true, native = false;
   double duration = -1, frame_period = 0.1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract");
   app.add_option("--robot", robot_path, "robot config YAML");
   app.add_option("--clips", clips_dir, "PMG clip directory");
+  app.add_option("--config", config, "Table I configuration the actor was trained for")
+      ->check(CLI::IsMember({"pmg_gco", "pmg", "single_gait"}));
+  app.add_option("--gco", gco_path, "GCO options (pmg_gco)");
   app.add_option("--commands", commands, "command sequence YAML");
   app.add_option("--seeds", seeds, "runs (seed k perturbs the initial pose and phase, and the sensor noise)")->check(CLI::Range(1, 100));
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
@@ -118,7 +131,16 @@ int main(int argc, char** argv) {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const Schedule sched = loadSchedule(commands);
     const double T = duration > 0 ? duration : sched.duration;
-    const auto gen_model = std::make_shared<const pmg::GeneratorModel>(pmg::loadClipLibrary(clips_dir, robot), pmg::generatorJointSpace(robot));
+    const bool single_gait = config == "single_gait";
+    const auto gen_model = std::make_shared<const pmg::GeneratorModel>(
+        single_gait ? pmg::loadClipLibrary(std::vector<std::string>{clips_dir + "/walk_forward.yaml"}, robot)
+                    : pmg::loadClipLibrary(clips_dir, robot),
+        pmg::generatorJointSpace(robot));
+    pmg::gco::GcoOptions gco_options = pmg::gco::loadGcoOptionsFile(gco_path);
+    gco_options.enabled = config == "pmg_gco";
+    const auto legs = pmg::gco::LegModel::fromRobotConfig(robot);
+    // Single gait: the forward clip at its nominal speed, neutral posture, whatever the command.
+    const pmg::VelocityCommand single_gait_ud{gen_model->dynamicClip(pmg::CommandAxis::kForward, 1)->nominal_scale, 0.0, 0.0};
     std::filesystem::create_directories(out);
     const int nj = static_cast<int>(robot.numJoints());
     std::vector<Totals> totals;
@@ -139,7 +161,7 @@ int main(int argc, char** argv) {
                            mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
       const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
 
-      pmg::MotionGenerator gen(gen_model);
+      pmg::gco::GeneratorWithGco gen(gen_model, legs, gco_options);
       gen.reset(seed > 0 ? 0.5 * (uni(rng) + 1.0) : 0.0);
       pp::PolicyStageOptions so;
       so.backend = native ? pp::PolicyBackend::kNative : pp::PolicyBackend::kOnnxRuntime;
@@ -148,6 +170,8 @@ int main(int argc, char** argv) {
       so.noise_q = noise ? 0.01 : 0.0;
       so.noise_qd = noise ? 0.5 : 0.0;
       so.noise_seed = static_cast<unsigned>(2000 + seed);
+      so.gco = gco_options.enabled;
+      so.mode = single_gait ? "single_gait" : "pmg";
       pp::PolicyStage stage(model_path, robot, so);  // observation, actor, limb separation as in training
       const int na = stage.runner().actionSize();
       pmg::LowCommand low;
@@ -172,10 +196,14 @@ int main(int argc, char** argv) {
         double u[6];
         std::string seg;
         sched.at(t, u, &seg);
-        gen.step({u[0], u[1], u[2]}, {u[3], u[4], u[5]}, 0.01);
-        const pmg::GeneratorOutput& g = gen.output();
-
-        stage.step(state, {u[0], u[1], u[2], u[3], u[4], u[5]}, g, low);
+        const pmg::gco::GcoResult& gr = single_gait ? gen.step(single_gait_ud, {0.0, 0.0, 0.0}, 0.01)
+                                                    : gen.step({u[0], u[1], u[2]}, {u[3], u[4], u[5]}, 0.01);
+        const pmg::GeneratorOutput& g = gen.generatorOutput();
+        const std::array<double, 6> observed =
+            gco_options.enabled ? std::array<double, 6>{gr.u_opt.v_x, gr.u_opt.v_y, gr.u_opt.yaw_rate, gr.u_opt.pitch,
+                                                        gr.u_opt.roll, gr.u_opt.height}
+                                : std::array<double, 6>{u[0], u[1], u[2], u[3], u[4], u[5]};
+        stage.step(state, observed, g, low);
         ++low.sequence;
         for (int c = 0; c < 5; ++c) sim.exchange(low, state);
 
@@ -211,7 +239,7 @@ int main(int argc, char** argv) {
           tot.yaw += std::abs(u[2] - wz);
           tot.pitch += std::abs(u[3] - pitch);
           tot.roll += std::abs(u[4] - roll);
-          tot.height += std::abs(g.base_height - height);
+          tot.height += std::abs(u[5] - height);
           ++tot.n;
         }
         csv << t << ',' << seg;
@@ -243,7 +271,7 @@ int main(int argc, char** argv) {
     std::ofstream js(out + "/summary.json");
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
-    js << "{\"model\": \"" << model_path << "\", \"duration_s\": " << T << ", \"runs\": [";
+    js << "{\"model\": \"" << model_path << "\", \"config\": \"" << config << "\", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];
       const double n = std::max<long>(1, t.n);

@@ -190,6 +190,8 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
     if (!kv.second.IsScalar()) r.fail("pmg." + key, "expected a scalar");
     c.pmg[key] = kv.second.Scalar();
   }
+  // Contracts written before the Table I ablation have no pmg.mode: they were trained on PMG.
+  c.pmg.emplace("mode", "pmg");
 
   const YAML::Node pairs = r.require(root, "reference_pairs", "");
   if (!pairs.IsSequence() || pairs.size() == 0) r.fail("reference_pairs", "expected a non-empty list");

@@ -24,7 +24,7 @@ class NativeModels : public ::testing::TestWithParam<std::string> {};
 TEST_P(NativeModels, MatchesOnnxRuntimeAndReferences) {
   PolicyRobotSpec spec = g1Spec();
   const std::string path = GetParam();
-  if (path.rfind("config/", 0) == 0) spec.pmg = {{"enabled", "true"}, {"gco", "false"}};
+  if (path.rfind("config/", 0) == 0) spec.pmg = {{"enabled", "true"}, {"gco", "true"}};
   PolicyRunner ort(path, spec);
   PolicyRunner native(path, spec, nativeOptions());
   // Reference pairs plus perturbed inputs (not stored anywhere): both engines agree.

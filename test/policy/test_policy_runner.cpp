@@ -133,7 +133,7 @@ TEST(PolicyRunner, TighterToleranceThanFloatNoiseStillPasses) {
 // which means the policy has to be retrained or re-exported.
 TEST(PolicyRunner, ShippedPolicyMatchesRobotConfig) {
   PolicyRobotSpec spec = loadPolicyRobotSpec("config/robots/g1/g1.yaml", 0.01);
-  spec.pmg = {{"enabled", "true"}, {"gco", "false"}};
+  spec.pmg = {{"enabled", "true"}, {"gco", "true"}, {"mode", "pmg"}};  // full PMG (GCO)
   PolicyRunner runner("config/policies/g1_pmg_policy.onnx", spec);
   EXPECT_EQ(runner.actionSize(), 12);
   EXPECT_EQ(runner.observationSize(), 62);

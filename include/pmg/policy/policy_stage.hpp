@@ -35,6 +35,10 @@ struct PolicyStageOptions {
   PolicyBackend backend = PolicyBackend::kNative;  ///< kNative: allocation-free tick
   double control_period = 0.01;   ///< [s], must equal the contract's
   bool gco = false;               ///< the controller runs GCO (must match the contract)
+  /// Reference the actor was trained on (must match the contract's pmg.mode): "pmg" = the PMG
+  /// generator on all clips (the controller); "single_gait" = the generator on the forward-walk
+  /// clip alone at its nominal speed (the Table I baseline; only pmg_policy_sil runs it).
+  std::string mode = "pmg";
   /// Gaussian sensor noise on the observation (evaluation as in training); 0 = none.
   double noise_gyro = 0, noise_gravity = 0, noise_q = 0, noise_qd = 0;
   unsigned noise_seed = 0;
