@@ -16,6 +16,16 @@ std::string GantryOptions::validate() const {
   return {};
 }
 
+std::string SoleContactOptions::validate(double timestep) const {
+  if (!enabled) return {};
+  if (!(timeconst >= 2 * timestep && timeconst <= 1.0))
+    return "sole_contacts.timeconst: expected in [2 timestep, 1] s";
+  if (!(dampratio > 0 && dampratio <= 10)) return "sole_contacts.dampratio: expected in (0, 10]";
+  if (!(dmin > 0 && dmin <= dmax && dmax < 1)) return "sole_contacts.dmin/dmax: expected 0 < dmin <= dmax < 1";
+  if (!(width > 0 && width <= 1)) return "sole_contacts.width: expected in (0, 1] m";
+  return {};
+}
+
 std::string MujocoBackendOptions::validate() const {
   if (!(timestep > 0 && timestep <= 0.001)) return "mujoco.timestep: expected in (0, 0.001] s (>= 1 kHz physics)";
   const double ratio = cycle_period / timestep;
@@ -23,6 +33,7 @@ std::string MujocoBackendOptions::validate() const {
     return "mujoco.cycle_period: expected a positive multiple of timestep";
   for (double o : encoder_offsets)
     if (!std::isfinite(o) || std::fabs(o) > 0.5) return "mujoco.encoder_offsets: expected finite, |offset| <= 0.5 rad";
+  if (std::string e = sole_contacts.validate(timestep); !e.empty()) return "mujoco." + e;
   return gantry.enabled ? gantry.validate() : std::string();
 }
 
@@ -68,6 +79,25 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
       throw ConfigError("mujoco.encoder_offsets: has " + std::to_string(options_.encoder_offsets.size()) +
                         " entries, expected " + std::to_string(n) + " (one per joint)");
     for (std::size_t i = 0; i < n; ++i) offsets_[static_cast<Eigen::Index>(i)] = options_.encoder_offsets[i];
+  }
+  if (options_.sole_contacts.enabled) {
+    const SoleContactOptions& sc = options_.sole_contacts;
+    int changed = 0;
+    for (const std::string& foot : {robot_.left_foot_link, robot_.right_foot_link}) {
+      const int b = mj_name2id(model_.get(), mjOBJ_BODY, foot.c_str());
+      if (b < 0) throw ConfigError(robot_.mjcf_path + ": no foot body '" + foot + "' (robot.left/right_foot_link)");
+      for (int g = 0; g < model_->ngeom; ++g) {
+        if (model_->geom_bodyid[g] != b || (model_->geom_contype[g] == 0 && model_->geom_conaffinity[g] == 0)) continue;
+        model_->geom_solref[mjNREF * g] = sc.timeconst;
+        model_->geom_solref[mjNREF * g + 1] = sc.dampratio;
+        model_->geom_solimp[mjNIMP * g] = sc.dmin;
+        model_->geom_solimp[mjNIMP * g + 1] = sc.dmax;
+        model_->geom_solimp[mjNIMP * g + 2] = sc.width;
+        model_->geom_solmix[g] = 1e3;
+        ++changed;
+      }
+    }
+    if (changed == 0) throw ConfigError(robot_.mjcf_path + ": mujoco.sole_contacts: the foot bodies have no colliding geom");
   }
   // Identified actuator models (robot config `actuator:` blocks).
   actuator_.resize(n);

@@ -16,7 +16,8 @@
 ///    offset, torque saturation and torque-speed envelope, Coulomb/Stribeck/load-dependent
 ///    friction with true stiction, viscous friction, armature and gain scales (backlash needs a
 ///    rotor body and is not applied to the robot: a configured gap is refused with an error);
-///  - external pushes on a body (fault-injection tests).
+///  - external pushes on a body (fault-injection tests);
+///  - stiff "calibration bench" sole contacts (SoleContactOptions, default off).
 
 #include <memory>
 #include <optional>
@@ -43,12 +44,31 @@ struct GantryOptions {
   std::string validate() const;
 };
 
+/// Calibration-bench sole contacts (opt-in; off = the MJCF's soft contacts, which every other SIL test and
+/// the policy assume). MuJoCo's default contact (solref 0.02 s, solimp 0.9/0.95) lets a loaded G1 sole
+/// sink and tilt by millirad as its load moves; a zero-point calibration that assumes flat, planted soles
+/// (docs/calibration.md, "Zero-point calibration") needs a rigid bench floor. When enabled, every
+/// colliding geom of the two foot bodies (robot config left/right_foot_link) gets this solref/solimp and a
+/// solmix of 1e3 (MuJoCo averages the two geoms' parameters weighted by solmix, so the sole's values
+/// dominate the floor's). MuJoCo 2.2 semantics (XML reference, "Solver parameters"): solref =
+/// (time constant [s], damping ratio), solimp = (dmin, dmax, width [m]).
+struct SoleContactOptions {
+  bool enabled = false;
+  double timeconst = 0.004;  ///< solref[0] [s], >= 2 physics timesteps (MuJoCo's stability rule)
+  double dampratio = 1.0;    ///< solref[1], in (0, 10]
+  double dmin = 0.99;        ///< solimp[0], in (0, dmax]
+  double dmax = 0.999;       ///< solimp[1], in [dmin, 1)
+  double width = 0.001;      ///< solimp[2] [m], > 0
+  std::string validate(double timestep) const;  ///< empty if valid, else "sole_contacts.field: expected ..."
+};
+
 /// Options of the MuJoCo backend.
 struct MujocoBackendOptions {
   double timestep = 0.001;          ///< physics step [s], ≤ 0.001 (≥ 1 kHz)
   double cycle_period = 0.002;      ///< HAL cycle [s] (500 Hz); a multiple of timestep
   GantryOptions gantry;
   std::vector<double> encoder_offsets;  ///< (n or empty) hidden zero offsets [rad]: reported = true + offset
+  SoleContactOptions sole_contacts;     ///< calibration-bench floor (default off)
   std::string validate() const;     ///< empty if valid, else "field: expected ..."
 };
 
