@@ -69,6 +69,9 @@ int main(int argc, char** argv) {
   app.add_flag("--sil-truth", sil_truth, "SIL: print the true foot poses after each pose (slip check)");
   app.add_option("--history-csv", history_csv, "convergence history CSV (iteration, z per joint)");
   app.add_option("--plot", plot_path, "convergence plot PNG (needs python3 + matplotlib; implies a history CSV)");
+  bool bench_contacts = false;
+  app.add_flag("--bench-contacts", bench_contacts, "SIL: stiff sole contacts (rigid calibration bench floor, "
+               "MujocoBackendOptions::sole_contacts)");
   int passes = 1;
   app.add_option("--passes", passes, "capture passes; pass k+1 plans its targets with the estimate of pass k "
                                      "(less internal stress in the closed chain)")->check(CLI::Range(1, 5));
@@ -123,6 +126,7 @@ int main(int argc, char** argv) {
     if (backend_name == "mujoco") {
       pmg::MujocoBackendOptions bo = cc ? cc->mujoco : pmg::MujocoBackendOptions{};
       bo.gantry.enabled = false;  // standing on the ground: the protocol needs the feet planted
+      bo.sole_contacts.enabled = bench_contacts;
       bo.encoder_offsets.assign(robot.numJoints(), 0.0);
       if (inject_seed >= 0)
         bo.encoder_offsets = pmg::calib::randomLegOffsets(robot, *model, static_cast<unsigned>(inject_seed), max_offset);
@@ -177,7 +181,7 @@ int main(int argc, char** argv) {
             fmt::print("  {}\n", s);
             if (s.rfind("pose ", 0) == 0 || s.rfind("home", 0) == 0) feet(s.substr(0, 18).c_str());
           },
-          z_guess);
+          z_guess, cap.final_targets);
       feet("after");
       t_capture += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (cap.feet_moved)

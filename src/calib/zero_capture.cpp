@@ -98,6 +98,16 @@ ZeroProtocol loadZeroProtocol(const std::string& path) {
   num("max_home_drift", &p.max_home_drift);
   num("max_shift_m", &p.max_shift_m);
   num("max_angle_rad", &p.max_angle_rad);
+  const auto flag = [&](const char* key, bool* v) {
+    if (!z[key]) return;
+    try {
+      *v = z[key].as<bool>();
+    } catch (const std::exception&) {
+      throw ConfigError(fmt::format("{}: zero_calibration.{}: expected true or false", path, key));
+    }
+  };
+  flag("start_from_current", &p.start_from_current);
+  flag("flatten_feet", &p.flatten_feet);
   for (const char* key : {"leg_kp", "leg_kd"}) {
     if (!z[key]) continue;
     if (!z[key].IsSequence()) throw ConfigError(fmt::format("{}: zero_calibration.{}: expected a list of 6 numbers", path, key));
@@ -176,7 +186,7 @@ std::vector<ZeroSample> synthesizeZeroSamples(std::shared_ptr<const gco::LegMode
 
 ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std::shared_ptr<const gco::LegModel> model,
                              const ZeroProtocol& protocol, const std::function<void(const std::string&)>& log,
-                             const ZeroVector& z_guess) {
+                             const ZeroVector& z_guess, const Eigen::VectorXd& start_targets) {
   protocol.validate();
   const auto say = [&](const std::string& s) {
     if (log) log(s);
@@ -246,11 +256,16 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   };
 
   // Ramp from the current readings to the default pose, then settle.
-  exchange(false);
+  if (start_targets.size() != 0 && start_targets.size() != n)
+    throw std::invalid_argument(fmt::format("captureZeroPoses: start_targets has {} entries, expected 0 or {}",
+                                            start_targets.size(), n));
+  const bool held = start_targets.size() == n;
+  if (held) target = start_targets;
+  exchange(held);
   {
     Eigen::VectorXd start(n);
-    for (int i = 0; i < n; ++i) start(i) = st.motors[static_cast<std::size_t>(i)].q;
-    const Eigen::VectorXd goal = robot.defaultPose();
+    for (int i = 0; i < n; ++i) start(i) = held ? start_targets(i) : st.motors[static_cast<std::size_t>(i)].q;
+    const Eigen::VectorXd goal = protocol.start_from_current ? start : robot.defaultPose();
     const int steps = cycles(protocol.move_s);
     for (int c = 1; c <= steps; ++c) {
       const double s = 0.5 - 0.5 * std::cos(M_PI * c / steps);
@@ -274,7 +289,9 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   Eigen::Isometry3d X_WM = Eigen::Isometry3d::Identity();
   X_WM.linear() = Eigen::AngleAxisd(yaw_m, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   X_WM.translation() = 0.5 * (X_WL.translation() + X_WR.translation());
-  const Eigen::Isometry3d X_ML = flatten(X_WM.inverse() * X_WL), X_MR = flatten(X_WM.inverse() * X_WR);
+  const bool keep_feet = !protocol.flatten_feet;
+  const Eigen::Isometry3d X_ML = keep_feet ? X_WM.inverse() * X_WL : flatten(X_WM.inverse() * X_WL);
+  const Eigen::Isometry3d X_MR = keep_feet ? X_WM.inverse() * X_WR : flatten(X_WM.inverse() * X_WR);
   const Eigen::Isometry3d X_MB0 = X_WM.inverse() * X_WB;  // measured home pelvis pose in M
   const double yaw0 = std::atan2(X_MB0.linear()(1, 0), X_MB0.linear()(0, 0));  // home: pelvis level, this yaw
   say(fmt::format("home: feet {:.3f} m apart, pelvis {:.3f} m above the soles, tilt {:.4f} rad",
@@ -424,6 +441,7 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   if (st.base_truth_valid)
     out.max_base_drift_m =
         (Eigen::Vector3d(st.base_position[0], st.base_position[1], st.base_position[2]) - home_base).norm();
+  out.final_targets = target;
   say(fmt::format("home again: orientation drift {:.5f} rad{}", out.home_drift,
                   out.feet_moved ? "  FEET MOVED (max_home_drift exceeded)" : ""));
   return out;

@@ -196,6 +196,14 @@ struct ZeroProtocol {
   /// robot config's). The G1's default ankle kp (40 N·m/rad) cannot hold the standing robot without a
   /// balance controller (ankle stiffness < m g h): the protocol raises it. [N·m/rad], [N·m·s/rad], [0, 2000].
   std::vector<double> leg_kp, leg_kd;
+  /// true: the planned foot poses are the home's feet flattened on the nominal model (level soles in the
+  /// model); false: the home's feet as the model sees them (with hidden offsets the model's feet are
+  /// tilted, the real ones flat: keeping them makes the planned moves fit the real chain to second order).
+  bool flatten_feet = true;
+  /// true: the capture starts by holding the joint readings it finds (for a robot already standing with
+  /// both soles flat); false: it first ramps to the robot config's default pose in reading space (with
+  /// hidden offsets the real pose is then default − offset, which does not fit both soles flat).
+  bool start_from_current = false;
   void validate() const;
 };
 
@@ -211,6 +219,7 @@ struct ZeroCapture {
   double duration_s = 0.0;          ///< backend time spent [s]
   /// Ground truth of the SIL (sole slip over the whole capture) when the backend provides it; else NaN.
   double max_base_drift_m = std::numeric_limits<double>::quiet_NaN();
+  Eigen::VectorXd final_targets;    ///< (n) joint targets the robot is left holding (reading space) [rad]
 };
 
 /// Drives the robot through @p protocol via @p backend (one exchange per backend cycle, lockstep in
@@ -218,12 +227,18 @@ struct ZeroCapture {
 /// per pose. Joints other than the legs hold their default pose. Leg IK on the nominal model; with
 /// @p z_guess (a previous estimate, model = reading + z_guess) the targets are consistent with it, which
 /// lowers the internal stress of the closed chain in a second pass.
+/// @p start_targets (n joint targets in reading space [rad], or empty): the targets the robot is held at
+/// when the capture starts (e.g. the previous pass's ZeroCapture::final_targets); with
+/// protocol.start_from_current the capture keeps holding them instead of taking the first readings as
+/// targets (which would drop the torque that carries the standing robot's weight).
 /// @throws std::runtime_error when the backend faults, the IK of a pose fails or leaves the joint
-/// limits (names the pose), or the IMU says the robot tipped (tilt error > max_tilt_error).
+/// limits (names the pose), or the IMU says the robot tipped (tilt error > max_tilt_error); std::invalid_argument
+/// when start_targets has neither 0 nor n entries.
 ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot,
                              std::shared_ptr<const gco::LegModel> model, const ZeroProtocol& protocol,
                              const std::function<void(const std::string&)>& log = {},
-                             const ZeroVector& z_guess = ZeroVector::Zero());
+                             const ZeroVector& z_guess = ZeroVector::Zero(),
+                             const Eigen::VectorXd& start_targets = {});
 
 /// Noise-free samples of @p protocol on the nominal leg model, for design-time observability analysis and
 /// tests: home = the robot config's default leg pose levelled (feet flat, pelvis level), each pose's pelvis
