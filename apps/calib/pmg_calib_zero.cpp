@@ -69,9 +69,10 @@ int main(int argc, char** argv) {
   app.add_flag("--sil-truth", sil_truth, "SIL: print the true foot poses after each pose (slip check)");
   app.add_option("--history-csv", history_csv, "convergence history CSV (iteration, z per joint)");
   app.add_option("--plot", plot_path, "convergence plot PNG (needs python3 + matplotlib; implies a history CSV)");
-  bool bench_contacts = false;
-  app.add_flag("--bench-contacts", bench_contacts, "SIL: stiff sole contacts (rigid calibration bench floor, "
-               "MujocoBackendOptions::sole_contacts)");
+  std::string sil_contacts = "bench";
+  app.add_option("--sil-contacts", sil_contacts, "SIL sole contacts: bench (rigid calibration bench floor, "
+                 "MujocoBackendOptions::sole_contacts; default) | mjcf (the MJCF's soft contacts, as every other SIL run)")
+      ->check(CLI::IsMember({"bench", "mjcf"}));
   int passes = 1;
   app.add_option("--passes", passes, "capture passes; pass k+1 plans its targets with the estimate of pass k "
                                      "(less internal stress in the closed chain)")->check(CLI::Range(1, 5));
@@ -126,7 +127,7 @@ int main(int argc, char** argv) {
     if (backend_name == "mujoco") {
       pmg::MujocoBackendOptions bo = cc ? cc->mujoco : pmg::MujocoBackendOptions{};
       bo.gantry.enabled = false;  // standing on the ground: the protocol needs the feet planted
-      bo.sole_contacts.enabled = bench_contacts;
+      bo.sole_contacts.enabled = sil_contacts == "bench";
       bo.encoder_offsets.assign(robot.numJoints(), 0.0);
       if (inject_seed >= 0)
         bo.encoder_offsets = pmg::calib::randomLegOffsets(robot, *model, static_cast<unsigned>(inject_seed), max_offset);
