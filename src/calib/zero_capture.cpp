@@ -255,7 +255,8 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
     for (const auto& u : ups) sample->tilt_spread = std::max(sample->tilt_spread, angleBetween(u, sample->up_I));
   };
 
-  // Ramp from the current readings to the default pose, then settle.
+  // Ramp from the current readings (or the held start_targets) to the default pose, or keep holding them
+  // (start_from_current); then settle.
   if (start_targets.size() != 0 && start_targets.size() != n)
     throw std::invalid_argument(fmt::format("captureZeroPoses: start_targets has {} entries, expected 0 or {}",
                                             start_targets.size(), n));

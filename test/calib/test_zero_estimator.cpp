@@ -222,6 +222,32 @@ TEST_F(ZeroEstimatorTest, BadProtocolNamesFileAndField) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("poses[0] (far).dp"), std::string::npos) << e.what();
   }
+  {
+    std::ofstream f(path);
+    f << "zero_calibration:\n  flatten_feet: maybe\n  poses:\n    - {name: a, dp: [0, 0, -0.05]}\n";
+  }
+  try {
+    loadZeroProtocol(path);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("zero_calibration.flatten_feet: expected true or false"), std::string::npos)
+        << e.what();
+  }
+}
+
+// The switches the SIL acceptance relies on: absent = the conservative defaults, the shipped protocol sets
+// both (docs/calibration.md: start from the current stance, plan with the home feet as the model sees them).
+TEST_F(ZeroEstimatorTest, ProtocolSwitchesParse) {
+  EXPECT_TRUE(protocol_->start_from_current);
+  EXPECT_FALSE(protocol_->flatten_feet);
+  const std::string path = ::testing::TempDir() + "/zero_protocol_defaults.yaml";
+  {
+    std::ofstream f(path);
+    f << "zero_calibration:\n  poses:\n    - {name: a, dp: [0, 0, -0.05]}\n";
+  }
+  const ZeroProtocol d = loadZeroProtocol(path);
+  EXPECT_FALSE(d.start_from_current);
+  EXPECT_TRUE(d.flatten_feet);
 }
 
 }  // namespace
