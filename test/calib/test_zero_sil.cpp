@@ -124,10 +124,11 @@ TEST_F(ZeroSilTest, PushDuringHoldIsRefusedOrAborts) {
 // 0.005 rad. SIL on the calibration bench floor (MujocoBackendOptions::sole_contacts: the estimator assumes
 // flat, planted soles; MuJoCo's default soft contacts let them tilt by millirad, docs/calibration.md), three
 // capture passes as `pmg_calib_zero --passes 3 --bench-contacts`, each planned on the previous estimate.
-// Seeds 1 and 9 are the two worst of seeds 1-10 after pass 2 (measured with the tool: pass 1 0.022 / 0.013,
-// pass 2 0.0048 / 0.0033, pass 3 0.0011 / 0.0008 rad). Also: every pass improves on the previous one.
+// Seeds 1 and 17: the worst of seeds 1-10 and of 11-20 after pass 2 (measured with the tool: pass 1 0.022 /
+// 0.068, pass 2 0.0048 / 0.027, pass 3 0.0011 / 0.0017 rad). Also: passes 2 and 3 each improve on the previous
+// one (pass 1 alone can be worse than uncalibrated: seed 17, planned on the nominal model, 0.068 rad).
 TEST_F(ZeroSilTest, RecoversRandomLegOffsets) {
-  for (unsigned seed : {1u, 9u}) {
+  for (unsigned seed : {1u, 17u}) {
     MujocoBackendOptions bo;
     bo.gantry.enabled = false;
     bo.sole_contacts.enabled = true;
@@ -155,7 +156,7 @@ TEST_F(ZeroSilTest, RecoversRandomLegOffsets) {
       z = r.z;
       const double e = error(z);
       std::printf(", pass %d %.5f", pass + 1, e);
-      EXPECT_LT(e, e_prev) << "seed " << seed << " pass " << pass + 1 << " did not improve";
+      if (pass > 0) EXPECT_LT(e, e_prev) << "seed " << seed << " pass " << pass + 1 << " did not improve";
       e_prev = e;
     }
     std::printf(" rad\n");
