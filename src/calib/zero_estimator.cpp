@@ -98,6 +98,29 @@ double ZeroEstimator::imuDisagreement(const ZeroVector& q, const Eigen::Vector3d
 
 namespace {
 
+using PoseJacobian = Eigen::Matrix<double, 8, kZeroJoints + 3>;
+
+/// Central-difference Jacobian of one pose's constraint c(q, p) w.r.t. (z, p) (columns: the 12
+/// joint offsets, then the right-sole placement x, y, yaw), step 1e-6.
+template <typename Constraint>
+PoseJacobian poseJacobian(const Constraint& c, const ZeroVector& q, const Eigen::Vector3d& p) {
+  constexpr double h = 1e-6;
+  PoseJacobian J;
+  for (int j = 0; j < kZeroJoints + 3; ++j) {
+    ZeroVector qp = q, qm = q;
+    Eigen::Vector3d pp = p, pm = p;
+    if (j < kZeroJoints) {
+      qp(j) += h;
+      qm(j) -= h;
+    } else {
+      pp(j - kZeroJoints) += h;
+      pm(j - kZeroJoints) -= h;
+    }
+    J.col(j) = (c(qp, pp) - c(qm, pm)) / (2.0 * h);
+  }
+  return J;
+}
+
 /// Per-pose solve in ceres::TinySolver's interface: x = (Δq (12), Δp (3)) around (q0, p0).
 /// Residuals: Δq (12), Δp (3), sqrt(w_c) c(q0 + Δq, p0 + Δp) (8); c's Jacobian by central differences.
 struct PoseCost {
@@ -162,22 +185,11 @@ ZeroObservability ZeroEstimator::observability(const std::vector<ZeroSample>& sa
   for (const auto& s : samples)
     if (s.valid) use.push_back(&s);
   Eigen::MatrixXd J(8 * static_cast<Eigen::Index>(use.size()), kZeroJoints + 3);
-  constexpr double h = 1e-6;
   for (std::size_t k = 0; k < use.size(); ++k) {
-    const ZeroVector q = use[k]->readings + z;
-    for (int j = 0; j < kZeroJoints + 3; ++j) {
-      ZeroVector qp = q, qm = q;
-      Eigen::Vector3d pp = p, pm = p;
-      if (j < kZeroJoints) {
-        qp(j) += h;
-        qm(j) -= h;
-      } else {
-        pp(j - kZeroJoints) += h;
-        pm(j - kZeroJoints) -= h;
-      }
-      J.block<8, 1>(8 * static_cast<Eigen::Index>(k), j) =
-          (constraint(qp, pp, use[k]->up_I) - constraint(qm, pm, use[k]->up_I)) / (2.0 * h);
-    }
+    const Eigen::Vector3d& up = use[k]->up_I;
+    J.block<8, kZeroJoints + 3>(8 * static_cast<Eigen::Index>(k), 0) =
+        poseJacobian([&](const ZeroVector& q, const Eigen::Vector3d& pl) { return constraint(q, pl, up); },
+                     use[k]->readings + z, p);
   }
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
   ZeroObservability o;
@@ -229,24 +241,13 @@ ZeroEstimate ZeroEstimator::estimate(const std::vector<ZeroSample>& samples, con
       std::vector<Eigen::Matrix<double, 8, kZeroJoints + 3>> Jk(static_cast<std::size_t>(n));
       std::vector<Vec8> ck(static_cast<std::size_t>(n));
       Eigen::Matrix<double, kZeroJoints + 3, kZeroJoints + 3> H = Eigen::Matrix<double, kZeroJoints + 3, kZeroJoints + 3>::Zero();
-      constexpr double h = 1e-6;
       for (int k = 0; k < n; ++k) {
         if (!active[static_cast<std::size_t>(k)]) continue;
         const ZeroSample& s = samples[static_cast<std::size_t>(k)];
         const ZeroVector q = s.readings + z;
         ck[static_cast<std::size_t>(k)] = constraint(q, p, s.up_I);
-        for (int j = 0; j < kZeroJoints + 3; ++j) {
-          ZeroVector qp = q, qm = q;
-          Eigen::Vector3d pp = p, pm = p;
-          if (j < kZeroJoints) {
-            qp(j) += h;
-            qm(j) -= h;
-          } else {
-            pp(j - kZeroJoints) += h;
-            pm(j - kZeroJoints) -= h;
-          }
-          Jk[static_cast<std::size_t>(k)].col(j) = (constraint(qp, pp, s.up_I) - constraint(qm, pm, s.up_I)) / (2 * h);
-        }
+        Jk[static_cast<std::size_t>(k)] =
+            poseJacobian([&](const ZeroVector& qq, const Eigen::Vector3d& pl) { return constraint(qq, pl, s.up_I); }, q, p);
         H += Jk[static_cast<std::size_t>(k)].transpose() * Jk[static_cast<std::size_t>(k)];
       }
       H.diagonal().array() += 1e-12 * H.diagonal().maxCoeff();
