@@ -57,12 +57,7 @@ int main(int argc, char** argv) {
   }
   using namespace pmg::calib;
   const RigConfig rig = make_test_rig(0.002);
-  RigParams truth;
-  truth.kp_scale = 1.1;
-  truth.kd_scale = 0.9;
-  truth.armature_kgm2 = 0.005;
-  truth.act.torque_limit_Nm = rig.torque_limit_Nm;
-  truth.act.rate_hz = rig.rate_hz;
+  const RigParams truth = make_rig_truth(rig, 1.1, 0.9, 0.005);
   SyntheticLogOptions o;
   o.duration_s = duration;
   o.log_rate_hz = rate;

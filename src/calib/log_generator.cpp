@@ -157,6 +157,16 @@ HiddenEffect draw_hidden_effect(const std::string& name, std::uint64_t seed, con
   return h;
 }
 
+RigParams make_rig_truth(const RigConfig& rig, double kp_scale, double kd_scale, double armature_kgm2) {
+  RigParams t;
+  t.kp_scale = kp_scale;
+  t.kd_scale = kd_scale;
+  t.armature_kgm2 = armature_kgm2;
+  t.act.torque_limit_Nm = rig.torque_limit_Nm;
+  t.act.rate_hz = rig.rate_hz;
+  return t;
+}
+
 RigConfig make_test_rig(double sim_dt_s) {
   RigConfig r;
   r.source_file = "make_test_rig()";

@@ -14,13 +14,7 @@ namespace {
 
 /// Truth well off the rig's nominal values (kp x1.3, kd x0.8, armature 0.006 vs 0.004).
 RigParams truth_of(const RigConfig& rig) {
-  RigParams t;
-  t.kp_scale = 1.3;
-  t.kd_scale = 0.8;
-  t.armature_kgm2 = 0.006;
-  t.act.torque_limit_Nm = rig.torque_limit_Nm;
-  t.act.rate_hz = rig.rate_hz;
-  return t;
+  return make_rig_truth(rig, 1.3, 0.8, 0.006);
 }
 
 std::vector<BenchLog> short_logs(const RigConfig& rig, std::uint64_t seed) {

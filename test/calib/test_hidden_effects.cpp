@@ -21,13 +21,7 @@ struct Logs {
 
 /// Reference truth: the baseline is off nominal too (the fit has to move kp, kd and armature).
 RigParams base_truth() {
-  RigParams t;
-  t.kp_scale = 1.1;
-  t.kd_scale = 0.9;
-  t.armature_kgm2 = 0.005;
-  t.act.torque_limit_Nm = make_test_rig().torque_limit_Nm;
-  t.act.rate_hz = make_test_rig().rate_hz;
-  return t;
+  return make_rig_truth(make_test_rig(), 1.1, 0.9, 0.005);
 }
 
 Logs make_logs(const RigConfig& rig, const RigParams& truth, std::uint64_t seed) {

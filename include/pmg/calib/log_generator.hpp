@@ -53,4 +53,8 @@ HiddenEffect draw_hidden_effect(const std::string& name, std::uint64_t seed, con
 /// armature 0.004 kg·m², limit 1.5 N·m, driver at 500 Hz, physics at `sim_dt_s`.
 RigConfig make_test_rig(double sim_dt_s = 0.002);
 
+/// Truth for a synthetic log of `rig`: kp and kd as multiples of the rig's nominal gains, the
+/// armature [kg·m²], and the rig's torque limit [N·m] and driver rate [Hz]; no extension effects.
+RigParams make_rig_truth(const RigConfig& rig, double kp_scale, double kd_scale, double armature_kgm2);
+
 }  // namespace pmg::calib
