@@ -226,12 +226,9 @@ class G1PmgEnv(Env):
         return ref, u_opt.astype(jnp.float32), gco_state
 
     def _height_target(self, ref, tracked):
-        c = self.cfg
-        if c.mode == "pmg_gco":
-            return tracked[5]                                  # h' of u'
-        if c.mode == "single_gait":
-            return tracked[5]                                  # the commanded height
-        return jnp.asarray(ref["base_height"], jnp.float32)   # the template's height
+        if self.cfg.mode == "pmg":
+            return jnp.asarray(ref["base_height"], jnp.float32)  # the template's height
+        return tracked[5]  # pmg_gco: h' of u'; single_gait: the commanded height
 
     def reset(self, rng):
         c = self.cfg
