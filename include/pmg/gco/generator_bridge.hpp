@@ -7,7 +7,7 @@
 /// The policy observes GcoResult::u_opt (u' of eq. 19) instead of the raw command; with
 /// GcoOptions::enabled = false (the "PMG w/o GCO" ablation) u' is the template's own base state.
 /// Setup allocates and may throw; step() is noexcept and allocation-free (test/gco/
-/// gco_no_alloc_test.cpp runs it under an operator-new counter).
+/// test/gco/test_gco_alloc.cpp runs it under an operator-new counter).
 
 #include <memory>
 
