@@ -12,14 +12,9 @@
 
 #include <Eigen/Core>
 
-namespace pmg {
+#include "pmg/common/config_error.hpp"
 
-/// Error raised by every configuration loader. what() names the file, the key and the
-/// expected range, e.g. "g1.yaml: joints[3].kp = -1: expected > 0".
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+namespace pmg {
 
 /// One actuated joint (= one motor). Units: rad, rad/s, N·m, N·m/rad, N·m·s/rad.
 struct JointConfig {
