@@ -171,6 +171,27 @@ TEST(YamlArchive, ValidateIsCalledAndNamesFileLineAndKeyPath) {
             "cfg.yaml:4: joints[1]: kp = -1.000000: expected 0..5000");
 }
 
+struct ThrowingCheck {
+  double dt = 0.01;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("dt", &dt, "[s]");
+  }
+  void validate() const {
+    if (!(dt > 0 && dt < 0.1)) throw std::invalid_argument("dt = " + std::to_string(dt) + ": expected in (0, 0.1) s");
+  }
+};
+
+TEST(YamlArchive, ThrowingValidateIsConvertedToConfigErrorWithLocation) {
+  EXPECT_DOUBLE_EQ(yaml::parseYamlString<ThrowingCheck>("dt: 0.002\n", "t.yaml").dt, 0.002);
+  try {
+    yaml::parseYamlString<ThrowingCheck>("\ndt: 5\n", "t.yaml");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "t.yaml:2: dt = 5.000000: expected in (0, 0.1) s");
+  }
+}
+
 TEST(YamlArchive, SyntaxErrorAndMissingFileNameThePath) {
   const std::string msg = errorOf("name: [g1\n");
   EXPECT_EQ(msg.rfind("cfg.yaml:", 0), 0u) << msg;

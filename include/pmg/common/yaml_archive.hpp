@@ -23,7 +23,8 @@
 ///     }
 ///     /// The validate() convention: "" = valid, else what is wrong, naming the field and the
 ///     /// expected range ("kp = -1: expected 0..5000"). The archive calls it after reading the
-///     /// struct and throws ConfigError("<file>:<line>: <key path>: <message>").
+///     /// struct and throws ConfigError("<file>:<line>: <key path>: <message>"). (A `void validate()
+///     /// const` that throws a std::exception is also called; its what() becomes <message>.)
 ///     std::string validate() const { return kp >= 0 && kp <= 5000 ? "" : "kp: expected 0..5000"; }
 ///   };
 ///   enum class Bus { kCan, kUdp };
@@ -62,6 +63,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -144,6 +146,11 @@ template <class T, class = void>
 struct HasValidate : std::false_type {};
 template <class T>
 struct HasValidate<T, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const T&>().validate()), std::string>>>
+    : std::true_type {};
+template <class T, class = void>
+struct HasThrowingValidate : std::false_type {};
+template <class T>
+struct HasThrowingValidate<T, std::enable_if_t<std::is_void_v<decltype(std::declval<const T&>().validate())>>>
     : std::true_type {};
 
 template <class T>
@@ -358,6 +365,12 @@ void readValue(const YAML::Node& n, const YamlSource& s, unsigned flags, T* out)
     if constexpr (HasValidate<T>::value) {
       const std::string msg = out->validate();
       if (!msg.empty()) failValidate(s, n, msg);
+    } else if constexpr (HasThrowingValidate<T>::value) {
+      try {
+        out->validate();
+      } catch (const std::exception& e) {
+        failValidate(s, n, e.what());
+      }
     }
   } else {
     static_assert(sizeof(T) == 0,
