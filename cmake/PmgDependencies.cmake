@@ -44,5 +44,17 @@ if(NOT ONNXRUNTIME_INCLUDE_DIR OR NOT ONNXRUNTIME_LIBRARY)
 endif()
 add_library(pmg_deps_onnxruntime INTERFACE)
 add_library(pmg_deps::onnxruntime ALIAS pmg_deps_onnxruntime)
-target_include_directories(pmg_deps_onnxruntime SYSTEM INTERFACE ${ONNXRUNTIME_INCLUDE_DIR})
-target_link_libraries(pmg_deps_onnxruntime INTERFACE ${ONNXRUNTIME_LIBRARY})
+target_include_directories(pmg_deps_onnxruntime SYSTEM INTERFACE $<BUILD_INTERFACE:${ONNXRUNTIME_INCLUDE_DIR}>)
+# The copy in third_party/ is installed with pmg (lib/, cmake/PmgInstall.cmake); an official release
+# elsewhere stays where it is and the installed executables get its folder in their RPATH.
+cmake_path(IS_PREFIX PMG_SOURCE_DIR "${ONNXRUNTIME_LIBRARY}" NORMALIZE PMG_ONNXRUNTIME_IN_SOURCE_TREE)
+if(PMG_ONNXRUNTIME_IN_SOURCE_TREE)
+  get_filename_component(_pmg_ort_name "${ONNXRUNTIME_LIBRARY}" NAME)
+  target_link_libraries(pmg_deps_onnxruntime INTERFACE
+    $<BUILD_INTERFACE:${ONNXRUNTIME_LIBRARY}>
+    $<INSTALL_INTERFACE:$<INSTALL_PREFIX>/${CMAKE_INSTALL_LIBDIR}/${_pmg_ort_name}>)
+else()
+  target_link_libraries(pmg_deps_onnxruntime INTERFACE ${ONNXRUNTIME_LIBRARY})
+  get_filename_component(_pmg_ort_dir "${ONNXRUNTIME_LIBRARY}" DIRECTORY)
+  list(APPEND CMAKE_INSTALL_RPATH "${_pmg_ort_dir}")
+endif()

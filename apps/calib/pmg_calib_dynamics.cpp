@@ -1,6 +1,9 @@
 // pmg_calib_dynamics: motor dynamic calibration on bench logs (issue 6). See docs/calibration.md.
 //   pmg_calib_dynamics --rig RIG.yaml --train A [B ...] --heldout C [D ...] --report OUT.json [--plot OUT.png]
+// Every output path is checked before the logs are read and the fit starts. The plot is drawn by
+// scripts/calib_plot.py of pmg's data directory (pmg::dataDir()).
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -10,6 +13,7 @@
 
 #include "pmg/calib/actuator_yaml.hpp"
 #include "pmg/calib/dynamics_calibration.hpp"
+#include "pmg/common/data_paths.hpp"
 
 namespace {
 
@@ -47,6 +51,16 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
+    // Outputs first: a bad path must not cost the fit.
+    pmg::requireWritableFile(report_path);
+    if (!actuator_out.empty()) pmg::requireWritableFile(actuator_out);
+    const std::string plot_script = pmg::resolveData("scripts/calib_plot.py").string();
+    if (!plot_path.empty()) {
+      pmg::requireWritableFile(plot_path);
+      pmg::requireWritableFile(plot_path + ".traces.csv");
+      if (!std::filesystem::is_regular_file(plot_script))
+        throw std::runtime_error(plot_script + ": plot script missing (set PMG_DATA_DIR to pmg's share/pmg)");
+    }
     opt.optimizer = pmg::calib::parse_optimizer(optimizer);
     opt.candidates = candidates;
     const pmg::calib::RigConfig rig = pmg::calib::load_rig_config(rig_path);
@@ -79,7 +93,7 @@ int main(int argc, char** argv) {
       const std::string traces = plot_path + ".traces.csv";
       pmg::calib::write_trace_csv(rig, heldout, rep, traces);
       const std::string cmd = fmt::format("python3 {} --report {} --traces {} --out {}",
-                                          shell_quote(std::string(PMG_SOURCE_DIR) + "/scripts/calib_plot.py"),
+                                          shell_quote(plot_script),
                                           shell_quote(report_path), shell_quote(traces), shell_quote(plot_path));
       if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plot failed: " + cmd);
       std::remove(traces.c_str());

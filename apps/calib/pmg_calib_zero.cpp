@@ -16,6 +16,7 @@
 
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/calib/zero_io.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/controller/controller_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
@@ -55,7 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_path, "controller config (with robot:) or robot config YAML")->required();
   app.add_option("--backend", backend_name, "mujoco (SIL, no gantry) | can (controller config's can: settings)")
       ->check(CLI::IsMember({"mujoco", "can"}));
-  app.add_option("--protocol", protocol_path, "pose protocol YAML (default config/calib/zero_poses_g1.yaml)");
+  app.add_option("--protocol", protocol_path, "pose protocol YAML (default: config/calib/zero_poses_g1.yaml of pmg's "
+                                              "data directory)");
   app.add_option("--out", out_path, "result YAML (zero_offset per joint, robot-config form)");
   app.add_option("--inject-offsets", inject_file, "SIL: hidden encoder offsets YAML {joint_name: rad}");
   app.add_option("--inject-random", inject_seed, "SIL: random hidden offsets on the 12 leg joints, this seed");
@@ -83,6 +85,11 @@ int main(int argc, char** argv) {
 
   try {
     eo.validate();
+    // Outputs first: a bad path must not cost the capture.
+    if (!plot_path.empty() && history_csv.empty()) history_csv = plot_path + ".csv";
+    for (const std::string* out : {&out_path, &history_csv, &plot_path})
+      if (!out->empty()) pmg::requireWritableFile(*out);
+    const std::string plot_script = pmg::resolveData("scripts/pmg_plot_zero.py").string();
     // Config: a controller config names its robot config; else it is the robot config.
     pmg::RobotConfig robot;
     std::unique_ptr<pmg::ControllerConfig> cc;
@@ -92,7 +99,7 @@ int main(int argc, char** argv) {
     } else {
       robot = pmg::loadRobotConfig(config_path);
     }
-    if (protocol_path.empty()) protocol_path = std::string(PMG_SOURCE_DIR) + "/config/calib/zero_poses_g1.yaml";
+    if (protocol_path.empty()) protocol_path = pmg::resolveData("config/calib/zero_poses_g1.yaml").string();
     const pmg::calib::ZeroProtocol protocol = pmg::calib::loadZeroProtocol(protocol_path);
     auto model = pmg::gco::LegModel::fromRobotConfig(robot);
     const auto idx = pmg::calib::zeroJointIndices(*model, robot);
@@ -234,11 +241,9 @@ int main(int argc, char** argv) {
     total.z += z_config;
     for (auto& h : total.history) h += z_config;
     if (!out_path.empty()) pmg::calib::writeZeroResult(out_path, robot, *model, total, cap, eo);
-    if (!plot_path.empty() && history_csv.empty()) history_csv = plot_path + ".csv";
     if (!history_csv.empty()) pmg::calib::writeZeroHistoryCsv(history_csv, robot, *model, total);
     if (!plot_path.empty()) {
-      const std::string cmd = fmt::format("python3 '{}/apps/calib/pmg_plot_zero.py' '{}' '{}'", PMG_SOURCE_DIR,
-                                          history_csv, plot_path);
+      const std::string cmd = fmt::format("python3 '{}' '{}' '{}'", plot_script, history_csv, plot_path);
       if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plot failed: " << cmd << "\n";
     }
     return res.converged ? 0 : 2;

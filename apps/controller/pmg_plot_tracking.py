@@ -2,36 +2,44 @@
 """Tracking plot of a pmg_controller run: reference vs. measured joint angles of the leg joints
 (like the PMG paper's tracking figure), from its LCM event log (or the CSV of pmg_log_export).
 
-    build/bin/pmg_plot_tracking.py run.lcmlog tracking.png
-    build/bin/pmg_plot_tracking.py run.csv tracking.png
-An event log is first converted with pmg_log_export (found next to this script in build/bin).
+    pmg_plot_tracking.py run.lcmlog tracking.png [--robot ROBOT.yaml]
+    pmg_plot_tracking.py run.csv tracking.png
+An event log is first converted with pmg_log_export, found next to this script (build/bin or
+<prefix>/bin); --robot goes to it (default: the G1 config of pmg's data directory).
 """
+import argparse
 import os
 import subprocess
 import sys
 import tempfile
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
 LEG = ["hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll"]
 
 
-def load(path: str):
+def load(path: str, robot):
+    import numpy as np
+
     if path.endswith(".csv"):
         return np.genfromtxt(path, delimiter=",", names=True)
-    exporter = os.path.join(os.path.dirname(os.path.abspath(__file__)), "pmg_log_export")
+    exporter = os.path.join(os.path.dirname(os.path.realpath(__file__)), "pmg_log_export")
     with tempfile.TemporaryDirectory() as tmp:
         csv_path = os.path.join(tmp, "run.csv")
-        subprocess.run([exporter, "--log", path, "--csv", csv_path], check=True)
+        cmd = [exporter, "--log", path, "--csv", csv_path] + (["--robot", robot] if robot else [])
+        rc = subprocess.run(cmd).returncode
+        if rc not in (0, 2):  # 2: truncated log, the complete events were exported (warning printed)
+            sys.exit(f"pmg_plot_tracking.py: {' '.join(cmd)} failed (exit code {rc})")
         return np.genfromtxt(csv_path, delimiter=",", names=True)
 
 
-def main(log_path: str, png_path: str) -> int:
-    data = load(log_path)
+def main(log_path: str, png_path: str, robot=None) -> int:
+    # Imported here, not at the top: --help needs neither matplotlib nor numpy (nor their caches).
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    data = load(log_path, robot)
     t = data["t"]
     fig, axes = plt.subplots(len(LEG), 2, figsize=(13, 12), sharex=True)
     rms_all = []
@@ -66,7 +74,9 @@ def main(log_path: str, png_path: str) -> int:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        print(__doc__)
-        sys.exit(2)
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("log", help="pmg_controller event log (.lcmlog) or pmg_log_export CSV (.csv)")
+    parser.add_argument("png", help="output PNG")
+    parser.add_argument("--robot", help="robot config YAML for the export of an event log (joint names)")
+    args = parser.parse_args()
+    sys.exit(main(args.log, args.png, args.robot))

@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
@@ -92,16 +93,16 @@ void writeTrace(const std::string& path, const FootSlipMeter& with, const FootSl
 
 int main(int argc, char** argv) {
   CLI::App app{"Foot slip of PMG templates with and without GCO over a command grid (issue 4)"};
-  std::string robot_path = "config/robots/g1/g1.yaml";
-  std::string clips_dir = "config/clips/g1";
+  std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string clips_dir = pmg::resolveData("config/clips/g1").string();
   std::string gco_config;
   std::string out_dir;
   double seconds = 5.0, warmup = 2.0, dt = 0.01;  // the grid of docs/gco.md
   std::vector<double> vx{-0.6, -0.3, 0.0, 0.3, 0.6, 0.9}, vy{0.0, 0.3}, wz{-0.6, 0.0, 0.6};
   std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
   std::vector<double> trace{0.6, 0.0, 0.0}, trace_posture{0.0, 0.0, 0.0};
-  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
-  app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory);
+  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory)->capture_default_str();
   app.add_option("--gco-config", gco_config, "GcoOptions YAML (defaults if omitted)")->check(CLI::ExistingFile);
   app.add_option("--out-dir", out_dir, "write gco_grid.csv and gco_trace.csv here");
   app.add_option("--seconds", seconds, "measured time per command [s]")->check(CLI::Range(1.0, 120.0));

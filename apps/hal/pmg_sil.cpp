@@ -4,7 +4,7 @@
 // (or any HAL built with the CAN backend) talks to it exactly as to the robot, through the real bus
 // code. Faults can be injected from the command line.
 //
-//   pmg_sil --robot config/robots/g1/g1.yaml --plan config/hal/g1_can.yaml --port 47000
+//   pmg_sil [--robot config/robots/g1/g1.yaml] [--plan config/hal/g1_can.yaml] --port 47000
 //           [--realtime] [--no-gantry] [--duration 20] [--drop 0.01] [--silent-joint 3] ...
 #include <atomic>
 #include <csignal>
@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
@@ -26,13 +27,15 @@ int main(int argc, char** argv) {
   using namespace pmg::hal::bus;
   namespace rt = pmg::hal::rt;
   CLI::App app{"pmg_sil: MuJoCo 2.2 robot behind emulated CAN motor drivers (UDP loopback)"};
-  std::string robot_path = "config/robots/g1/g1.yaml", plan_path = "config/hal/g1_can.yaml";
+  std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string plan_path = pmg::resolveData("config/hal/g1_can.yaml").string();
   int port = 47000, fifo = 0;
   double duration = 0.0, faults_after = 0.0, push_at = -1.0, push_force = 300.0, push_duration = 0.2;
   bool realtime = false, no_gantry = false;
   SilFaults f;
-  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
-  app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile);
+  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile)
+      ->capture_default_str();
   app.add_option("--port", port, "UDP base port (bus b: host base+2b, SIL base+2b+1; IMU after the buses)")
       ->check(CLI::Range(1024, 65000));
   app.add_flag("--realtime", realtime, "step every 2 ms of wall time and answer every command at once, like "

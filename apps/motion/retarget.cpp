@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/motion/amp_npz.hpp"
 #include "pmg/motion/bvh.hpp"
@@ -32,11 +33,11 @@ HumanMotion loadHuman(const std::string& path) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Retarget human mocap onto the robot (Ceres over KDL chains) and report the match"};
-  std::string input, robot_yaml = "config/robots/g1/g1.yaml", csv;
+  std::string input, robot_yaml = pmg::resolveData("config/robots/g1/g1.yaml").string(), csv;
   double begin_s = 0.0, end_s = -1.0;
   bool mirror = false;
   app.add_option("input", input, "DeepMimic .txt, CMU .bvh or Isaac Lab AMP .npz file")->required();
-  app.add_option("--robot", robot_yaml, "robot config YAML");
+  app.add_option("--robot", robot_yaml, "robot config YAML")->capture_default_str();
   app.add_option("--begin", begin_s, "first second used");
   app.add_option("--end", end_s, "last second used (-1 = end of file)");
   app.add_flag("--mirror", mirror, "mirror left/right before retargeting");

@@ -25,6 +25,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
@@ -231,18 +232,18 @@ void commandAt(int tick, int ticks_per_segment, pmg::VelocityCommand& u_d, pmg::
 
 int main(int argc, char** argv) {
   CLI::App app{"Emit PMG generator test vectors (JSON) for the Python port"};
-  std::string robot_path = "config/robots/g1/g1.yaml", out = "pmg_vectors.json";
+  std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string(), out = "pmg_vectors.json";
   std::vector<std::string> clip_files;
   int ticks = 1400;
-  std::string gco_path = "config/gco/g1.yaml";
+  std::string gco_path = pmg::resolveData("config/gco/g1.yaml").string();
   double dt = 0.01, phase0 = 0.3;
-  app.add_option("--robot", robot_path, "robot config YAML");
+  app.add_option("--robot", robot_path, "robot config YAML")->capture_default_str();
   app.add_option("--clips", clip_files, "clip files (default: synthetic clips)");
   app.add_option("--out", out, "output JSON file");
   app.add_option("--ticks", ticks, "generator ticks")->check(CLI::Range(1, 1000000));
   app.add_option("--dt", dt, "tick period [s]")->check(CLI::PositiveNumber);
   app.add_option("--phase0", phase0, "initial phase")->check(CLI::Range(0.0, 1.0));
-  app.add_option("--gco", gco_path, "GCO options YAML (the controller's)");
+  app.add_option("--gco", gco_path, "GCO options YAML (the controller's)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);

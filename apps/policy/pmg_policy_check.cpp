@@ -1,6 +1,6 @@
 // pmg_policy_check: loads an exported actor exactly as the controller would (contract check
 // against the robot config, reference pairs, warm-up) and prints its contract.
-//   build-policy/bin/pmg_policy_check --model config/policies/g1_pmg.onnx
+//   pmg_policy_check --model config/policies/g1_pmg_policy.onnx
 //       [--robot config/robots/g1/g1.yaml] [--period 0.01] [--pmg gco=false --pmg enabled=true]
 // Exit code 0 if the controller would start with this policy, 1 otherwise (the error names
 // the file and the field).
@@ -10,15 +10,16 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/policy/policy_runner.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"Check an ONNX actor's pmg.contract against a robot config"};
-  std::string model, robot = "config/robots/g1/g1.yaml";
+  std::string model, robot = pmg::resolveData("config/robots/g1/g1.yaml").string();
   double period = 0.01;
   std::vector<std::string> pmg;
   app.add_option("--model", model, "ONNX actor with pmg.contract metadata")->required();
-  app.add_option("--robot", robot, "robot config YAML (joint order, default pose, PD gains)");
+  app.add_option("--robot", robot, "robot config YAML (joint order, default pose, PD gains)")->capture_default_str();
   app.add_option("--period", period, "controller loop period [s]")->check(CLI::PositiveNumber);
   app.add_option("--pmg", pmg, "PMG/GCO setting the controller runs with, key=value (repeatable)");
   CLI11_PARSE(app, argc, argv);

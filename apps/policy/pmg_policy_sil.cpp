@@ -38,6 +38,7 @@
 #include <mujoco/mujoco.h>
 #include <yaml-cpp/yaml.h>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
@@ -106,9 +107,12 @@ struct Totals {
 
 int main(int argc, char** argv) {
   CLI::App app{"Evaluate a policy in the MuJoCo 2.2 SIL on the preset command sequence"};
-  std::string model_path = "config/policies/g1_pmg_policy.onnx", robot_path = "config/robots/g1/g1.yaml";
-  std::string clips_dir = "config/clips/g1", commands = "config/policies/eval_commands.yaml", out = "out/policy_sil";
-  std::string config = "pmg_gco", gco_path = "config/gco/g1.yaml";
+  // Defaults: pmg's data directory (pmg::dataDir()); the output folder is relative to the working directory.
+  std::string model_path = pmg::resolveData("config/policies/g1_pmg_policy.onnx").string();
+  std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string clips_dir = pmg::resolveData("config/clips/g1").string();
+  std::string commands = pmg::resolveData("config/policies/eval_commands.yaml").string(), out = "out/policy_sil";
+  std::string config = "pmg_gco", gco_path = pmg::resolveData("config/gco/g1.yaml").string();
   int seeds = 3;
   bool noise = true, native = false;
   double duration = -1, frame_period = 0.1;

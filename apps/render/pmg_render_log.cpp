@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/common/mujoco_model.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/render/gl_context.hpp"
 #include "pmg/render/image.hpp"
@@ -34,7 +35,8 @@ double secondsSince(Clock::time_point start) {
 
 int main(int argc, char** argv) {
   CLI::App app{"pmg_render_log: render a pmg_controller LCM event log (PMG_STATE) to PNG frames"};
-  std::string log_path, out_dir, robot_path = "config/robots/g1/g1.yaml", channel = "PMG_STATE";
+  std::string log_path, out_dir, robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string channel = "PMG_STATE";
   std::string strip_name = "strip.png";
   int frames = 6;
   double t0 = 0.0, t1 = 0.0, video_fps = 0.0;

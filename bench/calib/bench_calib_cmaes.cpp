@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -19,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include "pmg/calib/bench_sim.hpp"
@@ -41,20 +41,19 @@ std::string load_average() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"bench_calib_cmaes: wall time of a CMA-ES baseline fit with the population evaluated on 1 vs N "
+               "threads, and whether the results are bit-identical"};
   int threads = 2, generations = 20, n_logs = 2;
   double duration = 25.0, rate = 500.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--duration")) duration = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--rate")) rate = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--generations")) generations = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--logs")) n_logs = std::atoi(argv[i + 1]);
-  }
-  if (threads < 2 || generations < 1 || !(duration > 2.0) || n_logs < 1 || n_logs > 2) {
-    fmt::print(stderr,
-               "bench_calib_cmaes: expected --threads >= 2, --generations >= 1, --duration > 2, --logs 1 or 2\n");
-    return 2;
-  }
+  app.add_option("--threads", threads, "N, the thread count compared with 1")->check(CLI::Range(2, 1024))
+      ->capture_default_str();
+  app.add_option("--duration", duration, "length of each training log [s]")->check(CLI::Range(2.001, 3600.0))
+      ->capture_default_str();
+  app.add_option("--rate", rate, "log rate [Hz]")->check(CLI::Range(10.0, 10000.0))->capture_default_str();
+  app.add_option("--generations", generations, "CMA-ES generations of the phase-1 timing")
+      ->check(CLI::Range(1, 100000))->capture_default_str();
+  app.add_option("--logs", n_logs, "training logs (1 or 2)")->check(CLI::Range(1, 2))->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   using namespace pmg::calib;
   const RigConfig rig = make_test_rig(0.002);
   const RigParams truth = make_rig_truth(rig, 1.1, 0.9, 0.005);

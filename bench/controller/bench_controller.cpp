@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/controller/controller.hpp"
 #include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -28,10 +29,11 @@ double us(Clock::duration d) { return std::chrono::duration<double, std::micro>(
 
 int main(int argc, char** argv) {
   CLI::App app{"bench_controller: generator / loop / HAL cost and SIL real-time factor"};
-  std::string config_path = "config/controller/g1_sil.yaml", script_path = "config/commands/demo.yaml";
+  std::string config_path = pmg::resolveData("config/controller/g1_sil.yaml").string();
+  std::string script_path = pmg::resolveData("config/commands/demo.yaml").string();
   double seconds = 28.0;
-  app.add_option("--config", config_path)->check(CLI::ExistingFile);
-  app.add_option("--script", script_path)->check(CLI::ExistingFile);
+  app.add_option("--config", config_path, "controller config YAML")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--script", script_path, "command script YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--seconds", seconds, "simulated seconds of the SIL run");
   CLI11_PARSE(app, argc, argv);
 

@@ -1,10 +1,11 @@
 // Google Benchmark of the GCO tick: GCO alone (synthetic G1 template), the generator alone and
-// generator + GCO on the shipped G1 clips. Run from the repository root:
+// generator + GCO on the shipped G1 clips (of pmg's data directory, pmg::dataDir()):
 //   build/bin/pmg_gco_benchmark
 // Tail latency (p50/p99/max per tick) is printed by pmg_gco_tick_bench.
 #include <benchmark/benchmark.h>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/gco/synthetic_gait.hpp"
@@ -17,11 +18,11 @@ using namespace pmg::gco;
 
 std::shared_ptr<const GeneratorModel> generatorModel(const RobotConfig& r) {
   const GeneratorJointSpace js = pmg::generatorJointSpace(r);
-  return std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", r), js);
+  return std::make_shared<const GeneratorModel>(loadClipLibrary(resolveData("config/clips/g1").string(), r), js);
 }
 
 void BM_GcoSolveSyntheticWalk(benchmark::State& state) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig robot = loadRobotConfig(resolveData("config/robots/g1/g1.yaml").string());
   auto legs = LegModel::fromRobotConfig(robot);
   LegKinematics kin(legs);
   SyntheticGaitOptions o;
@@ -41,7 +42,7 @@ void BM_GcoSolveSyntheticWalk(benchmark::State& state) {
 BENCHMARK(BM_GcoSolveSyntheticWalk);
 
 void BM_GeneratorStep(benchmark::State& state) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig robot = loadRobotConfig(resolveData("config/robots/g1/g1.yaml").string());
   MotionGenerator gen(generatorModel(robot));
   for (auto _ : state) {
     gen.step({0.6, 0.0, 0.3}, {}, 0.01);
@@ -51,7 +52,7 @@ void BM_GeneratorStep(benchmark::State& state) {
 BENCHMARK(BM_GeneratorStep);
 
 void BM_GeneratorPlusGco(benchmark::State& state) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig robot = loadRobotConfig(resolveData("config/robots/g1/g1.yaml").string());
   GeneratorWithGco pipe(generatorModel(robot), LegModel::fromRobotConfig(robot), GcoOptions{});
   for (auto _ : state) {
     const GcoResult& r = pipe.step({0.6, 0.0, 0.3}, {}, 0.01);

@@ -2,7 +2,7 @@
 // p99 <= 150 us on the 2-core development machine). Sweeps the command over the grid of
 // velocities and yaw rates so every blend and contact pattern is visited, times each tick with
 // steady_clock and prints p50 / p90 / p99 / p99.9 / max for the GCO solve and the whole tick.
-// Run from the repository root: build/bin/pmg_gco_tick_bench [--ticks N]
+// Robot config and clips default to the G1 of pmg's data directory: build/bin/pmg_gco_tick_bench [--ticks N]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/generator/robot_joint_space.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/motion/clip_io.hpp"
@@ -29,10 +30,11 @@ int main(int argc, char** argv) {
   using namespace pmg::gco;
   CLI::App app{"Generator + GCO tick latency"};
   int ticks = 200000;
-  std::string robot_path = "config/robots/g1/g1.yaml", clips_dir = "config/clips/g1";
+  std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string clips_dir = pmg::resolveData("config/clips/g1").string();
   app.add_option("--ticks", ticks, "number of timed ticks")->check(CLI::Range(1000, 10000000));
-  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile);
-  app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory);
+  app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
+  app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     const RobotConfig robot = loadRobotConfig(robot_path);

@@ -19,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/hal/bus/bus_plan.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
@@ -114,10 +115,11 @@ int main(int argc, char** argv) {
   try {
     std::printf("== 1. Bus load per 2 ms slot (worst-case bit stuffing, MIT command 8 B + reply 6 B, 20 us turnaround)\n");
     for (const char* p : {"config/hal/g1_can.yaml", "config/hal/g1_canfd.yaml", "config/hal/g1_can_per_limb.yaml"})
-      printLoads(p);
+      printLoads(pmg::resolveData(p).string());
 
-    const pmg::RobotConfig robot = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
-    CyclicWork work(bus::BusPlan::fromYaml("config/hal/g1_can.yaml"), safety::SafetyOptions::fromRobot(robot));
+    const std::string plan_path = pmg::resolveData("config/hal/g1_can.yaml").string();
+    const pmg::RobotConfig robot = pmg::loadRobotConfig(pmg::resolveData("config/robots/g1/g1.yaml").string());
+    CyclicWork work(bus::BusPlan::fromYaml(plan_path), safety::SafetyOptions::fromRobot(robot));
     std::printf("\n== 2. Cyclic HAL work, 29 motors (decode replies + supervisor step + encode commands)\n");
     const int reps = 20000;
     const double t0 = rt::now();

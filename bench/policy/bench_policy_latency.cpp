@@ -1,8 +1,8 @@
 // Latency of the policy tick: PolicyRunner::step with each backend (ONNX Runtime with 1 thread,
-// and the allocation-free native evaluator) for the committed actors, plus observation assembly
-// and limb separation. Prints p50 / p99 / max per call in
-// microseconds over N calls after warm-up (run from the repository root):
-//   build-policy/bin/bench_policy_latency [--iterations 20000]
+// and the allocation-free native evaluator) for the given actors (default: the shipped policy of
+// pmg's data directory), plus observation assembly and limb separation. Prints p50 / p99 / max per
+// call in microseconds over N calls after warm-up:
+//   build/bin/bench_policy_latency [--iterations 20000] [--model test/data/policy/g1_legs_512_256_128.onnx ...]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/common/data_paths.hpp"
 #include "pmg/policy/limb_separation.hpp"
 #include "pmg/policy/observation.hpp"
 #include "pmg/policy/policy_runner.hpp"
@@ -62,11 +63,13 @@ void benchModel(const std::string& path, const pmg::policy::PolicyRobotSpec& spe
 int main(int argc, char** argv) {
   CLI::App app{"Policy tick latency (p50/p99/max)"};
   int n = 20000;
-  std::string robot = "config/robots/g1/g1.yaml";
-  std::vector<std::string> models = {"test/data/policy/g1_legs_ok.onnx", "test/data/policy/g1_legs_512_256_128.onnx"};
+  std::string robot = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::vector<std::string> models = {pmg::resolveData("config/policies/g1_pmg_policy.onnx").string()};
   app.add_option("--iterations", n, "timed calls per model")->check(CLI::Range(100, 10000000));
-  app.add_option("--robot", robot, "robot config YAML");
-  app.add_option("--model", models, "ONNX actors (contract must match the robot config)");
+  app.add_option("--robot", robot, "robot config YAML")->capture_default_str();
+  app.add_option("--model", models, "ONNX actors (contract must match the robot config; default: the shipped policy; "
+                                    "the test models are test/data/policy/g1_legs_*.onnx)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     auto spec = pmg::policy::loadPolicyRobotSpec(robot, 0.01);

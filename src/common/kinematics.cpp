@@ -1,8 +1,19 @@
 #include "pmg/common/kinematics.hpp"
 
 #include <kdl_parser/kdl_parser.hpp>
+#include <urdf_parser/urdf_parser.h>
 
 namespace pmg {
+
+KDL::Tree kdlTreeFromUrdfFile(const std::string& urdf_path) {
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDFFile(urdf_path);
+  if (!model || !model->root_link_) throw ConfigError(urdf_path + ": cannot read or parse the URDF");
+  model->root_link_->inertial.reset();  // KDL has no root inertia; kdl_parser would warn and drop it
+  KDL::Tree tree;
+  if (!kdl_parser::treeFromUrdfModel(*model, tree))
+    throw ConfigError(urdf_path + ": kdl_parser could not build a KDL tree from this URDF");
+  return tree;
+}
 
 Eigen::Isometry3d toEigen(const KDL::Frame& f) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -14,8 +25,7 @@ Eigen::Isometry3d toEigen(const KDL::Frame& f) {
 }
 
 KinematicModel::KinematicModel(const RobotConfig& config) : config_(config) {
-  if (!kdl_parser::treeFromFile(config_.urdf_path, tree_))
-    throw ConfigError(config_.urdf_path + ": kdl_parser could not build a KDL tree from this URDF");
+  tree_ = kdlTreeFromUrdfFile(config_.urdf_path);
   // Every configured joint must exist in the URDF as a moving joint.
   for (const auto& j : config_.joints) {
     bool found = false;

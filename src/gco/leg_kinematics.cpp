@@ -67,6 +67,8 @@ std::shared_ptr<const LegModel> LegModel::fromUrdfFile(const std::string& urdf_p
   options.validate();
   const urdf::ModelInterfaceSharedPtr urdf_model = urdf::parseURDFFile(urdf_path);
   if (!urdf_model) throw std::runtime_error(urdf_path + ": cannot read or parse the URDF");
+  // KDL has no root-link inertia: kdl_parser drops it with a (colour-coded) warning on every load.
+  if (urdf_model->root_link_) urdf_model->root_link_->inertial.reset();
   KDL::Tree tree;
   if (!kdl_parser::treeFromUrdfModel(*urdf_model, tree)) {
     throw std::runtime_error(urdf_path + ": kdl_parser could not build a KDL tree");

@@ -47,6 +47,12 @@ class ChainFkWorkspace {
   KDL::Frame frame_;
 };
 
+/// KDL tree of the URDF at @p urdf_path (parsed with urdfdom, built with kdl_parser). KDL cannot
+/// represent an inertia on the root link (the G1's "pelvis" has one), which kdl_parser drops with a
+/// warning on every load; the root inertia is dropped before the tree is built, so the tree is the
+/// same and nothing is printed. @throws ConfigError naming the file if it cannot be read or parsed.
+KDL::Tree kdlTreeFromUrdfFile(const std::string& urdf_path);
+
 /// The robot's KDL tree, loaded from the URDF named in the robot config.
 class KinematicModel {
  public:
