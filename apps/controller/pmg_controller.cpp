@@ -1,20 +1,24 @@
 // pmg_controller: the 100 Hz PMG controller over the 500 Hz HAL. One binary for the robot and the
-// SIL; the backend and timing mode come from the config (config/controller/*.yaml).
+// SIL; the backend and timing mode come from the config (config/controller/*.yaml). The HAL
+// supervisor (watchdogs, envelope, fall detection, the mode state machine) is always on.
 //
 //   pmg_controller --config config/controller/g1_sil.yaml [--duration 14] [--script demo.yaml]
 //                  [--log run.lcmlog] [--realtime|--lockstep] [--no-lcm]
+//
+// Exit status: 0 the run ended without a fault; 3 the robot fell or faulted (it is in damping);
+// 1 setup error (the message names the file and field); 2 bad command line.
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 
 #include <CLI/CLI.hpp>
 
-#include "pmg/controller/controller.hpp"
-#include "pmg/hal/safety/safe_backend.hpp"
+#include "pmg/controller/controller_app.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+extern "C" void onSignal(int) { g_stop = true; }
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -23,7 +27,8 @@ int main(int argc, char** argv) {
   double duration = 0.0;
   bool realtime = false, lockstep = false, no_lcm = false;
   app.add_option("--config", config_path, "controller config YAML")->required()->check(CLI::ExistingFile);
-  app.add_option("--duration", duration, "run time [s]; 0 = the script's length (lockstep) or until Ctrl-C");
+  app.add_option("--duration", duration, "run time [s]; 0 = the script's length (lockstep) or until Ctrl-C")
+      ->check(CLI::Range(0.0, 1e7));
   app.add_option("--script", script_path, "scripted command sequence YAML (instead of LCM input)")
       ->check(CLI::ExistingFile);
   app.add_option("--log", log_path, "record telemetry as an LCM event log (lcm-logger format)");
@@ -38,10 +43,11 @@ int main(int argc, char** argv) {
   app.add_option("--can-transport", can_transport, "udp (towards pmg_sil) or socketcan (robot)")
       ->check(CLI::IsMember({"udp", "socketcan"}));
   app.add_option("--can-port", can_port, "UDP base port of pmg_sil")->check(CLI::Range(1024, 65000));
-  bool hal_safety = false;
-  app.add_flag("--hal-safety", hal_safety, "500 Hz safety supervisor in the HAL (guard mode: per-input watchdogs, "
-                                           "envelope, torque bound, latched damping; docs/hal.md)");
   CLI11_PARSE(app, argc, argv);
+  if (!std::isfinite(duration)) {  // CLI::Range lets NaN through
+    std::fprintf(stderr, "pmg_controller: --duration: expected a finite number of seconds >= 0\n");
+    return 2;
+  }
 
   try {
     pmg::ControllerConfig config = pmg::loadControllerConfig(config_path);
@@ -54,9 +60,7 @@ int main(int argc, char** argv) {
       config.can.plan_file = can_plan;
       config.can.transport = can_transport;
       config.can.udp_port = can_port;
-      config.hal_supervisor = true;
     }
-    if (hal_safety) config.hal_supervisor = true;
     pmg::CommandScript script;
     if (!script_path.empty()) script = pmg::loadCommandScript(script_path);
     if (duration <= 0 && !script_path.empty()) duration = script.duration();
@@ -64,48 +68,23 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "pmg_controller: lockstep mode needs --duration or --script\n");
       return 2;
     }
+    // Every run mode stops cleanly on SIGINT/SIGTERM: the runner checks the flag every tick
+    // (lockstep) or every 10 ms (real time), then the log and the summary are written.
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     const bool rt = config.timing == pmg::TimingMode::kRealtime;
     const bool can = config.backend == pmg::BackendKind::kCan;
-    std::printf("pmg_controller: robot %s (%zu joints), backend %s, %s, %.0f Hz loop / %.0f Hz HAL, HAL supervisor %s\n",
+    std::printf("pmg_controller: robot %s (%zu joints), backend %s, %s, %.0f Hz loop / %.0f Hz HAL, supervisor on\n",
                 config.robot.name.c_str(), config.robot.numJoints(),
                 can ? ("can (" + config.can.transport + ", plan " + config.can.plan_file + ")").c_str()
                     : (config.mujoco.gantry.enabled ? "mujoco (gantry on)" : "mujoco (gantry off)"),
-                rt ? "real time" : "lockstep", config.loop_rate_hz, config.hal_rate_hz,
-                config.hal_supervisor ? "on" : "off");
-    pmg::Controller controller(config);
-    pmg::hal::safety::SafeBackend* safe = controller.halSafety();
-    const pmg::CommandScript* sp = script_path.empty() ? nullptr : &script;
-    const pmg::RunSummary s = rt ? controller.runRealtime(duration, &g_stop, sp) : controller.runLockstep(duration, sp);
-    std::printf("ran %lld ticks, %.2f s controller time in %.2f s wall (real-time factor %.1f)\n",
-                static_cast<long long>(s.ticks), s.sim_time, s.wall_time, s.real_time_factor);
-    std::printf("loop tick runtime  p50 %.1f us  p99 %.1f us  max %.1f us\n", 1e6 * s.loop.runtime_p50,
-                1e6 * s.loop.runtime_p99, 1e6 * s.loop.runtime_max);
-    std::printf("HAL cycle runtime  p50 %.1f us  p99 %.1f us  max %.1f us\n", 1e6 * s.hal.runtime_p50,
-                1e6 * s.hal.runtime_p99, 1e6 * s.hal.runtime_max);
-    if (rt)
-      std::printf("HAL period p50 %.3f ms p99 %.3f ms max %.3f ms\n", 1e3 * s.hal.period_p50, 1e3 * s.hal.period_p99,
-                  1e3 * s.hal.period_max);
-    std::printf("deadline misses: %lld; commands rejected (NaN) %llu, clamped %llu, stale ticks %llu\n",
-                static_cast<long long>(s.deadline_misses), static_cast<unsigned long long>(s.commands.rejected_nan),
-                static_cast<unsigned long long>(s.commands.clamped),
-                static_cast<unsigned long long>(s.commands.stale_ticks));
-    std::printf("telemetry frames written %llu, dropped %llu; final mode %d, fault %d\n",
-                static_cast<unsigned long long>(s.telemetry_written),
-                static_cast<unsigned long long>(s.telemetry_dropped), static_cast<int>(s.final_mode),
-                static_cast<int>(s.fault));
-    if (!config.log_file.empty()) std::printf("event log: %s\n", config.log_file.c_str());
-    pmg::hal::safety::SafetyStatus hs;
-    if (safe && safe->status(hs))
-      std::printf("HAL safety: mode %s, fault %s (joint %d, at %.3f s), clamped joint-cycles %llu, held replies %llu, "
-                  "max |tau|/limit %.2f\n",
-                  pmg::hal::safety::toString(hs.mode), pmg::hal::safety::toString(hs.fault.code), hs.fault.index,
-                  hs.fault.time_s,
-                  static_cast<unsigned long long>(hs.clamped_joint_ticks),
-                  static_cast<unsigned long long>(hs.held_replies), hs.max_tau_ratio);
-    if (safe && hs.mode == pmg::hal::safety::Mode::kDamping) return 3;
-    return s.fault == pmg::ControllerFault::kNone ? 0 : 3;
+                rt ? "real time" : "lockstep", config.loop_rate_hz, config.hal_rate_hz);
+    std::fflush(stdout);
+    pmg::ControllerApp controller(config);
+    const pmg::RunSummary s = controller.run(duration, script_path.empty() ? nullptr : &script, &g_stop);
+    std::printf("%s", s.text().c_str());
+    if (!controller.config().log_file.empty()) std::printf("event log: %s\n", controller.config().log_file.c_str());
+    return s.exitCode();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_controller: %s\n", e.what());
     return 1;

@@ -14,7 +14,7 @@
 
 #include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 

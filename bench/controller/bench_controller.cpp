@@ -10,9 +10,9 @@
 #include <CLI/CLI.hpp>
 
 #include "pmg/common/data_paths.hpp"
-#include "pmg/controller/controller.hpp"
+#include "pmg/controller/controller_app.hpp"
 #include "pmg/generator/robot_joint_space.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -51,47 +51,39 @@ int main(int argc, char** argv) {
     std::vector<double> t;
     t.reserve(100000);
     for (int k = 0; k < 100000; ++k) {
-      const auto& seg = script.at(std::fmod(k * 0.01, script.duration()));
+      const pmg::Command u = script.at(std::fmod(k * 0.01, script.duration()));
+      const pmg::VelocityCommand ud{u.vx, u.vy, u.wz};
+      const pmg::PostureCommand us_{u.pitch, u.roll, u.height.value_or(config.robot.standing_base_height)};
       const auto t0 = Clock::now();
-      gen.step(seg.velocity, seg.posture, 0.01);
+      gen.step(ud, us_, 0.01);
       t.push_back(us(Clock::now() - t0));
     }
     const Pct p = percentiles(t);
     std::printf("generator step (29 joints, 3 dynamic clips)  p50 %7.2f us  p99 %7.2f us  max %7.2f us  (n=100000)\n",
                 p.p50, p.p99, p.max);
   }
-  // 2. Loop tick and HAL cycle inside a lockstep SIL run.
-  pmg::Controller controller(config);
-  const int ticks = static_cast<int>(seconds * config.loop_rate_hz);
-  std::vector<double> tick_us, hal_us;
-  tick_us.reserve(static_cast<std::size_t>(ticks));
-  hal_us.reserve(static_cast<std::size_t>(ticks) * 5);
-  pmg::CommandSample sample;
-  const auto wall0 = Clock::now();
-  for (int k = 0; k < ticks; ++k) {
-    const double now = k / config.loop_rate_hz;
-    const auto& seg = script.at(std::fmod(now, script.duration()));
-    sample.velocity = seg.velocity;
-    sample.posture = seg.posture;
-    sample.velocity_time = sample.posture_time = now;
-    controller.setInput(sample);
-    const auto t0 = Clock::now();
-    controller.tick(now);
-    tick_us.push_back(us(Clock::now() - t0));
-    for (int c = 0; c < config.cyclesPerTick(); ++c) {
-      const auto h0 = Clock::now();
-      controller.hal().cycle();
-      hal_us.push_back(us(Clock::now() - h0));
+  // 2. Loop tick and HAL cycle inside a lockstep SIL run, through the product path: the same
+  // ControllerApp (HAL stack with the supervisor, shaper, runner, telemetry) pmg_controller runs.
+  config.lcm_enabled = false;
+  config.timing = pmg::TimingMode::kLockstep;
+  pmg::ControllerApp controller(config);
+  pmg::CommandScript looped = script;
+  while (looped.duration() < seconds) {  // repeat the script to cover the benchmark time
+    for (const auto& seg : script.segments) {
+      pmg::CommandSegment next = seg;
+      next.start = looped.duration();
+      looped.segments.push_back(next);
     }
   }
-  const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
-  const Pct pt = percentiles(tick_us), ph = percentiles(hal_us);
-  std::printf("loop tick (generator + command shaping + modes + telemetry)  p50 %7.2f us  p99 %7.2f us  max %7.2f us  (n=%d)\n",
-              pt.p50, pt.p99, pt.max, ticks);
-  std::printf("HAL cycle, MuJoCo SIL (2 physics steps @1 kHz + motor PD + gantry)  p50 %7.1f us  p99 %7.1f us  max %7.1f us\n",
-              ph.p50, ph.p99, ph.max);
-  std::printf("SIL real-time factor (lockstep): %.2f  (%.1f s simulated in %.2f s wall)\n", seconds / wall, seconds, wall);
-  std::printf("deadline budget: loop 10000 us, HAL 2000 us; final mode %d, fault %d\n",
-              static_cast<int>(controller.mode()), static_cast<int>(controller.fault()));
+  const pmg::RunSummary s = controller.run(seconds, &looped, nullptr);
+  std::printf("loop tick (shaper + generator + GCO + limiter + telemetry push)  p50 %7.2f us  p99 %7.2f us  max %7.2f us  (n=%lld)\n",
+              1e6 * s.loop.runtime_p50, 1e6 * s.loop.runtime_p99, 1e6 * s.loop.runtime_max,
+              static_cast<long long>(s.run.ticks));
+  std::printf("HAL cycle, MuJoCo SIL + supervisor (2 physics steps @1 kHz + motor PD + gantry)  p50 %7.1f us  p99 %7.1f us  max %7.1f us\n",
+              1e6 * s.hal.runtime_p50, 1e6 * s.hal.runtime_p99, 1e6 * s.hal.runtime_max);
+  std::printf("SIL real-time factor (lockstep): %.2f  (%.1f s simulated in %.2f s wall)\n", s.run.real_time_factor,
+              s.run.sim_time, s.run.wall_time);
+  std::printf("deadline budget: loop 10000 us, HAL 2000 us; final mode %s, fault %s\n", pmg::toString(s.final_mode),
+              pmg::toString(s.fault));
   return 0;
 }

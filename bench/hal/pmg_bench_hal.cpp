@@ -23,7 +23,7 @@
 #include "pmg/hal/bus/bus_plan.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/safety/supervisor.hpp"
@@ -166,7 +166,7 @@ int main(int argc, char** argv) {
 
     if (sil_cycles > 0) {
       std::printf("\n== 4. CAN HAL cycle over UDP loopback against the SIL emulator (lockstep round trip)\n");
-      bus::BusPlan plan = bus::BusPlan::fromYaml("config/hal/g1_can.yaml");
+      bus::BusPlan plan = bus::BusPlan::fromYaml(plan_path);
       const auto base = static_cast<std::uint16_t>(30000 + (getpid() % 1000) * 20);
       auto sim = std::make_unique<pmg::MujocoBackend>(robot, pmg::MujocoBackendOptions{});
       bus::SilDriverEmulator sil(plan, std::move(sim), base);

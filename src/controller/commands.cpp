@@ -3,21 +3,32 @@
 #include <algorithm>
 #include <cmath>
 
-#include <yaml-cpp/yaml.h>
-
-#include "pmg/common/robot_config.hpp"
+#include "pmg/common/config_error.hpp"
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg {
 
+namespace {
+bool finitePositive(double v) { return std::isfinite(v) && v > 0; }
+bool validRange(const std::array<double, 2>& r) { return std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1]; }
+}  // namespace
+
 std::string CommandLimits::validate() const {
   if (!(timeout > 0 && timeout < 10)) return "commands.timeout_s: expected in (0, 10) s";
-  for (int i = 0; i < 3; ++i) {
-    if (!(max_velocity[static_cast<std::size_t>(i)] > 0)) return "commands.max_velocity: expected > 0";
-    if (!(max_acceleration[static_cast<std::size_t>(i)] > 0)) return "commands.max_acceleration: expected > 0";
-    if (!(posture_min[static_cast<std::size_t>(i)] <= posture_max[static_cast<std::size_t>(i)]))
-      return "commands.posture_min/max: expected min <= max";
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!finitePositive(max_velocity[i])) return "commands.max_velocity: expected finite values > 0";
+    if (!finitePositive(max_acceleration[i])) return "commands.max_acceleration: expected finite values > 0";
   }
-  if (!(posture_rate > 0)) return "commands.posture_rate: expected > 0";
+  if (!validRange(pitch_range)) return "commands.pitch_range: expected finite [min, max] with min <= max [rad]";
+  if (!validRange(roll_range)) return "commands.roll_range: expected finite [min, max] with min <= max [rad]";
+  if (!validRange(height_range) || !(height_range[0] > 0))
+    return "commands.height_range: expected finite [min, max] with 0 < min <= max [m]";
+  if (!finitePositive(posture_rate)) return "commands.posture_rate: expected a finite value > 0 [rad/s]";
+  if (!finitePositive(height_rate)) return "commands.height_rate: expected a finite value > 0 [m/s]";
+  if (!(standing_height >= height_range[0] && standing_height <= height_range[1]))
+    return "commands.height_range: must contain the standing height " + std::to_string(standing_height) + " m";
+  if (!finitePositive(max_reference_speed) || max_reference_speed > 50)
+    return "commands.max_reference_speed: expected in (0, 50] rad/s";
   return {};
 }
 
@@ -25,47 +36,48 @@ namespace {
 double slew(double current, double target, double max_step) noexcept {
   return current + std::clamp(target - current, -max_step, max_step);
 }
+/// Clamps v into [lo, hi]; sets *clamped when it was outside.
+double clampCount(double v, double lo, double hi, bool* clamped) noexcept {
+  if (v < lo || v > hi) *clamped = true;
+  return std::clamp(v, lo, hi);
+}
 }  // namespace
+
+CommandShaper::CommandShaper(CommandLimits limits) : limits_(limits) { reset(); }
 
 void CommandShaper::reset() noexcept {
   velocity_ = {};
   target_ = {};
-  posture_ = {};
-  posture_target_ = {};
+  posture_ = {0.0, 0.0, limits_.standing_height};
+  posture_target_ = posture_;
 }
 
 void CommandShaper::update(const CommandSample& s, double now, double dt) noexcept {
+  const Command& u = s.command;
   if (s.velocity_time >= 0 && s.velocity_time != last_velocity_time_) {
     last_velocity_time_ = s.velocity_time;
-    const VelocityCommand& v = s.velocity;
-    if (!std::isfinite(v.vx) || !std::isfinite(v.vy) || !std::isfinite(v.wz)) {
+    if (!std::isfinite(u.vx) || !std::isfinite(u.vy) || !std::isfinite(u.wz)) {
       ++counters_.rejected_nan;
     } else {
-      std::array<double, 3> u{v.vx, v.vy, v.wz};
       bool clamped = false;
-      for (std::size_t i = 0; i < 3; ++i) {
-        if (std::fabs(u[i]) > limits_.max_velocity[i]) clamped = true;
-        u[i] = std::clamp(u[i], -limits_.max_velocity[i], limits_.max_velocity[i]);
-      }
+      const auto& m = limits_.max_velocity;
+      target_ = {clampCount(u.vx, -m[0], m[0], &clamped), clampCount(u.vy, -m[1], m[1], &clamped),
+                 clampCount(u.wz, -m[2], m[2], &clamped)};
       if (clamped) ++counters_.clamped;
-      target_ = {u[0], u[1], u[2]};
     }
   }
   if (s.posture_time >= 0 && s.posture_time != last_posture_time_) {
     last_posture_time_ = s.posture_time;
-    const PostureCommand& p = s.posture;
-    if (!std::isfinite(p.pitch) || !std::isfinite(p.roll) || !std::isfinite(p.height)) {
+    const bool height_ok = !u.height || std::isfinite(*u.height);
+    if (!std::isfinite(u.pitch) || !std::isfinite(u.roll) || !height_ok) {
       ++counters_.rejected_nan;
     } else {
-      std::array<double, 3> u{p.pitch, p.roll, p.height};
       bool clamped = false;
-      for (std::size_t i = 0; i < 3; ++i) {
-        if (i == 2 && u[i] <= 0) continue;  // height <= 0: standing height
-        if (u[i] < limits_.posture_min[i] || u[i] > limits_.posture_max[i]) clamped = true;
-        u[i] = std::clamp(u[i], limits_.posture_min[i], limits_.posture_max[i]);
-      }
+      const double h = u.height ? *u.height : limits_.standing_height;  // "none": the standing height
+      posture_target_ = {clampCount(u.pitch, limits_.pitch_range[0], limits_.pitch_range[1], &clamped),
+                         clampCount(u.roll, limits_.roll_range[0], limits_.roll_range[1], &clamped),
+                         clampCount(h, limits_.height_range[0], limits_.height_range[1], &clamped)};
       if (clamped) ++counters_.clamped;
-      posture_target_ = {u[0], u[1], u[2]};
     }
   }
   // Staleness: no fresh velocity command within the timeout → stop (zero velocity), slewed.
@@ -79,60 +91,154 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
   velocity_.wz = slew(velocity_.wz, target_.wz, limits_.max_acceleration[2] * dt);
   posture_.pitch = slew(posture_.pitch, posture_target_.pitch, limits_.posture_rate * dt);
   posture_.roll = slew(posture_.roll, posture_target_.roll, limits_.posture_rate * dt);
-  // Height: 0 means "standing"; slew between explicit heights only.
-  if (posture_target_.height <= 0 || posture_.height <= 0)
-    posture_.height = posture_target_.height;
-  else
-    posture_.height = slew(posture_.height, posture_target_.height, limits_.posture_rate * dt);
+  posture_.height = slew(posture_.height, posture_target_.height, limits_.height_rate * dt);
 }
+
+void ReferenceRateLimiter::reset(const double* q, int n) noexcept {
+  for (int i = 0; i < n && i < static_cast<int>(prev_.size()); ++i) prev_[static_cast<std::size_t>(i)] = q[i];
+  have_prev_ = true;
+}
+
+bool ReferenceRateLimiter::apply(double* q, int n, double dt) noexcept {
+  n = std::min(n, static_cast<int>(prev_.size()));
+  bool limited = false;
+  if (have_prev_) {
+    const double step = max_speed_ * dt;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const double d = q[i] - prev_[k];
+      if (d > step || d < -step) {
+        q[i] = prev_[k] + std::clamp(d, -step, step);
+        limited = true;
+      }
+    }
+  }
+  reset(q, n);
+  if (limited) ++limited_ticks_;
+  return limited;
+}
+
+// ------------------------------------------------------------------------------------ scripts
 
 double CommandScript::duration() const {
-  double t = 0;
-  for (const auto& s : segments) t += s.duration;
-  return t;
+  return segments.empty() ? 0.0 : segments.back().start + segments.back().duration;
 }
 
-const CommandSegment& CommandScript::at(double t) const {
-  double start = 0;
-  for (const auto& s : segments) {
-    if (t < start + s.duration) return s;
-    start += s.duration;
+std::size_t CommandScript::segmentIndex(double t) const {
+  std::size_t k = 0;
+  while (k + 1 < segments.size() && t >= segments[k + 1].start) ++k;
+  return k;
+}
+
+Command CommandScript::at(double t) const {
+  if (segments.empty()) return {};
+  const std::size_t k = segmentIndex(t);
+  const Command& to = segments[k].command;
+  if (k == 0 || !(ramp > 0)) return to;
+  const Command& from = segments[k - 1].command;
+  const double a = std::clamp((t - segments[k].start) / ramp, 0.0, 1.0);
+  const auto mix = [a](double x, double y) { return x + a * (y - x); };
+  Command u{mix(from.vx, to.vx), mix(from.vy, to.vy), mix(from.wz, to.wz), mix(from.pitch, to.pitch),
+            mix(from.roll, to.roll), to.height};
+  if (from.height && to.height) u.height = mix(*from.height, *to.height);
+  return u;
+}
+
+namespace {
+
+/// The YAML form of one segment (keys of both placements; loadCommandScript checks which is used).
+struct SegmentYaml {
+  std::string name, label;
+  std::optional<double> t, duration;
+  double vx = 0, vy = 0, wz = 0, pitch = 0, roll = 0;
+  std::optional<double> height;
+  std::optional<ModeRequest> mode;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("name", &name, "segment name");
+    a->Visit("label", &label, "segment name (alias of name)");
+    a->Visit("t", &t, "start time [s] since the script start");
+    a->Visit("duration", &duration, "segment length [s]");
+    a->Visit("vx", &vx, "forward velocity, heading frame [m/s]");
+    a->Visit("vy", &vy, "lateral velocity, left positive [m/s]");
+    a->Visit("wz", &wz, "yaw rate, counter-clockwise positive [rad/s]");
+    a->Visit("pitch", &pitch, "torso forward bend [rad]");
+    a->Visit("roll", &roll, "torso lean, right positive [rad]");
+    a->Visit("height", &height, "pelvis height [m]; absent: no height command (standing height)");
+    a->Visit("mode", &mode, "mode request posted when the segment starts");
   }
-  return segments.back();
+};
+
+struct ScriptYaml {
+  double ramp = 0.0;
+  std::optional<double> duration;
+  std::vector<SegmentYaml> segments;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("ramp", &ramp, "linear ramp between segments [s]");
+    a->Visit("duration", &duration, "total length [s] (required with t)");
+    a->Visit("segments", &segments, "the segments", yaml::kRequired);
+  }
+  std::string validate() const {
+    if (!(ramp >= 0 && ramp < 60)) return "ramp: expected in [0, 60) s";
+    if (segments.empty()) return "segments: expected at least one segment";
+    return {};
+  }
+};
+
+}  // namespace
+
+std::vector<std::pair<std::string, ModeRequest>> yamlEnumNames(ModeRequest) {
+  return {{"passive", ModeRequest::kPassive}, {"soft_stand", ModeRequest::kSoftStand},
+          {"active", ModeRequest::kActive},   {"damping", ModeRequest::kDamping},
+          {"reset", ModeRequest::kReset}};
 }
 
 CommandScript loadCommandScript(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ": cannot read command script: " + e.what());
-  }
+  const yaml::YamlDocument doc = yaml::loadYamlDocument(path);
+  ScriptYaml y;
+  yaml::readYaml(doc, &y);
   CommandScript script;
   script.source_file = path;
-  const YAML::Node segs = root["segments"];
-  if (!segs || !segs.IsSequence() || segs.size() == 0)
-    throw ConfigError(path + ": segments: missing or empty (expected a list of {duration, vx, vy, wz, pitch, roll, height})");
-  for (std::size_t i = 0; i < segs.size(); ++i) {
-    const std::string k = path + ": segments[" + std::to_string(i) + "]";
+  script.ramp = y.ramp;
+  const YAML::Node segs = doc.root["segments"];
+  const bool by_start = y.segments[0].t.has_value();
+  for (std::size_t i = 0; i < y.segments.size(); ++i) {
+    const SegmentYaml& g = y.segments[i];
+    const yaml::YamlSource where{path, doc.source.base_dir, "segments[" + std::to_string(i) + "]"};
+    const auto fail = [&](const std::string& msg) { yaml::fail(where, segs[i], msg); };
+    if (g.t.has_value() != by_start || g.duration.has_value() == by_start)
+      fail(by_start ? "expected 't' (start time) and no 'duration', like segments[0]"
+                    : "expected 'duration' and no 't', like segments[0]");
+    if (!g.name.empty() && !g.label.empty()) fail("give 'name' or 'label', not both");
     CommandSegment s;
-    const auto get = [&](const char* key, double fallback) {
-      if (!segs[i][key]) return fallback;
-      double v;
-      try {
-        v = segs[i][key].as<double>();
-      } catch (const YAML::Exception&) {
-        throw ConfigError(k + "." + key + ": not a number");
-      }
-      if (!std::isfinite(v)) throw ConfigError(k + "." + key + ": not finite");
-      return v;
-    };
-    s.duration = get("duration", -1.0);
-    if (!(s.duration > 0 && s.duration < 3600)) throw ConfigError(k + ".duration: expected in (0, 3600) s");
-    s.velocity = {get("vx", 0), get("vy", 0), get("wz", 0)};
-    s.posture = {get("pitch", 0), get("roll", 0), get("height", 0)};
-    if (segs[i]["label"]) s.label = segs[i]["label"].as<std::string>();
+    s.name = g.name.empty() ? g.label : g.name;
+    s.command = Command{g.vx, g.vy, g.wz, g.pitch, g.roll, g.height};
+    if (g.height && !(*g.height > 0 && *g.height < 3)) fail("height: expected in (0, 3) m, or absent for none");
+    s.mode = g.mode.value_or(ModeRequest::kNone);
+    if (by_start) {
+      s.start = *g.t;
+      if (i == 0 && s.start != 0.0) fail("t: the first segment must start at t: 0");
+      if (i > 0 && !(s.start > script.segments.back().start))
+        fail("t: expected later than the previous segment's t");
+      if (i > 0) script.segments.back().duration = s.start - script.segments.back().start;
+    } else {
+      s.duration = *g.duration;
+      if (!(s.duration > 0 && s.duration < 3600)) fail("duration: expected in (0, 3600) s");
+      s.start = i == 0 ? 0.0 : script.segments.back().start + script.segments.back().duration;
+    }
     script.segments.push_back(s);
+  }
+  if (by_start) {
+    if (!y.duration) yaml::fail(doc.source, doc.root, "duration: required when the segments give 't'");
+    const double end = *y.duration - script.segments.back().start;
+    if (!(end > 0 && *y.duration < 36000))
+      yaml::fail(doc.source, doc.root, "duration: expected after the last segment's t and < 36000 s");
+    script.segments.back().duration = end;
+  } else if (y.duration && std::fabs(*y.duration - script.duration()) > 1e-9) {
+    yaml::fail(doc.source, doc.root,
+               "duration: " + std::to_string(*y.duration) + " s disagrees with the sum of the segments' durations (" +
+                   std::to_string(script.duration()) + " s); omit it");
   }
   return script;
 }

@@ -3,160 +3,270 @@
 #include <cmath>
 #include <filesystem>
 
-#include <yaml-cpp/yaml.h>
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg {
+
+std::vector<std::pair<std::string, BackendKind>> yamlEnumNames(BackendKind) {
+  return {{"mujoco", BackendKind::kMujoco}, {"can", BackendKind::kCan}};
+}
+std::vector<std::pair<std::string, TimingMode>> yamlEnumNames(TimingMode) {
+  return {{"lockstep", TimingMode::kLockstep}, {"realtime", TimingMode::kRealtime}};
+}
+std::vector<std::pair<std::string, StartupMode>> yamlEnumNames(StartupMode) {
+  return {{"active", StartupMode::kActive}, {"passive", StartupMode::kPassive}};
+}
+
 namespace {
 namespace fs = std::filesystem;
 
-template <typename T>
-T get(const YAML::Node& node, const char* key, const T& fallback, const std::string& where) {
-  if (!node || !node[key]) return fallback;
-  try {
-    return node[key].as<T>();
-  } catch (const YAML::Exception&) {
-    throw ConfigError(where + "." + key + ": cannot read '" + YAML::Dump(node[key]) + "' as the expected type");
+// The file's form: one struct per section, each field declared once with its doc and units.
+struct CanYaml {
+  std::string plan;
+  std::string transport = "udp";
+  int udp_port = 47000;
+  bool paced = false;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("plan", &plan, "bus plan YAML (config/hal/*.yaml)", yaml::kPath);
+    a->Visit("transport", &transport, "udp (pmg_sil) | socketcan (robot)");
+    a->Visit("udp_port", &udp_port, "UDP base port of pmg_sil, 1024..65000");
+    a->Visit("paced", &paced, "send each motor at its slot time");
   }
-}
+  std::string validate() const {
+    if (transport != "udp" && transport != "socketcan") return "transport: '" + transport + "': expected udp or socketcan";
+    if (udp_port < 1024 || udp_port > 65000) return "udp_port: expected 1024..65000";
+    return {};
+  }
+};
 
-template <std::size_t N>
-std::array<double, N> getArray(const YAML::Node& node, const char* key, const std::array<double, N>& fallback,
-                               const std::string& where) {
-  if (!node || !node[key]) return fallback;
-  const auto v = get<std::vector<double>>(node, key, {}, where);
-  if (v.size() != N) throw ConfigError(where + "." + key + ": expected " + std::to_string(N) + " numbers");
-  std::array<double, N> a{};
-  for (std::size_t i = 0; i < N; ++i) a[i] = v[i];
-  return a;
-}
+struct TimingYaml {
+  TimingMode mode = TimingMode::kLockstep;
+  double loop_rate_hz = 100.0, hal_rate_hz = 500.0;
+  int loop_fifo_priority = 0, hal_fifo_priority = 0, hal_cpu = -1;
+  bool lock_memory = false;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("mode", &mode, "lockstep | realtime");
+    a->Visit("loop_rate_hz", &loop_rate_hz, "controller loop rate, 10..1000 Hz");
+    a->Visit("hal_rate_hz", &hal_rate_hz, "HAL rate, an integer multiple of loop_rate_hz, <= 4000 Hz");
+    a->Visit("loop_fifo_priority", &loop_fifo_priority, "SCHED_FIFO 1..99, 0 = normal");
+    a->Visit("hal_fifo_priority", &hal_fifo_priority, "SCHED_FIFO 1..99, 0 = normal");
+    a->Visit("hal_cpu", &hal_cpu, "CPU of the HAL thread, -1 = any");
+    a->Visit("lock_memory", &lock_memory, "mlockall before real-time operation");
+  }
+  std::string validate() const {
+    if (!(loop_rate_hz >= 10 && loop_rate_hz <= 1000)) return "loop_rate_hz: expected 10..1000 Hz";
+    const double ratio = hal_rate_hz / loop_rate_hz;
+    if (!(ratio >= 1 && std::fabs(ratio - std::round(ratio)) < 1e-9 && hal_rate_hz <= 4000))
+      return "hal_rate_hz: expected an integer multiple of loop_rate_hz, <= 4000 Hz";
+    if (loop_fifo_priority < 0 || loop_fifo_priority > 99) return "loop_fifo_priority: expected 0..99";
+    if (hal_fifo_priority < 0 || hal_fifo_priority > 99) return "hal_fifo_priority: expected 0..99";
+    if (hal_cpu < -1) return "hal_cpu: expected -1 (any) or a CPU index";
+    return {};
+  }
+};
+
+struct GantryYaml {
+  GantryOptions g;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("enabled", &g.enabled, "hang the robot in the bring-up gantry");
+    a->Visit("anchor_height", &g.anchor_height, "pelvis anchor height [m]");
+    a->Visit("stiffness", &g.stiffness, "[N/m]");
+    a->Visit("damping", &g.damping, "[N*s/m]");
+    a->Visit("rot_stiffness", &g.rot_stiffness, "[N*m/rad]");
+    a->Visit("rot_damping", &g.rot_damping, "[N*m*s/rad]");
+  }
+};
+
+struct MujocoYaml {
+  double timestep = 0.001;
+  std::vector<double> encoder_offsets;
+  GantryYaml gantry;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("timestep", &timestep, "physics step [s], <= 0.001");
+    a->Visit("encoder_offsets", &encoder_offsets, "hidden zero offsets per joint [rad] (tests)");
+    a->Visit("gantry", &gantry, "bring-up gantry");
+  }
+};
+
+struct GeneratorYaml {
+  GeneratorParams p;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("epsilon", &p.epsilon, "PMG eq. 6 epsilon");
+    a->Visit("max_command", &p.max_command, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] the generator accepts");
+  }
+  std::string validate() const { return p.validate(); }
+};
+
+struct CommandsYaml {
+  CommandLimits l;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("timeout_s", &l.timeout, "older velocity commands are stale [s]");
+    a->Visit("max_velocity", &l.max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s]");
+    a->Visit("max_acceleration", &l.max_acceleration, "slew limits [m/s^2, m/s^2, rad/s^2]");
+    a->Visit("pitch_range", &l.pitch_range, "[min, max] torso pitch [rad]");
+    a->Visit("roll_range", &l.roll_range, "[min, max] torso roll [rad]");
+    a->Visit("height_range", &l.height_range, "[min, max] pelvis height [m]");
+    a->Visit("posture_rate", &l.posture_rate, "pitch/roll slew limit [rad/s]");
+    a->Visit("height_rate", &l.height_rate, "height slew limit [m/s]");
+    a->Visit("max_reference_speed", &l.max_reference_speed, "bound on every joint reference's speed [rad/s]");
+  }
+};
+
+struct SafetyYaml {
+  double soft_stand_duration_s = 1.0;
+  double damping_kd_scale = 1.0;
+  StartupMode startup = StartupMode::kActive;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("soft_stand_duration_s", &soft_stand_duration_s, "supervisor soft stand (0, 60] s");
+    a->Visit("damping_kd_scale", &damping_kd_scale, "damping kd = scale * robot kd, (0, 5]");
+    a->Visit("startup", &startup, "active (stand up and engage) | passive (wait for an operator)");
+  }
+  std::string validate() const {
+    if (!(soft_stand_duration_s > 0 && soft_stand_duration_s <= 60)) return "soft_stand_duration_s: expected (0, 60] s";
+    if (!(damping_kd_scale > 0 && damping_kd_scale <= 5)) return "damping_kd_scale: expected (0, 5]";
+    return {};
+  }
+};
+
+struct PolicyYaml {
+  std::string model;
+  std::string backend = "native";
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("model", &model, "ONNX actor with its pmg contract", yaml::kPath | yaml::kRequired);
+    a->Visit("backend", &backend, "native (allocation-free) | onnxruntime");
+  }
+  std::string validate() const {
+    if (backend != "native" && backend != "onnxruntime") return "backend: '" + backend + "': expected native or onnxruntime";
+    return {};
+  }
+};
+
+struct TelemetryYaml {
+  bool lcm = true;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string log_file;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("lcm", &lcm, "publish telemetry / receive commands over LCM");
+    a->Visit("lcm_url", &lcm_url, "LCM provider URL (ttl=0 keeps traffic on the host)");
+    a->Visit("log_file", &log_file, "LCM event log (\"\" = none)", yaml::kPath);
+  }
+};
+
+struct ControllerYaml {
+  std::string robot, clips, gco;
+  BackendKind backend = BackendKind::kMujoco;
+  std::optional<CanYaml> can;
+  TimingYaml timing;
+  MujocoYaml mujoco;
+  std::optional<bool> gco_enabled;
+  GeneratorYaml generator;
+  CommandsYaml commands;
+  SafetyYaml safety;
+  std::optional<PolicyYaml> policy;
+  TelemetryYaml telemetry;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("robot", &robot, "robot config YAML", yaml::kPath | yaml::kRequired);
+    a->Visit("clips", &clips, "clip library folder", yaml::kPath | yaml::kRequired);
+    a->Visit("backend", &backend, "mujoco (in-process SIL) | can (motor buses)");
+    a->Visit("can", &can, "motor-bus settings (backend: can)");
+    a->Visit("timing", &timing, "rates and real-time settings");
+    a->Visit("mujoco", &mujoco, "MuJoCo 2.2 SIL settings");
+    a->Visit("gco", &gco, "GCO options YAML", yaml::kPath);
+    a->Visit("gco_enabled", &gco_enabled, "false: PMG w/o GCO");
+    a->Visit("generator", &generator, "PMG generator parameters");
+    a->Visit("commands", &commands, "command limits");
+    a->Visit("safety", &safety, "supervisor settings");
+    a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
+    a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
+  }
+};
+
 }  // namespace
 
+HalStackConfig ControllerConfig::halStack() const {
+  HalStackConfig h;
+  h.backend = backend;
+  h.can = can;
+  h.mujoco = mujoco;
+  h.lockstep = timing == TimingMode::kLockstep;
+  h.soft_stand_duration_s = soft_stand_duration;
+  h.damping_kd_scale = damping_kd_scale;
+  return h;
+}
+
+RunnerOptions ControllerConfig::runner() const {
+  RunnerOptions r;
+  r.mode = timing;
+  r.loop_period_s = 1.0 / loop_rate_hz;
+  r.hal_cycles_per_tick = cyclesPerTick();
+  r.loop_fifo_priority = loop_fifo_priority;
+  r.hal_fifo_priority = hal_fifo_priority;
+  r.hal_cpu = hal_cpu;
+  r.lock_memory = lock_memory;
+  return r;
+}
+
 ControllerConfig loadControllerConfig(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot open file");
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  const yaml::YamlDocument doc = yaml::loadYamlDocument(path);
+  ControllerYaml y;
+  yaml::readYaml(doc, &y);
+  const auto fail = [&](const std::string& key, const std::string& msg) {
+    yaml::fail(yaml::YamlSource{path, doc.source.base_dir, key}, doc.root[key], msg);
+  };
   ControllerConfig c;
   c.source_file = path;
-  const fs::path dir = fs::absolute(fs::path(path)).parent_path();
-  const std::string f = path + ": ";
-  if (!root["robot"]) throw ConfigError(f + "robot: missing (path of the robot config)");
-  if (!root["clips"]) throw ConfigError(f + "clips: missing (folder of the clip library)");
-  c.robot_file = (dir / root["robot"].as<std::string>()).lexically_normal().string();
-  c.clips_dir = (dir / root["clips"].as<std::string>()).lexically_normal().string();
-  if (!fs::is_directory(c.clips_dir)) throw ConfigError(f + "clips: folder '" + c.clips_dir + "' not found");
+  c.robot_file = y.robot;
+  c.clips_dir = y.clips;
+  if (!fs::is_directory(c.clips_dir)) fail("clips", "folder '" + c.clips_dir + "' not found");
   c.robot = loadRobotConfig(c.robot_file);
-
-  const std::string backend = get<std::string>(root, "backend", "mujoco", path + ": backend");
-  if (backend == "mujoco") {
-    c.backend = BackendKind::kMujoco;
-  } else if (backend == "can") {
-    c.backend = BackendKind::kCan;
-    c.hal_supervisor = true;
-  } else {
-    throw ConfigError(f + "backend: '" + backend + "': expected mujoco or can");
+  c.backend = y.backend;
+  if (y.can) {
+    c.can = CanSettings{y.can->plan, y.can->transport, y.can->udp_port, y.can->paced};
   }
-  const YAML::Node can = root["can"];
-  const std::string canw = path + ": can";
-  if (can && can["plan"])
-    c.can.plan_file = (dir / get<std::string>(can, "plan", "", canw)).lexically_normal().string();
-  c.can.transport = get<std::string>(can, "transport", c.can.transport, canw);
-  c.can.udp_port = get<int>(can, "udp_port", c.can.udp_port, canw);
-  c.can.paced = get<bool>(can, "paced", false, canw);
-  if (c.can.transport != "udp" && c.can.transport != "socketcan")
-    throw ConfigError(canw + ".transport: '" + c.can.transport + "': expected udp or socketcan");
-  if (c.can.udp_port < 1024 || c.can.udp_port > 65000) throw ConfigError(canw + ".udp_port: expected 1024..65000");
   if (c.backend == BackendKind::kCan && !fs::exists(c.can.plan_file))
-    throw ConfigError(canw + ".plan: bus plan '" + c.can.plan_file + "' not found (required with backend: can)");
-
-  const YAML::Node t = root["timing"];
-  const std::string w = path + ": timing";
-  const std::string mode = get<std::string>(t, "mode", "lockstep", w);
-  if (mode == "lockstep")
-    c.timing = TimingMode::kLockstep;
-  else if (mode == "realtime")
-    c.timing = TimingMode::kRealtime;
-  else
-    throw ConfigError(w + ".mode: '" + mode + "': expected lockstep or realtime");
-  c.loop_rate_hz = get<double>(t, "loop_rate_hz", 100.0, w);
-  c.hal_rate_hz = get<double>(t, "hal_rate_hz", 500.0, w);
-  c.loop_fifo_priority = get<int>(t, "loop_fifo_priority", 0, w);
-  c.hal.fifo_priority = get<int>(t, "hal_fifo_priority", 0, w);
-  c.hal.cpu = get<int>(t, "hal_cpu", -1, w);
-  c.lock_memory = get<bool>(t, "lock_memory", false, w);
-  if (!(c.loop_rate_hz >= 10 && c.loop_rate_hz <= 1000)) throw ConfigError(w + ".loop_rate_hz: expected 10..1000 Hz");
-  const double ratio = c.hal_rate_hz / c.loop_rate_hz;
-  if (!(ratio >= 1 && std::fabs(ratio - std::round(ratio)) < 1e-9 && c.hal_rate_hz <= 4000))
-    throw ConfigError(w + ".hal_rate_hz: expected an integer multiple of loop_rate_hz, <= 4000 Hz");
-  for (int prio : {c.loop_fifo_priority, c.hal.fifo_priority})
-    if (prio < 0 || prio > 99) throw ConfigError(w + ".*_fifo_priority: expected 0..99");
-
-  const YAML::Node m = root["mujoco"];
-  const std::string mw = path + ": mujoco";
-  c.mujoco.timestep = get<double>(m, "timestep", 0.001, mw);
+    fail("can", "plan: bus plan '" + c.can.plan_file + "' not found (required with backend: can)");
+  c.timing = y.timing.mode;
+  c.loop_rate_hz = y.timing.loop_rate_hz;
+  c.hal_rate_hz = y.timing.hal_rate_hz;
+  c.loop_fifo_priority = y.timing.loop_fifo_priority;
+  c.hal_fifo_priority = y.timing.hal_fifo_priority;
+  c.hal_cpu = y.timing.hal_cpu;
+  c.lock_memory = y.timing.lock_memory;
+  c.mujoco.timestep = y.mujoco.timestep;
   c.mujoco.cycle_period = 1.0 / c.hal_rate_hz;
-  c.mujoco.encoder_offsets = get<std::vector<double>>(m, "encoder_offsets", {}, mw);
-  const YAML::Node g = m ? m["gantry"] : YAML::Node();
-  const std::string gw = mw + ".gantry";
-  c.mujoco.gantry.enabled = get<bool>(g, "enabled", true, gw);
-  c.mujoco.gantry.anchor_height = get<double>(g, "anchor_height", 0.95, gw);
-  c.mujoco.gantry.stiffness = get<double>(g, "stiffness", 4000.0, gw);
-  c.mujoco.gantry.damping = get<double>(g, "damping", 400.0, gw);
-  c.mujoco.gantry.rot_stiffness = get<double>(g, "rot_stiffness", 800.0, gw);
-  c.mujoco.gantry.rot_damping = get<double>(g, "rot_damping", 60.0, gw);
-  if (const std::string e = c.mujoco.validate(); !e.empty()) throw ConfigError(f + e);
-
-  const YAML::Node gen = root["generator"];
-  c.generator.epsilon = get<double>(gen, "epsilon", c.generator.epsilon, path + ": generator");
-  c.generator.max_command = getArray<3>(gen, "max_command", c.generator.max_command, path + ": generator");
-  if (const std::string e = c.generator.validate(); !e.empty()) throw ConfigError(f + e);
-
-  if (root["gco"]) {
-    c.gco_file = (dir / get<std::string>(root, "gco", "", path + ": gco")).lexically_normal().string();
+  c.mujoco.encoder_offsets = y.mujoco.encoder_offsets;
+  c.mujoco.gantry = y.mujoco.gantry.g;
+  if (const std::string e = c.mujoco.validate(); !e.empty()) fail("mujoco", e);
+  c.generator = y.generator.p;
+  if (!y.gco.empty()) {
+    c.gco_file = y.gco;
     c.gco = gco::loadGcoOptionsFile(c.gco_file);  // throws naming the file and field
   }
-  if (root["gco_enabled"]) c.gco.enabled = get<bool>(root, "gco_enabled", true, path + ": gco_enabled");
-
-  const YAML::Node cmd = root["commands"];
-  const std::string cw = path + ": commands";
-  c.commands.timeout = get<double>(cmd, "timeout_s", c.commands.timeout, cw);
-  c.commands.max_velocity = getArray<3>(cmd, "max_velocity", c.commands.max_velocity, cw);
-  c.commands.max_acceleration = getArray<3>(cmd, "max_acceleration", c.commands.max_acceleration, cw);
-  c.commands.posture_min = getArray<3>(cmd, "posture_min", c.commands.posture_min, cw);
-  c.commands.posture_max = getArray<3>(cmd, "posture_max", c.commands.posture_max, cw);
-  c.commands.posture_rate = get<double>(cmd, "posture_rate", c.commands.posture_rate, cw);
-  if (const std::string e = c.commands.validate(); !e.empty()) throw ConfigError(f + e);
-
-  const YAML::Node s = root["safety"];
-  c.soft_stand_duration = get<double>(s, "soft_stand_duration_s", 1.0, path + ": safety");
-  c.damping_kd_scale = get<double>(s, "damping_kd_scale", 1.0, path + ": safety");
-  c.hal_supervisor = get<bool>(s, "hal_supervisor", c.hal_supervisor, path + ": safety");
-  c.max_invalid_ticks = get<int>(s, "max_invalid_ticks", 3, path + ": safety");
-  if (c.max_invalid_ticks < 0 || c.max_invalid_ticks > 50)
-    throw ConfigError(f + "safety.max_invalid_ticks: expected 0..50 ticks");
-  if (!(c.soft_stand_duration >= 0 && c.soft_stand_duration <= 10))
-    throw ConfigError(f + "safety.soft_stand_duration_s: expected 0..10 s");
-  if (!(c.damping_kd_scale > 0 && c.damping_kd_scale <= 5)) throw ConfigError(f + "safety.damping_kd_scale: expected (0, 5]");
-
-  const YAML::Node pol = root["policy"];
-  if (pol && pol["model"]) {
-    c.policy_file = (dir / get<std::string>(pol, "model", "", path + ": policy")).lexically_normal().string();
-    if (!fs::exists(c.policy_file)) throw ConfigError(f + "policy.model: '" + c.policy_file + "' not found");
-    const std::string engine = get<std::string>(pol, "backend", "native", path + ": policy");
-    if (engine != "native" && engine != "onnxruntime")
-      throw ConfigError(f + "policy.backend: '" + engine + "': expected native or onnxruntime");
-    c.policy_native = engine == "native";
+  if (y.gco_enabled) c.gco.enabled = *y.gco_enabled;
+  c.commands = y.commands.l;
+  c.commands.standing_height = c.robot.standing_base_height;
+  if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);
+  c.soft_stand_duration = y.safety.soft_stand_duration_s;
+  c.damping_kd_scale = y.safety.damping_kd_scale;
+  c.startup = y.safety.startup;
+  if (y.policy) {
+    c.policy_file = y.policy->model;
+    if (!fs::exists(c.policy_file)) fail("policy", "model: '" + c.policy_file + "' not found");
+    c.policy_native = y.policy->backend == "native";
   }
-
-  const YAML::Node tel = root["telemetry"];
-  c.lcm_enabled = get<bool>(tel, "lcm", true, path + ": telemetry");
-  c.lcm_url = get<std::string>(tel, "lcm_url", c.lcm_url, path + ": telemetry");
-  const std::string log = get<std::string>(tel, "log_file", "", path + ": telemetry");
-  c.log_file = log.empty() ? "" : (fs::path(log).is_absolute() ? log : fs::absolute(log).string());
+  c.lcm_enabled = y.telemetry.lcm;
+  c.lcm_url = y.telemetry.lcm_url;
+  c.log_file = y.telemetry.log_file;
   return c;
 }
 

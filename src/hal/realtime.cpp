@@ -1,4 +1,4 @@
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 
 #include <pthread.h>
 #include <sched.h>

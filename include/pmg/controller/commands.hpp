@@ -1,65 +1,98 @@
 #pragma once
 /// @file commands.hpp
-/// Operator commands (velocity u_d, posture u_s, mode requests) as they reach the 100 Hz loop,
-/// their validation (NaN, range, staleness) and shaping (slew-rate limits), and the scripted
-/// command sequences used by the demo, the tests and `pmg_command_script`.
+/// The one command vocabulary of pmg, from the wire (LCM decoding, command scripts) to the policy
+/// observation:
+///  - pmg::Command: u = u_d ⊕ u_s (PMG eqs. 4–12) with "no height command" explicit
+///    (std::optional), never a ≤ 0 sentinel;
+///  - pmg::CommandSample: the newest operator input as a command source writes it (timestamps,
+///    mode request);
+///  - pmg::CommandLimits: the one set of command limits, validated once at setup; the shaper
+///    clamps against it and the stages downstream only check (the generator and GCO limits are
+///    cross-checked against it when the controller is built);
+///  - pmg::CommandShaper: validation (NaN, range, staleness) and slew limits, so that no command
+///    step makes a joint reference jump (docs/controller.md, "Reference continuity");
+///  - pmg::CommandScript: the one command-script format, read by pmg_controller,
+///    pmg_command_script and pmg_policy_sil.
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "pmg/generator/generator.hpp"
+#include "pmg/hal/modes.hpp"
 
 namespace pmg {
 
-/// Controller modes (see docs/controller.md). Values match pmg_lcm::mode_command_t.mode.
-enum class ControllerMode : std::int8_t {
-  kPassive = 0,    ///< zero torque
-  kSoftStand = 1,  ///< interpolate from the measured pose to the standing pose
-  kActive = 2,     ///< PMG (and the policy, when one is loaded) drives the joints
-  kDamping = 3,    ///< latched e-stop: kp = 0, kd only
+/// Operator command u = u_d ⊕ u_s. Velocities in the heading frame H (yaw-aligned base frame):
+/// vx forward [m/s], vy left [m/s], wz yaw rate counter-clockwise [rad/s]; posture: torso pitch
+/// (forward bend) [rad], roll (lean right) [rad], pelvis height above the ground [m] or none.
+struct Command {
+  double vx = 0.0, vy = 0.0, wz = 0.0;
+  double pitch = 0.0, roll = 0.0;
+  std::optional<double> height;  ///< nullopt: no height command (the standing height)
 };
 
-/// The newest operator input, as written by the LCM receiver or a script (trivially copyable).
+/// The newest operator input, as a command source (LCM receiver, script, test) writes it.
+/// Trivially copyable (crosses pmg::LatestValue).
 struct CommandSample {
-  VelocityCommand velocity{};
-  PostureCommand posture{};
-  double velocity_time = -1.0;  ///< receive time of the velocity command [s, controller clock]; < 0: none yet
-  double posture_time = -1.0;
-  std::int8_t mode_request = -1;  ///< requested ControllerMode, 4 = clear the damping latch, -1 = none
+  Command command;
+  double velocity_time = -1.0;  ///< receive time of the velocity part [s, controller clock]; < 0: none yet
+  double posture_time = -1.0;   ///< receive time of the posture part [s]; < 0: none yet
+  ModeRequest mode_request = ModeRequest::kNone;
   std::uint32_t mode_request_seq = 0;  ///< increments with every mode request
 };
 
-/// Command validation and shaping limits.
+/// Command limits: the operator's envelope. Validated once (validate()); the shaper clamps to it.
 struct CommandLimits {
-  double timeout = 0.5;                            ///< a velocity command older than this is stale [s]
-  std::array<double, 3> max_velocity{1.0, 0.5, 1.0};     ///< |v_x|, |v_y| [m/s], |ω| [rad/s]
-  std::array<double, 3> max_acceleration{1.0, 1.0, 2.0}; ///< slew limits [m/s², m/s², rad/s²]
-  std::array<double, 3> posture_min{-0.3, -0.3, 0.0};    ///< pitch, roll [rad], height [m] (0: standing)
-  std::array<double, 3> posture_max{0.6, 0.3, 1.0};
-  double posture_rate = 0.5;                       ///< posture slew limit [rad/s or m/s]
+  double timeout = 0.5;                                   ///< velocity command older than this is stale [s]
+  std::array<double, 3> max_velocity{1.0, 0.5, 1.0};      ///< |v_x|, |v_y| [m/s], |ω| [rad/s]
+  std::array<double, 3> max_acceleration{1.0, 1.0, 2.0};  ///< slew limits [m/s², m/s², rad/s²]
+  std::array<double, 2> pitch_range{-0.3, 0.6};           ///< torso pitch [rad]
+  std::array<double, 2> roll_range{-0.3, 0.3};            ///< torso roll [rad]
+  std::array<double, 2> height_range{0.45, 0.85};         ///< pelvis height [m]
+  double posture_rate = 0.5;                              ///< pitch/roll slew limit [rad/s]
+  double height_rate = 0.2;                               ///< height slew limit [m/s]
+  /// Pelvis height that "no height command" means [m] (set from the generator's squat clip at setup).
+  double standing_height = 0.78;
+  /// Bound on the speed of every joint reference the loop sends [rad/s] (walking peaks near
+  /// 3.6 rad/s on the G1 clips); enforced by pmg::ReferenceRateLimiter after the generator.
+  double max_reference_speed = 6.0;
+  /// Empty when valid, else "commands.<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
 
-/// Counters of rejected/shaped input (telemetry).
+/// Counters of rejected and shaped input (telemetry and the run summary).
 struct CommandCounters {
-  std::uint64_t rejected_nan = 0;     ///< commands with NaN/Inf (ignored: the previous valid one is kept)
-  std::uint64_t clamped = 0;          ///< commands beyond max_velocity / posture range (clamped)
-  std::uint64_t stale_ticks = 0;      ///< ticks on which the velocity command was stale (→ zero velocity)
+  std::uint64_t rejected_nan = 0;  ///< commands with NaN/Inf (ignored: the previous valid one is kept)
+  std::uint64_t clamped = 0;       ///< commands outside the limits (clamped)
+  std::uint64_t stale_ticks = 0;   ///< ticks on which the velocity command was stale (→ zero velocity)
 };
 
-/// Turns raw operator input into the command the generator gets. noexcept, allocation-free.
+/// Turns raw operator input into the command the generator gets: validated, clamped to the
+/// limits, slew-limited; the height is resolved ("none" → CommandLimits::standing_height) and
+/// slewed like any other value, so "none" ↔ value transitions are continuous.
+/// noexcept, allocation-free.
 class CommandShaper {
  public:
-  explicit CommandShaper(CommandLimits limits) : limits_(limits) {}
+  explicit CommandShaper(CommandLimits limits);
   /// @param sample newest input; @param now controller time [s]; @param dt tick [s].
   void update(const CommandSample& sample, double now, double dt) noexcept;
-  /// Brings the shaped command back to zero velocity / neutral posture at once (mode changes).
+  /// Zero velocity, neutral posture, standing height at once (only when the motors do not follow
+  /// the references: before the loop enters kActive).
   void reset() noexcept;
+  /// Shaped velocity u_d (heading frame).
   const VelocityCommand& velocity() const noexcept { return velocity_; }
+  /// Shaped posture u_s; height always a value [m] (resolved).
   const PostureCommand& posture() const noexcept { return posture_; }
+  /// (v_x, v_y, ω, pitch, roll, height): the command as the policy observes it.
+  std::array<double, 6> vector() const noexcept {
+    return {velocity_.vx, velocity_.vy, velocity_.wz, posture_.pitch, posture_.roll, posture_.height};
+  }
   bool stale() const noexcept { return stale_; }
   const CommandCounters& counters() const noexcept { return counters_; }
+  const CommandLimits& limits() const noexcept { return limits_; }
 
  private:
   CommandLimits limits_;
@@ -70,24 +103,60 @@ class CommandShaper {
   CommandCounters counters_;
 };
 
-/// One segment of a scripted command sequence.
-struct CommandSegment {
-  double duration = 1.0;  ///< [s]
-  VelocityCommand velocity{};
-  PostureCommand posture{};
-  std::string label;
+/// Bounds the speed of the joint references the loop sends: |q_k − q_{k−1}| ≤ max_speed · dt per
+/// joint, whatever the generator (or a mode change) produced. The last line of reference
+/// continuity behind the command shaper. noexcept, allocation-free (capacity pmg::kMaxMotors).
+class ReferenceRateLimiter {
+ public:
+  /// @param max_speed [rad/s] > 0.
+  explicit ReferenceRateLimiter(double max_speed) noexcept : max_speed_(max_speed) {}
+  /// Starts from @p q (n values) without limiting (on entering kActive from the standing pose).
+  void reset(const double* q, int n) noexcept;
+  /// Limits @p q (n values, in place) against the previous output; returns true if any joint was
+  /// limited this tick (counted in limitedTicks()).
+  bool apply(double* q, int n, double dt) noexcept;
+  std::uint64_t limitedTicks() const noexcept { return limited_ticks_; }
+  double maxSpeed() const noexcept { return max_speed_; }
+
+ private:
+  double max_speed_;
+  std::array<double, 32> prev_{};
+  bool have_prev_ = false;
+  std::uint64_t limited_ticks_ = 0;
 };
 
-/// A scripted command sequence (config/commands/*.yaml): segments played back to back.
+/// One segment of a command script.
+struct CommandSegment {
+  std::string name;       ///< key `name` (or `label`)
+  double start = 0.0;     ///< [s] since the script start
+  double duration = 0.0;  ///< [s]
+  Command command;        ///< held (and ramped to, see CommandScript::ramp) during the segment
+  ModeRequest mode = ModeRequest::kNone;  ///< key `mode`: request posted when the segment starts
+};
+
+/// A command script (config/commands/*.yaml, config/policies/eval_commands.yaml): segments played
+/// back to back. One format, two ways to place segments (never mixed in one file):
+///
+///   ramp: 0.5          # optional [s]: linear ramp from the previous segment's command (0 = step)
+///   duration: 48.0     # optional total [s]; required when segments give `t`
+///   segments:          # each: name|label, duration [s] or t [s] (start), vx vy wz pitch roll
+///     - {name: stand, duration: 2.0}                       #   height (optional), mode (optional:
+///     - {name: squat, duration: 3.0, height: 0.66}         #   passive|soft_stand|active|damping|reset)
+///
+/// Unknown keys are errors naming the file, line, key and the nearest valid key.
 struct CommandScript {
   std::string source_file;
+  double ramp = 0.0;
   std::vector<CommandSegment> segments;
   double duration() const;
-  /// Command at time @p t since the start [s]; the last segment holds after the end.
-  const CommandSegment& at(double t) const;
+  /// Index of the segment at time @p t [s] (the last holds after the end).
+  std::size_t segmentIndex(double t) const;
+  /// Command at @p t [s], ramped from the previous segment over `ramp` seconds. A height ramps
+  /// only between two explicit heights; "none" ↔ value steps are left to the shaper's slew.
+  Command at(double t) const;
 };
 
-/// Loads a command script. @throws ConfigError naming file, segment and field.
+/// Loads a command script. @throws ConfigError naming file, line, segment and field.
 CommandScript loadCommandScript(const std::string& path);
 
 }  // namespace pmg

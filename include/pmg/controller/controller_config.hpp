@@ -1,8 +1,11 @@
 #pragma once
 /// @file controller_config.hpp
 /// Configuration of `pmg_controller` (config/controller/*.yaml): which robot, which clips, which
-/// backend (the SIL or the motor buses), timing, command limits, telemetry. Validated once at
-/// start-up; every error names the file, key and expected range.
+/// backend (the SIL or the motor buses), timing, command limits, safety, policy, telemetry.
+/// Read through the one YAML archive (pmg/common/yaml_archive.hpp): unknown keys are errors that
+/// name the file, line, key and the nearest valid key; every number must be finite; relative
+/// paths resolve against the folder of the file. Validated once at load; every error names the
+/// file, key and expected range (pmg::ConfigError).
 
 #include <string>
 
@@ -10,26 +13,16 @@
 #include "pmg/controller/commands.hpp"
 #include "pmg/gco/gco.hpp"
 #include "pmg/generator/generator.hpp"
-#include "pmg/hal/hal_runner.hpp"
+#include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/runner.hpp"
 
 namespace pmg {
 
-enum class BackendKind {
-  kMujoco,  ///< in-process MuJoCo 2.2 SIL
-  kCan,     ///< motor buses (SocketCAN on the robot, UDP towards the pmg_sil process); docs/hal.md
-};
-
-/// Motor-bus backend settings (backend: can).
-struct CanSettings {
-  std::string plan_file;           ///< bus plan YAML (absolute after loading)
-  std::string transport = "udp";   ///< "socketcan" (robot) or "udp" (pmg_sil)
-  int udp_port = 47000;            ///< UDP base port of pmg_sil
-  bool paced = false;              ///< send each motor at its slot time instead of at the slot start
-};
-enum class TimingMode {
-  kLockstep,  ///< the loop drives the HAL cycles itself, as fast as possible (tests, CI)
-  kRealtime,  ///< 100 Hz loop thread + 500 Hz HAL thread paced to the wall clock
+/// What the loop requests at start-up (safety.startup).
+enum class StartupMode {
+  kActive,   ///< request soft stand as soon as every input is healthy, then active once standing
+  kPassive,  ///< stay passive until an operator requests a mode (robot hardware default)
 };
 
 struct ControllerConfig {
@@ -39,25 +32,21 @@ struct ControllerConfig {
   RobotConfig robot;
   BackendKind backend = BackendKind::kMujoco;
   CanSettings can;
-  /// Run the 500 Hz safety supervisor inside the HAL (guard mode: per-input watchdogs, envelope,
-  /// torque bound, latched damping; docs/hal.md). Default on for backend: can.
-  bool hal_supervisor = false;
-  bool lock_memory = false;      ///< mlockall() before real-time operation
   TimingMode timing = TimingMode::kLockstep;
   double loop_rate_hz = 100.0;   ///< controller loop rate [Hz]
   double hal_rate_hz = 500.0;    ///< HAL rate [Hz], an integer multiple of loop_rate_hz
   int loop_fifo_priority = 0;    ///< SCHED_FIFO priority of the loop thread (0: normal)
-  HalRunnerOptions hal;          ///< HAL thread priority / CPU
+  int hal_fifo_priority = 0;     ///< SCHED_FIFO priority of the HAL thread (0: normal)
+  int hal_cpu = -1;              ///< CPU of the HAL thread (-1: any)
+  bool lock_memory = false;      ///< mlockall() before real-time operation
   MujocoBackendOptions mujoco;
   GeneratorParams generator;
   std::string gco_file;          ///< absolute path of the GCO options ("" = defaults)
   gco::GcoOptions gco;           ///< Ground-aware Command Optimization; gco.enabled = false: "PMG w/o GCO"
   CommandLimits commands;
-  double soft_stand_duration = 1.0;   ///< interpolation time from the measured to the standing pose [s]
-  double damping_kd_scale = 1.0;      ///< damping mode: kd = scale · config kd
-  /// Consecutive loop ticks with an invalid state (missing reply, NaN) or a backend fault that are
-  /// tolerated (the last valid command is held) before damping latches. 0 = latch at once.
-  int max_invalid_ticks = 3;
+  double soft_stand_duration = 1.0;  ///< supervisor soft stand: measured → standing pose [s]
+  double damping_kd_scale = 1.0;     ///< damping mode: kd = scale · robot config kd
+  StartupMode startup = StartupMode::kActive;
   /// Trained actor (ONNX with its pmg contract); "" = none (PMG references go to the motors
   /// directly, as in the gantry bring-up). With a policy the gantry is normally off.
   std::string policy_file;
@@ -67,10 +56,13 @@ struct ControllerConfig {
   std::string log_file;          ///< LCM event log to record ("" = none)
 
   int cyclesPerTick() const { return static_cast<int>(hal_rate_hz / loop_rate_hz + 0.5); }
+  /// The HAL stack this config asks for (makeHalStack()).
+  HalStackConfig halStack() const;
+  /// The runner options this config asks for.
+  RunnerOptions runner() const;
 };
 
-/// Loads and validates a controller config. Relative paths resolve against the file's folder.
-/// @throws ConfigError.
+/// Loads and validates a controller config. @throws ConfigError naming file:line, key and range.
 ControllerConfig loadControllerConfig(const std::string& path);
 
 }  // namespace pmg

@@ -1,19 +1,14 @@
 #pragma once
 /// @file hal_runner.hpp
-/// The 500 Hz HAL: each cycle takes the newest LowCommand from the controller loop, exchanges it
-/// with the backend, and publishes the new LowState. The two sides meet only through lock-free
-/// LatestValue hand-overs, so neither the HAL nor the loop ever waits for the other.
+/// One 500 Hz HAL cycle: take the newest LowCommand from the 100 Hz loop, exchange it with the
+/// backend (the stack from makeHalStack()), and publish the new LowState. The loop and the HAL
+/// meet only through lock-free LatestValue hand-overs, so neither ever waits for the other.
 ///
-/// Two ways to run it:
-///  - real time: start() spawns the HAL thread, which wakes on absolute deadlines
-///    (clock_nanosleep TIMER_ABSTIME) every cycle_period, optionally with SCHED_FIFO priority,
-///    and CPU affinity; stop() joins it;
-///  - lockstep: the caller invokes cycle() itself (the controller does cycles_per_tick of them per
-///    control tick), which runs faster than real time and is deterministic (tests, CI).
+/// HalRunner has no thread and no clock of its own: pmg::Runner (runner.hpp) calls cycle() from
+/// its HAL task (real time, hal::rt::PeriodicTask) or from stepLockstep() (lockstep).
 
 #include <atomic>
 #include <memory>
-#include <thread>
 
 #include "pmg/hal/backend.hpp"
 #include "pmg/hal/latest_value.hpp"
@@ -21,15 +16,10 @@
 
 namespace pmg {
 
-struct HalRunnerOptions {
-  int fifo_priority = 0;  ///< SCHED_FIFO priority 1..99 for the HAL thread; 0 = normal scheduling
-  int cpu = -1;           ///< CPU to pin the HAL thread to; -1 = no affinity
-};
-
 class HalRunner {
  public:
-  HalRunner(std::unique_ptr<HalBackend> backend, int num_motors, HalRunnerOptions options = {});
-  ~HalRunner();
+  /// @param backend the HAL stack (owned); @param num_motors joints driven (≤ kMaxMotors).
+  HalRunner(std::unique_ptr<HalBackend> backend, int num_motors);
   HalRunner(const HalRunner&) = delete;
   HalRunner& operator=(const HalRunner&) = delete;
 
@@ -38,41 +28,27 @@ class HalRunner {
   /// Loop side: newest state (wait-free). Returns true if new since the last call.
   bool latest(LowState& state) noexcept { return states_.read(state); }
 
-  /// One HAL cycle (lockstep mode, or called by the HAL thread). noexcept, allocation-free.
+  /// One HAL cycle. noexcept, allocation-free. Measures its own runtime and the time since the
+  /// previous cycle (hal::rt::now), records them in timing() and hands them to the loop in the
+  /// LowState (hal_runtime, hal_period, hal_overruns).
   BackendStatus cycle() noexcept;
-
-  /// Real-time mode: spawn the 500 Hz thread. Returns false (with a reason in @p error) if the
-  /// requested SCHED_FIFO priority could not be set; the thread then runs with normal priority.
-  bool start(std::string* error = nullptr);
-  void stop();
-  bool running() const noexcept { return running_.load(); }
 
   HalBackend& backend() noexcept { return *backend_; }
   double cyclePeriod() const noexcept { return backend_->cyclePeriod(); }
-  /// Timing of the HAL cycles (read from the reporting side only).
+  /// Runtime/period of the HAL cycles (summarised from the reporting side after a run).
   TimingStats& timing() noexcept { return timing_; }
   std::uint64_t faultCycles() const noexcept { return fault_cycles_.load(); }
 
  private:
-  void threadMain();
-
   std::unique_ptr<HalBackend> backend_;
-  HalRunnerOptions options_;
   LatestValue<LowCommand> commands_;
   LatestValue<LowState> states_;
   LowCommand command_{};
   LowState state_{};
   TimingStats timing_;
-  std::atomic<bool> running_{false};
   std::atomic<std::uint64_t> fault_cycles_{0};
-  double last_runtime_ = 0.0, last_period_ = 0.0;  // HAL thread only
-  std::uint64_t overruns_ = 0;                      // HAL thread only
-  std::thread thread_;
+  double last_start_ = -1.0, last_runtime_ = 0.0, last_period_ = 0.0;
+  std::uint64_t overruns_ = 0;
 };
-
-/// Monotonic clock in seconds.
-double monotonicSeconds() noexcept;
-/// Sleeps until the absolute CLOCK_MONOTONIC time @p t [s].
-void sleepUntil(double t) noexcept;
 
 }  // namespace pmg

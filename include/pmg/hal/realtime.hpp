@@ -1,5 +1,5 @@
 #pragma once
-/// @file realtime.hpp
+/// @file realtime.hpp (pmg::hal core; used by pmg::Runner for the HAL thread and the 100 Hz loop)
 /// @brief Real-time helpers for periodic tasks: mlockall, SCHED_FIFO, CPU affinity, and a periodic
 /// runner that wakes on absolute deadlines (clock_nanosleep TIMER_ABSTIME) and records runtime /
 /// period statistics (pmg::TimingStats: p50/p99/max) and overruns, allocation-free in the cycle.

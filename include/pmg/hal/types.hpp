@@ -7,6 +7,8 @@
 #include <array>
 #include <cstdint>
 
+#include "pmg/hal/modes.hpp"
+
 namespace pmg {
 
 /// Maximum number of motors one HAL drives (G1: 29).
@@ -64,6 +66,11 @@ struct LowState {
   double hal_runtime = 0.0;
   double hal_period = 0.0;
   std::uint64_t hal_overruns = 0;
+  /// The HAL's mode after this cycle (written by hal::safety::SafeBackend, the only mode state
+  /// machine), its latched fault and the soft-stand progress 0..1.
+  Mode mode = Mode::kPassive;
+  FaultCode fault = FaultCode::kNone;
+  double stand_progress = 0.0;
 };
 
 }  // namespace pmg

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "pmg/hal/bus/imu_protocol.hpp"
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/bus/socketcan_transport.hpp"
 
@@ -233,6 +233,7 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
 
 std::unique_ptr<CanBackend> makeCanBackend(const CanBackendSetup& setup) {
   BusPlan plan = BusPlan::fromYaml(setup.plan_file);
+  if (setup.robot) checkPlanAgainstRobot(plan.buses(), setup.plan_file, *setup.robot);
   CanBackendOptions o;
   o.lockstep = setup.lockstep;
   o.paced = setup.paced;

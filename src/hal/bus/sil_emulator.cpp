@@ -7,7 +7,7 @@
 
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 
 namespace pmg::hal::bus {
 

@@ -58,6 +58,7 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
     if (!finite) ++nonfinite_;
   }
   in_.policy_valid = finite;
+  in_.backend_fault = last_status_ == pmg::BackendStatus::kFault;
 
   sup_.step(in_, out_);
 
@@ -103,6 +104,10 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
     }
   }
   ++cycles_;
+  last_status_ = st;
+  state.mode = out_.mode;
+  state.fault = out_.fault.code;
+  state.stand_progress = out_.stand_progress;
 
   SafetyStatus s;
   s.mode = out_.mode;

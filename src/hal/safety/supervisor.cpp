@@ -11,50 +11,6 @@
 
 namespace pmg::hal::safety {
 
-const char* toString(Mode m) noexcept {
-  switch (m) {
-    case Mode::kPassive: return "passive";
-    case Mode::kSoftStand: return "soft_stand";
-    case Mode::kActive: return "active";
-    case Mode::kDamping: return "damping";
-  }
-  return "unknown";
-}
-
-const char* toString(ModeRequest r) noexcept {
-  switch (r) {
-    case ModeRequest::kNone: return "none";
-    case ModeRequest::kPassive: return "passive";
-    case ModeRequest::kSoftStand: return "soft_stand";
-    case ModeRequest::kActive: return "active";
-    case ModeRequest::kDamping: return "damping";
-  }
-  return "unknown";
-}
-
-const char* toString(FaultCode c) noexcept {
-  switch (c) {
-    case FaultCode::kNone: return "none";
-    case FaultCode::kEstop: return "e-stop requested";
-    case FaultCode::kCommandStale: return "command stream stale";
-    case FaultCode::kCommandInvalid: return "command not finite";
-    case FaultCode::kPolicyStale: return "policy output stale";
-    case FaultCode::kPolicyInvalid: return "policy output invalid";
-    case FaultCode::kMotorStale: return "motor reply timeout";
-    case FaultCode::kMotorInvalid: return "motor measurement not finite";
-    case FaultCode::kImuStale: return "IMU timeout";
-    case FaultCode::kImuInvalid: return "IMU sample invalid";
-    case FaultCode::kImuFrozen: return "IMU frozen";
-    case FaultCode::kJointPosition: return "joint position limit";
-    case FaultCode::kJointVelocity: return "joint velocity limit";
-    case FaultCode::kJointTorque: return "joint torque limit";
-    case FaultCode::kFallTilt: return "fall: base tilt";
-    case FaultCode::kFallHeight: return "fall: base height";
-    case FaultCode::kCount: break;
-  }
-  return "unknown";
-}
-
 // ---------------------------------------------------------------- options
 std::string SafetyOptions::validate() const {
   std::ostringstream os;
@@ -279,7 +235,8 @@ void SafetySupervisor::step(const SafetyInput& in, SafetyOutput& out) noexcept {
   // 1. Faults (only where torque is applied: soft stand and active).
   if (mode_ == Mode::kSoftStand || mode_ == Mode::kActive) {
     Fault f;
-    if (!inputsHealthy(in, mode_ == Mode::kActive, f) || !envelopeHealthy(in, f)) {
+    if (in.backend_fault) f = make(FaultCode::kBackend, -1, 0.0, in.now_s);
+    if (in.backend_fault || !inputsHealthy(in, mode_ == Mode::kActive, f) || !envelopeHealthy(in, f)) {
       fault_ = f;
       ++out.fault_counts[static_cast<std::size_t>(f.code)];
       enter(Mode::kDamping, in);
@@ -317,7 +274,10 @@ void SafetySupervisor::step(const SafetyInput& in, SafetyOutput& out) noexcept {
         if (mode_ == Mode::kSoftStand) {
           enter(Mode::kPassive, in);
           accepted = true;
-        } else if (mode_ == Mode::kDamping && in_mode >= opt_.reset_min_damping_s) {
+        }
+        break;
+      case ModeRequest::kReset:
+        if (mode_ == Mode::kDamping && in_mode >= opt_.reset_min_damping_s) {
           bool slow = true;
           for (std::size_t j = 0; j < n_; ++j) slow = slow && std::fabs(in.qd[j]) < opt_.reset_qd_max;
           if (slow) {
@@ -330,12 +290,6 @@ void SafetySupervisor::step(const SafetyInput& in, SafetyOutput& out) noexcept {
       case ModeRequest::kNone: break;
     }
     if (!accepted) ++out.refused_requests;
-  }
-
-  // 3. Guard mode arms itself.
-  if (opt_.guard_mode && mode_ == Mode::kPassive && mode_ == before) {
-    Fault ignored;
-    if (inputsHealthy(in, true, ignored) && envelopeHealthy(in, ignored)) enter(Mode::kActive, in);
   }
 
   writeCommand(in, out);

@@ -12,11 +12,12 @@
 #include <system_error>
 #include <thread>
 
+#include "g1_fixture.hpp"
 #include "alloc_counter.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 
 using namespace pmg::hal::bus;
@@ -332,7 +333,7 @@ TEST(CanBackend, SetupErrors) {
   one.push_back(std::make_unique<UdpCanTransport>(UdpCanTransport::Options{}));
   EXPECT_THROW(CanBackend(plan, std::move(one), nullptr), std::invalid_argument);
   CanBackendSetup s;
-  s.plan_file = "config/hal/g1_can.yaml";
+  s.plan_file = pmg::test::g1CanPlanPath();
   s.transport = "carrier-pigeon";
   EXPECT_THROW(makeCanBackend(s), std::runtime_error);
 }

@@ -5,7 +5,7 @@
 
 #include <thread>
 
-#include "pmg/hal/bus/realtime.hpp"
+#include "pmg/hal/realtime.hpp"
 
 using namespace pmg::hal::rt;
 
@@ -18,9 +18,9 @@ TEST(PeriodicTask, RunsTheRequestedCyclesAndRecordsThem) {
   EXPECT_EQ(calls, 40);
   EXPECT_EQ(t.timing().cycles(), 40);
   const pmg::TimingSummary s = t.timing().summary();
-  EXPECT_GT(s.period_p50, 0.0);
-  EXPECT_GE(s.period_max, s.period_p50);
-  EXPECT_GE(s.runtime_max, s.runtime_p50);
+  // Paced by the clock, not run in a burst (a slow machine only makes periods longer).
+  EXPECT_GE(s.period_p50, 0.5 * o.period_s);
+  EXPECT_GT(s.runtime_max, 0.0);
 }
 
 TEST(PeriodicTask, CountsOverrunsAndReanchors) {

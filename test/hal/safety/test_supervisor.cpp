@@ -206,14 +206,16 @@ TEST(Supervisor, ResetFromDampingNeedsTimeAndStillness) {
   Rig r;
   r.toActive();
   r.tick(ModeRequest::kDamping);
-  r.tick(ModeRequest::kPassive);
+  r.tick(ModeRequest::kReset);
   EXPECT_EQ(r.out.mode, Mode::kDamping) << "too early";
   r.ticks(300);
-  r.in.qd = {0.0, 1.0};
   r.tick(ModeRequest::kPassive);
+  EXPECT_EQ(r.out.mode, Mode::kDamping) << "passive is not reset: only kReset clears the latch";
+  r.in.qd = {0.0, 1.0};
+  r.tick(ModeRequest::kReset);
   EXPECT_EQ(r.out.mode, Mode::kDamping) << "still moving";
   r.in.qd = {0.0, 0.1};
-  r.tick(ModeRequest::kPassive);
+  r.tick(ModeRequest::kReset);
   EXPECT_EQ(r.out.mode, Mode::kPassive);
   EXPECT_EQ(r.out.fault.code, FaultCode::kNone);
   r.tick(ModeRequest::kSoftStand);
@@ -409,7 +411,7 @@ TEST(Supervisor, StepDoesNotAllocate) {
     r.tick(ModeRequest::kDamping);
     r.ticks(300);
     r.in.qd = {0, 0};
-    r.tick(ModeRequest::kPassive);
+    r.tick(ModeRequest::kReset);
     allocs = static_cast<long>(scope.count());
   }
   EXPECT_EQ(allocs, 0);
@@ -443,25 +445,24 @@ TEST(Supervisor, OptionsFromG1RobotConfig) {
   EXPECT_DOUBLE_EQ(o.joints[3].tau_max, 139.0);  // left knee
 }
 
-TEST(ModeRequests, GamepadCombosAreEdgeTriggered) {
-  GamepadRequests g;
-  EXPECT_EQ(g.update(kBtnStart), ModeRequest::kSoftStand);
-  EXPECT_EQ(g.update(kBtnStart), ModeRequest::kNone) << "held button fires once";
-  EXPECT_EQ(g.update(0), ModeRequest::kNone);
-  EXPECT_EQ(g.update(kBtnR1), ModeRequest::kNone);
-  EXPECT_EQ(g.update(kBtnR1 | kBtnA), ModeRequest::kActive);
-  EXPECT_EQ(g.update(kBtnL2 | kBtnB | kBtnStart), ModeRequest::kDamping) << "e-stop wins";
-  EXPECT_EQ(g.update(kBtnSelect), ModeRequest::kPassive);
-}
-
-TEST(ModeRequests, LcmCodesAndMailbox) {
-  bool valid = false;
-  EXPECT_EQ(modeRequestFromCode(4, valid), ModeRequest::kDamping);
-  EXPECT_TRUE(valid);
-  EXPECT_EQ(modeRequestFromCode(3, valid), ModeRequest::kActive);
-  EXPECT_EQ(modeRequestFromCode(7, valid), ModeRequest::kNone);
-  EXPECT_FALSE(valid);
-  EXPECT_EQ(modeRequestFromCode(-1, valid), ModeRequest::kNone);
+TEST(ModeRequests, WireCodesMatchTheLcmTypeAndUnknownCodesAreRejected) {
+  // pmg_lcm::mode_command_t: 0 passive, 1 soft stand, 2 active, 3 damping (e-stop), 4 reset.
+  ModeRequest r = ModeRequest::kNone;
+  ASSERT_TRUE(pmg::modeRequestFromWire(0, r));
+  EXPECT_EQ(r, ModeRequest::kPassive);
+  ASSERT_TRUE(pmg::modeRequestFromWire(2, r));
+  EXPECT_EQ(r, ModeRequest::kActive);
+  ASSERT_TRUE(pmg::modeRequestFromWire(3, r));
+  EXPECT_EQ(r, ModeRequest::kDamping);
+  ASSERT_TRUE(pmg::modeRequestFromWire(4, r));
+  EXPECT_EQ(r, ModeRequest::kReset);
+  for (int bad : {5, 7, 99, -1, -5, 127, -128}) {
+    r = ModeRequest::kNone;
+    EXPECT_FALSE(pmg::modeRequestFromWire(bad, r)) << bad;
+    EXPECT_EQ(r, ModeRequest::kNone) << "a rejected code leaves the output unchanged";
+  }
+  EXPECT_STREQ(pmg::toString(Mode::kDamping), "damping");
+  EXPECT_STREQ(pmg::toString(FaultCode::kFallHeight), "fall: base height");
   ModeRequestMailbox box;
   EXPECT_EQ(box.take(), ModeRequest::kNone);
   box.post(ModeRequest::kSoftStand);
@@ -473,28 +474,15 @@ TEST(ModeRequests, LcmCodesAndMailbox) {
   EXPECT_EQ(box.take(), ModeRequest::kDamping) << "a pending e-stop is never overwritten";
 }
 
-TEST(Supervisor, GuardModeArmsItselfAndStillLatches) {
-  SafetyOptions o = twoJoints();
-  o.guard_mode = true;
-  Rig r(o);
-  r.in.q = {0.8, 0.1};
-  r.in.cmd_q = {0.8, 0.1};
-  r.in.cmd_kp = {50.0, 20.0};
-  r.tick(ModeRequest::kNone, /*fresh_motors=*/false);
-  EXPECT_EQ(r.out.mode, Mode::kPassive) << "no motor data yet";
+TEST(Supervisor, BackendFaultLatchesDampingWhileTorqueIsApplied) {
+  Rig r;
+  r.in.backend_fault = true;
   r.tick();
-  EXPECT_EQ(r.out.mode, Mode::kActive) << "healthy inputs and a valid command arm it";
-  EXPECT_DOUBLE_EQ(r.out.cmd_kp[0], 50.0) << "the loop's command passes through";
-  r.in.cmd_q[0] = kNaN;
+  EXPECT_EQ(r.out.mode, Mode::kPassive) << "no torque applied in passive: nothing to stop";
+  r.in.backend_fault = false;
+  r.toActive();
+  r.in.backend_fault = true;
   r.tick();
   EXPECT_EQ(r.out.mode, Mode::kDamping);
-  EXPECT_EQ(r.out.fault.code, FaultCode::kCommandInvalid);
-  r.in.cmd_q[0] = 0.8;
-  r.ticks(50);
-  EXPECT_EQ(r.out.mode, Mode::kDamping) << "latched even though the input is healthy again";
-  r.ticks(300);
-  r.tick(ModeRequest::kPassive);
-  EXPECT_EQ(r.out.mode, Mode::kPassive);
-  r.tick();
-  EXPECT_EQ(r.out.mode, Mode::kActive) << "re-armed after the reset";
+  EXPECT_EQ(r.out.fault.code, FaultCode::kBackend);
 }

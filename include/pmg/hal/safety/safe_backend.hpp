@@ -18,7 +18,10 @@
 ///     has not expired: a single lost CAN frame is the HAL's business, not the loop's. Once the
 ///     watchdog expires the loop sees valid = false (and the HAL is already in damping). A cycle
 ///     with no reply at all whose values could all be held is returned as kPartial, not kFault;
-///  5. publishes a SafetyStatus for telemetry through a lock-free LatestValue.
+///  5. writes the supervisor's mode, fault and stand progress into the LowState the loop reads, and
+///     publishes a SafetyStatus for telemetry through a lock-free LatestValue;
+///  6. a cycle whose wrapped backend returned kFault (after step 4) is a backend fault for the
+///     supervisor on the next cycle (FaultCode::kBackend → damping while torque is applied).
 /// Time is counted in HAL cycles (now = cycle * period), so lockstep runs are deterministic and
 /// the watchdogs measure "cycles without news" exactly.
 
@@ -86,6 +89,7 @@ class SafeBackend final : public pmg::HalBackend {
   std::array<double, pmg::kMaxMotors> held_at_{};  ///< When each was valid [s] (cycle time).
   double imu_held_at_ = -1e9;
   std::uint64_t held_count_ = 0;
+  pmg::BackendStatus last_status_ = pmg::BackendStatus::kOk;
 };
 
 }  // namespace pmg::hal::safety

@@ -19,11 +19,12 @@
 ///   kPassive/kSoftStand/kActive -> kDamping  request kDamping (e-stop)
 ///   kSoftStand/kActive -> kDamping  any fault: watchdog timeout or invalid value, joint position/
 ///                             velocity/torque beyond the fault thresholds, fall (tilt or height)
-///   kDamping   -> kPassive    request kPassive (reset), only after reset_min_damping_s in damping
-///                             and with every |qd| < reset_qd_max; clears the latched fault
+///   kSoftStand/kActive -> kDamping  backend fault reported by the wrapped backend (SafeBackend)
+///   kDamping   -> kPassive    request kReset, only after reset_min_damping_s in damping and with
+///                             every |qd| < reset_qd_max; clears the latched fault
 /// Any other request is refused and counted in SafetyOutput::refused_requests (not a fault).
-/// Guard mode (SafetyOptions::guard_mode) adds: kPassive -> kActive without a request once every
-/// input, the command stream and the policy output are healthy.
+/// This is the only mode state machine of pmg: the 100 Hz loop reads the mode from the HAL state
+/// (LowState::mode) and computes a command only for kActive.
 ///
 /// How the HAL calls it, each 2 ms tick, in the HAL thread:
 ///   1. read the buses; for each joint j write input.q[j], qd[j], tau[j] (joint side) and, if a
@@ -46,6 +47,7 @@
 #include <string>
 #include <vector>
 
+#include "pmg/hal/modes.hpp"
 #include "pmg/hal/safety/envelope.hpp"
 
 namespace pmg {
@@ -54,36 +56,12 @@ struct RobotConfig;
 
 namespace pmg::hal::safety {
 
-enum class Mode : std::uint8_t { kPassive = 0, kSoftStand, kActive, kDamping };
-
-/// Mode change requests (from gamepad buttons or LCM, see mode_requests.hpp).
-enum class ModeRequest : std::uint8_t { kNone = 0, kPassive, kSoftStand, kActive, kDamping };
-
-/// Why the robot went to damping.
-enum class FaultCode : std::uint8_t {
-  kNone = 0,
-  kEstop,           ///< Operator requested damping.
-  kCommandStale,    ///< No command from the 100 Hz loop for command_timeout_s.
-  kCommandInvalid,  ///< Command contains NaN/Inf.
-  kPolicyStale,     ///< Policy output older than policy_timeout_s.
-  kPolicyInvalid,   ///< Policy output flagged invalid (NaN) by the loop.
-  kMotorStale,      ///< No valid reply from motor `index` for motor_timeout_s.
-  kMotorInvalid,    ///< Measured q/qd/tau of joint `index` non-finite.
-  kImuStale,        ///< No IMU sample for imu_timeout_s.
-  kImuInvalid,      ///< IMU sample non-finite, quaternion not unit, or rate/acceleration beyond range.
-  kImuFrozen,       ///< New IMU samples bit-identical imu_frozen_samples times in a row.
-  kJointPosition,   ///< Measured q of joint `index` beyond [q_min, q_max] by more than q_fault_margin.
-  kJointVelocity,   ///< Measured |qd| of joint `index` above qd_fault.
-  kJointTorque,     ///< Measured |tau| of joint `index` above tau_fault.
-  kFallTilt,        ///< Base tilt above max_tilt_rad.
-  kFallHeight,      ///< Base height below min_base_height_m.
-  kCount
-};
-inline constexpr std::size_t kNumFaultCodes = static_cast<std::size_t>(FaultCode::kCount);
-
-const char* toString(Mode m) noexcept;
-const char* toString(ModeRequest r) noexcept;
-const char* toString(FaultCode c) noexcept;
+// The mode vocabulary is pmg's one (include/pmg/hal/modes.hpp), shared with LCM and the loop.
+using pmg::FaultCode;
+using pmg::kNumFaultCodes;
+using pmg::Mode;
+using pmg::ModeRequest;
+using pmg::toString;
 
 /// The latched reason for damping.
 struct Fault {
@@ -135,12 +113,6 @@ struct SafetyOptions {
   double soft_stand_duration_s = 3.0;      ///< [s]
   double reset_min_damping_s = 1.0;        ///< Minimum time in damping before reset [s].
   double reset_qd_max = 0.5;               ///< Every |qd| below this to reset [rad/s].
-  /// Guard mode, for a loop that runs its own mode sequence (pmg_controller: its own soft stand,
-  /// passive and damping): the supervisor goes passive -> active by itself as soon as every input
-  /// is healthy and a valid command arrived, and then only guards (watchdogs, envelope, slew and
-  /// torque clamps, latched damping). A reset request (kPassive) from damping returns to passive,
-  /// from where it re-arms the same way.
-  bool guard_mode = false;
   WatchdogOptions watchdog;
   EnvelopeOptions envelope;
 
@@ -163,6 +135,7 @@ struct SafetyInput {
   double command_stamp_s = -1e9;        ///< When the loop published cmd_* [s].
   double policy_stamp_s = -1e9;         ///< When the policy output behind cmd_* was produced [s].
   bool policy_valid = false;            ///< Policy output finite and within its contract.
+  bool backend_fault = false;           ///< The wrapped backend reported kFault this tick.
 };
 
 /// Per-tick output, sized by SafetySupervisor::makeOutput().

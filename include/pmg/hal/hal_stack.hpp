@@ -1,0 +1,61 @@
+#pragma once
+/// @file hal_stack.hpp
+/// The one HAL stack factory. Every tool that can move a motor (pmg_controller, pmg_policy_sil,
+/// pmg_calib_zero, the SIL tests) builds its backend here, so they all run the same safety stack:
+///
+///   backend (MuJoCo SIL | CAN buses | a caller's backend)
+///     → ZeroOffsetBackend (calibrated encoder zeros of the robot config, when any is non-zero)
+///       → hal::safety::SafeBackend (watchdogs, envelope, fall detection, slew and torque clamps,
+///         the mode state machine; always on)
+///
+/// The result goes to pmg::HalRunner. docs/architecture.md draws it.
+
+#include <memory>
+#include <string>
+
+#include "pmg/hal/backend.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+
+namespace pmg {
+struct RobotConfig;
+namespace hal::safety {
+class SafeBackend;
+}
+
+enum class BackendKind {
+  kMujoco,  ///< in-process MuJoCo 2.2 SIL
+  kCan,     ///< motor buses (SocketCAN on the robot, UDP towards the pmg_sil process); docs/hal.md
+};
+
+/// Motor-bus backend settings (backend: can).
+struct CanSettings {
+  std::string plan_file;           ///< bus plan YAML (absolute after loading)
+  std::string transport = "udp";   ///< "socketcan" (robot) or "udp" (pmg_sil)
+  int udp_port = 47000;            ///< UDP base port of pmg_sil
+  bool paced = false;              ///< send each motor at its slot time instead of at the slot start
+};
+
+/// What makeHalStack() builds.
+struct HalStackConfig {
+  BackendKind backend = BackendKind::kMujoco;
+  CanSettings can;
+  MujocoBackendOptions mujoco;
+  bool lockstep = true;                ///< CAN: lockstep with pmg_sil (else real time)
+  double soft_stand_duration_s = 1.0;  ///< supervisor soft stand [s]
+  double damping_kd_scale = 1.0;       ///< damping mode kd = scale · robot config kd
+};
+
+/// The stack: the outermost backend (owns the others) and its supervisor.
+struct HalStack {
+  std::unique_ptr<HalBackend> backend;
+  hal::safety::SafeBackend* safety = nullptr;  ///< owned by `backend` (its outermost layer)
+  HalBackend* device = nullptr;  ///< the innermost backend (MuJoCo SIL, CAN buses, the caller's); owned by `backend`
+};
+
+/// Builds backend → zero offsets → SafeBackend. With @p custom (test mocks, other hardware) that
+/// backend replaces the configured one; the rest of the stack is the same.
+/// @throws ConfigError / std::runtime_error naming the file, port or field (setup only).
+HalStack makeHalStack(const RobotConfig& robot, const HalStackConfig& config,
+                      std::unique_ptr<HalBackend> custom = nullptr);
+
+}  // namespace pmg
