@@ -9,19 +9,7 @@
 
 #include <fmt/format.h>
 
-
 namespace pmg::calib {
-namespace {
-
-const std::set<std::string>& known_keys() {
-  static const std::set<std::string> k = {"armature_kgm2", "kp_scale", "kd_scale", "rate_hz", "delay_s",
-                                          "offset_rad", "torque_limit_Nm", "tau_stall_Nm", "w_max_rad_per_s",
-                                          "fc_Nm", "fs_Nm", "vs_rad_per_s", "kl", "fv_Nms_per_rad",
-                                          "backlash_gap_rad"};
-  return k;
-}
-
-}  // namespace
 
 void ActuatorBlock::validate(const std::string& where) const {
   try {
@@ -40,41 +28,35 @@ void ActuatorBlock::validate(const std::string& where) const {
     throw std::runtime_error(fmt::format("{}: actuator.kd_scale = {}: expected > 0", where, kd_scale));
 }
 
-ActuatorBlock parse_actuator_block(const YAML::Node& map, const std::string& where) {
-  if (!map || !map.IsMap()) throw std::runtime_error(where + ": 'actuator' must be a map");
+namespace {
+
+// Reads and validates one block; `where` prefixes validate() messages.
+ActuatorBlock read_block(const YAML::Node& map, const yaml::YamlSource& src, const std::string& where) {
+  if (!map.IsMap()) yaml::fail(src, map, "expected a map of actuator parameters, got " +
+                                             std::string(map.IsNull() ? "nothing" : map.IsSequence() ? "a list" : "'" + map.Scalar() + "'"));
   ActuatorBlock b;
-  for (const auto& kv : map) {
-    const std::string key = kv.first.as<std::string>();
-    if (!known_keys().count(key))
-      throw std::runtime_error(fmt::format("{}: actuator.{}: unknown key (expected one of armature_kgm2, kp_scale, "
-                                           "kd_scale, rate_hz, delay_s, offset_rad, torque_limit_Nm, tau_stall_Nm, "
-                                           "w_max_rad_per_s, fc_Nm, fs_Nm, vs_rad_per_s, kl, fv_Nms_per_rad, "
-                                           "backlash_gap_rad)", where, key));
-    double v = 0.0;
-    try {
-      v = kv.second.as<double>();
-    } catch (const std::exception&) {
-      throw std::runtime_error(fmt::format("{}: actuator.{} must be a number", where, key));
-    }
-    ActuatorParams& p = b.params;
-    if (key == "armature_kgm2") b.armature_kgm2 = v;
-    else if (key == "kp_scale") b.kp_scale = v;
-    else if (key == "kd_scale") b.kd_scale = v;
-    else if (key == "rate_hz") p.rate_hz = v;
-    else if (key == "delay_s") p.delay_s = v;
-    else if (key == "offset_rad") p.offset_rad = v;
-    else if (key == "torque_limit_Nm") p.torque_limit_Nm = v;
-    else if (key == "tau_stall_Nm") p.tau_stall_Nm = v;
-    else if (key == "w_max_rad_per_s") p.w_max_rad_per_s = v;
-    else if (key == "fc_Nm") p.fc_Nm = v;
-    else if (key == "fs_Nm") p.fs_Nm = v;
-    else if (key == "vs_rad_per_s") p.vs_rad_per_s = v;
-    else if (key == "kl") p.kl = v;
-    else if (key == "fv_Nms_per_rad") p.fv_Nms_per_rad = v;
-    else if (key == "backlash_gap_rad") p.backlash_gap_rad = v;
+  yaml::readYaml(map, src, &b);
+  try {
+    b.validate(where);
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(e.what());
   }
-  b.validate(where);
   return b;
+}
+
+// An actuator file: `actuator:` and nothing else.
+struct ActuatorFile {
+  YAML::Node actuator;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("actuator", &actuator, "the actuator block", yaml::kRequired);
+  }
+};
+
+}  // namespace
+
+ActuatorBlock parse_actuator_block(const YAML::Node& map, const std::string& where) {
+  return read_block(map, yaml::YamlSource{where, "", "actuator", false}, where);
 }
 
 YAML::Node actuator_block_to_yaml(const ActuatorBlock& b) {
@@ -102,14 +84,11 @@ YAML::Node actuator_block_to_yaml(const ActuatorBlock& b) {
 }
 
 ActuatorBlock load_actuator_file(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read YAML: {}", path, e.what()));
-  }
-  if (!root["actuator"]) throw std::runtime_error(path + ": missing map 'actuator'");
-  return parse_actuator_block(root["actuator"], path);
+  const yaml::YamlDocument doc = yaml::loadYamlDocument(path);
+  ActuatorFile f;
+  yaml::readYaml(doc, &f);
+  const yaml::YamlSource src = yaml::detail::child(doc.source, "actuator");
+  return read_block(f.actuator, src, yaml::location(doc.source, f.actuator));
 }
 
 void write_actuator_file(const std::string& path, const ActuatorBlock& block, const std::string& comment) {

@@ -8,7 +8,8 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
+
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg::calib {
 namespace {
@@ -126,33 +127,54 @@ BenchLog from_dfki(const std::string& measured_path, const Table& meas) {
   return log;
 }
 
-BenchLog from_bam_json(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path, e.what()));
+// A Rhoban BAM log (JSON): a header and per-sample entries; every key of the format is declared,
+// those pmg does not use as raw nodes, so a misspelt key is an error.
+struct BamEntry {
+  double timestamp = 0.0, goal_position = 0.0, position = 0.0, speed = 0.0;
+  bool torque_enable = false;
+  YAML::Node input_volts, load, temp;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("timestamp", &timestamp, "[s]", yaml::kRequired);
+    a->Visit("goal_position", &goal_position, "[rad]", yaml::kRequired);
+    a->Visit("position", &position, "[rad]", yaml::kRequired);
+    a->Visit("speed", &speed, "[rad/s]", yaml::kRequired);
+    a->Visit("torque_enable", &torque_enable, "", yaml::kRequired);
+    a->Visit("input_volts", &input_volts, "[V] (unused)");
+    a->Visit("load", &load, "(unused)");
+    a->Visit("temp", &temp, "(unused)");
   }
-  const YAML::Node entries = root["entries"];
-  if (!entries || !entries.IsSequence() || entries.size() < 2)
-    throw std::runtime_error(fmt::format("{}: 'entries' must be a list of at least 2 samples", path));
-  if (!root["kp"]) throw std::runtime_error(fmt::format("{}: missing header field 'kp'", path));
-  const double kp = root["kp"].as<double>();
+};
+
+struct BamLog {
+  double kp = 0.0;
+  std::vector<BamEntry> entries;
+  YAML::Node length, motor, mass, vin, trajectory;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("kp", &kp, "firmware P gain", yaml::kRequired);
+    a->Visit("entries", &entries, "samples", yaml::kRequired);
+    a->Visit("length", &length, "(unused)");
+    a->Visit("motor", &motor, "(unused)");
+    a->Visit("mass", &mass, "(unused)");
+    a->Visit("vin", &vin, "(unused)");
+    a->Visit("trajectory", &trajectory, "(unused)");
+  }
+  std::string validate() const {
+    return entries.size() < 2 ? "entries: expected a list of at least 2 samples" : "";
+  }
+};
+
+BenchLog from_bam_json(const std::string& path) {
+  const BamLog bam = yaml::loadYamlFile<BamLog>(path);
   BenchLog log;
-  std::size_t i = 0;
-  for (const auto& e : entries) {
-    auto get = [&](const char* f) {
-      const YAML::Node v = e[f];
-      if (!v) throw std::runtime_error(fmt::format("{}: entries[{}] has no field '{}'", path, i, f));
-      return v;
-    };
-    log.t.push_back(get("timestamp").as<double>());
-    log.q_cmd.push_back(get("goal_position").as<double>());
-    log.q.push_back(get("position").as<double>());
-    log.dq.push_back(get("speed").as<double>());
-    log.enabled.push_back(get("torque_enable").as<bool>() ? 1 : 0);
-    log.kp.push_back(kp);
-    ++i;
+  for (const BamEntry& e : bam.entries) {
+    log.t.push_back(e.timestamp);
+    log.q_cmd.push_back(e.goal_position);
+    log.q.push_back(e.position);
+    log.dq.push_back(e.speed);
+    log.enabled.push_back(e.torque_enable ? 1 : 0);
+    log.kp.push_back(bam.kp);
   }
   return log;
 }
@@ -273,51 +295,77 @@ void RigConfig::validate() const {
   check(std::isfinite(sim_dt_s) && sim_dt_s > 0 && sim_dt_s <= 0.005, "sim.dt_s", "in (0, 0.005] s", sim_dt_s);
 }
 
-RigConfig load_rig_config(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read rig YAML: {}", path, e.what()));
+namespace {
+
+enum class RigType { kPendulum };
+std::vector<std::pair<std::string, RigType>> yamlEnumNames(RigType) { return {{"pendulum", RigType::kPendulum}}; }
+enum class MotorControl { kPd };
+std::vector<std::pair<std::string, MotorControl>> yamlEnumNames(MotorControl) { return {{"pd", MotorControl::kPd}}; }
+enum class Encoder { kMotorSide, kLinkSide };
+std::vector<std::pair<std::string, Encoder>> yamlEnumNames(Encoder) {
+  return {{"motor_side", Encoder::kMotorSide}, {"link_side", Encoder::kLinkSide}};
+}
+
+// The rig file format (config/bench/*.yaml).
+struct RigFile {
+  RigConfig* c = nullptr;
+  struct Rig {
+    RigConfig* c = nullptr;
+    RigType type = RigType::kPendulum;
+    template <class A>
+    void Serialize(A* a) {
+      a->Visit("type", &type, "pendulum", yaml::kRequired);
+      a->Visit("mass_kg", &c->mass_kg, "pendulum mass [kg]", yaml::kRequired);
+      a->Visit("com_m", &c->com_m, "axis to centre of mass [m]", yaml::kRequired);
+      a->Visit("link_inertia_kgm2", &c->link_inertia_kgm2, "about the centre of mass [kg m^2]");
+      a->Visit("gravity_mps2", &c->gravity_mps2, "[m/s^2]");
+    }
+  } rig;
+  struct Motor {
+    RigConfig* c = nullptr;
+    MotorControl control = MotorControl::kPd;
+    Encoder encoder = Encoder::kMotorSide;
+    template <class A>
+    void Serialize(A* a) {
+      a->Visit("control", &control, "pd");
+      a->Visit("kp_Nm_per_rad", &c->kp_Nm_per_rad, "nominal stiffness [N m/rad]", yaml::kRequired);
+      a->Visit("kd_Nms_per_rad", &c->kd_Nms_per_rad, "nominal damping [N m s/rad]", yaml::kRequired);
+      a->Visit("armature_kgm2", &c->armature_kgm2, "rotor inertia at the joint [kg m^2]", yaml::kRequired);
+      a->Visit("torque_limit_Nm", &c->torque_limit_Nm, "[N m] (absent = none)");
+      a->Visit("rate_hz", &c->rate_hz, "driver PD rate [Hz]");
+      a->Visit("encoder", &encoder, "motor_side | link_side");
+      a->Visit("log_gain_to_SI", &c->log_gain_to_SI, "log kp/kd unit to SI");
+    }
+  } motor;
+  struct Sim {
+    RigConfig* c = nullptr;
+    template <class A>
+    void Serialize(A* a) {
+      a->Visit("dt_s", &c->sim_dt_s, "physics step [s]");
+    }
+  } sim;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("rig", &rig, "the pendulum", yaml::kRequired);
+    a->Visit("motor", &motor, "the driver", yaml::kRequired);
+    a->Visit("sim", &sim, "rig simulation");
   }
+};
+
+}  // namespace
+
+RigConfig load_rig_config(const std::string& path) {
   RigConfig c;
   c.source_file = path;
-  auto num = [&](const YAML::Node& map, const char* section, const char* key, bool required, double dflt) {
-    const YAML::Node v = map[key];
-    if (!v) {
-      if (required) throw std::runtime_error(fmt::format("{}: missing {}.{}", path, section, key));
-      return dflt;
-    }
-    try {
-      return v.as<double>();
-    } catch (const std::exception&) {
-      throw std::runtime_error(fmt::format("{}: {}.{} must be a number", path, section, key));
-    }
-  };
-  const YAML::Node rig = root["rig"];
-  const YAML::Node motor = root["motor"];
-  if (!rig || !rig.IsMap()) throw std::runtime_error(fmt::format("{}: missing map 'rig'", path));
-  if (!motor || !motor.IsMap()) throw std::runtime_error(fmt::format("{}: missing map 'motor'", path));
-  const std::string type = rig["type"] ? rig["type"].as<std::string>() : "";
-  if (type != "pendulum") throw std::runtime_error(fmt::format("{}: rig.type = '{}': expected 'pendulum'", path, type));
-  c.mass_kg = num(rig, "rig", "mass_kg", true, 0);
-  c.com_m = num(rig, "rig", "com_m", true, 0);
-  c.link_inertia_kgm2 = num(rig, "rig", "link_inertia_kgm2", false, 0.0);
-  c.gravity_mps2 = num(rig, "rig", "gravity_mps2", false, 9.81);
-  const std::string control = motor["control"] ? motor["control"].as<std::string>() : "pd";
-  if (control != "pd") throw std::runtime_error(fmt::format("{}: motor.control = '{}': expected 'pd'", path, control));
-  c.kp_Nm_per_rad = num(motor, "motor", "kp_Nm_per_rad", true, 0);
-  c.kd_Nms_per_rad = num(motor, "motor", "kd_Nms_per_rad", true, 0);
-  c.armature_kgm2 = num(motor, "motor", "armature_kgm2", true, 0);
-  c.torque_limit_Nm = num(motor, "motor", "torque_limit_Nm", false, std::numeric_limits<double>::infinity());
-  c.rate_hz = num(motor, "motor", "rate_hz", false, 1000.0);
-  c.log_gain_to_SI = num(motor, "motor", "log_gain_to_SI", false, 1.0);
-  const std::string enc = motor["encoder"] ? motor["encoder"].as<std::string>() : "motor_side";
-  if (enc != "motor_side" && enc != "link_side")
-    throw std::runtime_error(fmt::format("{}: motor.encoder = '{}': expected motor_side or link_side", path, enc));
-  c.encoder_motor_side = enc == "motor_side";
-  if (const YAML::Node sim = root["sim"]) c.sim_dt_s = num(sim, "sim", "dt_s", false, c.sim_dt_s);
-  c.validate();
+  RigFile f;
+  f.c = f.rig.c = f.motor.c = f.sim.c = &c;
+  yaml::readYaml(yaml::loadYamlDocument(path), &f);
+  c.encoder_motor_side = f.motor.encoder == Encoder::kMotorSide;
+  try {
+    c.validate();
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(e.what());  // names source_file, field and range
+  }
   return c;
 }
 

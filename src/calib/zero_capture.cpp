@@ -1,14 +1,15 @@
 // Zero-point calibration protocol: YAML, and the capture through a pmg::HalBackend.
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/common/mujoco_model.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "pmg/common/yaml_archive.hpp"
 #include "pmg/hal/backend.hpp"
 
 namespace pmg::calib {
@@ -69,65 +70,66 @@ void ZeroProtocol::validate() const {
   }
 }
 
-ZeroProtocol loadZeroProtocol(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    throw ConfigError(fmt::format("{}: cannot read: {}", path, e.what()));
+namespace {
+
+// The protocol file format (config/calib/zero_poses_g1.yaml), read with pmg::yaml.
+struct PoseEntry {
+  std::string name;
+  std::array<double, 3> dp{0.0, 0.0, 0.0};
+  std::array<double, 3> rpy{0.0, 0.0, 0.0};
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("name", &name, "pose name (default: pose<k>)");
+    a->Visit("dp", &dp, "pelvis shift [x, y, z] in the stance frame [m]");
+    a->Visit("rpy", &rpy, "pelvis roll, pitch, yaw about the stance axes [rad]");
   }
-  const YAML::Node z = root["zero_calibration"];
-  if (!z || !z.IsMap()) throw ConfigError(path + ": missing map 'zero_calibration'");
+};
+
+struct ProtocolSection {
+  ZeroProtocol* p = nullptr;
+  std::vector<PoseEntry> poses;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("settle_s", &p->settle_s, "[s]");
+    a->Visit("move_s", &p->move_s, "[s]");
+    a->Visit("hold_s", &p->hold_s, "[s]");
+    a->Visit("average_s", &p->average_s, "[s]");
+    a->Visit("max_gyro_rms", &p->max_gyro_rms, "[rad/s]");
+    a->Visit("max_tilt_spread", &p->max_tilt_spread, "[rad]");
+    a->Visit("max_tilt_error", &p->max_tilt_error, "[rad]");
+    a->Visit("max_home_drift", &p->max_home_drift, "[rad]");
+    a->Visit("max_shift_m", &p->max_shift_m, "[m]");
+    a->Visit("max_angle_rad", &p->max_angle_rad, "[rad]");
+    a->Visit("leg_kp", &p->leg_kp, "6 leg gains, chain order [N m/rad]");
+    a->Visit("leg_kd", &p->leg_kd, "6 leg gains, chain order [N m s/rad]");
+    a->Visit("start_from_current", &p->start_from_current, "hold the readings found at start");
+    a->Visit("flatten_feet", &p->flatten_feet, "plan with the home's feet flattened");
+    a->Visit("poses", &poses, "the poses", yaml::kRequired);
+  }
+};
+
+struct ProtocolFile {
+  ProtocolSection zero_calibration;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("zero_calibration", &zero_calibration, "the capture protocol", yaml::kRequired);
+  }
+};
+
+}  // namespace
+
+ZeroProtocol loadZeroProtocol(const std::string& path) {
   ZeroProtocol p;
   p.source = path;
-  const auto num = [&](const char* key, double* v) {
-    if (!z[key]) return;
-    try {
-      *v = z[key].as<double>();
-    } catch (const std::exception&) {
-      throw ConfigError(fmt::format("{}: zero_calibration.{}: expected a number", path, key));
-    }
-  };
-  num("settle_s", &p.settle_s);
-  num("move_s", &p.move_s);
-  num("hold_s", &p.hold_s);
-  num("average_s", &p.average_s);
-  num("max_gyro_rms", &p.max_gyro_rms);
-  num("max_tilt_spread", &p.max_tilt_spread);
-  num("max_tilt_error", &p.max_tilt_error);
-  num("max_home_drift", &p.max_home_drift);
-  num("max_shift_m", &p.max_shift_m);
-  num("max_angle_rad", &p.max_angle_rad);
-  const auto flag = [&](const char* key, bool* v) {
-    if (!z[key]) return;
-    try {
-      *v = z[key].as<bool>();
-    } catch (const std::exception&) {
-      throw ConfigError(fmt::format("{}: zero_calibration.{}: expected true or false", path, key));
-    }
-  };
-  flag("start_from_current", &p.start_from_current);
-  flag("flatten_feet", &p.flatten_feet);
-  for (const char* key : {"leg_kp", "leg_kd"}) {
-    if (!z[key]) continue;
-    if (!z[key].IsSequence()) throw ConfigError(fmt::format("{}: zero_calibration.{}: expected a list of 6 numbers", path, key));
-    auto& v = std::string(key) == "leg_kp" ? p.leg_kp : p.leg_kd;
-    for (const auto& e : z[key]) v.push_back(e.as<double>());
-  }
-  const YAML::Node poses = z["poses"];
-  if (!poses || !poses.IsSequence()) throw ConfigError(path + ": zero_calibration.poses: expected a list");
+  ProtocolFile f;
+  f.zero_calibration.p = &p;
+  yaml::readYaml(yaml::loadYamlDocument(path), &f);
+  const auto& poses = f.zero_calibration.poses;
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const YAML::Node n = poses[k];
     ZeroPoseSpec s;
-    const auto vec3 = [&](const char* key, Eigen::Vector3d* v) {
-      if (!n[key]) return;
-      if (!n[key].IsSequence() || n[key].size() != 3)
-        throw ConfigError(fmt::format("{}: zero_calibration.poses[{}].{}: expected [x, y, z]", path, k, key));
-      for (std::size_t a = 0; a < 3; ++a) (*v)(static_cast<Eigen::Index>(a)) = n[key][a].as<double>();
-    };
-    s.name = n["name"] ? n["name"].as<std::string>() : fmt::format("pose{}", k);
-    vec3("dp", &s.dp);
-    vec3("rpy", &s.rpy);
+    s.name = poses[k].name.empty() ? fmt::format("pose{}", k) : poses[k].name;
+    s.dp = Eigen::Vector3d(poses[k].dp[0], poses[k].dp[1], poses[k].dp[2]);
+    s.rpy = Eigen::Vector3d(poses[k].rpy[0], poses[k].rpy[1], poses[k].rpy[2]);
     p.poses.push_back(s);
   }
   p.validate();

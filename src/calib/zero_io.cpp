@@ -22,30 +22,7 @@ std::vector<double> randomLegOffsets(const RobotConfig& robot, const gco::LegMod
 }
 
 std::vector<double> loadJointValues(const std::string& path, const RobotConfig& robot) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const std::exception& e) {
-    throw ConfigError(fmt::format("{}: cannot read: {}", path, e.what()));
-  }
-  const YAML::Node map = root["zero_offsets"] ? root["zero_offsets"] : root;
-  if (!map.IsMap()) throw ConfigError(path + ": expected a map {joint_name: offset_rad} (or zero_offsets: {...})");
-  std::vector<double> out(robot.numJoints(), 0.0);
-  for (const auto& kv : map) {
-    const std::string name = kv.first.as<std::string>();
-    const int i = robot.jointIndex(name);
-    if (i < 0) throw ConfigError(fmt::format("{}: zero_offsets.{}: not a joint of {}", path, name, robot.source_file));
-    double v = NAN;
-    try {
-      v = kv.second.as<double>();
-    } catch (const std::exception&) {
-    }
-    if (!std::isfinite(v) || std::abs(v) > 0.5)
-      throw ConfigError(fmt::format("{}: zero_offsets.{} = {}: expected a finite offset, |offset| <= 0.5 rad", path,
-                                    name, kv.second.Scalar()));
-    out[static_cast<std::size_t>(i)] = v;
-  }
-  return out;
+  return loadZeroOffsetFile(path, robot);  // one reader for the robot config's `zero_offsets:` and this
 }
 
 void writeZeroResult(const std::string& path, const RobotConfig& robot, const gco::LegModel& model,

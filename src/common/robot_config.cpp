@@ -3,37 +3,16 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
-#include <yaml-cpp/yaml.h>
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg {
 namespace {
 
 namespace fs = std::filesystem;
-
-[[noreturn]] void fail(const std::string& file, const std::string& key, const std::string& what) {
-  throw ConfigError(file + ": " + key + ": " + what);
-}
-
-template <typename T>
-T required(const YAML::Node& node, const std::string& key, const std::string& file, const std::string& prefix) {
-  const YAML::Node child = node[key];
-  if (!child) fail(file, prefix + key, "missing (required)");
-  try {
-    return child.as<T>();
-  } catch (const YAML::Exception&) {
-    fail(file, prefix + key, "cannot read value '" + YAML::Dump(child) + "' as the expected type");
-  }
-}
-
-template <typename T>
-T optional(const YAML::Node& node, const std::string& key, const T& fallback, const std::string& file,
-           const std::string& prefix) {
-  if (!node[key]) return fallback;
-  return required<T>(node, key, file, prefix);
-}
 
 std::string num(double v) {
   std::ostringstream s;
@@ -60,7 +39,6 @@ PMG_JOINT_VECTOR(defaultPose, default_position)
 PMG_JOINT_VECTOR(lowerLimits, lower)
 PMG_JOINT_VECTOR(zeroOffsets, zero_offset)
 PMG_JOINT_VECTOR(upperLimits, upper)
-PMG_JOINT_VECTOR(velocityLimits, velocity_limit)
 PMG_JOINT_VECTOR(kp, kp)
 PMG_JOINT_VECTOR(kd, kd)
 PMG_JOINT_VECTOR(torqueLimits, torque_limit)
@@ -79,177 +57,256 @@ std::vector<std::string> RobotConfig::jointNames() const {
   return names;
 }
 
-void validate(const RobotConfig& c) {
-  const std::string& f = c.source_file.empty() ? std::string("<robot config>") : c.source_file;
-  if (c.joints.empty()) fail(f, "joints", "empty: expected at least one joint");
-  if (c.buses.empty()) fail(f, "buses", "empty: expected at least one bus");
+namespace {
+
+// One problem found by checkConfig(): the joint it concerns (-1 = none), the key path and what is wrong.
+struct Problem {
+  int joint = -1;
+  std::string key;
+  std::string what;
+  std::string text() const { return key + (what.rfind("= ", 0) == 0 ? " " : ": ") + what; }
+};
+
+std::optional<Problem> checkConfig(const RobotConfig& c) {
+  if (c.joints.empty()) return Problem{-1, "joints", "empty: expected at least one joint"};
   if (!(c.standing_base_height > 0.05 && c.standing_base_height < 3.0))
-    fail(f, "robot.standing_base_height", "= " + num(c.standing_base_height) + ": expected in (0.05, 3) m");
-  for (std::size_t b = 0; b < c.buses.size(); ++b) {
-    const auto& bus = c.buses[b];
-    const std::string k = "buses[" + std::to_string(b) + "]";
-    if (bus.bitrate < 10000 || bus.bitrate > 1000000)
-      fail(f, k + ".bitrate", "= " + std::to_string(bus.bitrate) + ": expected 10000..1000000 bit/s");
-    if (bus.data_bitrate != 0 && (!bus.fd || bus.data_bitrate < bus.bitrate || bus.data_bitrate > 8000000))
-      fail(f, k + ".data_bitrate", "= " + std::to_string(bus.data_bitrate) +
-                                       ": expected 0, or bitrate..8000000 bit/s with fd: true");
-  }
+    return Problem{-1, "robot.standing_base_height", "= " + num(c.standing_base_height) + ": expected in (0.05, 3) m"};
   std::set<std::string> names;
-  std::set<std::pair<int, int>> bus_ids;
+  std::map<std::pair<std::string, int>, std::string> bus_ids;
   for (std::size_t i = 0; i < c.joints.size(); ++i) {
     const auto& j = c.joints[i];
+    const int ji = static_cast<int>(i);
     const std::string k = "joints[" + std::to_string(i) + "] (" + j.name + ")";
-    if (j.name.empty()) fail(f, k + ".name", "empty");
-    if (!names.insert(j.name).second) fail(f, k + ".name", "duplicate joint name");
-    auto finite = [&](double v, const char* field) {
-      if (!std::isfinite(v)) fail(f, k + "." + field, "is not a finite number");
-    };
-    finite(j.lower, "lower");
-    finite(j.upper, "upper");
-    finite(j.kp, "kp");
-    finite(j.kd, "kd");
-    finite(j.default_position, "default");
+    auto bad = [&](const std::string& field, const std::string& what) { return Problem{ji, k + "." + field, what}; };
+    if (j.name.empty()) return bad("name", "empty");
+    if (!names.insert(j.name).second) return bad("name", "duplicate joint name");
+    for (const auto& [v, field] : {std::pair<double, const char*>{j.lower, "lower"}, {j.upper, "upper"},
+                                   {j.velocity_limit, "velocity_limit"}, {j.torque_limit, "torque_limit"},
+                                   {j.kp, "kp"}, {j.kd, "kd"}, {j.default_position, "default"}}) {
+      if (!std::isfinite(v)) return bad(field, "is not a finite number");
+    }
     if (!(j.lower < j.upper))
-      fail(f, k + ".lower/upper", "= [" + num(j.lower) + ", " + num(j.upper) + "]: expected lower < upper");
-    if (!(j.velocity_limit > 0)) fail(f, k + ".velocity_limit", "= " + num(j.velocity_limit) + ": expected > 0 rad/s");
-    if (!(j.torque_limit > 0)) fail(f, k + ".torque_limit", "= " + num(j.torque_limit) + ": expected > 0 N*m");
-    if (!(j.kp >= 0 && j.kp <= 5000)) fail(f, k + ".kp", "= " + num(j.kp) + ": expected 0..5000 N*m/rad");
-    if (!(j.kd >= 0 && j.kd <= 500)) fail(f, k + ".kd", "= " + num(j.kd) + ": expected 0..500 N*m*s/rad");
+      return bad("lower/upper", "= [" + num(j.lower) + ", " + num(j.upper) + "]: expected lower < upper");
+    if (!(j.velocity_limit > 0)) return bad("velocity_limit", "= " + num(j.velocity_limit) + ": expected > 0 rad/s");
+    if (!(j.torque_limit > 0)) return bad("torque_limit", "= " + num(j.torque_limit) + ": expected > 0 N*m");
+    if (!(j.kp >= 0 && j.kp <= 5000)) return bad("kp", "= " + num(j.kp) + ": expected 0..5000 N*m/rad");
+    if (!(j.kd >= 0 && j.kd <= 500)) return bad("kd", "= " + num(j.kd) + ": expected 0..500 N*m*s/rad");
     if (j.default_position < j.lower || j.default_position > j.upper)
-      fail(f, k + ".default", "= " + num(j.default_position) + ": expected within [" + num(j.lower) + ", " +
-                                  num(j.upper) + "]");
-    if (j.bus < 0 || j.bus >= static_cast<int>(c.buses.size()))
-      fail(f, k + ".bus", "= " + std::to_string(j.bus) + ": expected 0.." + std::to_string(c.buses.size() - 1));
-    if (j.motor_id < 1 || j.motor_id > 2047)
-      fail(f, k + ".motor_id", "= " + std::to_string(j.motor_id) + ": expected 1..2047");
-    if (!bus_ids.insert({j.bus, j.motor_id}).second)
-      fail(f, k + ".motor_id", "= " + std::to_string(j.motor_id) + ": duplicate id on bus " + std::to_string(j.bus));
+      return bad("default", "= " + num(j.default_position) + ": expected within [" + num(j.lower) + ", " +
+                                num(j.upper) + "]");
+    if (j.bus.empty()) return bad("bus", "empty: expected the name of a motor bus, e.g. can0");
+    if (j.motor_id < 1 || j.motor_id > 254)
+      return bad("motor_id", "= " + std::to_string(j.motor_id) + ": expected 1..254");
+    const auto [it, fresh] = bus_ids.emplace(std::make_pair(j.bus, j.motor_id), j.name);
+    if (!fresh)
+      return bad("motor_id", "= " + std::to_string(j.motor_id) + ": duplicate id on bus " + j.bus + " (also " +
+                                 it->second + ")");
     if (j.mirror_sign != 1 && j.mirror_sign != -1)
-      fail(f, k + ".mirror_sign", "= " + std::to_string(j.mirror_sign) + ": expected 1 or -1");
+      return bad("mirror_sign", "= " + std::to_string(j.mirror_sign) + ": expected 1 or -1");
+    if (!std::isfinite(j.zero_offset) || std::fabs(j.zero_offset) > 0.5)
+      return bad("zero_offset", "= " + num(j.zero_offset) + ": expected finite, |offset| <= 0.5 rad");
   }
   for (std::size_t i = 0; i < c.joints.size(); ++i) {
     const auto& j = c.joints[i];
+    const int ji = static_cast<int>(i);
     const std::string k = "joints[" + std::to_string(i) + "] (" + j.name + ")";
     const int m = c.jointIndex(j.mirror);
-    if (m < 0) fail(f, k + ".mirror", "= '" + j.mirror + "': not a joint of this robot");
+    if (m < 0) return Problem{ji, k + ".mirror", "= '" + j.mirror + "': not a joint of this robot"};
     const auto& partner = c.joints[static_cast<std::size_t>(m)];
     if (partner.mirror != j.name)
-      fail(f, k + ".mirror", "= '" + j.mirror + "' whose mirror is '" + partner.mirror + "': expected a pairwise map");
+      return Problem{ji, k + ".mirror",
+                     "= '" + j.mirror + "' whose mirror is '" + partner.mirror + "': expected a pairwise map"};
     if (partner.mirror_sign != j.mirror_sign)
-      fail(f, k + ".mirror_sign", "differs from the sign of its partner '" + partner.name + "'");
+      return Problem{ji, k + ".mirror_sign", "differs from the sign of its partner '" + partner.name + "'"};
   }
-  if (!c.urdf_path.empty() && !fs::exists(c.urdf_path)) fail(f, "robot.urdf", "file '" + c.urdf_path + "' not found");
-  if (!c.mjcf_path.empty() && !fs::exists(c.mjcf_path)) fail(f, "robot.mjcf", "file '" + c.mjcf_path + "' not found");
+  if (!c.urdf_path.empty() && !fs::exists(c.urdf_path))
+    return Problem{-1, "robot.urdf", "file '" + c.urdf_path + "' not found"};
+  if (!c.mjcf_path.empty() && !fs::exists(c.mjcf_path))
+    return Problem{-1, "robot.mjcf", "file '" + c.mjcf_path + "' not found"};
+  return std::nullopt;
+}
+
+// ---- the file format (read with pmg::yaml) ----
+
+struct RobotSection {
+  RobotConfig* c = nullptr;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("name", &c->name, "robot model name", yaml::kRequired);
+    a->Visit("urdf", &c->urdf_path, "URDF file (kinematics), relative to this file", yaml::kRequired | yaml::kPath);
+    a->Visit("mjcf", &c->mjcf_path, "MJCF file (simulation), relative to this file", yaml::kRequired | yaml::kPath);
+    a->Visit("base_link", &c->base_link, "floating-base link", yaml::kRequired);
+    a->Visit("left_foot_link", &c->left_foot_link, "left sole link", yaml::kRequired);
+    a->Visit("right_foot_link", &c->right_foot_link, "right sole link", yaml::kRequired);
+    a->Visit("imu_site", &c->imu_site, "MJCF site of the IMU", yaml::kRequired);
+    a->Visit("standing_base_height", &c->standing_base_height, "pelvis height in the default pose [m]");
+  }
+};
+
+struct JointEntry {
+  JointConfig j;
+  YAML::Node actuator;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("name", &j.name, "joint name as in URDF/MJCF", yaml::kRequired);
+    a->Visit("lower", &j.lower, "position lower limit [rad]", yaml::kRequired);
+    a->Visit("upper", &j.upper, "position upper limit [rad]", yaml::kRequired);
+    a->Visit("velocity_limit", &j.velocity_limit, "|qd| limit [rad/s]", yaml::kRequired);
+    a->Visit("torque_limit", &j.torque_limit, "|tau| limit [N*m]", yaml::kRequired);
+    a->Visit("kp", &j.kp, "motor-level PD stiffness [N*m/rad]", yaml::kRequired);
+    a->Visit("kd", &j.kd, "motor-level PD damping [N*m*s/rad]", yaml::kRequired);
+    a->Visit("default", &j.default_position, "default standing pose [rad]", yaml::kRequired);
+    a->Visit("bus", &j.bus, "motor bus name, e.g. can0", yaml::kRequired);
+    a->Visit("motor_id", &j.motor_id, "motor driver id on its bus, 1..254", yaml::kRequired);
+    a->Visit("mirror", &j.mirror, "left/right mirror joint (default: itself)");
+    a->Visit("mirror_sign", &j.mirror_sign, "q_mirror = mirror_sign * q (+-1)");
+    a->Visit("actuator", &actuator, "actuator model: a map or the path of an actuator file");
+  }
+};
+
+struct RobotFile {
+  RobotSection robot;
+  std::vector<JointEntry> joints;
+  YAML::Node zero_offsets;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("robot", &robot, "model files and links", yaml::kRequired);
+    a->Visit("joints", &joints, "actuated joints in motor order", yaml::kRequired);
+    a->Visit("zero_offsets", &zero_offsets, "{joint: offset_rad} or the path of a pmg_calib_zero result");
+  }
+};
+
+// A pmg_calib_zero result file (calib/zero_io.cpp writes it): the offsets plus the calibration record.
+struct ZeroResultFile {
+  YAML::Node zero_offsets, calibration, placement, duration, drift, poses;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("zero_offsets", &zero_offsets, "{joint: offset_rad}", yaml::kRequired);
+    a->Visit("calibration", &calibration, "solver record");
+    a->Visit("placement_right_sole_in_left", &placement, "[x, y, yaw]");
+    a->Visit("capture_duration_s", &duration, "[s]");
+    a->Visit("home_drift_rad", &drift, "[rad]");
+    a->Visit("poses", &poses, "per-pose status");
+  }
+};
+
+// Applies a {joint_name: offset_rad} map; unknown joints are named with the nearest joint.
+void readZeroOffsetMap(const YAML::Node& map, const yaml::YamlSource& src, const RobotConfig& robot,
+                       std::vector<double>* out) {
+  if (!map.IsMap()) yaml::fail(src, map, "expected a map {joint_name: offset_rad}");
+  const std::map<std::string, double> values = [&] {
+    std::map<std::string, double> v;
+    yaml::readYaml(map, src, &v);
+    return v;
+  }();
+  const std::vector<std::string> names = robot.jointNames();
+  for (const auto& kv : map) {
+    const std::string name = kv.first.Scalar();
+    const int i = robot.jointIndex(name);
+    if (i < 0)
+      yaml::fail(src, kv.first, "'" + name + "' is not a joint of " + robot.source_file + " (did you mean '" +
+                                    yaml::nearestKey(name, names) + "'?)");
+    const double v = values.at(name);
+    if (std::fabs(v) > 0.5)
+      yaml::fail(yaml::detail::child(src, name), kv.second, "expected |offset| <= 0.5 rad, got " + kv.second.Scalar());
+    (*out)[static_cast<std::size_t>(i)] = v;
+  }
+}
+
+std::vector<double> readZeroOffsetDocument(const yaml::YamlDocument& doc, const RobotConfig& robot) {
+  std::vector<double> out(robot.numJoints(), 0.0);
+  if (doc.root.IsMap() && doc.root["zero_offsets"]) {
+    ZeroResultFile f;
+    yaml::readYaml(doc, &f);
+    readZeroOffsetMap(f.zero_offsets, yaml::detail::child(doc.source, "zero_offsets"), robot, &out);
+  } else {
+    readZeroOffsetMap(doc.root, doc.source, robot, &out);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string RobotConfig::validate() const {
+  const auto p = checkConfig(*this);
+  return p ? p->text() : std::string();
+}
+
+void validate(const RobotConfig& c) {
+  const std::string msg = c.validate();
+  if (!msg.empty()) throw ConfigError((c.source_file.empty() ? std::string("<robot config>") : c.source_file) + ": " + msg);
+}
+
+std::vector<double> loadZeroOffsetFile(const std::string& path, const RobotConfig& robot) {
+  return readZeroOffsetDocument(yaml::loadYamlDocument(path), robot);
 }
 
 RobotConfig loadRobotConfig(const std::string& yaml_path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(yaml_path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(yaml_path + ": cannot open file");
-  } catch (const YAML::ParserException& e) {
-    throw ConfigError(yaml_path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  const std::string& f = yaml_path;
+  const yaml::YamlDocument doc = yaml::loadYamlDocument(yaml_path);
   RobotConfig c;
   c.source_file = yaml_path;
-  const fs::path dir = fs::absolute(fs::path(yaml_path)).parent_path();
-  const YAML::Node robot = root["robot"];
-  if (!robot || !robot.IsMap()) fail(f, "robot", "missing (required map)");
-  c.name = required<std::string>(robot, "name", f, "robot.");
-  c.urdf_path = (dir / required<std::string>(robot, "urdf", f, "robot.")).lexically_normal().string();
-  c.mjcf_path = (dir / required<std::string>(robot, "mjcf", f, "robot.")).lexically_normal().string();
-  c.base_link = required<std::string>(robot, "base_link", f, "robot.");
-  c.left_foot_link = required<std::string>(robot, "left_foot_link", f, "robot.");
-  c.right_foot_link = required<std::string>(robot, "right_foot_link", f, "robot.");
-  c.imu_site = required<std::string>(robot, "imu_site", f, "robot.");
-  c.standing_base_height = optional<double>(robot, "standing_base_height", 0.78, f, "robot.");
-
-  const YAML::Node buses = root["buses"];
-  if (!buses || !buses.IsSequence()) fail(f, "buses", "missing (required list)");
-  for (std::size_t b = 0; b < buses.size(); ++b) {
-    const std::string p = "buses[" + std::to_string(b) + "].";
-    BusConfig bus;
-    bus.name = required<std::string>(buses[b], "name", f, p);
-    bus.bitrate = required<int>(buses[b], "bitrate", f, p);
-    bus.fd = optional<bool>(buses[b], "fd", false, f, p);
-    bus.data_bitrate = optional<int>(buses[b], "data_bitrate", 0, f, p);
-    c.buses.push_back(bus);
-  }
-  const YAML::Node joints = root["joints"];
-  if (!joints || !joints.IsSequence()) fail(f, "joints", "missing (required list)");
-  for (std::size_t i = 0; i < joints.size(); ++i) {
-    const std::string p = "joints[" + std::to_string(i) + "].";
-    const YAML::Node n = joints[i];
-    JointConfig j;
-    j.name = required<std::string>(n, "name", f, p);
-    j.lower = required<double>(n, "lower", f, p);
-    j.upper = required<double>(n, "upper", f, p);
-    j.velocity_limit = required<double>(n, "velocity_limit", f, p);
-    j.torque_limit = required<double>(n, "torque_limit", f, p);
-    j.kp = required<double>(n, "kp", f, p);
-    j.kd = required<double>(n, "kd", f, p);
-    j.default_position = required<double>(n, "default", f, p);
-    j.bus = required<int>(n, "bus", f, p);
-    j.motor_id = required<int>(n, "motor_id", f, p);
-    j.mirror = optional<std::string>(n, "mirror", j.name, f, p);
-    j.mirror_sign = optional<int>(n, "mirror_sign", 1, f, p);
-    if (const YAML::Node a = n["actuator"]) {
+  RobotFile file;
+  file.robot.c = &c;
+  yaml::readYaml(doc, &file);
+  const yaml::YamlSource joints_src = yaml::detail::child(doc.source, "joints");
+  const YAML::Node joints_node = doc.root["joints"];
+  for (std::size_t i = 0; i < file.joints.size(); ++i) {
+    JointEntry& e = file.joints[i];
+    if (e.j.mirror.empty()) e.j.mirror = e.j.name;
+    if (const YAML::Node& a = e.actuator; !a.IsNull()) {
+      const yaml::YamlSource asrc = yaml::detail::child(yaml::detail::item(joints_src, i), "actuator");
       if (a.IsScalar()) {  // path of an actuator file with a top-level `actuator:` map
-        const std::string afile = (dir / a.as<std::string>()).lexically_normal().string();
-        YAML::Node doc;
+        const std::string afile = (fs::path(doc.source.base_dir) / a.Scalar()).lexically_normal().string();
+        yaml::YamlDocument adoc;
         try {
-          doc = YAML::LoadFile(afile);
-        } catch (const YAML::Exception& e) {
-          fail(f, p + "actuator", "cannot read actuator file '" + afile + "': " + e.what());
+          adoc = yaml::loadYamlDocument(afile);
+        } catch (const ConfigError& err) {
+          yaml::fail(asrc, a, std::string("cannot read actuator file: ") + err.what());
         }
-        if (!doc["actuator"] || !doc["actuator"].IsMap())
-          fail(f, p + "actuator", "file '" + afile + "' has no top-level `actuator:` map");
-        j.actuator_yaml = YAML::Dump(doc["actuator"]);
-        j.actuator_source = afile + ": actuator";
+        if (!adoc.root.IsMap() || !adoc.root["actuator"] || !adoc.root["actuator"].IsMap())
+          yaml::fail(asrc, a, "file '" + afile + "' has no top-level `actuator:` map");
+        if (adoc.root.size() != 1) {
+          for (const auto& kv : adoc.root)
+            if (kv.first.Scalar() != "actuator")
+              yaml::fail(adoc.source, kv.first, "unknown key '" + kv.first.Scalar() + "' (an actuator file has only `actuator:`)");
+        }
+        e.j.actuator_yaml = YAML::Dump(adoc.root["actuator"]);
+        e.j.actuator_source = yaml::location(adoc.source, adoc.root["actuator"]) + ": actuator";
       } else if (a.IsMap()) {
-        j.actuator_yaml = YAML::Dump(a);
-        j.actuator_source = f + ": " + p + "actuator";
+        e.j.actuator_yaml = YAML::Dump(a);
+        e.j.actuator_source = yaml::location(asrc, a) + ": " + asrc.key_path;
       } else {
-        fail(f, p + "actuator", "expected a map of actuator parameters or the path of an actuator file");
+        yaml::fail(asrc, a, "expected a map of actuator parameters or the path of an actuator file");
       }
     }
-    c.joints.push_back(j);
+    c.joints.push_back(e.j);
   }
-  if (const YAML::Node z = root["zero_offsets"]) {  // optional: pmg_calib_zero result (map or file)
-    YAML::Node map = z;
-    std::string src = f + ": zero_offsets";
+  if (const YAML::Node& z = file.zero_offsets; !z.IsNull()) {  // optional: pmg_calib_zero result (map or file)
+    const yaml::YamlSource zsrc = yaml::detail::child(doc.source, "zero_offsets");
+    std::vector<double> offsets;
     if (z.IsScalar()) {
-      const std::string zfile = (dir / z.as<std::string>()).lexically_normal().string();
-      YAML::Node doc;
+      const std::string zfile = (fs::path(doc.source.base_dir) / z.Scalar()).lexically_normal().string();
       try {
-        doc = YAML::LoadFile(zfile);
-      } catch (const YAML::Exception& e) {
-        fail(f, "zero_offsets", "cannot read zero-offset file '" + zfile + "': " + e.what());
+        offsets = loadZeroOffsetFile(zfile, c);
+      } catch (const ConfigError& err) {
+        yaml::fail(zsrc, z, std::string("in the zero-offset file: ") + err.what());
       }
-      map = doc["zero_offsets"];
-      src = zfile + ": zero_offsets";
-      if (!map || !map.IsMap()) fail(f, "zero_offsets", "file '" + zfile + "' has no top-level `zero_offsets:` map");
-    } else if (!z.IsMap()) {
-      fail(f, "zero_offsets", "expected a map {joint_name: offset_rad} or the path of a pmg_calib_zero result file");
+    } else if (z.IsMap()) {
+      offsets.assign(c.numJoints(), 0.0);
+      readZeroOffsetMap(z, zsrc, c, &offsets);
+    } else {
+      yaml::fail(zsrc, z, "expected a map {joint_name: offset_rad} or the path of a pmg_calib_zero result file");
     }
-    for (const auto& kv : map) {
-      const std::string name = kv.first.as<std::string>();
-      const int i = c.jointIndex(name);
-      if (i < 0) throw ConfigError(src + "." + name + ": not a joint of " + f);
-      double v = 0.0;
-      try {
-        v = kv.second.as<double>();
-      } catch (const YAML::Exception&) {
-        throw ConfigError(src + "." + name + ": expected a number [rad]");
-      }
-      if (!std::isfinite(v) || std::fabs(v) > 0.5)
-        throw ConfigError(src + "." + name + " = " + kv.second.Scalar() + ": expected finite, |offset| <= 0.5 rad");
-      c.joints[static_cast<std::size_t>(i)].zero_offset = v;
-    }
+    for (std::size_t i = 0; i < c.joints.size(); ++i) c.joints[i].zero_offset = offsets[i];
   }
-  validate(c);
+  if (const auto p = checkConfig(c)) {
+    // Name the line of the joint (or of the robot section) the problem concerns.
+    YAML::Node at = doc.root["robot"];
+    if (p->joint >= 0 && joints_node && joints_node.IsSequence()) at = joints_node[static_cast<std::size_t>(p->joint)];
+    else if (p->key == "robot.urdf") at = doc.root["robot"]["urdf"];
+    else if (p->key == "robot.mjcf") at = doc.root["robot"]["mjcf"];
+    yaml::fail(doc.source, at, p->text());
+  }
   return c;
 }
 

@@ -73,12 +73,19 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
 }
 
 std::string nearestKey(const std::string& key, const std::vector<std::string>& candidates) {
+  // Smallest edit distance; among equals the longest common prefix ('rp' -> 'rpy', not 'dp').
+  const auto prefix = [&key](const std::string& c) {
+    std::size_t n = 0;
+    while (n < key.size() && n < c.size() && key[n] == c[n]) ++n;
+    return n;
+  };
   std::string best;
-  std::size_t best_d = std::string::npos;
+  std::size_t best_d = std::string::npos, best_p = 0;
   for (const auto& c : candidates) {
-    const std::size_t d = editDistance(key, c);
-    if (d < best_d) {
+    const std::size_t d = editDistance(key, c), p = prefix(c);
+    if (d < best_d || (d == best_d && p > best_p)) {
       best_d = d;
+      best_p = p;
       best = c;
     }
   }
@@ -86,6 +93,7 @@ std::string nearestKey(const std::string& key, const std::vector<std::string>& c
 }
 
 std::string location(const YamlSource& source, const YAML::Node& node) {
+  if (!source.lines) return source.file;
   try {
     const YAML::Mark m = node.Mark();
     if (!m.is_null()) return source.file + ":" + std::to_string(m.line + 1);

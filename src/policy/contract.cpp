@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg::policy {
 namespace {
@@ -64,6 +65,23 @@ class Reader {
     return std::vector<float>(d.begin(), d.end());
   }
 
+  /// Rejects keys of `map` (at `path`, "" = top level) not in `allowed`, and duplicate keys: a typo in a
+  /// contract is an error naming the key, the nearest valid key and the line of the metadata text.
+  void keys(const YAML::Node& map, const std::string& path, const std::vector<std::string>& allowed) const {
+    if (!map.IsMap()) fail(path.empty() ? kContractMetadataKey : path, "expected a map");
+    std::set<std::string> seen;
+    for (const auto& kv : map) {
+      const std::string key = kv.first.Scalar();
+      const std::string field = path.empty() ? key : path + "." + key;
+      const std::string line = kv.first.Mark().is_null() ? std::string()
+                                                          : " at line " + std::to_string(kv.first.Mark().line + 1) +
+                                                                " of the " + kContractMetadataKey + " metadata";
+      if (!seen.insert(key).second) fail(field, "duplicate key" + line);
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+        fail(field, "unknown key" + line + " (did you mean '" + yaml::nearestKey(key, allowed) + "'?)");
+    }
+  }
+
   std::vector<std::string> names(const YAML::Node& n, const std::string& field) const {
     if (!n.IsSequence()) fail(field, "expected a list of names");
     std::vector<std::string> out;
@@ -108,9 +126,12 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
-    r.fail(kContractMetadataKey, std::string("not valid YAML: ") + e.what());
+    r.fail(kContractMetadataKey, "not valid YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
+                                     std::to_string(e.mark.column + 1) + " of the metadata: " + e.msg);
   }
   if (!root.IsMap()) r.fail(kContractMetadataKey, "expected a YAML map");
+  r.keys(root, "", {"version", "robot", "joint_names", "actuated_joints", "controls_waist", "control_period",
+                    "default_pose", "kp", "kd", "action", "observation", "pmg", "reference_pairs"});
 
   PolicyContract c;
   c.version = r.scalar<int>(r.require(root, "version", ""), "version", "an integer");
@@ -144,6 +165,7 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   }
 
   const YAML::Node act = r.require(root, "action", "");
+  r.keys(act, "action", {"scale", "offset", "clip"});
   c.action.scale = r.numbers(r.require(act, "scale", "action"), "action.scale");
   checkSize(r, "action.scale", c.action.scale.size(), na, "one per actuated_joints entry");
   c.action.offset = r.numbers(r.require(act, "offset", "action"), "action.offset");
@@ -152,6 +174,7 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   if (!(c.action.clip > 0.0f)) r.fail("action.clip", "must be > 0");
 
   const YAML::Node obs = r.require(root, "observation", "");
+  r.keys(obs, "observation", {"history_length", "history_order", "clip", "terms"});
   c.observation.history_length = r.scalar<int>(r.require(obs, "history_length", "observation"),
                                                "observation.history_length", "an integer");
   if (c.observation.history_length < 1 || c.observation.history_length > 1000) {
@@ -168,6 +191,7 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   std::set<std::string> term_names;
   for (std::size_t i = 0; i < terms.size(); ++i) {
     const std::string f = "observation.terms[" + std::to_string(i) + "]";
+    r.keys(terms[i], f, {"name", "size", "scale"});
     ObservationTerm t;
     t.name = r.scalar<std::string>(r.require(terms[i], "name", f), f + ".name", "a name");
     if (!term_names.insert(t.name).second) r.fail(f + ".name", "duplicate term '" + t.name + "'");
@@ -198,6 +222,7 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   const auto n_obs = static_cast<std::size_t>(c.observation.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const std::string f = "reference_pairs[" + std::to_string(i) + "]";
+    r.keys(pairs[i], f, {"obs", "action"});
     ReferencePair p;
     p.obs = r.floats(r.require(pairs[i], "obs", f), f + ".obs");
     checkSize(r, f + ".obs", p.obs.size(), n_obs, "observation size = frame size x history_length");

@@ -141,6 +141,10 @@ TEST(YamlArchive, DuplicateKeyIsAnError) {
 
 TEST(YamlArchive, MissingRequiredKey) { EXPECT_EQ(errorOf("count: 1\n"), "cfg.yaml:1: missing required key 'name'"); }
 
+TEST(YamlArchive, MisspeltRequiredKeyIsNamedAsUnknownWithTheNearestKey) {
+  EXPECT_EQ(errorOf("count: 1\nnmae: g1\n"), "cfg.yaml:2: unknown key 'nmae' at the top level (did you mean 'name'?)");
+}
+
 TEST(YamlArchive, TypeErrorsNameLineKeyPathAndExpectedType) {
   EXPECT_EQ(errorOf("name: g1\ncount: 1.5\n"), "cfg.yaml:2: count: expected an integer, got '1.5'");
   EXPECT_EQ(errorOf("name: g1\nid: 300\n"), "cfg.yaml:2: id: expected an integer in 0..255, got 300");
@@ -221,12 +225,23 @@ TEST(YamlArchive, FileLoadResolvesPathsAgainstTheFileFolderAndReadsOneKey) {
   fs::remove_all(dir);
 }
 
+TEST(YamlArchive, SourceWithoutLinesNamesOnlyTheFile) {
+  Gains g;
+  try {
+    yaml::readYaml(YAML::Load("\n\nkq: 1\n"), yaml::YamlSource{"robot.yaml: joints[2].gains", "", "", false}, &g);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "robot.yaml: joints[2].gains: unknown key 'kq' at the top level (did you mean 'kp'?)");
+  }
+}
+
 TEST(YamlArchive, EditDistanceAndNearestKey) {
   EXPECT_EQ(yaml::editDistance("kitten", "sitting"), 3u);
   EXPECT_EQ(yaml::editDistance("", "abc"), 3u);
   EXPECT_EQ(yaml::editDistance("policyy", "policy"), 1u);
   EXPECT_EQ(yaml::nearestKey("vxx", {"vy", "vx", "wz"}), "vx");
   EXPECT_EQ(yaml::nearestKey("x", {}), "");
+  EXPECT_EQ(yaml::nearestKey("rp", {"name", "dp", "rpy"}), "rpy");  // tie at distance 1: longer common prefix
 }
 
 TEST(YamlArchive, DescribeFieldsListsDeclarationsInOrder) {

@@ -32,6 +32,7 @@
 
 #include "pmg/calib/actuator_model.hpp"
 #include "pmg/calib/bench_log.hpp"
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg::calib {
 
@@ -44,15 +45,39 @@ struct ActuatorBlock {
   double kd_scale = 1.0;                ///< > 0
   /// Throws std::runtime_error "<where>: actuator.<key> = <v>: expected <range>".
   void validate(const std::string& where) const;
+
+  /// Fields for pmg::yaml (yaml_archive.hpp): the keys of the block format above.
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("armature_kgm2", &armature_kgm2, "rotor inertia at the joint [kg m^2]");
+    a->Visit("kp_scale", &kp_scale, "multiplies the PD stiffness");
+    a->Visit("kd_scale", &kd_scale, "multiplies the PD damping");
+    a->Visit("rate_hz", &params.rate_hz, "driver PD rate [Hz] (0 = every physics step)");
+    a->Visit("delay_s", &params.delay_s, "command transport delay [s]");
+    a->Visit("offset_rad", &params.offset_rad, "encoder reading - true angle [rad]");
+    a->Visit("torque_limit_Nm", &params.torque_limit_Nm, "torque saturation [N m] (.inf = none)", yaml::kAllowNonFinite);
+    a->Visit("tau_stall_Nm", &params.tau_stall_Nm, "torque-speed envelope [N m] (0 = off)");
+    a->Visit("w_max_rad_per_s", &params.w_max_rad_per_s, "no-load speed [rad/s]");
+    a->Visit("fc_Nm", &params.fc_Nm, "Coulomb friction [N m]");
+    a->Visit("fs_Nm", &params.fs_Nm, "break-away torque [N m] (0 = fc_Nm)");
+    a->Visit("vs_rad_per_s", &params.vs_rad_per_s, "Stribeck velocity [rad/s]");
+    a->Visit("kl", &params.kl, "load-dependent friction coefficient");
+    a->Visit("fv_Nms_per_rad", &params.fv_Nms_per_rad, "viscous friction [N m s/rad]");
+    a->Visit("backlash_gap_rad", &params.backlash_gap_rad, "dead-zone width [rad]");
+  }
 };
 
-/// Parses the map under an `actuator:` key (pass the map itself). `where` names the file/section
-/// for error messages. Unknown keys are an error (typos must not silently disable an effect).
+/// Parses the map under an `actuator:` key (pass the map itself) with pmg::yaml. `where` names the
+/// file/section for error messages (the node's own line numbers are not used: it may come from
+/// re-parsed text). Unknown keys are an error naming the nearest valid key (typos must not silently
+/// disable an effect); non-finite numbers are refused except torque_limit_Nm: .inf.
+/// @throws pmg::ConfigError.
 ActuatorBlock parse_actuator_block(const YAML::Node& map, const std::string& where);
 /// The block as a YAML map (only non-default effects, plus rate and limit).
 YAML::Node actuator_block_to_yaml(const ActuatorBlock& block);
 
-/// Reads `path` and parses its top-level `actuator:` map.
+/// Reads `path` and parses its top-level `actuator:` map (the only key). @throws pmg::ConfigError
+/// naming the file and line.
 ActuatorBlock load_actuator_file(const std::string& path);
 /// Writes `{actuator: block}` to `path`, preceded by `comment` lines (prefixed with "# ").
 void write_actuator_file(const std::string& path, const ActuatorBlock& block, const std::string& comment);

@@ -17,9 +17,10 @@ namespace pmg::calib {
 std::vector<double> randomLegOffsets(const RobotConfig& robot, const gco::LegModel& model, unsigned seed,
                                      double max_offset);
 
-/// Reads `{joint_name: value, ...}` (or a file with a top-level `zero_offsets:` map) into a robot-order
-/// vector (n, zeros for joints not named). @throws ConfigError naming the file and the unknown joint or
-/// the non-finite / |value| > 0.5 rad entry.
+/// Reads `{joint_name: value, ...}` (or a pmg_calib_zero result file with a top-level `zero_offsets:`
+/// map) into a robot-order vector (n, zeros for joints not named); = pmg::loadZeroOffsetFile().
+/// @throws ConfigError naming the file, line and the unknown joint (with the nearest joint name) or
+/// key, or the non-finite / |value| > 0.5 rad entry.
 std::vector<double> loadJointValues(const std::string& path, const RobotConfig& robot);
 
 /// Writes the result: `zero_offsets: {joint: offset}` (the form loadJointValues and the robot config's

@@ -26,8 +26,9 @@ struct JointConfig {
   double kp = 0.0;             ///< motor-level PD stiffness [N·m/rad], ≥ 0
   double kd = 0.0;             ///< motor-level PD damping [N·m·s/rad], ≥ 0
   double default_position = 0; ///< default standing pose [rad], within [lower, upper]
-  int bus = 0;                 ///< index into RobotConfig::buses
-  int motor_id = 0;            ///< CAN id of the motor driver on its bus, 1..2047
+  std::string bus;             ///< name of the motor bus (CAN interface), e.g. "can0"; the bus plans
+                               ///< (config/hal/*.yaml) must agree (pmg::hal::bus::checkPlanAgainstRobot)
+  int motor_id = 0;            ///< id of the motor driver on its bus, 1..254 (MIT-mode CAN)
   std::string mirror;          ///< name of the left/right mirror joint (itself for sagittal joints)
   int mirror_sign = 1;         ///< q_mirror = mirror_sign · q (±1)
   /// Identified actuator model of this joint (pmg_calib_dynamics output, docs/calibration.md) as
@@ -45,14 +46,6 @@ struct JointConfig {
   double zero_offset = 0.0;
 };
 
-/// One motor bus (CAN / CAN FD).
-struct BusConfig {
-  std::string name;            ///< interface name, e.g. "can0"
-  int bitrate = 1000000;       ///< nominal (arbitration) bit rate [bit/s]
-  int data_bitrate = 0;        ///< CAN FD data-phase bit rate [bit/s]; 0 = same as bitrate
-  bool fd = false;             ///< CAN FD frames
-};
-
 /// The whole robot configuration. Paths are absolute after loading.
 struct RobotConfig {
   std::string source_file;     ///< the YAML file this was loaded from
@@ -64,7 +57,6 @@ struct RobotConfig {
   std::string right_foot_link; ///< e.g. "right_ankle_roll_link"
   std::string imu_site;        ///< MJCF site of the IMU, e.g. "imu_in_pelvis"
   double standing_base_height = 0.78;  ///< pelvis height above the ground in the default pose [m]
-  std::vector<BusConfig> buses;
   std::vector<JointConfig> joints;     ///< in motor/joint order (= MJCF joint order)
 
   std::size_t numJoints() const { return joints.size(); }
@@ -75,7 +67,6 @@ struct RobotConfig {
   /// Per-joint vectors (n): lower/upper limits [rad], kp [N·m/rad], kd [N·m·s/rad], torque limit [N·m].
   Eigen::VectorXd lowerLimits() const;
   Eigen::VectorXd upperLimits() const;
-  Eigen::VectorXd velocityLimits() const;
   Eigen::VectorXd kp() const;
   Eigen::VectorXd kd() const;
   Eigen::VectorXd torqueLimits() const;
@@ -85,16 +76,25 @@ struct RobotConfig {
   std::vector<std::string> jointNames() const;
   /// Encoder zero offsets (n) [rad] (JointConfig::zero_offset).
   Eigen::VectorXd zeroOffsets() const;
+  /// The pmg::yaml validate() convention: "" if valid, else what is wrong, naming the key and the
+  /// expected range, e.g. "joints[3] (left_knee_joint).kp = -1: expected 0..5000 N*m/rad".
+  std::string validate() const;
 };
 
-/// Loads and validates a robot config YAML file. Relative model paths are resolved against the
-/// file's folder. @throws ConfigError naming the file, key and expected range on any problem
-/// (missing key, wrong type, limits out of order, default pose outside limits, negative gains,
-/// unknown/duplicate joint or bus, mirror map not an involution, bus index out of range, duplicate
-/// motor id on a bus, model file missing).
+/// Loads and validates a robot config YAML file (read with pmg::yaml, yaml_archive.hpp). Relative
+/// model paths are resolved against the file's folder. @throws ConfigError naming the file, line, key
+/// and expected range on any problem (unknown key, with the nearest valid key; missing key; wrong
+/// type; non-finite number; limits out of order; default pose outside limits; negative gains;
+/// duplicate joint; mirror map not an involution; duplicate motor id on a bus; model file missing).
 RobotConfig loadRobotConfig(const std::string& yaml_path);
 
-/// Validates an already-filled config (also used by loadRobotConfig). @throws ConfigError.
+/// Validates an already-filled config. @throws ConfigError "<source_file>: <config.validate()>".
 void validate(const RobotConfig& config);
+
+/// Reads a file of encoder zero offsets into robot joint order (n; 0 for joints not named): either a
+/// bare map {joint_name: offset_rad} or a pmg_calib_zero result (`zero_offsets: {...}` plus its
+/// `calibration`, `poses`, ... keys). Every offset finite with |offset| <= 0.5 rad.
+/// @throws ConfigError naming the file, line and key (an unknown joint with the nearest joint name).
+std::vector<double> loadZeroOffsetFile(const std::string& path, const RobotConfig& robot);
 
 }  // namespace pmg

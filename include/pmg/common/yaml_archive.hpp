@@ -91,6 +91,9 @@ struct YamlSource {
   std::string file;
   std::string base_dir;
   std::string key_path;
+  /// false: the node's line numbers do not refer to `file` (e.g. a block re-parsed from
+  /// YAML::Dump text); errors then name `file` without a line.
+  bool lines = true;
 };
 
 /// A parsed YAML document and where it came from.
@@ -111,7 +114,8 @@ YamlDocument parseYamlDocument(const std::string& text, const std::string& sourc
 /// Levenshtein distance (insert, delete, substitute = 1) between two strings.
 std::size_t editDistance(const std::string& a, const std::string& b);
 
-/// The candidate nearest to `key` by edit distance (first of equals), or "" if there are none.
+/// The candidate nearest to `key` by edit distance (among equals the one sharing the longest prefix
+/// with `key`, then the first), or "" if there are none.
 std::string nearestKey(const std::string& key, const std::vector<std::string>& candidates);
 
 /// "<file>:<line>" of a node (line 1-based; just "<file>" when the node has no position).
@@ -205,7 +209,8 @@ class YamlReadArchive {
     valid_.emplace_back(name);
     const YAML::Node n = map_[name];  // const access: never inserts into the map
     if (!n) {
-      if (flags & kRequired) fail(source_, map_, std::string("missing required key '") + name + "'");
+      // Reported by checkUnknownKeys(), after unknown keys: a misspelt required key is named as such.
+      if (flags & kRequired) missing_.emplace_back(name);
       if constexpr (detail::IsOptional<T>::value) value->reset();
       return;
     }
@@ -222,14 +227,19 @@ class YamlReadArchive {
   const YAML::Node& node() const { return map_; }
   const YamlSource& source() const { return source_; }
 
-  /// Rejects keys that no Visit() named. Called by readYaml() after Serialize().
-  void checkUnknownKeys() const { detail::checkUnknownKeys(map_, source_, visited_, valid_); }
+  /// Rejects keys that no Visit() named, then missing required keys. Called by readYaml() after
+  /// Serialize(). (A YAML::Node field whose key is absent stays a Null node: test IsNull().)
+  void checkUnknownKeys() const {
+    detail::checkUnknownKeys(map_, source_, visited_, valid_);
+    if (!missing_.empty()) fail(source_, map_, "missing required key '" + missing_.front() + "'");
+  }
 
  private:
   const YAML::Node map_;
   YamlSource source_;
   std::set<std::string> visited_;
   std::vector<std::string> valid_;
+  std::vector<std::string> missing_;
 };
 
 /// Collects the declared fields of T (for docs and --help).

@@ -80,6 +80,19 @@ struct CommandLimits {
   double v_y_min = -0.8, v_y_max = 0.8;              ///< [m/s]
   double yaw_rate_min = -1.5, yaw_rate_max = 1.5;    ///< [rad/s]
   double height_min = 0.45, height_max = 0.85;       ///< [m]
+
+  /// Fields for pmg::yaml (yaml_archive.hpp): keys = field names.
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("v_x_min", &v_x_min, "[m/s]");
+    a->Visit("v_x_max", &v_x_max, "[m/s]");
+    a->Visit("v_y_min", &v_y_min, "[m/s]");
+    a->Visit("v_y_max", &v_y_max, "[m/s]");
+    a->Visit("yaw_rate_min", &yaw_rate_min, "[rad/s]");
+    a->Visit("yaw_rate_max", &yaw_rate_max, "[rad/s]");
+    a->Visit("height_min", &height_min, "[m]");
+    a->Visit("height_max", &height_max, "[m]");
+  }
 };
 
 /// GCO parameters. Defaults are the documented G1 tuning (docs/gco.md).
@@ -116,11 +129,38 @@ struct GcoOptions {
 
   /// Throws std::invalid_argument naming the field and its allowed range.
   void validate() const;
+
+  /// Fields for pmg::yaml (yaml_archive.hpp): keys = field names, `limits:` a sub-map.
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("enabled", &enabled, "false = PMG w/o GCO");
+    a->Visit("dt", &dt, "control period [s]");
+    a->Visit("ground_height", &ground_height, "[m]");
+    a->Visit("w_foot_velocity", &w_foot_velocity, "[1/(m/s)]");
+    a->Visit("w_foot_yaw_rate", &w_foot_yaw_rate, "[1/(rad/s)]");
+    a->Visit("w_foot_height", &w_foot_height, "[1/m]");
+    a->Visit("w_prior_velocity", &w_prior_velocity, "[1/(m/s)]");
+    a->Visit("w_prior_yaw_rate", &w_prior_yaw_rate, "[1/(rad/s)]");
+    a->Visit("w_prior_height", &w_prior_height, "[1/m]");
+    a->Visit("w_smooth_velocity", &w_smooth_velocity, "[1/(m/s)]");
+    a->Visit("w_smooth_yaw_rate", &w_smooth_yaw_rate, "[1/(rad/s)]");
+    a->Visit("w_smooth_height", &w_smooth_height, "[1/m]");
+    a->Visit("w_limit", &w_limit, "[1/SI unit]");
+    a->Visit("limits", &limits, "command limits");
+    a->Visit("contact_ramp_time", &contact_ramp_time, "[s]");
+    a->Visit("max_jump_velocity", &max_jump_velocity, "[m/s per tick]");
+    a->Visit("max_jump_yaw_rate", &max_jump_yaw_rate, "[rad/s per tick]");
+    a->Visit("max_jump_height", &max_jump_height, "[m per tick]");
+    a->Visit("newton_polish_iterations", &newton_polish_iterations, "0..20");
+    a->Visit("max_iterations", &max_iterations, "1..100");
+    a->Visit("failure_gradient_norm", &failure_gradient_norm, "");
+  }
 };
 
 /// Reads a GcoOptions YAML mapping (keys = field names; `limits:` sub-map; missing keys keep
-/// their defaults). Throws std::runtime_error naming the file and key on unknown keys or wrong
-/// types, and std::invalid_argument (prefixed with the file name) from validate().
+/// their defaults), bare or under a top-level `gco:` key, with pmg::yaml (yaml_archive.hpp).
+/// Throws pmg::ConfigError naming the file, line and key on unknown keys (with the nearest valid
+/// key), wrong types, non-finite numbers, and on validate() failures.
 GcoOptions loadGcoOptionsFile(const std::string& path);
 /// Same as loadGcoOptionsFile() for YAML text; `source_name` is used in error messages.
 GcoOptions parseGcoOptionsYaml(const std::string& yaml_text, const std::string& source_name);

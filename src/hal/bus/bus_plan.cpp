@@ -1,13 +1,17 @@
 #include "pmg/hal/bus/bus_plan.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
+#include <array>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+
+#include "pmg/common/robot_config.hpp"
+#include "pmg/common/yaml_archive.hpp"
 
 namespace pmg::hal::bus {
 
@@ -193,122 +197,176 @@ std::string BusPlan::report() const {
   return os.str();
 }
 
-// ---------------------------------------------------------------- YAML
+// ---------------------------------------------------------------- YAML (pmg::yaml, yaml_archive.hpp)
 namespace {
 
-[[noreturn]] void fail(const std::string& path, const std::string& field, const std::string& what) {
-  throw std::runtime_error(path + ": " + field + ": " + what);
-}
-
-template <typename T>
-T get(const YAML::Node& node, const char* key, const std::string& path, const std::string& where,
-      const T* fallback = nullptr) {
-  const YAML::Node v = node[key];
-  if (!v) {
-    if (fallback) return *fallback;
-    fail(path, where + "." + key, "missing required field");
-  }
-  try {
-    return v.as<T>();
-  } catch (const YAML::Exception& e) {
-    fail(path, where + "." + key, std::string("cannot parse value: ") + e.what());
-  }
-}
-
-template <typename T>
-T getOr(const YAML::Node& node, const char* key, const std::string& path, const std::string& where, T def) {
-  return get<T>(node, key, path, where, &def);
-}
-
-MotorRanges parseRanges(const YAML::Node& n, const std::string& path, const std::string& where) {
+// The file format of a bus plan (docs/hal.md, 'Bus plans').
+struct RangesEntry {
   MotorRanges r;
-  const MotorRanges d;
-  r.q_min = getOr(n, "q_min", path, where, d.q_min);
-  r.q_max = getOr(n, "q_max", path, where, d.q_max);
-  r.qd_min = getOr(n, "qd_min", path, where, d.qd_min);
-  r.qd_max = getOr(n, "qd_max", path, where, d.qd_max);
-  r.kp_min = getOr(n, "kp_min", path, where, d.kp_min);
-  r.kp_max = getOr(n, "kp_max", path, where, d.kp_max);
-  r.kd_min = getOr(n, "kd_min", path, where, d.kd_min);
-  r.kd_max = getOr(n, "kd_max", path, where, d.kd_max);
-  r.tau_min = getOr(n, "tau_min", path, where, d.tau_min);
-  r.tau_max = getOr(n, "tau_max", path, where, d.tau_max);
-  const std::string msg = r.validate();
-  if (!msg.empty()) fail(path, where, msg);
-  return r;
-}
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("q_min", &r.q_min, "[rad]");
+    a->Visit("q_max", &r.q_max, "[rad]");
+    a->Visit("qd_min", &r.qd_min, "[rad/s]");
+    a->Visit("qd_max", &r.qd_max, "[rad/s]");
+    a->Visit("kp_min", &r.kp_min, "[N m/rad]");
+    a->Visit("kp_max", &r.kp_max, "[N m/rad]");
+    a->Visit("kd_min", &r.kd_min, "[N m s/rad]");
+    a->Visit("kd_max", &r.kd_max, "[N m s/rad]");
+    a->Visit("tau_min", &r.tau_min, "[N m]");
+    a->Visit("tau_max", &r.tau_max, "[N m]");
+  }
+  std::string validate() const { return r.validate(); }
+};
+
+struct MotorEntry {
+  std::string joint;
+  int joint_index = -1;
+  int motor_id = 0;
+  std::optional<std::uint32_t> command_can_id;
+  std::uint32_t reply_can_id = 0;
+  double direction = 1.0;
+  double offset = 0.0;
+  std::string type;
+  std::optional<std::array<double, 2>> joint_range;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("joint", &joint, "joint name of the robot config", yaml::kRequired);
+    a->Visit("joint_index", &joint_index, "index in the robot's joint order", yaml::kRequired);
+    a->Visit("motor_id", &motor_id, "driver id, 1..254", yaml::kRequired);
+    a->Visit("command_can_id", &command_can_id, "11-bit id of commands (default: motor_id)");
+    a->Visit("reply_can_id", &reply_can_id, "11-bit id of replies");
+    a->Visit("direction", &direction, "+1 or -1");
+    a->Visit("offset", &offset, "motor position at joint zero [rad]");
+    a->Visit("type", &type, "a key of motor_types", yaml::kRequired);
+    a->Visit("joint_range", &joint_range, "[low, high] [rad]: narrows the reply plausibility window");
+  }
+  std::string validate() const {
+    if (motor_id < 1 || motor_id > 254) return "motor_id: expected 1..254, got " + std::to_string(motor_id);
+    if (joint_range && !((*joint_range)[0] < (*joint_range)[1])) return "joint_range: expected low < high";
+    return "";
+  }
+};
+
+struct BusEntry {
+  std::string name;
+  std::string protocol = "mit";
+  BusTiming timing;
+  std::vector<MotorEntry> motors;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("name", &name, "interface name, e.g. can0", yaml::kRequired);
+    a->Visit("protocol", &protocol, "motor protocol (makeMotorProtocol name)");
+    a->Visit("bitrate", &timing.bitrate, "nominal bit rate [bit/s]");
+    a->Visit("fd", &timing.fd, "CAN FD frames");
+    a->Visit("data_bitrate", &timing.data_bitrate, "CAN FD data-phase bit rate [bit/s]");
+    a->Visit("motors", &motors, "served in this order inside the slot", yaml::kRequired);
+  }
+};
+
+struct PlanFile {
+  BusPlanOptions* o = nullptr;
+  double reply_margin = 0.2;
+  std::map<std::string, RangesEntry> motor_types;
+  std::vector<BusEntry> buses;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("period_s", &o->period_s, "HAL period [s]");
+    a->Visit("max_load", &o->max_load, "refuse a bus above this load, (0, 1]");
+    a->Visit("turnaround_s", &o->turnaround_s, "driver reply latency [s]");
+    a->Visit("num_joints", &o->num_joints, "every joint index 0..num_joints-1 exactly once");
+    a->Visit("reply_margin", &reply_margin, "reply window = joint range +- this [rad]");
+    a->Visit("motor_types", &motor_types, "codec ranges per motor type");
+    a->Visit("buses", &buses, "the buses", yaml::kRequired);
+  }
+  std::string validate() const {
+    if (const std::string ov = o->validate(); !ov.empty()) return ov;
+    if (buses.empty()) return "buses: expected a non-empty list of buses";
+    if (!(reply_margin >= 0.0 && reply_margin <= 1.0)) return "reply_margin: expected 0..1 rad";
+    return "";
+  }
+};
 
 }  // namespace
 
 std::vector<BusConfig> BusPlan::parseYaml(const std::string& path, BusPlanOptions& o) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": cannot read bus plan: " + e.what());
-  }
-  o.period_s = getOr(root, "period_s", path, "", o.period_s);
-  o.max_load = getOr(root, "max_load", path, "", o.max_load);
-  o.turnaround_s = getOr(root, "turnaround_s", path, "", o.turnaround_s);
-  o.num_joints = getOr(root, "num_joints", path, "", o.num_joints);
-  const double reply_margin = getOr(root, "reply_margin", path, "", 0.2);
-  const std::string ov = o.validate();
-  if (!ov.empty()) fail(path, "(top level)", ov);
-
-  std::map<std::string, MotorRanges> types;
-  if (const YAML::Node mt = root["motor_types"]) {
-    for (const auto& kv : mt) {
-      const std::string name = kv.first.as<std::string>();
-      types[name] = parseRanges(kv.second, path, "motor_types." + name);
-    }
-  }
-  const YAML::Node bn = root["buses"];
-  if (!bn || !bn.IsSequence() || bn.size() == 0) fail(path, "buses", "expected a non-empty list of buses");
+  const yaml::YamlDocument doc = yaml::loadYamlDocument(path);
+  PlanFile f;
+  f.o = &o;
+  yaml::readYaml(doc, &f);
+  const YAML::Node buses_node = doc.root["buses"];
   std::vector<BusConfig> buses;
-  for (std::size_t b = 0; b < bn.size(); ++b) {
-    const YAML::Node n = bn[b];
-    const std::string where = "buses[" + std::to_string(b) + "]";
+  for (std::size_t b = 0; b < f.buses.size(); ++b) {
+    const BusEntry& e = f.buses[b];
     BusConfig c;
-    c.name = get<std::string>(n, "name", path, where);
-    c.protocol = getOr<std::string>(n, "protocol", path, where, "mit");
-    c.timing.bitrate = getOr(n, "bitrate", path, where, 1e6);
-    c.timing.fd = getOr(n, "fd", path, where, false);
-    c.timing.data_bitrate = getOr(n, "data_bitrate", path, where, 5e6);
-    const YAML::Node mn = n["motors"];
-    if (!mn || !mn.IsSequence()) fail(path, where + ".motors", "expected a list of motors");
-    for (std::size_t k = 0; k < mn.size(); ++k) {
-      const YAML::Node m = mn[k];
-      const std::string mw = where + ".motors[" + std::to_string(k) + "]";
+    c.name = e.name;
+    c.protocol = e.protocol;
+    c.timing = e.timing;
+    for (std::size_t k = 0; k < e.motors.size(); ++k) {
+      const MotorEntry& m = e.motors[k];
       MotorSpec s;
-      s.name = get<std::string>(m, "joint", path, mw);
-      s.joint_index = get<int>(m, "joint_index", path, mw);
-      const int id = get<int>(m, "motor_id", path, mw);
-      if (id < 1 || id > 254) fail(path, mw + ".motor_id", "expected 1..254, got " + std::to_string(id));
-      s.motor_id = static_cast<std::uint8_t>(id);
-      s.command_can_id = getOr<std::uint32_t>(m, "command_can_id", path, mw, s.motor_id);
-      s.reply_can_id = getOr<std::uint32_t>(m, "reply_can_id", path, mw, 0);
-      s.direction = getOr(m, "direction", path, mw, 1.0);
-      s.offset = getOr(m, "offset", path, mw, 0.0);
-      const std::string type = get<std::string>(m, "type", path, mw);
-      auto it = types.find(type);
-      if (it == types.end()) fail(path, mw + ".type", "unknown motor type '" + type + "' (define it in motor_types)");
-      s.ranges = it->second;
+      s.name = m.joint;
+      s.joint_index = m.joint_index;
+      s.motor_id = static_cast<std::uint8_t>(m.motor_id);
+      s.command_can_id = m.command_can_id.value_or(s.motor_id);
+      s.reply_can_id = m.reply_can_id;
+      s.direction = m.direction;
+      s.offset = m.offset;
+      auto it = f.motor_types.find(m.type);
+      if (it == f.motor_types.end()) {
+        std::vector<std::string> names;
+        for (const auto& kv : f.motor_types) names.push_back(kv.first);
+        const YAML::Node mn = buses_node[b]["motors"][k]["type"];
+        yaml::YamlSource src = doc.source;
+        src.key_path = "buses[" + std::to_string(b) + "].motors[" + std::to_string(k) + "].type";
+        yaml::fail(src, mn, "unknown motor type '" + m.type + "' (define it in motor_types" +
+                                (names.empty() ? std::string(")") : "; did you mean '" + yaml::nearestKey(m.type, names) + "'?)"));
+      }
+      s.ranges = it->second.r;
       s.reply_limits.qd_abs_max = std::max(std::fabs(s.ranges.qd_min), std::fabs(s.ranges.qd_max));
       s.reply_limits.tau_abs_max = std::max(std::fabs(s.ranges.tau_min), std::fabs(s.ranges.tau_max));
-      if (const YAML::Node jr = m["joint_range"]) {
-        if (!jr.IsSequence() || jr.size() != 2) fail(path, mw + ".joint_range", "expected [low, high] in rad");
-        const double lo = jr[0].as<double>(), hi = jr[1].as<double>();
-        if (!(lo < hi)) fail(path, mw + ".joint_range", "expected low < high");
+      if (m.joint_range) {
         // Reply plausibility is judged motor-side: map the joint range through direction/offset.
+        const double lo = (*m.joint_range)[0], hi = (*m.joint_range)[1];
         const double a = s.direction * lo + s.offset, bnd = s.direction * hi + s.offset;
-        s.reply_limits.q_min = std::min(a, bnd) - reply_margin;
-        s.reply_limits.q_max = std::max(a, bnd) + reply_margin;
+        s.reply_limits.q_min = std::min(a, bnd) - f.reply_margin;
+        s.reply_limits.q_max = std::max(a, bnd) + f.reply_margin;
       }
       c.motors.push_back(s);
     }
     buses.push_back(std::move(c));
   }
   return buses;
+}
+
+void checkPlanAgainstRobot(const std::vector<BusConfig>& buses, const std::string& plan_file,
+                           const pmg::RobotConfig& robot) {
+  const std::string& rf = robot.source_file.empty() ? std::string("<robot config>") : robot.source_file;
+  const std::vector<std::string> names = robot.jointNames();
+  std::vector<int> seen(robot.numJoints(), 0);
+  for (std::size_t b = 0; b < buses.size(); ++b) {
+    for (std::size_t k = 0; k < buses[b].motors.size(); ++k) {
+      const MotorSpec& m = buses[b].motors[k];
+      const std::string where = plan_file + ": buses[" + std::to_string(b) + "].motors[" + std::to_string(k) + "]";
+      const int i = robot.jointIndex(m.name);
+      if (i < 0)
+        throw ConfigError(where + ": joint '" + m.name + "' is not a joint of " + rf + " (did you mean '" +
+                          yaml::nearestKey(m.name, names) + "'?)");
+      const pmg::JointConfig& j = robot.joints[static_cast<std::size_t>(i)];
+      if (m.joint_index != i)
+        throw ConfigError(where + ": joint '" + m.name + "' has joint_index " + std::to_string(m.joint_index) +
+                          ", but " + rf + " has it at index " + std::to_string(i));
+      if (buses[b].name != j.bus || static_cast<int>(m.motor_id) != j.motor_id)
+        throw ConfigError(where + ": joint '" + m.name + "' is on bus " + buses[b].name + " with motor_id " +
+                          std::to_string(m.motor_id) + ", but " + rf + " says bus " + j.bus + " with motor_id " +
+                          std::to_string(j.motor_id));
+      ++seen[static_cast<std::size_t>(i)];
+    }
+  }
+  for (std::size_t i = 0; i < seen.size(); ++i)
+    if (seen[i] != 1)
+      throw ConfigError(plan_file + ": joint '" + robot.joints[i].name + "' of " + rf + " appears " +
+                        std::to_string(seen[i]) + " times (expected exactly once)");
 }
 
 BusPlan BusPlan::fromYaml(const std::string& path) {

@@ -25,6 +25,10 @@
 
 #include "pmg/hal/bus/motor_protocol.hpp"
 
+namespace pmg {
+struct RobotConfig;
+}
+
 namespace pmg::hal::bus {
 
 /// Worst-case (full stuffing) bits of a classic CAN data frame with `payload` bytes (0..8).
@@ -96,10 +100,12 @@ class BusPlan {
   /// prefixed by `source` (file name), e.g. "g1.yaml: bus 'can3': load 87.5 % > 80 %".
   BusPlan(std::vector<BusConfig> buses, BusPlanOptions options, const std::string& source = "bus plan");
 
-  /// Load a plan from YAML (format in docs/hal.md). Throws std::runtime_error naming the file and
-  /// field on any missing/invalid value, and the load check's message if the budget is exceeded.
+  /// Load a plan from YAML (format in docs/hal.md, read with pmg::yaml). Throws pmg::ConfigError
+  /// naming the file, line and field on any missing/invalid value or unknown key (with the nearest
+  /// valid key), and std::invalid_argument with the load check's message if the budget is exceeded.
   static BusPlan fromYaml(const std::string& path);
   /// Parse YAML into configs without the load check (for tools that show refused plans).
+  /// @throws pmg::ConfigError as fromYaml().
   static std::vector<BusConfig> parseYaml(const std::string& path, BusPlanOptions& options_out);
 
   const std::vector<BusConfig>& buses() const noexcept { return buses_; }
@@ -118,5 +124,14 @@ class BusPlan {
   std::vector<BusLoad> loads_;
   std::vector<std::vector<SlotEntry>> schedule_;
 };
+
+/// The robot config is the single source of truth for the wiring: checks that every motor of a
+/// plan names a joint of `robot` with the same joint index, bus name and motor id, and that every
+/// joint of `robot` appears exactly once. Called by makeCanBackend() when the setup names the robot.
+/// @throws pmg::ConfigError naming both files, the joint and both values, e.g. "g1_can.yaml:
+/// buses[1].motors[3]: joint 'right_knee_joint' is on bus can1 with motor_id 4, but g1.yaml says bus
+/// can1 with motor_id 10".
+void checkPlanAgainstRobot(const std::vector<BusConfig>& buses, const std::string& plan_file,
+                           const pmg::RobotConfig& robot);
 
 }  // namespace pmg::hal::bus

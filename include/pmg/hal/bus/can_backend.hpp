@@ -115,6 +115,9 @@ class CanBackend final : public pmg::HalBackend {
 /// How the CAN backend reaches the buses.
 struct CanBackendSetup {
   std::string plan_file;            ///< Bus plan YAML (e.g. config/hal/g1_can.yaml).
+  /// The robot config the plan must agree with (joint indices, bus names, motor ids; see
+  /// checkPlanAgainstRobot()). Not owned; nullptr skips the check (bus-level tests only).
+  const pmg::RobotConfig* robot = nullptr;
   std::string transport = "udp";    ///< "socketcan" (robot: interface = bus name) or "udp" (pmg_sil).
   std::uint16_t udp_base_port = 47000;  ///< UDP port layout base (see sil_emulator.hpp).
   bool lockstep = false;            ///< Lockstep with pmg_sil (see CanBackendOptions::lockstep).
@@ -122,8 +125,8 @@ struct CanBackendSetup {
 };
 
 /// Build a CanBackend from a setup (setup code: throws std::runtime_error / std::system_error
-/// naming the file, interface or port). With "socketcan" there is no IMU channel on CAN: the IMU
-/// must come from another reader.
+/// naming the file, interface or port; pmg::ConfigError when the plan disagrees with setup.robot).
+/// With "socketcan" there is no IMU channel on CAN: the IMU must come from another reader.
 std::unique_ptr<CanBackend> makeCanBackend(const CanBackendSetup& setup);
 
 }  // namespace pmg::hal::bus
