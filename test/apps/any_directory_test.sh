@@ -7,7 +7,7 @@
 #   any_directory_test.sh BIN_DIR STATE_LOG_TOOL
 set -uo pipefail
 bin="$(cd "${1:?usage: any_directory_test.sh BIN_DIR STATE_LOG_TOOL}" && pwd)"
-make_log="${2:?usage: any_directory_test.sh BIN_DIR STATE_LOG_TOOL}"
+make_log="$(realpath "${2:?usage: any_directory_test.sh BIN_DIR STATE_LOG_TOOL}")"
 data="$bin/../share/pmg"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT

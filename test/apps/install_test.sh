@@ -55,8 +55,10 @@ for p in "$prefix" "$work/moved"; do
     mv "$prefix" "$p"
   fi
   "$p/bin/pmg_policy_check" --model "$p/share/pmg/config/policies/g1_pmg_policy.onnx"
-  "$p/bin/pmg_bus_plan" "$p/share/pmg/config/hal/g1_can.yaml" | head -n 1
-  "$p/bin/pmg_policy_check" --help | grep -qF "$p/share/pmg/config/robots/g1/g1.yaml" ||
+  plan="$("$p/bin/pmg_bus_plan" "$p/share/pmg/config/hal/g1_can.yaml")"
+  echo "${plan%%$'\n'*}"
+  help="$("$p/bin/pmg_policy_check" --help)"
+  [[ "$help" == *"$p/share/pmg/config/robots/g1/g1.yaml"* ]] ||
     { echo "FAIL pmg_policy_check's default robot config is not in $p/share/pmg"; exit 1; }
 done
 if [[ -n "$(ls -A "$work/elsewhere")" ]]; then
