@@ -3,7 +3,8 @@
 schedule, static clips as joint angles over the command value.
 
 Usage: scripts/motion_plot_clips.py [config/clips/g1] [out_dir]   (default out_dir: <clips>/plots)
-Writes dynamic_clips.png and static_clips.png.
+Writes dynamic_clips.png and static_clips.png. The default clip folder is the shipped set of pmg's
+data directory ($PMG_DATA_DIR, else the folder above this script: the checkout or <prefix>/share/pmg).
 """
 import glob
 import os
@@ -20,8 +21,16 @@ JOINTS = ["left_hip_pitch_joint", "left_hip_roll_joint", "left_knee_joint", "lef
           "right_hip_pitch_joint", "right_knee_joint", "waist_yaw_joint", "left_shoulder_pitch_joint"]
 
 
+def default_clip_dir():
+    data_dir = os.environ.get("PMG_DATA_DIR") or os.path.join(os.path.dirname(os.path.realpath(__file__)), "..")
+    return os.path.normpath(os.path.join(data_dir, "config", "clips", "g1"))
+
+
 def main():
-    clip_dir = sys.argv[1] if len(sys.argv) > 1 else "config/clips/g1"
+    if len(sys.argv) > 1 and sys.argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return
+    clip_dir = sys.argv[1] if len(sys.argv) > 1 else default_clip_dir()
     out_dir = sys.argv[2] if len(sys.argv) > 2 else os.path.join(clip_dir, "plots")
     os.makedirs(out_dir, exist_ok=True)
     clips = [yaml.safe_load(open(f)) for f in sorted(glob.glob(os.path.join(clip_dir, "*.yaml")))]

@@ -16,8 +16,7 @@ mkdir -p "$out"
 : > "$out/summary.txt"
 run() {  # name config script
   echo "== $1: $2 with $3" | tee -a "$out/summary.txt"
-  build/bin/pmg_controller --config "$2" --script "$3" --no-lcm --log "$out/$1.lcmlog" 2>&1 \
-    | grep -v "KDL does not support a root link with an inertia" | tee -a "$out/summary.txt"
+  build/bin/pmg_controller --config "$2" --script "$3" --no-lcm --log "$out/$1.lcmlog" 2>&1 | tee -a "$out/summary.txt"
   build/bin/pmg_log_export --log "$out/$1.lcmlog" --csv "$out/$1.csv"
   python3 build/bin/pmg_plot_tracking.py "$out/$1.csv" "$out/$1_tracking.png" | tee -a "$out/summary.txt"
 }
