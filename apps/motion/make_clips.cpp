@@ -4,28 +4,41 @@
 ///   build/bin/pmg_make_clips [--data data/motions] [--robot config/robots/g1/g1.yaml]
 ///                            [--out config/clips/g1] [--csv-dir DIR]
 ///
+/// The defaults are the folders of pmg's data directory (pmg::dataDir(); in a build tree, the
+/// checkout's data/ and config/), so the default run regenerates the shipped set in place.
+///
 /// Every clip: import (DeepMimic .txt / CMU .bvh) → optimisation-based retargeting
 /// (ceres_keypoints_v1) → contact segmentation and one gait cycle (dynamic) or a monotone posture
-/// sweep (static) → clip file. Mirrored clips use the robot's mirror map. Writes
+/// sweep (static) → clip file. Mirrored clips use the robot's mirror map (pmg::mirrorClip). Writes
 /// <out>/report.md (per-clip retargeting quality) and, with --csv-dir, per-clip keypoint CSVs for
 /// scripts/motion_plot_retarget.py.
+///
+/// All or nothing: every mocap file is read before any retargeting, every clip is built and
+/// validated in memory, then the clip files and report.md are written to temporary files in <out>
+/// and renamed onto their names only when all were written. A failure (a truncated BVH, a clip
+/// that does not validate, a full disk) leaves <out> as it was.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "pmg/common/data_paths.hpp"
+#include "pmg/clips/clip_io.hpp"
+#include "pmg/clips/clip_transforms.hpp"
+#include "pmg/clips/clip_validation.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/motion/bvh.hpp"
 #include "pmg/motion/clip_builder.hpp"
-#include "pmg/motion/clip_io.hpp"
 #include "pmg/motion/deepmimic.hpp"
 #include "pmg/motion/keypoint_retarget.hpp"
 
@@ -73,10 +86,16 @@ struct StaticSpec {
 
 std::string license(const std::string& file) { return file.rfind("cmu_bvh/", 0) == 0 ? kCmuLicense : kDeepMimicLicense; }
 
-HumanMotion load(const std::string& root, const Source& s) {
-  const std::string path = root + "/" + s.file;
-  HumanMotion h = s.file.size() > 4 && s.file.substr(s.file.size() - 4) == ".bvh" ? bvhToHuman(readBvh(path), kCmuUnit)
-                                                                                  : deepMimicToHuman(readDeepMimicMotion(path));
+/// Reads and imports one mocap file (whole). @throws what the readers throw (file, line, field).
+HumanMotion importFile(const std::string& root, const std::string& file) {
+  const std::string path = root + "/" + file;
+  return file.size() > 4 && file.substr(file.size() - 4) == ".bvh" ? bvhToHuman(readBvh(path), kCmuUnit)
+                                                                   : deepMimicToHuman(readDeepMimicMotion(path));
+}
+
+/// The seconds of @p s cut from its imported file @p whole.
+HumanMotion load(const HumanMotion& whole, const Source& s) {
+  HumanMotion h = whole;
   const int b = static_cast<int>(std::lround(s.begin_s * h.fps));
   const int e = s.end_s < 0 ? h.numFrames() : std::min(h.numFrames(), static_cast<int>(std::lround(s.end_s * h.fps)) + 1);
   h = h.slice(b, e);
@@ -89,6 +108,39 @@ std::string statsLine(const RetargetStats& st) {
                      "{:.1f} mm max per stance ({} stances); ground penetration {:.1f} mm",
                      st.keypoint_error_mean, st.keypoint_error_max, st.joint_limit_violations, st.skate_mean_mm, st.skate_max_mm,
                      st.stances, st.penetration_max_mm);
+}
+
+namespace fs = std::filesystem;
+
+/// Writes every (path, text) to a temporary file beside its path, then renames them all onto their
+/// paths: either every file is replaced or, if one cannot be written, none is (temporary files
+/// removed). @throws std::runtime_error naming the file.
+void writeAllOrNothing(const std::vector<std::pair<fs::path, std::string>>& files) {
+  std::vector<fs::path> temps;
+  std::error_code ec;
+  const auto removeTemps = [&] {
+    for (const fs::path& t : temps) fs::remove(t, ec);
+  };
+  for (const auto& [path, text] : files) {
+    if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+    const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".tmp");
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (f) temps.push_back(tmp);
+    f << text;
+    f.flush();
+    if (!f) {
+      removeTemps();
+      throw std::runtime_error(path.string() + ": cannot write (" + tmp.string() + "); no file of the set was changed");
+    }
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    fs::rename(temps[i], files[i].first, ec);
+    if (ec) {
+      removeTemps();
+      throw std::runtime_error(files[i].first.string() + ": cannot rename " + temps[i].string() + " onto it: " + ec.message() +
+                               fmt::format(" ({} of {} files were replaced)", i, files.size()));
+    }
+  }
 }
 
 /// Sole tracks of a built clip (phase, height [m], speed [m/s], contact label per foot) as CSV.
@@ -115,10 +167,13 @@ void writeSoleTracks(const DynamicClip& clip, const KinematicModel& model, const
 
 int main(int argc, char** argv) {
   CLI::App app{"Build the PMG clip set for the G1 from human mocap (ceres_keypoints_v1 retargeting)"};
-  std::string data_root = "data/motions", robot_yaml = "config/robots/g1/g1.yaml", out_dir = "config/clips/g1", csv_dir;
-  app.add_option("--data", data_root, "mocap data root (holds deepmimic/ and cmu_bvh/)");
-  app.add_option("--robot", robot_yaml, "robot config YAML");
-  app.add_option("--out", out_dir, "output directory for the clip files and report.md");
+  std::string data_root = pmg::resolveData("data/motions").string();
+  std::string robot_yaml = pmg::resolveData("config/robots/g1/g1.yaml").string();
+  std::string out_dir = pmg::resolveData("config/clips/g1").string(), csv_dir;
+  app.add_option("--data", data_root, "mocap data root (holds deepmimic/ and cmu_bvh/)")->capture_default_str();
+  app.add_option("--robot", robot_yaml, "robot config YAML")->capture_default_str();
+  app.add_option("--out", out_dir, "output directory for the clip files and report.md (default: the shipped set)")
+      ->capture_default_str();
   app.add_option("--csv-dir", csv_dir, "also write per-clip retargeting keypoint CSVs here");
   std::string tracks_dir;
   app.add_option("--sole-tracks-dir", tracks_dir, "also write per-clip sole height/speed CSVs (phase, labels) here");
@@ -183,9 +238,14 @@ int main(int argc, char** argv) {
         "drift of the sole centre from its mean during each contact; penetration: deepest sole point below z = 0.\n\n"
         "| clip | kind | source | frames | T [s] | x̄ | contacts L (μ, σ) / R (μ, σ) | retargeting quality |\n"
         "|---|---|---|---|---|---|---|---|\n";
+    // Read every mocap file first: a broken input fails here, before minutes of retargeting.
+    std::map<std::string, HumanMotion> imported;
+    for (const DynamicSpec& spec : dynamic_specs) imported.emplace(spec.source.file, importFile(data_root, spec.source.file));
+    for (const StaticSpec& spec : static_specs) imported.emplace(spec.source.file, importFile(data_root, spec.source.file));
+    std::vector<std::pair<fs::path, std::string>> outputs;  // written together at the end
     std::map<std::string, DynamicClip> built;
     for (const DynamicSpec& spec : dynamic_specs) {
-      const HumanMotion human = load(data_root, spec.source);
+      const HumanMotion human = load(imported.at(spec.source.file), spec.source);
       KeypointRetargetOptions rt_opt;
       rt_opt.level_pelvis = true;  // played with a level pelvis (clip format: no pelvis orientation)
       const RetargetResult res = retargetKeypoints(human, model, rt_opt);
@@ -219,7 +279,7 @@ int main(int argc, char** argv) {
                                     spec.notes, res.scale, robot_contacts.enter_height, robot_contacts.exit_height,
                                     robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st));
       validateClip(clip, robot, spec.name);
-      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);
       report += fmt::format("| {} | dynamic {} {:+d} | `{}` | [{}, {}) @ {:.0f} Hz | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source.file, clip.meta.frame_begin,
@@ -232,14 +292,14 @@ int main(int argc, char** argv) {
     for (const MirrorSpec& spec : mirror_specs) {
       const DynamicClip clip = mirrorClip(built.at(spec.source_clip), robot, spec.name);
       validateClip(clip, robot, spec.name);
-      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
       report += fmt::format("| {} | dynamic {} {:+d} | mirror of `{}` | - | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | as {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source_clip, clip.period, clip.nominal_scale,
                             clip.contact[0].mu, clip.contact[0].sigma, clip.contact[1].mu, clip.contact[1].sigma, spec.source_clip);
       std::printf("%-20s mirror of %s\n", clip.name.c_str(), spec.source_clip.c_str());
     }
     for (const StaticSpec& spec : static_specs) {
-      const HumanMotion human = load(data_root, spec.source);
+      const HumanMotion human = load(imported.at(spec.source.file), spec.source);
       // The height template is played with a level pelvis like the dynamic clips; the pitch
       // template needs the pelvis tilt (the waist pitch alone reaches 0.52 rad, the bend 1.31 rad).
       KeypointRetargetOptions rt_opt;
@@ -272,7 +332,7 @@ int main(int argc, char** argv) {
       clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; joints averaged with their left/right mirror (symmetric posture); {}", spec.notes, res.scale,
                                     spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", statsLine(st));
       validateClip(clip, robot, spec.name);
-      writeClip(clip, out_dir + "/" + spec.name + ".yaml");
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", 0, static_cast<int>(extreme) + 1);
       report += fmt::format("| {} | static {} | `{}` | [{}, {}) @ {:.0f} Hz | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | {} |\n",
                             clip.name, toString(clip.axis), spec.source.file, clip.meta.frame_begin, clip.meta.frame_end, rm.fps,
@@ -283,9 +343,8 @@ int main(int argc, char** argv) {
     report +=
         "\nNot in the set: a side-lean (roll) static clip: the shared mocap has no side-lean capture (CMU 132_35/36\n"
         "were located but not transcribed), so no roll template is shipped and none is synthesized.\n";
-    std::ofstream f(out_dir + "/report.md", std::ios::binary | std::ios::trunc);
-    if (!f) throw std::runtime_error(out_dir + "/report.md: cannot open for writing");
-    f << report;
+    outputs.emplace_back(fs::path(out_dir) / "report.md", report);
+    writeAllOrNothing(outputs);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_make_clips: %s\n", e.what());
     return 1;

@@ -29,7 +29,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 

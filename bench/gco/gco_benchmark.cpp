@@ -9,7 +9,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/gco/synthetic_gait.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 

@@ -15,7 +15,7 @@
 #include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 double pct(std::vector<double>& v, double p) {

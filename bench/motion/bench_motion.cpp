@@ -6,7 +6,7 @@
 #include "pmg/common/data_paths.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 #include "pmg/motion/deepmimic.hpp"
 #include "pmg/motion/keypoint_retarget.hpp"
 

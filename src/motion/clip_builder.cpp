@@ -6,7 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_transforms.hpp"
+#include "pmg/clips/clip_validation.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 
 namespace pmg::motion {
 namespace {
@@ -288,34 +290,6 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
 
 namespace pmg::motion {
 
-DynamicClip mirrorClip(const DynamicClip& clip, const RobotConfig& robot, const std::string& new_name) {
-  const auto n = static_cast<Eigen::Index>(robot.numJoints());
-  if (clip.q.cols() != n) throw std::invalid_argument("mirrorClip(" + clip.name + "): joint count differs from the robot config");
-  const std::vector<int> mirror = robot.mirrorIndex();
-  const Eigen::Index N = clip.q.rows();
-  DynamicClip m = clip;
-  m.name = new_name;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    const double sign = robot.joints[static_cast<std::size_t>(j)].mirror_sign;
-    m.q.col(j) = sign * clip.q.col(mirror[static_cast<std::size_t>(j)]);
-    m.qd.col(j) = sign * clip.qd.col(mirror[static_cast<std::size_t>(j)]);
-  }
-  m.v_base.col(1) *= -1.0;
-  m.omega_base.col(0) *= -1.0;
-  m.omega_base.col(2) *= -1.0;
-  if (clip.axis != CommandAxis::kForward) m.direction = -clip.direction;
-  m.contact = {clip.contact[1], clip.contact[0]};
-  // Rotate so that φ = 0 is the new left foot's touchdown (start of its contact interval).
-  double start = m.contact[0].mu - m.contact[0].sigma;
-  start -= std::floor(start);
-  const Eigen::Index shift = static_cast<Eigen::Index>(std::lround(start * static_cast<double>(N))) % N;
-  rotateClipPhase(m, shift);
-  if (m.meta.provenance == "mocap") m.meta.provenance = "mocap_mirrored";
-  m.meta.notes = fmt::format("left/right mirror of clip '{}' (robot mirror map), phase rotated by {} samples; {}", clip.name,
-                             shift, clip.meta.notes);
-  return m;
-}
-
 void StaticClipOptions::validate() const {
   if (name.empty()) throw std::invalid_argument("StaticClipOptions.name: expected a non-empty clip name");
   if (num_samples < 2) throw std::invalid_argument(fmt::format("StaticClipOptions.num_samples = {}: expected >= 2", num_samples));
@@ -494,34 +468,9 @@ std::array<std::vector<bool>, kNumFeet> robotContactLabels(const ClipSoleTracks&
   return out;
 }
 
-void rotateClipPhase(DynamicClip& clip, Eigen::Index shift) {
-  const Eigen::Index N = clip.q.rows();
-  if (N == 0) return;
-  shift = ((shift % N) + N) % N;
-  if (shift == 0) return;
-  auto rotate = [&](Eigen::MatrixXd& x) {
-    const Eigen::MatrixXd y = x;
-    for (Eigen::Index k = 0; k < N; ++k) x.row(k) = y.row((k + shift) % N);
-  };
-  rotate(clip.q);
-  rotate(clip.qd);
-  rotate(clip.v_base);
-  rotate(clip.omega_base);
-  Eigen::MatrixXd hgt = clip.base_height;
-  rotate(hgt);
-  clip.base_height = hgt.col(0);
-  const double dphi = static_cast<double>(shift) / static_cast<double>(N);
-  for (auto& c : clip.contact) {
-    c.mu -= dphi;
-    c.mu -= std::floor(c.mu);
-    if (c.mu >= 1.0) c.mu = 0.0;
-  }
-}
-
 void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model, const RobotContactOptions& options) {
   options.validate();
   const ClipSoleTracks tracks = clipSoleTracks(clip, model);
-  const Eigen::Index N = clip.q.rows();
   const auto labels = robotContactLabels(tracks, options);
   for (std::size_t f = 0; f < kNumFeet; ++f) {
     const std::vector<bool>& flags = labels[f];
@@ -531,22 +480,14 @@ void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model
                                            clip.name, footName(static_cast<Foot>(f)), options.enter_height));
     clip.contact[f] = contactModel(flags);
   }
-  // φ = 0 at the left foot's touchdown (start of its contact interval), as in every shipped clip.
-  double start = clip.contact[0].mu - clip.contact[0].sigma;
-  start -= std::floor(start);
-  rotateClipPhase(clip, static_cast<Eigen::Index>(std::lround(start * static_cast<double>(N))) % N);
+  alignPhaseOnLeftTouchdown(clip);  // φ = 0 at the left foot's touchdown, as in every clip
 }
 
 void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot) {
   const auto n = static_cast<Eigen::Index>(robot.numJoints());
   if (clip.q.cols() != n)
     throw std::invalid_argument(fmt::format("symmetrizeStaticClip({}): clip has {} joints, robot config {}", clip.name, clip.q.cols(), n));
-  const std::vector<int> mirror = robot.mirrorIndex();
-  const Eigen::MatrixXd q = clip.q;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    const double sign = robot.joints[static_cast<std::size_t>(j)].mirror_sign;
-    clip.q.col(j) = 0.5 * (q.col(j) + sign * q.col(mirror[static_cast<std::size_t>(j)]));
-  }
+  clip.q = 0.5 * (clip.q + mirrorJoints(clip.q, generatorJointSpace(robot)));
 }
 
 }  // namespace pmg::motion

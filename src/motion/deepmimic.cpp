@@ -37,45 +37,6 @@ Eigen::Matrix3d deepMimicToZUp() {
   return C;
 }
 
-std::array<Eigen::MatrixXd, 2> deepMimicSoleTracks(const DeepMimicMotion& motion, double scale) {
-  const Eigen::Matrix3d C = deepMimicToZUp();
-  const int F = static_cast<int>(motion.frames.size());
-  std::array<Eigen::MatrixXd, 2> out{Eigen::MatrixXd(F, 3), Eigen::MatrixXd(F, 3)};
-  std::vector<double> lower(static_cast<std::size_t>(F));
-  for (int k = 0; k < F; ++k) {
-    const DeepMimicFrame& f = motion.frames[static_cast<std::size_t>(k)];
-    const Eigen::Matrix3d R0 = f.R_MR.toRotationMatrix();
-    for (int side = 0; side < 2; ++side) {
-      const bool left = side == 0;
-      const Eigen::Vector3d p_hip = f.p_MR + R0 * Eigen::Vector3d(0, 0, left ? -0.084887 : 0.084887);
-      const Eigen::Matrix3d R_hip = R0 * (left ? f.left_hip : f.right_hip).toRotationMatrix();
-      const Eigen::Vector3d p_knee = p_hip + R_hip * Eigen::Vector3d(0, -0.421546, 0);
-      const Eigen::Matrix3d R_knee =
-          R_hip * Eigen::AngleAxisd(left ? f.left_knee : f.right_knee, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      const Eigen::Vector3d p_ankle = p_knee + R_knee * Eigen::Vector3d(0, -0.409870, 0);
-      const Eigen::Matrix3d R_ankle = R_knee * (left ? f.left_ankle : f.right_ankle).toRotationMatrix();
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      double ymin = 1e9;
-      for (const double x : {0.045 - 0.0885, 0.045 + 0.0885})
-        for (const double z : {-0.045, 0.045}) {
-          const Eigen::Vector3d p = p_ankle + R_ankle * Eigen::Vector3d(x, -0.05, z);
-          centre += 0.25 * p;
-          ymin = std::min(ymin, p.y());
-        }
-      const Eigen::Vector3d w = C * centre;
-      out[static_cast<std::size_t>(side)].row(k) = Eigen::RowVector3d(w.x(), w.y(), ymin);
-    }
-    lower[static_cast<std::size_t>(k)] = std::min(out[0](k, 2), out[1](k, 2));
-  }
-  std::nth_element(lower.begin(), lower.begin() + F / 2, lower.end());
-  const double ground = lower[static_cast<std::size_t>(F / 2)];
-  for (auto& m : out) {
-    m.col(2).array() -= ground;
-    m *= scale;
-  }
-  return out;
-}
-
 HumanMotion deepMimicToHuman(const DeepMimicMotion& motion) {
   const Eigen::Matrix3d C = deepMimicToZUp();
   HumanMotion h;

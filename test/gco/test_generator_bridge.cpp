@@ -5,7 +5,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace pmg::gco {
 namespace {

@@ -1,8 +1,11 @@
 // PMG generator: each equation on hand-computed cases, convexity, continuity across φ = 1 → 0,
-// negative commands, standing, posture offsets, and no allocation per tick.
+// negative commands (clips derived with pmg::clips), standing, posture offsets, clip validation,
+// and no allocation per tick.
 #include <cmath>
 #include <memory>
 #include <random>
+#include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -221,20 +224,46 @@ TEST(Generator, NegativeCommandsUseTimeReversedAndMirroredClips) {
   const DynamicClip* back = m->dynamicClip(CommandAxis::kForward, -1);
   ASSERT_NE(back, nullptr);
   EXPECT_EQ(back->meta.provenance, "mocap_time_reversed");
-  EXPECT_TRUE(back->q.row(1).isApprox(fwd->q.row(kSamples - 1)));  // q_back(φ) = q_fwd(1 − φ)
-  EXPECT_NEAR(back->v_base(0, 0), -fwd->v_base(0, 0), 1e-12);
+  EXPECT_EQ(back->direction, -1);
+  // Reversed, then rotated so that φ = 0 is the left touchdown again: the forward clip's left
+  // contact (μ 0.25, σ 0.3) reversed is μ 0.75, starting at 0.45 of the cycle = 3.6 → 4 samples.
+  const Eigen::Index shift = 4;
+  for (Eigen::Index k = 0; k < kSamples; ++k) {
+    const Eigen::Index src = (kSamples - (k + shift) % kSamples) % kSamples;  // q_back(φ) = q_fwd(1 − φ − shift/N)
+    EXPECT_TRUE(back->q.row(k).isApprox(fwd->q.row(src))) << k;
+    EXPECT_NEAR(back->v_base(k, 0), -fwd->v_base(src, 0), 1e-12);
+  }
+  EXPECT_NEAR(back->contact[0].mu, 0.25, 1e-12);
   const DynamicClip* left = m->dynamicClip(CommandAxis::kLateral, 1);
   const DynamicClip* right = m->dynamicClip(CommandAxis::kLateral, -1);
   EXPECT_EQ(right->meta.provenance, "mocap_mirrored");
-  EXPECT_TRUE(right->q.col(0).isApprox(left->q.col(1)));   // left joint takes the right joint's motion
-  EXPECT_TRUE(right->q.col(2).isApprox(-left->q.col(2)));  // yaw joint flips sign
-  EXPECT_DOUBLE_EQ(right->contact[0].mu, left->contact[1].mu);
+  EXPECT_EQ(right->direction, -1);
+  // Mirrored, then rotated by 4 samples: the new left foot is the old right one (μ 0.8, σ 0.3).
+  for (Eigen::Index k = 0; k < kSamples; ++k) {
+    const Eigen::Index src = (k + 4) % kSamples;
+    EXPECT_DOUBLE_EQ(right->q(k, 0), left->q(src, 1));   // left joint takes the right joint's motion
+    EXPECT_DOUBLE_EQ(right->q(k, 2), -left->q(src, 2));  // yaw joint flips sign
+  }
+  EXPECT_NEAR(right->contact[0].mu, left->contact[1].mu - 0.5, 1e-12);
   MotionGenerator gen(m);
   gen.step({0, -0.3, 0}, {}, 0.01);
   EXPECT_GT(gen.output().weight[1], 0.0);
   EXPECT_LT(gen.output().v_base[1], 0.0);  // walking right
   gen.step({0, 0, -0.5}, {}, 0.01);
   EXPECT_LT(gen.output().yaw_rate, 0.0);  // turning clockwise
+}
+
+TEST(Generator, DerivedClipsKeepTheLeftTouchdownAtPhaseZero) {
+  // All clips share one phase and are blended sample by sample, so a derived clip must start at
+  // the left foot's touchdown like the real ones (within half a sample).
+  auto m = model();
+  for (const auto& [axis, dir] : {std::pair{CommandAxis::kForward, -1}, std::pair{CommandAxis::kLateral, -1},
+                                  std::pair{CommandAxis::kYaw, -1}}) {
+    const DynamicClip* c = m->dynamicClip(axis, dir);
+    ASSERT_NE(c, nullptr);
+    const double start = c->contact[0].mu - c->contact[0].sigma;
+    EXPECT_LE(std::fabs(start - std::round(start)), 0.5 / kSamples + 1e-12) << c->name;
+  }
 }
 
 TEST(Generator, NanCommandFallsBackToStandingAndIsReported) {
@@ -257,16 +286,35 @@ TEST(Generator, ReferenceVelocityMatchesTheFiniteDifferenceOfQref) {
   EXPECT_LT((fd - qd0).cwiseAbs().maxCoeff(), 1e-6 + 0.02 * fd.cwiseAbs().maxCoeff());
 }
 
+// The generator refuses a clip by the clip library's one validation (pmg::validateClip).
+std::string modelError(const ClipLibrary& lib) {
+  try {
+    GeneratorModel m(lib, jointSpace());
+  } catch (const ClipFormatError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 TEST(Generator, RejectsInconsistentClips) {
   ClipLibrary lib = library();
   lib.dynamic_clips[0].qd.resize(3, kJoints);
-  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+  EXPECT_EQ(modelError(lib), "clip 'clip0': qd: is 3x4: expected 8x4 (same shape as q)");
   lib = library();
   lib.dynamic_clips[1].contact[0].sigma = 0.7;
-  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+  EXPECT_EQ(modelError(lib), "clip 'clip1': contact.left.sigma: = 0.7: expected in [0, 0.5] (phase units)");
   lib = library();
   lib.dynamic_clips.push_back(lib.dynamic_clips[0]);
-  EXPECT_THROW(GeneratorModel(lib, jointSpace()), std::invalid_argument);
+  EXPECT_NE(modelError(lib).find("duplicates clip 'clip0'"), std::string::npos);
+  lib = library();
+  lib.dynamic_clips[2].q(3, 1) = 3.5;  // beyond the limit 3
+  EXPECT_EQ(modelError(lib), "clip 'clip2': q[3][1]: = 3.500000: expected within joint limits [-3, 3] of r");
+  lib = library();
+  lib.static_clips[0].meta.joint_names = {"r", "l", "yaw", "pitch"};  // names are optional in memory, but checked
+  EXPECT_EQ(modelError(lib), "static clip 'squat': joint_names[0]: = 'r': expected 'l' (joint order of the joint space)");
+  lib = library();
+  lib.dynamic_clips[0].period = 12.0;
+  EXPECT_EQ(modelError(lib), "clip 'clip0': period: = 12: expected T in (0, 10) [s]");
 }
 
 TEST(Generator, StepDoesNotAllocate) {

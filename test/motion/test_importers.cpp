@@ -98,18 +98,3 @@ TEST(Importers, MirroredHumanMotionSwapsSides) {
 }
 
 }  // namespace
-
-// joint_angle_map_v1 building blocks: the Euler decompositions invert their compositions.
-#include "pmg/motion/joint_angle_map.hpp"
-namespace {
-TEST(JointAngleMap, EulerDecompositionsRoundTrip) {
-  using pmg::motion::eulerYXZ;
-  using pmg::motion::eulerZXY;
-  auto R = [](const Eigen::Vector3d& ax, double a) { return Eigen::AngleAxisd(a, ax).toRotationMatrix(); };
-  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(), Z = Eigen::Vector3d::UnitZ();
-  for (const Eigen::Vector3d a : {Eigen::Vector3d(0.3, -0.4, 1.1), Eigen::Vector3d(-2.0, 1.2, -0.1), Eigen::Vector3d(0, 0, 0)}) {
-    EXPECT_LT((eulerYXZ(R(Y, a(0)) * R(X, a(1)) * R(Z, a(2))) - a).norm(), 1e-12);
-    EXPECT_LT((eulerZXY(R(Z, a(0)) * R(X, a(1)) * R(Y, a(2))) - a).norm(), 1e-12);
-  }
-}
-}  // namespace

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "pmg/common/robot_config.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 #ifndef PMG_MAKE_CLIPS_EXE
 #error "PMG_MAKE_CLIPS_EXE must name the pmg_make_clips executable"

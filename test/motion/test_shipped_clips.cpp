@@ -15,7 +15,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/motion/clip_builder.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 

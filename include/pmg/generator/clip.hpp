@@ -9,7 +9,8 @@
 ///
 /// Clips are immutable after loading (Model/Data split): the generator only reads them.
 /// The on-disk format (versioned YAML) is documented in docs/clip_format.md and read/written by
-/// pmg::motion (include/pmg/motion/clip_io.hpp).
+/// the clip library pmg::clips (include/pmg/clips/clip_io.hpp), which also holds the one clip
+/// validation (clip_validation.hpp) and the clip transforms (clip_transforms.hpp).
 
 #include <array>
 #include <cstddef>

@@ -26,11 +26,13 @@
 ///   clip's period), so φ keeps running while standing and a start from rest is continuous.
 /// - **φ wrap.** Clips are periodic (sample N ≡ sample 0); phase interpolation wraps from the last
 ///   sample to the first, so q_ref is continuous across φ = 1 → 0.
-/// - **Negative commands.** Each axis has a clip per sign. A missing one is derived at load time:
-///   backward walking = the forward clip played in reverse time (q(1 − φ), velocities negated);
-///   right-sideways walking and clockwise turning = the left/right mirror of the left clip (mirror
-///   map of the robot config, contacts of the two feet swapped). Derived clips record this in
-///   their metadata (provenance "mocap_time_reversed" / "mocap_mirrored").
+/// - **Negative commands.** Each axis has a clip per sign. A missing one is derived at load time
+///   with the clip library's transforms (include/pmg/clips/clip_transforms.hpp): backward walking =
+///   the forward clip played in reverse time (q(1 − φ), velocities negated); right-sideways walking
+///   and clockwise turning = the left/right mirror of the left clip (mirror map of the robot config,
+///   contacts of the two feet swapped). Both are then rotated in phase so that φ = 0 is the left
+///   foot's touchdown, as in every clip, so derived and real clips blend phase-consistently. A
+///   derived capture says so in its metadata (provenance "mocap_time_reversed" / "mocap_mirrored").
 /// - **Reference velocity** q̇_ref: central finite difference of q_d over one template sample in
 ///   phase, times dφ/dt = 1 / T_u (the posture offset is constant in φ).
 /// - **Posture offset** q_s: each static clip is a table q(value) over its command range; the
@@ -40,6 +42,9 @@
 ///
 /// Model/Data split: GeneratorModel is immutable after construction (may allocate and throw);
 /// MotionGenerator::step() is noexcept and allocation-free (tested).
+///
+/// Header-only; the model's constructor (setup time) validates and derives clips with pmg::clips,
+/// so the target pmg::generator links pmg::clips.
 
 #include <algorithm>
 #include <array>
@@ -52,7 +57,10 @@
 
 #include <Eigen/Core>
 
+#include "pmg/clips/clip_transforms.hpp"
+#include "pmg/clips/clip_validation.hpp"
 #include "pmg/generator/clip.hpp"
+#include "pmg/generator/joint_space.hpp"
 
 namespace pmg {
 
@@ -72,16 +80,6 @@ struct PostureCommand {
   double roll = 0.0;
   double height = 0.0;  ///< absolute pelvis height [m]; <= 0 means "the standing height" (the squat clip's neutral)
   double operator[](std::size_t i) const { return i == 0 ? pitch : (i == 1 ? roll : height); }
-};
-
-/// The joint space the generator works in (filled from the robot config, pmg::RobotConfig).
-struct GeneratorJointSpace {
-  std::vector<std::string> joint_names;  ///< (n)
-  Eigen::VectorXd q_stand;               ///< (n) standing pose [rad]
-  Eigen::VectorXd lower, upper;          ///< (n) joint limits [rad]
-  std::vector<int> mirror_index;         ///< (n) left/right mirror partner of each joint
-  std::vector<int> mirror_sign;          ///< (n) ±1
-  double standing_base_height = 0.78;    ///< pelvis height in q_stand [m]
 };
 
 /// Tunables of the generator.
@@ -152,49 +150,15 @@ inline void phaseSample(double phi, std::size_t n_samples, std::size_t& k0, std:
   t = x - fl;
 }
 
-inline DynamicClip timeReversed(const DynamicClip& c) {
-  DynamicClip r = c;
-  const Eigen::Index n = c.q.rows();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const Eigen::Index s = (n - k) % n;
-    r.q.row(k) = c.q.row(s);
-    r.qd.row(k) = -c.qd.row(s);
-    r.v_base.row(k) = -c.v_base.row(s);
-    r.omega_base.row(k) = -c.omega_base.row(s);
-    r.base_height[k] = c.base_height[s];
-  }
-  for (auto& fc : r.contact) fc.mu = wrapPhase(1.0 - fc.mu);
-  r.direction = -c.direction;
-  r.name = c.name + "_time_reversed";
-  r.meta.provenance = "mocap_time_reversed";
-  r.meta.notes += (r.meta.notes.empty() ? "" : "; ") + std::string("derived by time reversal of ") + c.name;
-  return r;
-}
-
-inline DynamicClip mirrored(const DynamicClip& c, const GeneratorJointSpace& js) {
-  DynamicClip m = c;
-  for (Eigen::Index j = 0; j < c.q.cols(); ++j) {
-    const auto src = static_cast<Eigen::Index>(js.mirror_index[static_cast<std::size_t>(j)]);
-    const double sign = js.mirror_sign[static_cast<std::size_t>(j)];
-    m.q.col(j) = sign * c.q.col(src);
-    m.qd.col(j) = sign * c.qd.col(src);
-  }
-  m.v_base.col(1) = -c.v_base.col(1);   // y flips
-  m.omega_base.col(0) = -c.omega_base.col(0);  // roll rate flips
-  m.omega_base.col(2) = -c.omega_base.col(2);  // yaw rate flips
-  std::swap(m.contact[0], m.contact[1]);
-  m.direction = -c.direction;
-  m.name = c.name + "_mirrored";
-  m.meta.provenance = "mocap_mirrored";
-  m.meta.notes += (m.meta.notes.empty() ? "" : "; ") + std::string("derived by left/right mirroring of ") + c.name;
-  return m;
-}
-
 }  // namespace detail
 
 /// Immutable generator model: six dynamic clips (3 axes × 2 signs), up to three static clips,
-/// and the joint space. Construction validates everything and throws std::invalid_argument with
-/// the clip name, field and expected range on any inconsistency.
+/// and the joint space. Construction validates every clip with the clip library's one validation
+/// (pmg::validateClip, include/pmg/clips/clip_validation.hpp; clips built in memory may leave
+/// meta.joint_names empty) and derives a missing sign of an axis with its transforms
+/// (pmg::timeReverseClip, pmg::mirrorClip, include/pmg/clips/clip_transforms.hpp).
+/// @throws pmg::ClipFormatError naming the clip, the field and the expected range on an invalid
+/// clip or two clips for one slot; std::invalid_argument on invalid params or joint space.
 class GeneratorModel {
  public:
   GeneratorModel(const ClipLibrary& library, GeneratorJointSpace joint_space, GeneratorParams params = {})
@@ -206,28 +170,23 @@ class GeneratorModel {
         js_.mirror_index.size() != js_.joint_names.size() || js_.mirror_sign.size() != js_.joint_names.size())
       throw std::invalid_argument("GeneratorJointSpace: q_stand/lower/upper/mirror sizes differ from joint_names (" +
                                   std::to_string(n) + ")");
-    for (const auto& c : library.dynamic_clips) {
-      checkDynamic(c);
-      auto& entry = dynamic_[slotOf(c.axis, c.direction)];
-      if (entry) throw std::invalid_argument("clip '" + c.name + "': a second clip for the same axis and direction");
-      entry = std::make_unique<DynamicClip>(c);
-    }
+    ClipValidationOptions check;
+    check.require_joint_names = false;
+    for (const auto& c : library.dynamic_clips) validateClip(c, js_, "clip '" + c.name + "'", check);
+    for (const auto& s : library.static_clips) validateClip(s, js_, "static clip '" + s.name + "'", check);
+    validateLibraryAxes(library, "clip library");
+    for (const auto& c : library.dynamic_clips) dynamic_[slotOf(c.axis, c.direction)] = std::make_unique<DynamicClip>(c);
     for (std::size_t a = 0; a < kNumCommandAxes; ++a) {
       auto& pos = dynamic_[2 * a];
       auto& neg = dynamic_[2 * a + 1];
       const auto derive = [&](const DynamicClip& src) {
-        return static_cast<CommandAxis>(a) == CommandAxis::kForward ? detail::timeReversed(src)
-                                                                    : detail::mirrored(src, js_);
+        return static_cast<CommandAxis>(a) == CommandAxis::kForward ? timeReverseClip(src, src.name + "_time_reversed")
+                                                                    : mirrorClip(src, js_, src.name + "_mirrored");
       };
       if (pos && !neg) neg = std::make_unique<DynamicClip>(derive(*pos));
       if (neg && !pos) pos = std::make_unique<DynamicClip>(derive(*neg));
     }
-    for (const auto& s : library.static_clips) {
-      checkStatic(s);
-      auto& entry = static_[static_cast<std::size_t>(s.axis)];
-      if (entry) throw std::invalid_argument("static clip '" + s.name + "': a second clip for the same posture axis");
-      entry = std::make_unique<StaticClip>(s);
-    }
+    for (const auto& s : library.static_clips) static_[static_cast<std::size_t>(s.axis)] = std::make_unique<StaticClip>(s);
     t_stand_ = dynamic_[0] ? dynamic_[0]->period : 1.0;
     for (const auto& d : dynamic_)
       if (d) max_samples_ = std::max(max_samples_, d->numSamples());
@@ -246,44 +205,6 @@ class GeneratorModel {
   static std::size_t slotOf(CommandAxis axis, int direction) {
     return 2 * static_cast<std::size_t>(axis) + (direction < 0 ? 1 : 0);
   }
-  void checkJoints(const std::string& name, const ClipMetadata& meta, Eigen::Index cols) const {
-    if (cols != static_cast<Eigen::Index>(numJoints()))
-      throw std::invalid_argument("clip '" + name + "': q has " + std::to_string(cols) + " columns, expected " +
-                                  std::to_string(numJoints()) + " joints");
-    if (!meta.joint_names.empty() && meta.joint_names != js_.joint_names)
-      throw std::invalid_argument("clip '" + name + "': meta.joint_names differ from the robot's joint order");
-  }
-  void checkDynamic(const DynamicClip& c) const {
-    const Eigen::Index n = c.q.rows();
-    checkJoints(c.name, c.meta, c.q.cols());
-    if (n < 2) throw std::invalid_argument("clip '" + c.name + "': q has " + std::to_string(n) + " samples, expected >= 2");
-    if (c.qd.rows() != n || c.qd.cols() != c.q.cols() || c.v_base.rows() != n || c.v_base.cols() != 3 ||
-        c.omega_base.rows() != n || c.omega_base.cols() != 3 || c.base_height.size() != n)
-      throw std::invalid_argument("clip '" + c.name + "': qd/v_base/omega_base/base_height shapes do not match q (" +
-                                  std::to_string(n) + " samples)");
-    if (!(c.period > 0 && c.period < 10)) throw std::invalid_argument("clip '" + c.name + "': period expected in (0, 10) s");
-    if (!(c.nominal_scale > 0)) throw std::invalid_argument("clip '" + c.name + "': nominal_scale expected > 0");
-    if (c.direction != 1 && c.direction != -1) throw std::invalid_argument("clip '" + c.name + "': direction expected +1 or -1");
-    for (const auto& fc : c.contact)
-      if (!(fc.mu >= 0 && fc.mu < 1 && fc.sigma >= 0 && fc.sigma <= 0.5))
-        throw std::invalid_argument("clip '" + c.name + "': contact mu expected in [0, 1), sigma in [0, 0.5]");
-    if (!c.q.allFinite() || !c.qd.allFinite() || !c.v_base.allFinite() || !c.omega_base.allFinite() ||
-        !c.base_height.allFinite())
-      throw std::invalid_argument("clip '" + c.name + "': contains NaN or Inf");
-  }
-  void checkStatic(const StaticClip& s) const {
-    checkJoints(s.name, s.meta, s.q.cols());
-    const Eigen::Index k = s.values.size();
-    if (k < 2 || s.q.rows() != k)
-      throw std::invalid_argument("static clip '" + s.name + "': expected >= 2 values and one q row per value");
-    for (Eigen::Index i = 1; i < k; ++i)
-      if (!(s.values[i] > s.values[i - 1]))
-        throw std::invalid_argument("static clip '" + s.name + "': values expected strictly increasing");
-    if (s.neutral < s.values[0] || s.neutral > s.values[k - 1])
-      throw std::invalid_argument("static clip '" + s.name + "': neutral expected within [values.front, values.back]");
-    if (!s.q.allFinite() || !s.values.allFinite()) throw std::invalid_argument("static clip '" + s.name + "': NaN/Inf");
-  }
-
   GeneratorJointSpace js_;
   GeneratorParams params_;
   std::array<std::unique_ptr<DynamicClip>, 2 * kNumCommandAxes> dynamic_{};

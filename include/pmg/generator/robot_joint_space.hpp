@@ -5,6 +5,7 @@
 
 #include "pmg/common/robot_config.hpp"
 #include "pmg/generator/generator.hpp"
+#include "pmg/generator/joint_space.hpp"
 
 namespace pmg {
 
@@ -18,6 +19,7 @@ inline GeneratorJointSpace generatorJointSpace(const RobotConfig& robot) {
   js.mirror_index = robot.mirrorIndex();
   for (const auto& j : robot.joints) js.mirror_sign.push_back(j.mirror_sign);
   js.standing_base_height = robot.standing_base_height;
+  js.source = robot.source_file;
   return js;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/clips/clip_transforms.hpp"
 #include "pmg/generator/clip.hpp"
 #include "pmg/motion/robot_motion.hpp"
 
@@ -92,14 +93,6 @@ Eigen::MatrixXd periodicDerivative(const Eigen::MatrixXd& x, double period);
 
 namespace pmg::motion {
 
-/// Left↔right mirror of a dynamic clip with the robot's mirror map (RobotConfig joints' `mirror`
-/// and `mirror_sign`): q'_j = sign_j · q_mirror(j) (same for q̇); v' = (v_x, −v_y, v_z);
-/// ω' = (−ω_x, ω_y, −ω_z); contacts swapped; lateral and yaw clips change direction. The samples
-/// are rotated so that φ = 0 stays at the (new) left foot's touchdown. Sets provenance
-/// "mocap_mirrored" (a mirrored synthesized clip stays "synthesized") and appends to notes.
-/// @throws std::invalid_argument if the clip's joint count differs from the robot's.
-DynamicClip mirrorClip(const DynamicClip& clip, const RobotConfig& robot, const std::string& new_name);
-
 /// Options of static clip building.
 struct StaticClipOptions {
   std::string name;                          ///< e.g. "squat"
@@ -174,16 +167,12 @@ std::array<std::vector<bool>, kNumFeet> robotContactLabels(const ClipSoleTracks&
 
 /// Replaces the contact model {μ, σ} of both feet of @p clip by the longest run of the robot-foot
 /// labels (robotContactLabels on clipSoleTracks), then rotates the samples so that φ = 0 is
-/// the left foot's touchdown. @throws std::runtime_error naming the clip and foot if a foot is
+/// the left foot's touchdown (pmg::alignPhaseOnLeftTouchdown). @throws std::runtime_error naming the clip and foot if a foot is
 /// never in contact, and what clipSoleTracks throws.
 void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model, const RobotContactOptions& options = {});
 
-/// Rotates the N samples of a dynamic clip by @p shift samples (new sample k = old sample k + shift)
-/// and moves the contact centres μ by −shift / N, so the clip describes the same motion.
-void rotateClipPhase(DynamicClip& clip, Eigen::Index shift);
-
-/// Left/right-symmetric static clip: every row q becomes ½ (q + M q), where (M q)_j =
-/// mirror_sign_j · q_mirror(j) (robot config mirror map). A posture template should move both legs
+/// Left/right-symmetric static clip: every row q becomes ½ (q + M q), with M the robot's mirror
+/// map (pmg::mirrorJoints, clip_transforms.hpp). A posture template should move both legs
 /// alike; the captured squat and bend are lopsided (e.g. the squat's right hip yaw −0.22 rad against
 /// the left +0.01), and added to a walking template in joint space, a lopsided offset lengthens one
 /// leg and shortens the other. Joints that mirror onto themselves with sign −1 (waist yaw/roll)

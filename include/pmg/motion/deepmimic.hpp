@@ -12,7 +12,6 @@
 ///
 /// The file is parsed with yaml-cpp (JSON is a subset of YAML 1.2), so syntax errors carry a line.
 
-#include <array>
 #include <string>
 #include <vector>
 
@@ -47,15 +46,6 @@ struct DeepMimicMotion {
 /// 1e-2 of 1; renormalised) and the same duration as frame 0 (within 1e-4 s; the last may be 0).
 /// @throws std::runtime_error naming the file, the line, frame index and field on any problem.
 DeepMimicMotion readDeepMimicMotion(const std::string& path);
-
-/// Sole tracks of the DeepMimic humanoid3d feet by forward kinematics of its skeleton
-/// (characters/humanoid3d.txt: hip attach z = ±0.084887 m, knee −0.421546 m, ankle −0.409870 m
-/// along y; foot box centre (0.045, −0.0225, 0) m, size 0.177 × 0.055 × 0.09 m), in the robot's
-/// world axes W (Z up), multiplied by @p scale. Per foot (index 0 = left, 1 = right), F × 3:
-/// x, y = centre of the foot box's bottom face, z = height of its lowest corner above the ground.
-/// The ground height is the median over frames of the lower foot's lowest corner (the files put
-/// the ground near y = 0 with ±2 cm error).
-std::array<Eigen::MatrixXd, 2> deepMimicSoleTracks(const DeepMimicMotion& motion, double scale);
 
 /// Keypoints of a DeepMimic motion by forward kinematics of the humanoid3d skeleton
 /// (characters/humanoid3d.txt offsets: chest 0.236151 m above the root, shoulders at

@@ -1,5 +1,6 @@
-// Clip file I/O: write → read round trip, deterministic text, and validation errors that name
-// the file, the field and the expected range.
+// Clip file I/O (src/clips/clip_io.cpp): write → read round trip, deterministic text, errors that
+// name the file, the line, the field and the expected range, and unknown keys refused with the
+// nearest valid key.
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -10,8 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
-#include "pmg/motion/clip_io.hpp"
+#include "pmg/clips/clip_io.hpp"
 
 namespace {
 
@@ -20,7 +22,7 @@ using namespace pmg;
 class ClipIo : public ::testing::Test {
  protected:
   void SetUp() override {
-    robot_ = loadRobotConfig("config/robots/g1/g1.yaml");
+    robot_ = pmg::test::g1Robot();
     dir_ = std::filesystem::temp_directory_path() / ("pmg_clip_io_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
   }
@@ -96,7 +98,7 @@ TEST_F(ClipIo, RoundTripIsExactToTheTextPrecisionAndByteIdentical) {
 TEST_F(ClipIo, ErrorsNameFileFieldAndRange) {
   EXPECT_NE(errorWith("sigma: 0.300000}", "sigma: 0.700000}").find("contact.left.sigma: = 0.7: expected in [0, 0.5]"), std::string::npos);
   EXPECT_NE(errorWith("mu: 0.750000", "mu: 1.000000").find("contact.right.mu"), std::string::npos);
-  EXPECT_NE(errorWith("period: 1.200000", "period: 0.000000").find("period: = 0: expected T > 0"), std::string::npos);
+  EXPECT_NE(errorWith("period: 1.200000", "period: 0.000000").find("period: = 0: expected T in (0, 10) [s]"), std::string::npos);
   EXPECT_NE(errorWith("nominal_scale: 0.500000", "nominal_scale: -0.500000").find("nominal_scale"), std::string::npos);
   EXPECT_NE(errorWith("format_version: 1", "format_version: 2").find("format_version"), std::string::npos);
   EXPECT_NE(errorWith("left_hip_pitch_joint,", "left_hip_pitch_jnt,").find("joint_names[0]"), std::string::npos);
@@ -117,7 +119,25 @@ TEST_F(ClipIo, ErrorsNameFileFieldAndRange) {
   }
   // The error names the line of the bad value.
   const std::string line_msg = errorWith("period: 1.200000", "period: abc");
-  EXPECT_NE(line_msg.find("bad.yaml:8: period"), std::string::npos) << line_msg;
+  EXPECT_NE(line_msg.find("bad.yaml:8: period: expected a finite number, got 'abc'"), std::string::npos) << line_msg;
+  EXPECT_NE(errorWith("period: 1.200000", "period: .inf").find("bad.yaml:8: period: expected a finite number"), std::string::npos);
+  EXPECT_NE(errorWith("num_joints: 29", "num_joints: 28").find("bad.yaml:10: num_joints: = 28: expected 29"), std::string::npos);
+  EXPECT_NE(errorWith("kind: dynamic", "kind: static").find("bad.yaml:3: kind: = 'static': expected 'dynamic'"), std::string::npos);
+  EXPECT_NE(errorWith("axis: forward", "axis: forwards").find("bad.yaml:5: axis: = 'forwards': expected one of forward"),
+            std::string::npos);
+}
+
+TEST_F(ClipIo, UnknownKeysNameFileLineKeyAndNearestKey) {
+  EXPECT_EQ(errorWith("period: 1.200000", "perod: 1.200000"),
+            (dir_ / "bad.yaml").string() + ":8: unknown key 'perod' at the top level (did you mean 'period'?)");
+  EXPECT_EQ(errorWith("left: {mu: 0.250000, sigma: 0.300000}", "left: {mu: 0.250000, sigmaa: 0.300000}"),
+            (dir_ / "bad.yaml").string() + ":12: unknown key 'sigmaa' in 'contact.left' (did you mean 'sigma'?)");
+  EXPECT_EQ(errorWith("  license:", "  licence:"),
+            (dir_ / "bad.yaml").string() + ":16: unknown key 'licence' in 'metadata' (did you mean 'license'?)");
+  // A static clip's key in a dynamic clip is unknown too.
+  EXPECT_EQ(errorWith("num_samples: 8", "neutral: 0.5\nnum_samples: 8")
+                .rfind((dir_ / "bad.yaml").string() + ":9: unknown key 'neutral' at the top level (did you mean '", 0),
+            0u);
 }
 
 TEST_F(ClipIo, LibraryRejectsDuplicateAxisDirection) {
