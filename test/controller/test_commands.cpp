@@ -1,22 +1,29 @@
-// Command validation and shaping (NaN, range, staleness, slew limits) and command scripts.
+// The command vocabulary (commands.cpp): shaping (NaN, range, staleness, slew limits, the explicit
+// "no height command"), the reference rate limiter, and the one command-script format.
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 
 #include <gtest/gtest.h>
 
-#include "pmg/common/robot_config.hpp"
+#include "g1_fixture.hpp"
+#include "pmg/common/config_error.hpp"
 #include "pmg/controller/commands.hpp"
-#include "pmg/controller/controller_config.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg {
 namespace {
 
+CommandSample velocity(double vx, double vy, double wz, double t) {
+  CommandSample s;
+  s.command.vx = vx;
+  s.command.vy = vy;
+  s.command.wz = wz;
+  s.velocity_time = t;
+  return s;
+}
+
 TEST(CommandShaper, SlewLimitsTheVelocityStep) {
   CommandShaper shaper(CommandLimits{});
-  CommandSample s;
-  s.velocity = {1.0, 0.0, 1.0};
-  s.velocity_time = 0.0;
+  CommandSample s = velocity(1.0, 0.0, 1.0, 0.0);
   shaper.update(s, 0.0, 0.01);
   EXPECT_NEAR(shaper.velocity().vx, 0.01, 1e-12);  // 1 m/s^2 * 10 ms
   EXPECT_NEAR(shaper.velocity().wz, 0.02, 1e-12);  // 2 rad/s^2 * 10 ms
@@ -32,8 +39,7 @@ TEST(CommandShaper, StaleCommandRampsToZero) {
   CommandLimits limits;
   limits.timeout = 0.2;
   CommandShaper shaper(limits);
-  CommandSample s;
-  s.velocity = {0.5, 0.0, 0.0};
+  CommandSample s = velocity(0.5, 0.0, 0.0, 0.0);
   for (int k = 0; k < 100; ++k) {
     s.velocity_time = k * 0.01;
     shaper.update(s, k * 0.01, 0.01);
@@ -50,61 +56,144 @@ TEST(CommandShaper, StaleCommandRampsToZero) {
 
 TEST(CommandShaper, NanIsRejectedOutOfRangeIsClamped) {
   CommandShaper shaper(CommandLimits{});
-  CommandSample s;
-  s.velocity = {0.3, 0.0, 0.0};
-  s.velocity_time = 0.0;
+  CommandSample s = velocity(0.3, 0.0, 0.0, 0.0);
   for (int k = 0; k < 50; ++k) shaper.update(s, 0.01 * k, 0.01);
-  s.velocity = {NAN, 0.0, 0.0};
+  s.command.vx = std::nan("");
   s.velocity_time = 0.5;
   shaper.update(s, 0.5, 0.01);
   EXPECT_EQ(shaper.counters().rejected_nan, 1u);
   EXPECT_NEAR(shaper.velocity().vx, 0.3, 1e-12);
-  s.velocity = {0.0, 0.0, -7.0};
-  s.posture = {2.0, 0.0, 0.5};
-  s.velocity_time = s.posture_time = 0.51;
+  s.command = Command{0.0, 0.0, -7.0, 2.0, 0.0, 0.5};
   for (int k = 0; k < 400; ++k) {
     s.velocity_time = s.posture_time = 0.51 + 0.01 * k;
     shaper.update(s, s.velocity_time, 0.01);
   }
-  EXPECT_NEAR(shaper.velocity().wz, -1.0, 1e-12);  // clamped to max_velocity
-  EXPECT_NEAR(shaper.posture().pitch, 0.6, 1e-12);  // clamped to posture_max
+  EXPECT_NEAR(shaper.velocity().wz, -1.0, 1e-12);   // clamped to max_velocity
+  EXPECT_NEAR(shaper.posture().pitch, 0.6, 1e-12);  // clamped to pitch_range
+  EXPECT_NEAR(shaper.posture().height, 0.5, 1e-12);
   EXPECT_GE(shaper.counters().clamped, 1u);
+  s.command.height = std::numeric_limits<double>::infinity();
+  s.posture_time = 10.0;
+  shaper.update(s, 10.0, 0.01);
+  EXPECT_EQ(shaper.counters().rejected_nan, 2u) << "an infinite height is rejected like NaN";
 }
 
-TEST(CommandScript, LoadsTheDemoAndRejectsBadSegments) {
-  const CommandScript demo = loadCommandScript("config/commands/demo.yaml");
-  EXPECT_GE(demo.segments.size(), 4u);
-  EXPECT_NEAR(demo.at(0.0).velocity.vx, 0.0, 1e-12);
-  EXPECT_NEAR(demo.at(3.0).velocity.vx, 0.5, 1e-12);
-  EXPECT_NEAR(demo.at(1e6).velocity.vx, demo.segments.back().velocity.vx, 1e-12);
-  const std::string bad = (std::filesystem::temp_directory_path() / "pmg_bad_script.yaml").string();
-  std::ofstream(bad) << "segments:\n  - {duration: 1.0}\n  - {duration: -2, vx: 0.1}\n";
-  try {
-    loadCommandScript(bad);
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("segments[1].duration"), std::string::npos) << e.what();
-  }
-  std::ofstream(bad) << "segments:\n  - {duration: 1.0, vx: fast}\n";
-  EXPECT_THROW(loadCommandScript(bad), ConfigError);
+// Defect 2 of issue 11: "none" -> 0.45 m used to jump in one tick. Now "none" is the standing
+// height and every transition slews at height_rate.
+TEST(CommandShaper, HeightNoneToValueAndBackIsSlewed) {
+  CommandLimits limits;
+  limits.standing_height = 0.78;
+  CommandShaper shaper(limits);
+  EXPECT_DOUBLE_EQ(shaper.posture().height, 0.78) << "starts at the standing height";
+  CommandSample s;
+  const double dt = 0.01, max_step = limits.height_rate * dt;
+  double prev = shaper.posture().height, t = 0, largest = 0;
+  const auto run = [&](std::optional<double> h, double seconds) {
+    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
+      s.command.height = h;
+      s.posture_time = s.velocity_time = t;
+      shaper.update(s, t, dt);
+      largest = std::max(largest, std::fabs(shaper.posture().height - prev));
+      prev = shaper.posture().height;
+    }
+  };
+  run(std::nullopt, 0.5);
+  run(0.45, 0.1);
+  EXPECT_NEAR(shaper.posture().height, 0.78 - 10 * max_step, 1e-9) << "slewing down, not jumped";
+  run(0.45, 3.0);
+  EXPECT_NEAR(shaper.posture().height, 0.45, 1e-12);
+  run(std::nullopt, 0.1);
+  EXPECT_NEAR(shaper.posture().height, 0.45 + 10 * max_step, 1e-9) << "back to standing, slewed";
+  run(std::nullopt, 3.0);
+  EXPECT_NEAR(shaper.posture().height, 0.78, 1e-12);
+  EXPECT_LE(largest, max_step + 1e-12);
 }
 
-TEST(ControllerConfig, ShippedConfigLoadsAndBadValuesAreNamed) {
-  const ControllerConfig c = loadControllerConfig("config/controller/g1_sil.yaml");
-  EXPECT_EQ(c.cyclesPerTick(), 5);
-  EXPECT_TRUE(c.mujoco.gantry.enabled);
-  const std::string bad = "config/controller/.test_bad.yaml";
-  std::ifstream in("config/controller/g1_sil.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  text.replace(text.find("hal_rate_hz: 500"), 16, "hal_rate_hz: 250");
-  std::ofstream(bad) << text;
+TEST(CommandLimits, ValidateNamesTheField) {
+  CommandLimits l;
+  EXPECT_EQ(l.validate(), "");
+  l.max_velocity[1] = std::numeric_limits<double>::infinity();
+  EXPECT_NE(l.validate().find("commands.max_velocity"), std::string::npos);
+  l = CommandLimits{};
+  l.height_range = {0.9, 1.0};
+  EXPECT_NE(l.validate().find("standing height"), std::string::npos);
+  l = CommandLimits{};
+  l.max_reference_speed = 0;
+  EXPECT_NE(l.validate().find("max_reference_speed"), std::string::npos);
+}
+
+TEST(ReferenceRateLimiter, BoundsEveryJointsStep) {
+  ReferenceRateLimiter limiter(6.0);
+  double q[3] = {0.0, 1.0, -1.0};
+  limiter.reset(q, 3);
+  double next[3] = {0.5, 1.01, -2.0};
+  EXPECT_TRUE(limiter.apply(next, 3, 0.01));
+  EXPECT_NEAR(next[0], 0.06, 1e-12);
+  EXPECT_NEAR(next[1], 1.01, 1e-12) << "a small step passes unchanged";
+  EXPECT_NEAR(next[2], -1.06, 1e-12);
+  double same[3] = {0.06, 1.01, -1.06};
+  EXPECT_FALSE(limiter.apply(same, 3, 0.01));
+  EXPECT_EQ(limiter.limitedTicks(), 1u);
+}
+
+// ------------------------------------------------------------------------------------ scripts
+
+TEST(CommandScript, LoadsBothPlacementsOfTheOneFormat) {
+  const CommandScript demo = loadCommandScript(test::sourcePath("config/commands/demo.yaml"));
+  ASSERT_GE(demo.segments.size(), 4u);
+  EXPECT_NEAR(demo.at(0.0).vx, 0.0, 1e-12);
+  EXPECT_NEAR(demo.at(3.0).vx, 0.5, 1e-12);
+  EXPECT_FALSE(demo.at(3.0).height.has_value()) << "no height in the file: no height command";
+  EXPECT_NEAR(demo.at(1e6).vx, demo.segments.back().command.vx, 1e-12);
+  EXPECT_EQ(demo.segments[1].name, "forward");
+
+  const CommandScript eval = loadCommandScript(test::sourcePath("config/policies/eval_commands.yaml"));
+  EXPECT_NEAR(eval.duration(), 48.0, 1e-12);
+  EXPECT_NEAR(eval.ramp, 0.5, 1e-12);
+  EXPECT_EQ(eval.segments[1].name, "forward");
+  EXPECT_NEAR(eval.segments[1].start, 3.0, 1e-12);
+  EXPECT_NEAR(eval.at(3.25).vx, 0.25, 1e-12) << "ramped over 0.5 s";
+  ASSERT_TRUE(eval.at(35.0).height.has_value());
+  EXPECT_NEAR(*eval.at(35.0).height, 0.66, 1e-12);
+}
+
+std::string loadError(const std::string& text) {
+  test::TempDir dir;
+  const std::string path = dir.write("script.yaml", text);
   try {
-    loadControllerConfig(bad);
-    FAIL();
+    loadCommandScript(path);
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("timing.hal_rate_hz"), std::string::npos) << e.what();
+    return e.what();
   }
-  std::filesystem::remove(bad);
+  return "";
+}
+
+TEST(CommandScript, BadScriptsAreNamedErrors) {
+  EXPECT_NE(loadError("segments:\n  - {duration: 1.0}\n  - {duration: -2, vx: 0.1}\n").find("segments[1]"),
+            std::string::npos);
+  const std::string typo = loadError("segments:\n  - {duration: 1.0, vxx: 0.5}\n");
+  EXPECT_NE(typo.find("script.yaml:2"), std::string::npos) << typo;
+  EXPECT_NE(typo.find("'vxx'"), std::string::npos) << typo;
+  EXPECT_NE(typo.find("did you mean 'vx'"), std::string::npos) << typo;
+  EXPECT_NE(loadError("segments:\n  - {duration: 1.0, vx: fast}\n").find("vx"), std::string::npos);
+  EXPECT_NE(loadError("segments:\n  - {duration: 1.0, vx: .inf}\n").find("vx"), std::string::npos);
+  EXPECT_NE(loadError("segments:\n  - {t: 0, vx: 0.1}\n  - {duration: 2}\n").find("segments[1]"), std::string::npos)
+      << "placements are not mixed";
+  EXPECT_NE(loadError("segments:\n  - {t: 0}\n  - {t: 5}\n").find("duration"), std::string::npos);
+  EXPECT_NE(loadError("segments:\n  - {duration: 1, mode: flying}\n").find("mode"), std::string::npos);
+  EXPECT_NE(loadError("segments: []\n").find("segments"), std::string::npos);
+  EXPECT_NE(loadError("").find("script.yaml"), std::string::npos);
+}
+
+TEST(CommandScript, ModeRequestsByName) {
+  test::TempDir dir;
+  const std::string path = dir.write("modes.yaml", "segments:\n  - {duration: 1, mode: soft_stand}\n  - {duration: 1, mode: damping}\n"
+                                                   "  - {duration: 1, mode: reset}\n  - {duration: 1}\n");
+  const CommandScript s = loadCommandScript(path);
+  EXPECT_EQ(s.segments[0].mode, ModeRequest::kSoftStand);
+  EXPECT_EQ(s.segments[1].mode, ModeRequest::kDamping);
+  EXPECT_EQ(s.segments[2].mode, ModeRequest::kReset);
+  EXPECT_EQ(s.segments[3].mode, ModeRequest::kNone);
 }
 
 }  // namespace

@@ -75,6 +75,25 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
   }
   safe_.sequence = command.sequence;
   pmg::BackendStatus st = inner_->exchange(safe_, state);
+  // A reply with a non-finite value is no reply (a corrupted frame): counted, then held or timed
+  // out like a missing one.
+  for (std::size_t j = 0; j < n; ++j) {
+    pmg::MotorState& m = state.motors[j];
+    if (m.valid && !(std::isfinite(m.q) && std::isfinite(m.qd) && std::isfinite(m.tau))) {
+      m.valid = false;
+      ++nonfinite_replies_;
+    }
+  }
+  if (state.imu.valid) {
+    bool finite = true;
+    for (double v : state.imu.quat_wxyz) finite = finite && std::isfinite(v);
+    for (double v : state.imu.gyro) finite = finite && std::isfinite(v);
+    for (double v : state.imu.acc) finite = finite && std::isfinite(v);
+    if (!finite) {
+      state.imu.valid = false;
+      ++nonfinite_replies_;
+    }
+  }
   last_ = state;  // the supervisor sees the raw replies (its watchdogs count the missing ones)
   if (bopt_.hold_missing) {
     const WatchdogOptions& w = sup_.options().watchdog;
@@ -120,6 +139,7 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
   s.clamped_joint_ticks = out_.clamped_joint_ticks;
   s.nonfinite_commands = nonfinite_;
   s.held_replies = held_count_;
+  s.nonfinite_replies = nonfinite_replies_;
   s.fault_counts = out_.fault_counts;
   status_.write(s);
   return st;

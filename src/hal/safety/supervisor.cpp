@@ -216,10 +216,17 @@ bool SafetySupervisor::envelopeHealthy(const SafetyInput& in, Fault& f) const no
 }
 
 void SafetySupervisor::enter(Mode m, const SafetyInput& in) noexcept {
+  // Soft stand blends from where the motors were commanded to be (active -> soft stand: the last
+  // command, so the reference stays continuous), or from the measured pose when nothing was
+  // commanded (passive -> soft stand).
+  const bool from_command = mode_ == Mode::kActive;
   mode_ = m;
   mode_since_s_ = in.now_s;
   if (m == Mode::kSoftStand) {
-    for (std::size_t j = 0; j < n_; ++j) q_start_[j] = std::isfinite(in.q[j]) ? in.q[j] : opt_.stand_q[j];
+    for (std::size_t j = 0; j < n_; ++j) {
+      const double start = from_command && std::isfinite(prev_q_[j]) ? prev_q_[j] : in.q[j];
+      q_start_[j] = std::isfinite(start) ? start : opt_.stand_q[j];
+    }
   }
 }
 

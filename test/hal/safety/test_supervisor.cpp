@@ -7,6 +7,7 @@
 #include <random>
 
 #include "alloc_counter.hpp"
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/safety/mode_requests.hpp"
 #include "pmg/hal/safety/supervisor.hpp"
@@ -161,13 +162,25 @@ TEST(Supervisor, SoftStandToActiveOnlyWhenStandDoneAndCommandFresh) {
 TEST(Supervisor, ActiveToSoftStandAndSoftStandToPassive) {
   Rig r;
   r.toActive();
-  r.in.q = {0.5, -0.2};
+  r.in.cmd_q = {0.7, 0.15};
+  r.tick();
+  const double last_sent = r.out.cmd_q[0];
+  r.in.q = {0.5, -0.2};  // tracking error: measured differs from commanded
   r.tick(ModeRequest::kSoftStand);
   EXPECT_EQ(r.out.mode, Mode::kSoftStand);
-  EXPECT_NEAR(r.out.cmd_q[0], 0.5, 1e-12) << "blend starts at the measured pose";
+  EXPECT_NEAR(r.out.cmd_q[0], last_sent, 1e-12)
+      << "from active the blend starts at the last command (continuous reference), not the measured pose";
   r.tick(ModeRequest::kPassive);
   EXPECT_EQ(r.out.mode, Mode::kPassive);
   EXPECT_EQ(r.out.cmd_kp[0], 0.0);
+}
+
+TEST(Supervisor, SoftStandFromPassiveStartsAtTheMeasuredPose) {
+  Rig r;
+  r.in.q = {0.5, -0.2};
+  r.tick(ModeRequest::kSoftStand);
+  ASSERT_EQ(r.out.mode, Mode::kSoftStand);
+  EXPECT_NEAR(r.out.cmd_q[0], 0.5, 1e-12);
 }
 
 TEST(Supervisor, ActiveToPassiveIsRefused) {
@@ -436,7 +449,7 @@ TEST(Supervisor, OptionsValidationNamesTheField) {
 }
 
 TEST(Supervisor, OptionsFromG1RobotConfig) {
-  const pmg::RobotConfig robot = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
+  const pmg::RobotConfig robot = pmg::loadRobotConfig(pmg::test::g1RobotConfigPath());
   SafetyOptions o = SafetyOptions::fromRobot(robot);
   EXPECT_EQ(o.joints.size(), 29u);
   EXPECT_EQ(o.validate(), "");

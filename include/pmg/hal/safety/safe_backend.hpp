@@ -13,7 +13,8 @@
 ///     output);
 ///  2. takes the pending mode request from requests() (gamepad / LCM threads post there);
 ///  3. steps the supervisor and sends only its clamped command to the wrapped backend;
-///  4. with SafeBackendOptions::hold_missing, hands the loop the last valid reply of a motor (and the
+///  4. a reply (or IMU sample) with a non-finite value counts as missing (nonfinite_replies); with
+///     SafeBackendOptions::hold_missing, hands the loop the last valid reply of a motor (and the
 ///     last IMU sample) for a cycle in which it did not arrive, as long as that input's watchdog
 ///     has not expired: a single lost CAN frame is the HAL's business, not the loop's. Once the
 ///     watchdog expires the loop sees valid = false (and the HAL is already in damping). A cycle
@@ -48,6 +49,7 @@ struct SafetyStatus {
   std::uint64_t clamped_joint_ticks = 0;
   std::uint64_t nonfinite_commands = 0;  ///< Loop commands that contained NaN/Inf.
   std::uint64_t held_replies = 0;        ///< Missing motor replies / IMU samples replaced by the last valid one.
+  std::uint64_t nonfinite_replies = 0;   ///< Replies / IMU samples with NaN/Inf, treated as missing.
   std::array<std::uint32_t, kNumFaultCodes> fault_counts{};
 };
 
@@ -89,6 +91,7 @@ class SafeBackend final : public pmg::HalBackend {
   std::array<double, pmg::kMaxMotors> held_at_{};  ///< When each was valid [s] (cycle time).
   double imu_held_at_ = -1e9;
   std::uint64_t held_count_ = 0;
+  std::uint64_t nonfinite_replies_ = 0;
   pmg::BackendStatus last_status_ = pmg::BackendStatus::kOk;
 };
 

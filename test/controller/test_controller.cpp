@@ -1,0 +1,264 @@
+// The 100 Hz tick (controller.cpp) through the product path (ControllerApp: HAL stack with the
+// supervisor, shaper, generator + GCO, reference limiter), on the G1 in the MuJoCo 2.2 gantry SIL.
+//
+// Reference continuity (defect 2 of issue 11): a sweep of abrupt command steps on every axis and
+// combination, "none" <-> value heights, reversals, operator mode changes and script edges. Two
+// things are asserted on every tick / HAL cycle:
+//  - the PMG reference the loop sends moves at most CommandLimits::max_reference_speed (6 rad/s;
+//    walking references peak near 3.6 rad/s), and the reference limiter never had to act: the
+//    command shaper alone keeps the references continuous;
+//  - the position the supervisor actually sends to the motors (kp > 0) moves at most as fast, over
+//    every loop period (within one period the HAL sees the 100 Hz target as a step that its
+//    q_rate_max slew spreads over the cycles).
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "g1_fixture.hpp"
+#include "pmg/controller/controller_app.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/safety/safe_backend.hpp"
+
+namespace pmg {
+namespace {
+
+ControllerConfig silConfig() {
+  ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
+  c.lcm_enabled = false;
+  c.log_file.clear();
+  c.timing = TimingMode::kLockstep;
+  return c;
+}
+
+// Wraps the SIL and records the fastest change of the position sent to a motor with kp > 0, over
+// one loop period (5 HAL cycles: the loop's 100 Hz targets reach the 500 Hz HAL as steps).
+class RecordingBackend final : public HalBackend {
+ public:
+  RecordingBackend(const RobotConfig& r, const MujocoBackendOptions& o) : sim_(r, o) {}
+  const char* name() const noexcept override { return "recording"; }
+  double cyclePeriod() const noexcept override { return sim_.cyclePeriod(); }
+  BackendStatus exchange(const LowCommand& c, LowState& s) noexcept override {
+    const LowCommand& old = history_[cycle_ % kWindow];  // the command kWindow cycles ago
+    if (cycle_ >= kWindow) {
+      for (int i = 0; i < c.num_motors; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        bool stiff = c.motors[k].kp > 0;
+        for (const LowCommand& h : history_) stiff = stiff && h.motors[k].kp > 0;
+        if (!stiff) continue;
+        const double speed = std::fabs(c.motors[k].q - old.motors[k].q) / (kWindow * sim_.cyclePeriod());
+        if (speed > max_sent_speed) {
+          max_sent_speed = speed;
+          max_joint = i;
+          std::snprintf(max_at, sizeof max_at, "%s", phase);
+          max_time = time;
+        }
+      }
+    }
+    history_[cycle_ % kWindow] = c;
+    ++cycle_;
+    return sim_.exchange(c, s);
+  }
+  double max_sent_speed = 0.0;
+  int max_joint = -1;
+  const char* phase = "";  // label of the sweep step (set by the test)
+  char max_at[64] = "";
+  double time = 0.0, max_time = 0.0;
+
+ private:
+  static constexpr std::size_t kWindow = 5;
+  MujocoBackend sim_;
+  std::array<LowCommand, kWindow> history_{};
+  std::size_t cycle_ = 0;
+};
+
+struct Sweep {
+  ControllerConfig config = silConfig();
+  RecordingBackend* recorder = nullptr;
+  std::unique_ptr<ControllerApp> app;
+  CommandSample sample;
+  double t = 0.0;
+  double max_ref_speed = 0.0;
+  std::string worst_at;
+  std::array<double, kMaxMotors> prev_ref{};
+  bool have_prev = false;
+
+  Sweep() {
+    ControllerAppOptions o;
+    auto rec = std::make_unique<RecordingBackend>(config.robot, config.mujoco);
+    recorder = rec.get();
+    o.backend = std::move(rec);
+    app = std::make_unique<ControllerApp>(config, std::move(o));
+  }
+  void hold(const Command& u, double seconds, const std::string& label) {
+    const int n = static_cast<int>(config.robot.numJoints());
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / 0.01)); ++k, t += 0.01) {
+      sample.command = u;
+      sample.velocity_time = sample.posture_time = t;
+      recorder->phase = label.c_str();
+      recorder->time = t;
+      const TickStatus s = app->stepLockstep(sample);
+      const auto& ref = app->controller().reference();
+      if (have_prev && s.mode == Mode::kActive && !s.entered_active) {
+        for (int i = 0; i < n; ++i) {
+          const double v = std::fabs(ref[static_cast<std::size_t>(i)] - prev_ref[static_cast<std::size_t>(i)]) / 0.01;
+          if (v > max_ref_speed) {
+            max_ref_speed = v;
+            worst_at = label + " (" + config.robot.joints[static_cast<std::size_t>(i)].name + ")";
+          }
+        }
+      }
+      prev_ref = ref;
+      have_prev = true;
+    }
+  }
+  void request(ModeRequest r) {
+    sample.mode_request = r;
+    ++sample.mode_request_seq;
+  }
+};
+
+Command cmd(double vx, double vy, double wz, double pitch = 0, double roll = 0, std::optional<double> h = {}) {
+  return Command{vx, vy, wz, pitch, roll, h};
+}
+
+TEST(ReferenceContinuity, AbruptCommandSweepKeepsEveryJointReferenceUnderTheBound) {
+  Sweep s;
+  const CommandLimits& L = s.config.commands;
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  const double vx = L.max_velocity[0], vy = L.max_velocity[1], wz = L.max_velocity[2];
+  const std::vector<std::pair<std::string, Command>> steps = {
+      {"+vx", cmd(vx, 0, 0)},
+      {"-vx", cmd(-vx, 0, 0)},
+      {"+vy", cmd(0, vy, 0)},
+      {"-vy", cmd(0, -vy, 0)},
+      {"+wz", cmd(0, 0, wz)},
+      {"-wz", cmd(0, 0, -wz)},
+      {"+pitch", cmd(0, 0, 0, L.pitch_range[1])},
+      {"-pitch", cmd(0, 0, 0, L.pitch_range[0])},
+      {"+roll", cmd(0, 0, 0, 0, L.roll_range[1])},
+      {"-roll", cmd(0, 0, 0, 0, L.roll_range[0])},
+      {"height none->min", cmd(0, 0, 0, 0, 0, L.height_range[0])},
+      {"height none->max", cmd(0, 0, 0, 0, 0, L.height_range[1])},
+      {"vx+vy+wz", cmd(vx, vy, wz)},
+      {"-vx-vy-wz", cmd(-vx, -vy, -wz)},
+      {"vx-wz+pitch+squat", cmd(vx, 0, -wz, L.pitch_range[1], 0, L.height_range[0])},
+      {"everything", cmd(vx, -vy, wz, L.pitch_range[0], L.roll_range[1], L.height_range[0])},
+  };
+  for (const auto& [label, u] : steps) {
+    s.hold(u, 2.0, label);                    // step from rest ("none" height) to the target
+    s.hold(cmd(0, 0, 0), 1.5, label + " back");  // and back to rest
+  }
+  // Reversals: +max -> -max without passing through a rest segment.
+  s.hold(cmd(vx, 0, wz), 1.5, "reversal setup");
+  s.hold(cmd(-vx, 0, -wz), 1.5, "reversal");
+  s.hold(cmd(0, 0, 0, 0, 0, L.height_range[0]), 2.0, "squat");
+  s.hold(cmd(vx, vy, 0, 0, 0, std::nullopt), 2.0, "squat -> none while walking");
+  // Operator mode changes: active -> soft stand (while walking) -> active again.
+  s.request(ModeRequest::kSoftStand);
+  s.hold(cmd(0.5, 0, 0), 1.5, "active->soft stand");
+  EXPECT_EQ(s.app->controller().mode(), Mode::kSoftStand);
+  s.request(ModeRequest::kActive);
+  s.hold(cmd(0.5, 0, 0), 2.0, "soft stand->active");
+  EXPECT_EQ(s.app->controller().mode(), Mode::kActive);
+
+  const double bound = L.max_reference_speed;
+  std::printf("[ SIL ] abrupt-command sweep: fastest PMG reference %.2f rad/s at %s; fastest sent position %.2f rad/s "
+              "(joint %d, %s, t %.2f s); bound %.1f rad/s; limiter acted on %llu ticks\n",
+              s.max_ref_speed, s.worst_at.c_str(), s.recorder->max_sent_speed, s.recorder->max_joint,
+              s.recorder->max_at, s.recorder->max_time, bound,
+              static_cast<unsigned long long>(s.app->controller().referenceLimiter().limitedTicks()));
+  EXPECT_LE(s.max_ref_speed, bound + 1e-9) << s.worst_at;
+  EXPECT_LE(s.recorder->max_sent_speed, bound + 1e-9) << "joint " << s.recorder->max_joint;
+  EXPECT_EQ(s.app->controller().referenceLimiter().limitedTicks(), 0u)
+      << "the shaper alone should keep the references under the bound";
+  EXPECT_GT(s.max_ref_speed, 1.0) << "the sweep really moved the references";
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
+TEST(Controller, TickAndHalCycleDoNotAllocate) {
+  Sweep s;
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  s.hold(cmd(0.4, 0.1, 0.2), 1.0, "walk");
+  std::size_t allocations = 0;
+  s.sample.command = cmd(0.4, 0.1, 0.2, 0.1, 0.0, 0.7);  // walking crouched and bent
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 200; ++k) {
+      s.sample.velocity_time = s.sample.posture_time = s.t += 0.01;
+      s.app->stepLockstep(s.sample);
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0u) << "the 100 Hz tick and the 500 Hz HAL cycle (MuJoCo SIL + supervisor) allocate nothing";
+}
+
+TEST(Controller, NanAndStaleCommandsAreRejectedAndStopTheRobot) {
+  Sweep s;
+  s.hold(cmd(0.5, 0, 0), 3.0, "walk");
+  const Controller& c = s.app->controller();
+  EXPECT_NEAR(c.commands().velocity().vx, 0.5, 1e-9);
+  s.hold(cmd(std::nan(""), 0, 0), 0.3, "nan");
+  EXPECT_GT(c.commands().counters().rejected_nan, 0u);
+  EXPECT_NEAR(c.commands().velocity().vx, 0.5, 1e-9) << "the previous valid command is kept";
+  // No fresh command: stale after 0.5 s, then slewed to zero at 1 m/s^2.
+  for (int k = 0; k < 150; ++k) s.app->stepLockstep(s.sample);
+  EXPECT_TRUE(c.commands().stale());
+  EXPECT_NEAR(c.commands().velocity().vx, 0.0, 1e-9);
+  s.hold(cmd(5.0, 0, 0), 0.1, "too fast");
+  EXPECT_GT(c.commands().counters().clamped, 0u);
+  EXPECT_EQ(c.fault(), FaultCode::kNone);
+}
+
+TEST(Controller, UnknownModeCodesNeverReachTheSupervisorAndKnownOnesDo) {
+  Sweep s;
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  s.request(ModeRequest::kDamping);  // wire code 3: e-stop
+  s.hold(cmd(0, 0, 0), 0.1, "estop");
+  EXPECT_EQ(s.app->controller().mode(), Mode::kDamping);
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kEstop);
+  s.request(ModeRequest::kActive);
+  s.hold(cmd(0, 0, 0), 0.5, "active while latched");
+  EXPECT_EQ(s.app->controller().mode(), Mode::kDamping) << "latched";
+  s.hold(cmd(0, 0, 0), 2.5, "wait until the legs are still");
+  s.request(ModeRequest::kReset);  // wire code 4
+  s.hold(cmd(0, 0, 0), 0.1, "reset");
+  EXPECT_EQ(s.app->controller().mode(), Mode::kPassive);
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
+TEST(Controller, GcoAblationIsSwitchableFromConfig) {
+  for (bool enabled : {true, false}) {
+    ControllerConfig config = silConfig();
+    config.gco.enabled = enabled;
+    ControllerApp app(config);
+    CommandSample sample;
+    sample.command.vx = 0.5;
+    for (int k = 0; k < 250; ++k) {
+      sample.velocity_time = k * 0.01;
+      app.stepLockstep(sample);
+    }
+    ASSERT_EQ(app.controller().mode(), Mode::kActive);
+    EXPECT_EQ(app.controller().gcoResult().status, enabled ? gco::GcoStatus::kOk : gco::GcoStatus::kDisabled);
+    if (!enabled)
+      EXPECT_NEAR(app.controller().gcoResult().u_opt.v_x, app.controller().generator().output().v_base.x(), 1e-12);
+  }
+}
+
+TEST(Controller, CommandLimitsBeyondTheGeneratorAreAConfigError) {
+  ControllerConfig config = silConfig();
+  config.commands.max_velocity[0] = config.generator.max_command[0] + 0.5;
+  try {
+    ControllerApp app(config);
+    FAIL() << "accepted limits the generator would clamp again";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("commands.max_velocity[0]"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace pmg

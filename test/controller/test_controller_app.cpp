@@ -1,0 +1,258 @@
+// The composition root (controller_app.cpp) on the G1 in the MuJoCo 2.2 SIL, as pmg_controller
+// runs it: scripted runs track within bounds and record every tick; falls and faults are
+// detected by the always-on supervisor and named in the summary, which exits non-zero; a stop
+// flag (SIGINT/SIGTERM) ends a lockstep run cleanly with its log and summary.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <pmg_lcm/controller_state_t.hpp>
+
+#include "alloc_counter.hpp"
+#include "g1_fixture.hpp"
+#include "pmg/controller/controller_app.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+#include "temp_dir.hpp"
+
+namespace pmg {
+namespace {
+
+ControllerConfig silConfig(const std::string& file = test::g1SilControllerConfigPath()) {
+  ControllerConfig c = loadControllerConfig(file);
+  c.lcm_enabled = false;
+  c.log_file.clear();
+  c.timing = TimingMode::kLockstep;
+  return c;
+}
+
+CommandScript shortScript() {
+  CommandScript s;
+  const auto seg = [&](const char* name, double d, double vx, double wz) {
+    CommandSegment g;
+    g.name = name;
+    g.start = s.duration();
+    g.duration = d;
+    g.command.vx = vx;
+    g.command.wz = wz;
+    s.segments.push_back(g);
+  };
+  seg("stand", 1.5, 0, 0);
+  seg("forward", 3.0, 0.5, 0);
+  seg("turn", 2.0, 0, 0.5);
+  seg("stop", 1.5, 0, 0);
+  return s;
+}
+
+// Leg tracking bound. The legs hang in the gantry and follow PMG references whose swing-phase
+// velocities reach ~3 rad/s (hip pitch, knee). The motor-level PD (kp 150-200, kd 4-5 N*m*s/rad,
+// armature 0.01 kg*m^2) lags such a reference by about (kd/kp)*qd ~ 0.03*3 = 0.08 rad at the
+// peaks only, and gravity sags the hanging leg by m*g*l/kp ~ 0.005 rad; averaged over the cycle
+// this is ~0.01-0.02 rad RMS. 0.05 rad RMS per joint flags a broken loop, delay or gain
+// regression without flaking.
+constexpr double kLegTrackingRmsBound = 0.05;
+
+TEST(ControllerApp, ScriptedSequenceTracksWithinLimitsAndBounds) {
+  ControllerApp app(silConfig());
+  const ControllerConfig& config = app.config();
+  const CommandScript script = shortScript();
+  const int n = static_cast<int>(config.robot.numJoints());
+  std::vector<double> sq_err(12, 0.0);
+  int active_ticks = 0;
+  bool within = true;
+  const RunSummary s = app.run(script.duration(), &script, nullptr, [&](double now, const TickStatus& st, std::size_t) {
+    const LowState& state = app.controller().lastState();
+    const auto& ref = app.controller().reference();
+    for (int i = 0; i < n && within; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const JointConfig& j = config.robot.joints[k];
+      const MotorState& m = state.motors[k];
+      within = std::isfinite(m.q) && std::isfinite(m.qd) && std::isfinite(m.tau) && m.q >= j.lower - 0.01 &&
+               m.q <= j.upper + 0.01 && std::fabs(m.tau) <= j.torque_limit + 1e-9 && ref[k] >= j.lower - 1e-12 &&
+               ref[k] <= j.upper + 1e-12;
+      EXPECT_TRUE(within) << j.name << " at " << now;
+    }
+    if (st.mode == Mode::kActive && now > 2.0) {
+      ++active_ticks;
+      for (std::size_t i = 0; i < 12; ++i) {
+        const double e = state.motors[i].q - ref[i];
+        sq_err[i] += e * e;
+      }
+    }
+  });
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_EQ(s.final_mode, Mode::kActive);
+  EXPECT_EQ(s.exitCode(), 0);
+  ASSERT_GT(active_ticks, 400);
+  double worst = 0;
+  for (std::size_t i = 0; i < 12; ++i) {
+    const double rms = std::sqrt(sq_err[i] / active_ticks);
+    worst = std::max(worst, rms);
+    EXPECT_LT(rms, kLegTrackingRmsBound) << config.robot.joints[i].name;
+  }
+  std::printf("[ SIL ] leg tracking RMS worst joint %.4f rad (bound %.3f)\n", worst, kLegTrackingRmsBound);
+  EXPECT_GT(app.controller().generator().output().period, 0.5) << "the walk really moved the legs";
+}
+
+TEST(ControllerApp, LockstepRunRecordsEveryTick) {
+  test::TempDir dir;
+  ControllerConfig config = silConfig();
+  config.log_file = dir.file("run.lcmlog");
+  RunSummary s;
+  {
+    ControllerApp app(config);
+    const CommandScript script = shortScript();
+    s = app.run(4.0, &script, nullptr);
+  }
+  EXPECT_EQ(s.run.ticks, 400);
+  EXPECT_EQ(s.telemetry_dropped, 0u);
+  EXPECT_EQ(s.telemetry_written, 400u);
+  EXPECT_EQ(s.fault, FaultCode::kNone);
+  EXPECT_EQ(s.loop.cycles, 400);
+  EXPECT_NE(s.text().find("final mode: active; fault: none"), std::string::npos) << s.text();
+  std::printf("[ SIL ] RTF %.1f, loop p99 %.1f us, HAL p99 %.1f us, deadline misses %lld\n", s.run.real_time_factor,
+              1e6 * s.loop.runtime_p99, 1e6 * s.hal.runtime_p99, static_cast<long long>(s.deadline_misses));
+  lcm::LogFile file(config.log_file, "r");
+  ASSERT_TRUE(file.good());
+  std::int64_t expected_tick = 0;
+  pmg_lcm::controller_state_t m;
+  int active = 0;
+  while (const lcm::LogEvent* ev = file.readNextEvent()) {
+    if (ev->channel != "PMG_STATE") continue;
+    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0);
+    EXPECT_EQ(m.tick, expected_tick++);
+    EXPECT_EQ(m.num_joints, 29);
+    active += m.mode == 2;
+  }
+  EXPECT_EQ(expected_tick, 400);
+  EXPECT_GT(active, 250) << "telemetry carries the supervisor's mode";
+}
+
+// Defect 5 of issue 11: a robot that falls is detected (always on) and the run says so.
+TEST(ControllerApp, FallIsDetectedNamedAndExitsNonZero) {
+  ControllerConfig config = silConfig();
+  config.mujoco.gantry.enabled = false;  // on the ground, PMG references and no policy: it falls
+  ControllerApp app(config);
+  CommandScript script = shortScript();
+  const RunSummary s = app.run(8.0, &script, nullptr);
+  EXPECT_TRUE(s.fell()) << s.text();
+  EXPECT_EQ(s.final_mode, Mode::kDamping);
+  EXPECT_NE(s.exitCode(), 0);
+  EXPECT_NE(s.text().find("fall: base"), std::string::npos) << s.text();
+  EXPECT_NE(s.text().find("final mode: damping"), std::string::npos) << s.text();
+}
+
+// Defect 7 of issue 11: the stop flag (set by SIGINT/SIGTERM in pmg_controller) ends a lockstep
+// run at once, and the log and the summary are still written.
+TEST(ControllerApp, StopFlagEndsALockstepRunCleanly) {
+  test::TempDir dir;
+  ControllerConfig config = silConfig();
+  config.log_file = dir.file("stopped.lcmlog");
+  std::atomic<bool> stop{false};
+  RunSummary s;
+  {
+    ControllerApp app(config);
+    const CommandScript script = shortScript();
+    s = app.run(1000.0, &script, &stop, [&](double now, const TickStatus&, std::size_t) {
+      if (now >= 1.0) stop = true;
+    });
+  }
+  EXPECT_TRUE(s.run.stopped_by_flag);
+  EXPECT_EQ(s.run.ticks, 101);
+  EXPECT_EQ(s.telemetry_written, 101u);
+  EXPECT_NE(s.text().find("stopped by a signal"), std::string::npos);
+  EXPECT_GT(std::filesystem::file_size(config.log_file), 10000u);
+}
+
+// A backend that serves the MuJoCo SIL but, in a window of cycles, one motor replies NaN.
+class CorruptingBackend final : public HalBackend {
+ public:
+  CorruptingBackend(const RobotConfig& r, MujocoBackendOptions o, std::uint64_t bad_cycle,
+                    std::uint64_t good_again = ~std::uint64_t{0})
+      : sim_(r, std::move(o)), bad_cycle_(bad_cycle), good_again_(good_again) {}
+  const char* name() const noexcept override { return "corrupting"; }
+  double cyclePeriod() const noexcept override { return sim_.cyclePeriod(); }
+  BackendStatus exchange(const LowCommand& c, LowState& s) noexcept override {
+    last_command = c;
+    const BackendStatus st = sim_.exchange(c, s);
+    ++cycles_;
+    if (cycles_ >= bad_cycle_ && cycles_ < good_again_) s.motors[3].q = std::nan("");  // a motor replying NaN
+    return st;
+  }
+  LowCommand last_command{};
+
+ private:
+  MujocoBackend sim_;
+  std::uint64_t bad_cycle_, good_again_, cycles_ = 0;
+};
+
+TEST(ControllerApp, NanStateLatchesDampingWithKdOnly) {
+  ControllerConfig config = silConfig();
+  ControllerAppOptions o;
+  auto backend = std::make_unique<CorruptingBackend>(config.robot, config.mujoco, 1000);
+  CorruptingBackend* raw = backend.get();
+  o.backend = std::move(backend);
+  ControllerApp app(config, std::move(o));
+  CommandSample sample;
+  for (int k = 0; k < 400; ++k) app.stepLockstep(sample);
+  EXPECT_EQ(app.controller().mode(), Mode::kDamping);
+  EXPECT_EQ(app.controller().fault(), FaultCode::kMotorStale) << "a NaN reply is no reply; it timed out";
+  for (std::size_t i = 0; i < 29; ++i) {
+    EXPECT_EQ(raw->last_command.motors[i].kp, 0.0);
+    EXPECT_GT(raw->last_command.motors[i].kd, 0.0);
+  }
+  sample.mode_request = ModeRequest::kActive;
+  sample.mode_request_seq = 1;
+  app.stepLockstep(sample);
+  app.stepLockstep(sample);
+  EXPECT_EQ(app.controller().mode(), Mode::kDamping) << "latched";
+  const RunSummary s = app.finish();
+  EXPECT_NE(s.text().find("fault: motor reply timeout (joint 3"), std::string::npos) << s.text();
+}
+
+// Two cycles of NaN from one motor (corrupted frames) are held over by the HAL within the motor
+// watchdog (5 cycles): the robot stays active.
+TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
+  ControllerConfig config = silConfig();
+  ControllerAppOptions o;
+  o.backend = std::make_unique<CorruptingBackend>(config.robot, config.mujoco, 1001, 1003);
+  ControllerApp app(config, std::move(o));
+  CommandSample sample;
+  for (int k = 0; k < 400; ++k) app.stepLockstep(sample);
+  EXPECT_EQ(app.controller().mode(), Mode::kActive);
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+}
+
+// pmg_controller with the shipped policy and no gantry (config/controller/g1_sil_policy.yaml):
+// the actor keeps the G1 upright and walks it forward on command; the tick allocates nothing.
+TEST(ControllerApp, PolicyWalksTheG1WithoutGantry) {
+  ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  ASSERT_FALSE(config.mujoco.gantry.enabled);
+  ControllerApp app(config);
+  ASSERT_NE(app.controller().policy(), nullptr);
+  CommandSample sample;
+  double min_height = 10;
+  std::size_t allocations = 0;
+  for (int k = 0; k < 700; ++k) {
+    const double now = k * 0.01;
+    sample.command.vx = now < 1.5 ? 0.0 : 0.4;
+    sample.velocity_time = now;
+    if (k == 300) test::startCountingAllocations();
+    app.stepLockstep(sample);
+    if (k == 400) {
+      test::stopCountingAllocations();
+      allocations = test::allocationCount();
+    }
+    min_height = std::min(min_height, app.controller().lastState().base_position[2]);
+  }
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+  EXPECT_GT(min_height, 0.6) << "the robot fell";
+  EXPECT_GT(app.controller().lastState().base_position[0], 0.5) << "the robot did not walk forward";
+  EXPECT_EQ(allocations, 0u);
+  std::printf("[ SIL ] policy: walked %.2f m forward in 5.5 s, lowest pelvis %.2f m\n",
+              app.controller().lastState().base_position[0], min_height);
+}
+
+}  // namespace
+}  // namespace pmg
