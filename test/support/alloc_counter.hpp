@@ -1,21 +1,54 @@
 #pragma once
-// Counts heap allocations made by the current thread while a pmg::test::AllocationGuard is alive.
-// Link the target with pmg_test_support (which replaces the global operator new) to use it.
+// The one allocation guard of the tests. pmg_test_support replaces the global operator new / new[]
+// (all forms that allocate) with malloc plus a counter; a pmg::test::AllocationGuard switches the
+// counting on for its lifetime:
+//   - AllocationScope::kThisThread (default): operator new calls made by the constructing thread;
+//   - AllocationScope::kProcess: calls made by any thread of the process, including those made by
+//     shared libraries that link the same libstdc++ (ONNX Runtime's, for example).
+// Guards do not nest across scopes on one thread: use one guard per measured block.
 #include <cstddef>
 
 namespace pmg::test {
 
-/// Number of operator new calls on this thread since the counter was switched on.
+enum class AllocationScope { kThisThread, kProcess };
+
+/// Number of operator new calls on this thread since startCountingAllocations().
 std::size_t allocationCount() noexcept;
 void startCountingAllocations() noexcept;
 void stopCountingAllocations() noexcept;
 
-/// RAII: counts allocations of this thread during its lifetime.
+/// Number of operator new calls by any thread since startCountingProcessAllocations().
+std::size_t processAllocationCount() noexcept;
+void startCountingProcessAllocations() noexcept;
+void stopCountingProcessAllocations() noexcept;
+
+/// RAII: counts operator new calls during its lifetime (this thread, or the whole process).
 class AllocationGuard {
  public:
-  AllocationGuard() noexcept { startCountingAllocations(); }
-  ~AllocationGuard() { stopCountingAllocations(); }
-  std::size_t count() const noexcept { return allocationCount(); }
+  explicit AllocationGuard(AllocationScope scope = AllocationScope::kThisThread) noexcept : scope_(scope) {
+    if (scope_ == AllocationScope::kProcess) {
+      startCountingProcessAllocations();
+    } else {
+      startCountingAllocations();
+    }
+  }
+  ~AllocationGuard() {
+    if (scope_ == AllocationScope::kProcess) {
+      stopCountingProcessAllocations();
+    } else {
+      stopCountingAllocations();
+    }
+  }
+  AllocationGuard(const AllocationGuard&) = delete;
+  AllocationGuard& operator=(const AllocationGuard&) = delete;
+
+  /// Allocations counted so far (the guard keeps counting until it is destroyed).
+  std::size_t count() const noexcept {
+    return scope_ == AllocationScope::kProcess ? processAllocationCount() : allocationCount();
+  }
+
+ private:
+  AllocationScope scope_;
 };
 
 }  // namespace pmg::test

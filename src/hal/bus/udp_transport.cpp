@@ -38,6 +38,7 @@ bool decodeUdpCan(const std::uint8_t* buf, std::size_t n, CanFrame& out) noexcep
   const std::uint8_t flags = buf[3];
   const std::size_t len = buf[4];
   if ((flags & ~(kFlagFd | kFlagBrs | kFlagExt | kFlagErr)) != 0) return false;
+  if (buf[5] != 0 || buf[6] != 0 || buf[7] != 0) return false;  // reserved bytes: a foreign or corrupt datagram
   if (n != kUdpCanHeader + len) return false;
   const bool fd = flags & kFlagFd;
   if (fd ? !isValidFdLength(len) : len > kCanMaxPayload) return false;

@@ -22,7 +22,7 @@ inline constexpr std::size_t kUdpCanHeader = 12;
 
 /// Serialize a frame into `buf` (>= kUdpCanHeader + 64 bytes). Returns the datagram length.
 std::size_t encodeUdpCan(const CanFrame& frame, std::uint8_t* buf) noexcept;
-/// Parse a datagram; false if the magic, version, length or flags are invalid.
+/// Parse a datagram; false if the magic, version, length, flags or reserved bytes (5..7, zero) are invalid.
 bool decodeUdpCan(const std::uint8_t* buf, std::size_t n, CanFrame& out) noexcept;
 
 class UdpCanTransport final : public CanTransport {
