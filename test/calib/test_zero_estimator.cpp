@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/common/robot_config.hpp"
 
@@ -15,9 +16,9 @@ namespace {
 class ZeroEstimatorTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    robot_ = new RobotConfig(loadRobotConfig("config/robots/g1/g1.yaml"));
+    robot_ = new RobotConfig(pmg::test::g1Robot());
     model_ = new std::shared_ptr<const gco::LegModel>(gco::LegModel::fromRobotConfig(*robot_));
-    protocol_ = new ZeroProtocol(loadZeroProtocol("config/calib/zero_poses_g1.yaml"));
+    protocol_ = new ZeroProtocol(loadZeroProtocol(pmg::test::g1ZeroProtocolPath()));
   }
   static void TearDownTestSuite() {
     delete robot_;
@@ -232,6 +233,39 @@ TEST_F(ZeroEstimatorTest, BadProtocolNamesFileAndField) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("zero_calibration.flatten_feet: expected true or false"), std::string::npos)
         << e.what();
+  }
+  // A typo is an error naming the file, line, key and the nearest valid key.
+  {
+    std::ofstream f(path);
+    f << "zero_calibration:\n  hold: 2.0\n  poses:\n    - {name: a, dp: [0, 0, -0.05]}\n";
+  }
+  try {
+    loadZeroProtocol(path);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":2: unknown key 'hold' in 'zero_calibration' (did you mean 'hold_s'?)");
+  }
+  {
+    std::ofstream f(path);
+    f << "zero_calibration:\n  poses:\n    - {name: a, dp: [0, 0, -0.05], rp: [0, 0.1, 0]}\n";
+  }
+  try {
+    loadZeroProtocol(path);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path + ":3: unknown key 'rp' in 'zero_calibration.poses[0]' (did you mean 'rpy'?)");
+  }
+  {
+    std::ofstream f(path);
+    f << "zero_calibration:\n  poses:\n    - {name: a, dp: [0, 0, .inf]}\n";
+  }
+  try {
+    loadZeroProtocol(path);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path + ":3: zero_calibration.poses[0].dp[2]: expected a finite number, got '.inf'");
   }
 }
 

@@ -8,59 +8,61 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/zero_offset_backend.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg {
 namespace {
 
-namespace fs = std::filesystem;
-
-/// Copy of the G1 config (absolute model paths) with @p extra appended, in a temp folder.
-std::string configWith(const std::string& extra, const std::string& name) {
-  std::ifstream in("config/robots/g1/g1.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string dir = fs::absolute("config/robots/g1").string();
-  text = std::regex_replace(text, std::regex("urdf: g1_29dof"), "urdf: " + dir + "/g1_29dof");
-  text = std::regex_replace(text, std::regex("mjcf: g1_29dof"), "mjcf: " + dir + "/g1_29dof");
-  const std::string path = ::testing::TempDir() + "/" + name + ".yaml";
-  std::ofstream(path) << text << "\n" << extra;
-  return path;
+/// Copy of the G1 config (absolute model paths) with @p extra appended, in @p dir.
+std::string configWith(const test::TempDir& dir, const std::string& extra, const std::string& name) {
+  return dir.write(name + ".yaml", test::g1RobotConfigText() + "\n" + extra);
 }
 
 TEST(ZeroOffsets, RobotConfigReadsMapAndResultFile) {
-  const RobotConfig plain = loadRobotConfig("config/robots/g1/g1.yaml");
+  const test::TempDir dir;
+  const RobotConfig plain = loadRobotConfig(test::g1RobotConfigPath());
   EXPECT_EQ(plain.zeroOffsets().cwiseAbs().maxCoeff(), 0.0);
   const RobotConfig c =
-      loadRobotConfig(configWith("zero_offsets: {left_knee_joint: 0.021, right_hip_roll_joint: -0.013}\n", "zmap"));
+      loadRobotConfig(configWith(dir, "zero_offsets: {left_knee_joint: 0.021, right_hip_roll_joint: -0.013}\n", "zmap"));
   EXPECT_DOUBLE_EQ(c.joints[static_cast<std::size_t>(c.jointIndex("left_knee_joint"))].zero_offset, 0.021);
   EXPECT_DOUBLE_EQ(c.zeroOffsets()(c.jointIndex("right_hip_roll_joint")), -0.013);
   EXPECT_EQ(c.zeroOffsets()(c.jointIndex("left_knee_joint") + 1), 0.0);
   // The --out file of pmg_calib_zero, by path relative to the config.
-  std::ofstream(::testing::TempDir() + "/zres.yaml")
-      << "zero_offsets:\n  left_ankle_pitch_joint: 0.0042\ncalibration: {converged: true}\n";
-  const RobotConfig f = loadRobotConfig(configWith("zero_offsets: zres.yaml\n", "zfile"));
+  dir.write("zres.yaml", "zero_offsets:\n  left_ankle_pitch_joint: 0.0042\ncalibration: {converged: true}\n");
+  const RobotConfig f = loadRobotConfig(configWith(dir, "zero_offsets: zres.yaml\n", "zfile"));
   EXPECT_DOUBLE_EQ(f.zeroOffsets()(f.jointIndex("left_ankle_pitch_joint")), 0.0042);
 }
 
 TEST(ZeroOffsets, BadEntriesNameFileAndJoint) {
-  const auto expectError = [](const std::string& extra, const std::string& name, const std::string& needle) {
+  const test::TempDir dir;
+  const auto expectError = [&dir](const std::string& extra, const std::string& name, const std::string& needle) {
     try {
-      loadRobotConfig(configWith(extra, name));
+      loadRobotConfig(configWith(dir, extra, name));
       FAIL() << "expected ConfigError for " << extra;
     } catch (const ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  expectError("zero_offsets: {left_elbow_jint: 0.01}\n", "zbad1", "zero_offsets.left_elbow_jint: not a joint");
+  expectError("zero_offsets: {left_elbow_jint: 0.01}\n", "zbad1",
+              "zero_offsets: 'left_elbow_jint' is not a joint of");
+  expectError("zero_offsets: {left_elbow_jint: 0.01}\n", "zbad1b", "(did you mean 'left_elbow_joint'?)");
   expectError("zero_offsets: {left_knee_joint: 0.9}\n", "zbad2", "|offset| <= 0.5 rad");
-  expectError("zero_offsets: {left_knee_joint: abc}\n", "zbad3", "zero_offsets.left_knee_joint: expected a number");
-  expectError("zero_offsets: missing_file.yaml\n", "zbad4", "cannot read zero-offset file");
+  expectError("zero_offsets: {left_knee_joint: abc}\n", "zbad3",
+              "zero_offsets.left_knee_joint: expected a finite number, got 'abc'");
+  expectError("zero_offsets: {left_knee_joint: .nan}\n", "zbad3b",
+              "zero_offsets.left_knee_joint: expected a finite number, got '.nan'");
+  expectError("zero_offsets: missing_file.yaml\n", "zbad4", "missing_file.yaml: cannot open file");
+  // A pmg_calib_zero result file with a misspelt key.
+  dir.write("ztypo.yaml", "zero_offsets:\n  left_knee_joint: 0.01\ncalibraton: {converged: true}\n");
+  expectError("zero_offsets: ztypo.yaml\n", "zbad5", "ztypo.yaml:3: unknown key 'calibraton' at the top level (did you mean 'calibration'?)");
 }
 
 TEST(ZeroOffsets, BackendReportsTrueAnglesAndHoldsTrueTargets) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& robot = test::g1Robot();
   const auto n = static_cast<Eigen::Index>(robot.numJoints());
   Eigen::VectorXd hidden = Eigen::VectorXd::Zero(n);
   for (Eigen::Index i = 0; i < 12; ++i) hidden(i) = 0.04 * std::sin(1.7 * static_cast<double>(i) + 0.3);

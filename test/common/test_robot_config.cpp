@@ -1,5 +1,6 @@
 // Robot config loading and validation: the shipped G1 config is valid and agrees with the URDF;
 // every class of bad input is refused with an error naming file, key and expected range.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -8,26 +9,14 @@
 #include <gtest/gtest.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg {
 namespace {
 
-const char* kConfig = "config/robots/g1/g1.yaml";
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Writes a modified copy of the shipped config next to it (so relative model paths resolve).
-std::string writeVariant(const std::string& text, const std::string& name) {
-  const std::string path = "config/robots/g1/.test_" + name + ".yaml";
-  std::ofstream(path) << text;
-  return path;
-}
+const std::string kConfig = test::g1RobotConfigPath();
 
 TEST(RobotConfig, ShippedG1ConfigLoadsWith29Joints) {
   const RobotConfig c = loadRobotConfig(kConfig);
@@ -63,9 +52,11 @@ class RobotConfigRejects : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(RobotConfigRejects, NamesFileKeyAndRange) {
   const BadCase& bad = GetParam();
-  const std::string text =
-      std::regex_replace(readFile(kConfig), std::regex(bad.pattern), bad.replacement, std::regex_constants::format_first_only);
-  const std::string path = writeVariant(text, bad.name);
+  // A modified copy of the shipped config (model paths made absolute) in a per-test folder.
+  const std::string text = std::regex_replace(test::g1RobotConfigText(), std::regex(bad.pattern), bad.replacement,
+                                              std::regex_constants::format_first_only);
+  const test::TempDir dir;
+  const std::string path = dir.write(std::string(bad.name) + ".yaml", text);
   try {
     loadRobotConfig(path);
     FAIL() << "accepted a config with " << bad.name;
@@ -74,7 +65,6 @@ TEST_P(RobotConfigRejects, NamesFileKeyAndRange) {
     EXPECT_NE(msg.find(path), std::string::npos) << msg;
     EXPECT_NE(msg.find(bad.expected), std::string::npos) << msg;
   }
-  std::filesystem::remove(path);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -83,15 +73,54 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"limits_swapped", "lower: -2.5307, upper: 2.8798", "lower: 2.9, upper: 2.8798",
                               "expected lower < upper"},
                       BadCase{"default_outside", "default: 0.3", "default: 9", "left_knee_joint).default"},
-                      BadCase{"bad_bus", "bus: 0", "bus: 17", ".bus"},
-                      BadCase{"duplicate_motor", "motor_id: 2,", "motor_id: 1,", "duplicate id on bus 0"},
+                      BadCase{"bad_bus", "bus: can0", "bus: [can0]", "joints[0].bus: expected a string, got a list"},
+                      BadCase{"bad_motor_id", "motor_id: 1,", "motor_id: 300,", "(left_hip_pitch_joint).motor_id = 300: expected 1..254"},
+                      BadCase{"duplicate_motor", "motor_id: 2,", "motor_id: 1,", "duplicate id on bus can0"},
                       BadCase{"broken_mirror", "mirror: right_hip_roll_joint", "mirror: right_knee_joint",
                               "expected a pairwise map"},
-                      BadCase{"missing_key", "torque_limit: 88, ", "", "joints[0].torque_limit: missing"},
-                      BadCase{"not_a_number", "kd: 4,", "kd: fast,", "joints[0].kd: cannot read"},
-                      BadCase{"missing_urdf", "urdf: g1_29dof_rev_1_0.urdf", "urdf: nope.urdf", "robot.urdf"},
+                      BadCase{"missing_key", "torque_limit: 88, ", "", "joints[0]: missing required key 'torque_limit'"},
+                      BadCase{"not_a_number", "kd: 4,", "kd: fast,", "joints[0].kd: expected a finite number, got 'fast'"},
+                      BadCase{"infinite_limit", "velocity_limit: 32", "velocity_limit: .inf",
+                              "joints[0].velocity_limit: expected a finite number, got '.inf'"},
+                      BadCase{"typo_in_joint", "mirror_sign: -1\\}", "mirror_sigm: -1}",
+                              "unknown key 'mirror_sigm' in 'joints[1]' (did you mean 'mirror_sign'?)"},
+                      BadCase{"typo_in_robot", "standing_base_height:", "standing_base_heigth:",
+                              "unknown key 'standing_base_heigth' in 'robot' (did you mean 'standing_base_height'?)"},
+                      BadCase{"typo_at_top", "joints:", "zero_offset: {}\njoints:",
+                              "unknown key 'zero_offset' at the top level (did you mean 'zero_offsets'?)"},
+                      BadCase{"unknown_zero_joint", "joints:", "zero_offsets: {left_kne_joint: 0.1}\njoints:",
+                              "zero_offsets: 'left_kne_joint' is not a joint of"},
+                      BadCase{"zero_offset_too_big", "joints:", "zero_offsets: {left_knee_joint: 0.7}\njoints:",
+                              "zero_offsets.left_knee_joint: expected |offset| <= 0.5 rad, got 0.7"},
+                      BadCase{"missing_urdf", "urdf: \\S*g1_29dof_rev_1_0.urdf", "urdf: nope.urdf", "robot.urdf"},
                       BadCase{"syntax", "joints:", "joints: [", "YAML syntax error"}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// A typo names the file and the line of the misspelt key, the key and the nearest valid key.
+TEST(RobotConfig, TypoNamesFileLineKeyAndNearestKey) {
+  std::string text = test::g1RobotConfigText();
+  const std::size_t at = text.find("  imu_site:");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 11, "  imu_sites:");
+  const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+  const test::TempDir dir;
+  const std::string path = dir.write("typo.yaml", text);
+  try {
+    loadRobotConfig(path);
+    FAIL() << "accepted a typo";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":" + std::to_string(line) +
+                                         ": unknown key 'imu_sites' in 'robot' (did you mean 'imu_site'?)");
+  }
+}
+
+TEST(RobotConfig, BusesAndMotorIdsAreNamed) {
+  const RobotConfig c = loadRobotConfig(kConfig);
+  EXPECT_EQ(c.joints[0].bus, "can0");
+  EXPECT_EQ(c.joints[0].motor_id, 1);
+  EXPECT_EQ(c.joints[6].bus, "can1");  // right hip pitch: first motor of the second leg bus
+  EXPECT_EQ(c.joints[6].motor_id, 1);
+}
 
 }  // namespace
 }  // namespace pmg

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "gco_test_util.hpp"
+#include "pmg/common/config_error.hpp"
 
 namespace pmg::gco {
 namespace {
@@ -261,24 +262,47 @@ TEST(GcoOptions, YamlReadsFieldsAndRejectsUnknownKeys) {
   try {
     parseGcoOptionsYaml("w_foot_hieght: 1\n", "cfg/gco.yaml");
     FAIL();
-  } catch (const std::runtime_error& e) {
-    const std::string msg = e.what();
-    EXPECT_NE(msg.find("cfg/gco.yaml"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("w_foot_hieght"), std::string::npos) << msg;
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "cfg/gco.yaml:1: unknown key 'w_foot_hieght' at the top level (did you mean 'w_foot_height'?)");
+  }
+  try {
+    parseGcoOptionsYaml("gco:\n  dt: 0.01\n  limits: {v_x_max: 1.2, heigth_max: 0.8}\n", "cfg/gco.yaml");
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "cfg/gco.yaml:3: unknown key 'heigth_max' in 'gco.limits' (did you mean 'height_max'?)");
+  }
+  try {
+    parseGcoOptionsYaml("gco: {dt: 0.01}\ngcoo: {}\n", "cfg/gco.yaml");
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "cfg/gco.yaml:2: unknown key 'gcoo' at the top level (did you mean 'gco'?)");
   }
   try {
     parseGcoOptionsYaml("dt: 5\n", "cfg/gco.yaml");
     FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("dt"), std::string::npos) << e.what();
+  } catch (const pmg::ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.rfind("cfg/gco.yaml:1: ", 0), 0u) << msg;
+    EXPECT_NE(msg.find("dt"), std::string::npos) << msg;
   }
-  EXPECT_THROW(parseGcoOptionsYaml("enabled: maybe\n", "x.yaml"), std::runtime_error);
-  EXPECT_THROW(loadGcoOptionsFile("no/such/gco.yaml"), std::runtime_error);
+  try {
+    parseGcoOptionsYaml("max_jump_height: .inf\n", "cfg/gco.yaml");
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "cfg/gco.yaml:1: max_jump_height: expected a finite number, got '.inf'");
+  }
+  EXPECT_THROW(parseGcoOptionsYaml("enabled: maybe\n", "x.yaml"), pmg::ConfigError);
+  try {
+    loadGcoOptionsFile("no/such/gco.yaml");
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_STREQ(e.what(), "no/such/gco.yaml: cannot open file");
+  }
 }
 
 /// The ```yaml block that starts with "gco:" in docs/gco.md.
 std::string docsYamlBlock() {
-  std::ifstream f("docs/gco.md");
+  std::ifstream f(pmg::test::sourcePath("docs/gco.md"));
   std::stringstream ss;
   ss << f.rdbuf();
   const std::string doc = ss.str();
@@ -294,7 +318,7 @@ TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
   const std::string docs_yaml = docsYamlBlock();
   ASSERT_FALSE(docs_yaml.empty()) << "docs/gco.md has no ```yaml gco: block";
   for (int source = 0; source < 2; ++source) {
-    const GcoOptions o = source == 0 ? loadGcoOptionsFile("config/gco/g1.yaml")
+    const GcoOptions o = source == 0 ? loadGcoOptionsFile(pmg::test::g1GcoOptionsPath())
                                      : parseGcoOptionsYaml(docs_yaml, "docs/gco.md");
     SCOPED_TRACE(source == 0 ? "config/gco/g1.yaml" : "docs/gco.md");
     EXPECT_EQ(o.enabled, d.enabled);

@@ -33,7 +33,7 @@ TEST(PolicyRobotSpec, LoadsG1Config) {
 
 TEST(PolicyRobotSpec, MissingFileNamesPath) {
   try {
-    loadPolicyRobotSpec("config/robots/none/none.yaml", 0.01);
+    loadPolicyRobotSpec(pmg::test::sourcePath("config/robots/none/none.yaml"), 0.01);
     FAIL() << "expected an exception";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("config/robots/none/none.yaml"), std::string::npos) << e.what();
@@ -123,6 +123,52 @@ TEST(Contract, ParseRejectsNonFiniteAndWrongSizes) {
     FAIL();
   } catch (const ContractError& e) {
     EXPECT_EQ(e.field(), "reference_pairs[0].obs[3]");
+  }
+}
+
+// A typo in the contract is an error naming the model, the key, its line and the nearest valid key.
+TEST(Contract, UnknownKeysNameTheNearestKey) {
+  const std::string base =
+      "version: 1\njoint_names: [a, b]\nactuated_joints: [a]\ncontrols_waist: false\ncontrol_period: 0.01\n"
+      "default_pose: [0, 0]\nkp: [1, 1]\nkd: [0.1, 0.1]\naction: {scale: [0.5], offset: [0], clip: 5}\n"
+      "observation: {history_length: 2, clip: 10, terms: [{name: x, size: 2, scale: [1, 2]}]}\npmg: {enabled: true}\n"
+      "reference_pairs: [{obs: [1, 2, 3, 4], action: [0.5]}]\n";
+  EXPECT_NO_THROW(parseContract(base, "m.onnx"));
+  struct Case {
+    std::string text, field, what;
+  };
+  const Case cases[] = {
+      {base + "policyy: {}\n", "policyy",
+       "m.onnx: policyy: unknown key at line 13 of the pmg.contract metadata (did you mean 'pmg'?)"},
+      {"kpp: [1, 1]\n" + base, "kpp", "m.onnx: kpp: unknown key at line 1 of the pmg.contract metadata (did you mean 'kp'?)"},
+      {base + "version: 2\n", "version", "m.onnx: version: duplicate key at line 13 of the pmg.contract metadata"},
+  };
+  for (const Case& c : cases) {
+    try {
+      parseContract(c.text, "m.onnx");
+      FAIL() << c.text;
+    } catch (const ContractError& e) {
+      EXPECT_EQ(e.field(), c.field);
+      EXPECT_EQ(std::string(e.what()), c.what);
+    }
+  }
+  std::string nested = base;
+  nested.replace(nested.find("clip: 5"), 7, "clipp: 5");
+  try {
+    parseContract(nested, "m.onnx");
+    FAIL();
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "action.clipp");
+    EXPECT_NE(std::string(e.what()).find("(did you mean 'clip'?)"), std::string::npos) << e.what();
+  }
+  std::string term = base;
+  term.replace(term.find("size: 2"), 7, "sise: 2");
+  try {
+    parseContract(term, "m.onnx");
+    FAIL();
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "observation.terms[0].sise");
+    EXPECT_NE(std::string(e.what()).find("(did you mean 'size'?)"), std::string::npos) << e.what();
   }
 }
 

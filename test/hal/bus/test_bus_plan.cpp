@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include "g1_fixture.hpp"
+#include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/bus_plan.hpp"
 
 using namespace pmg::hal::bus;
@@ -112,7 +114,7 @@ TEST(BusPlan, ValidationNamesTheField) {
 }
 
 TEST(BusPlan, G1PlansFromYaml) {
-  BusPlan can = BusPlan::fromYaml("config/hal/g1_can.yaml");
+  BusPlan can = BusPlan::fromYaml(pmg::test::g1CanPlanPath());
   EXPECT_EQ(can.motorCount(), 29u);
   EXPECT_EQ(can.buses().size(), 6u);
   for (const BusLoad& l : can.loads()) EXPECT_LE(l.load, 0.8);
@@ -148,9 +150,7 @@ TEST(BusPlan, YamlErrorsNameFileAndField) {
     BusPlan::fromYaml(path);
     FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": buses[0].motors[0].motor_id: expected 1..254, got 300"),
-              std::string::npos)
-        << e.what();
+    EXPECT_EQ(std::string(e.what()), path + ":6: buses[0].motors[0]: motor_id: expected 1..254, got 300");
   }
   {
     std::ofstream f(path);
@@ -166,5 +166,76 @@ TEST(BusPlan, YamlErrorsNameFileAndField) {
         }
       },
       std::runtime_error);
+  {
+    std::ofstream f(path);
+    f << "motor_types:\n  a: {kp_min: 0, kp_max: 10}\nbuses:\n  - name: can0\n    motors:\n"
+         "      - {joint: j0, joint_index: 0, motor_id: 1, type: a, joint_rnage: [0, 1]}\n";
+  }
+  try {
+    BusPlan::fromYaml(path);
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path + ":6: unknown key 'joint_rnage' in 'buses[0].motors[0]' (did you mean 'joint_range'?)");
+  }
+  {
+    std::ofstream f(path);
+    f << "max_laod: 0.5\nbuses: []\n";
+  }
+  try {
+    BusPlan::fromYaml(path);
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":1: unknown key 'max_laod' at the top level (did you mean 'max_load'?)");
+  }
+  {
+    std::ofstream f(path);
+    f << "max_load: .inf\nbuses: []\n";
+  }
+  try {
+    BusPlan::fromYaml(path);
+    FAIL();
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":1: max_load: expected a finite number, got '.inf'");
+  }
   std::remove(path.c_str());
+}
+
+// The robot config is the source of truth for the wiring: the plan the CAN backend runs must agree.
+TEST(BusPlan, ShippedCanPlanAgreesWithTheRobotConfig) {
+  const pmg::RobotConfig robot = pmg::loadRobotConfig(pmg::test::g1RobotConfigPath());
+  const BusPlan can = BusPlan::fromYaml(pmg::test::g1CanPlanPath());
+  EXPECT_NO_THROW(checkPlanAgainstRobot(can.buses(), pmg::test::g1CanPlanPath(), robot));
+}
+
+TEST(BusPlan, PlanRobotMismatchNamesBothFilesTheJointAndBothIds) {
+  pmg::RobotConfig robot = pmg::loadRobotConfig(pmg::test::g1RobotConfigPath());
+  const std::string plan_file = pmg::test::g1CanPlanPath();
+  const BusPlan can = BusPlan::fromYaml(plan_file);
+  robot.joints[3].motor_id = 17;  // left knee: can0 id 4 in the plan
+  try {
+    checkPlanAgainstRobot(can.buses(), plan_file, robot);
+    FAIL() << "mismatch accepted";
+  } catch (const pmg::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), plan_file + ": buses[0].motors[3]: joint 'left_knee_joint' is on bus can0 with "
+                                                 "motor_id 4, but " + robot.source_file +
+                                                 " says bus can0 with motor_id 17");
+  }
+  robot = pmg::loadRobotConfig(pmg::test::g1RobotConfigPath());
+  std::swap(robot.joints[0].name, robot.joints[1].name);  // joint order differs from the plan's joint_index
+  EXPECT_THROW(checkPlanAgainstRobot(can.buses(), plan_file, robot), pmg::ConfigError);
+
+  // The CAN FD study plan wires the arms differently (one bus per arm): refused for this robot.
+  const std::string fd_file = pmg::test::sourcePath("config/hal/g1_canfd.yaml");
+  const BusPlan fd = BusPlan::fromYaml(fd_file);
+  robot = pmg::loadRobotConfig(pmg::test::g1RobotConfigPath());
+  try {
+    checkPlanAgainstRobot(fd.buses(), fd_file, robot);
+    FAIL() << "mismatch accepted";
+  } catch (const pmg::ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(fd_file), std::string::npos) << msg;
+    EXPECT_NE(msg.find(robot.source_file), std::string::npos) << msg;
+    EXPECT_NE(msg.find("joint 'left_wrist_roll_joint' is on bus can3 with motor_id 5"), std::string::npos) << msg;
+  }
 }
