@@ -70,6 +70,15 @@ expect 0 generator_vectors "$bin/pmg_generator_vectors" --ticks 20 --out vectors
 [[ -s vectors.json ]] || fail "generator_vectors: no vectors.json"
 port=$((20000 + ($$ % 1000) * 20))
 expect 0 sil "$bin/pmg_sil" --realtime --duration 0.05 --port "$port" && has sil "cycles"
+expect 0 gco_eval "$bin/pmg_gco_eval" --vx 0.3 --vy 0 --wz 0 --pitch 0 --roll 0 --height 0 --seconds 1 --warmup 0
+expect 0 policy_sil "$bin/pmg_policy_sil" --seeds 1 --duration 0.3 --out policy_sil && has policy_sil "mean over 1 seeds"
+[[ -f policy_sil/summary.json ]] || fail "policy_sil: no policy_sil/summary.json"
+expect 0 controller "$bin/pmg_controller" --config "$data/config/controller/g1_sil.yaml" --duration 0.2 --no-lcm
+# Benchmarks, shortened.
+expect 0 bench_controller "$bin/bench_controller" --seconds 0.3
+expect 0 bench_policy_latency "$bin/bench_policy_latency" --iterations 100
+expect 0 gco_tick_bench "$bin/pmg_gco_tick_bench" --ticks 1000
+expect 0 bench_motion "$bin/bench_motion" --benchmark_filter=LoadClipLibrary --benchmark_min_time=0.01
 
 # Output paths are checked before any work: the logs named here do not even exist, so an error
 # about the output proves it came first.
@@ -83,7 +92,7 @@ expect 1 calib_dynamics_bad_plot "$bin/pmg_calib_dynamics" --rig "$data/config/b
 expect 1 calib_zero_bad_out "$bin/pmg_calib_zero" --config "$data/config/robots/g1/g1.yaml" --out no_such_dir/zero.yaml &&
   has calib_zero_bad_out "no_such_dir/zero.yaml: cannot write"
 
-left="$(ls -A | grep -v -E '\.(out|lcmlog|csv|png|json)$')"
+left="$(ls -A | grep -v -E '\.(out|lcmlog|csv|png|json)$|^policy_sil$')"
 [[ -z "$left" ]] || fail "unexpected files in the working directory: $left"
 echo "$failures failures"
 [[ $failures -eq 0 ]]
