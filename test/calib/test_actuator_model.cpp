@@ -1,26 +1,11 @@
 // ActuatorModel: stiction, Stribeck, load-dependent friction, delay line, limits, driver rate,
 // zero offset; and that step() does not allocate.
-#include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <new>
 
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "pmg/calib/actuator_model.hpp"
-
-namespace {
-std::atomic<long> g_allocs{0};
-std::atomic<bool> g_count{false};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_count.load()) ++g_allocs;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace pmg::calib {
 namespace {
@@ -168,14 +153,16 @@ TEST(ActuatorModel, StepDoesNotAllocate) {
   MotorCommand c;
   c.kp_Nm_per_rad = 5.0;
   double sum = 0.0;
-  g_allocs = 0;
-  g_count = true;
-  for (int k = 0; k < 1000; ++k) {
-    c.q_des_rad = std::sin(0.01 * k);
-    sum += ActuatorModel::step(p, *s, c, joint(0.0, 0.1, 0.01, -0.05)).tau_applied_Nm;
+  std::size_t allocations = 0;
+  {
+    pmg::test::AllocationGuard guard;
+    for (int k = 0; k < 1000; ++k) {
+      c.q_des_rad = std::sin(0.01 * k);
+      sum += ActuatorModel::step(p, *s, c, joint(0.0, 0.1, 0.01, -0.05)).tau_applied_Nm;
+    }
+    allocations = guard.count();
   }
-  g_count = false;
-  EXPECT_EQ(g_allocs.load(), 0);
+  EXPECT_EQ(allocations, 0u);
   EXPECT_TRUE(std::isfinite(sum));
 }
 

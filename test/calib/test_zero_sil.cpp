@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/calib/zero_io.hpp"
 #include "pmg/common/robot_config.hpp"
@@ -57,9 +58,9 @@ class PushingBackend final : public HalBackend {
 class ZeroSilTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    robot = loadRobotConfig("config/robots/g1/g1.yaml");
+    robot = pmg::test::g1Robot();
     model = gco::LegModel::fromRobotConfig(robot);
-    protocol = loadZeroProtocol("config/calib/zero_poses_g1.yaml");
+    protocol = loadZeroProtocol(pmg::test::g1ZeroProtocolPath());
   }
   RobotConfig robot;
   std::shared_ptr<const gco::LegModel> model;

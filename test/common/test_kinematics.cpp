@@ -5,13 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/mujoco_model.hpp"
 
 namespace pmg {
 namespace {
 
-const char* kConfig = "config/robots/g1/g1.yaml";
+const std::string kConfig = pmg::test::g1RobotConfigPath();
 
 // Compares KDL's FK with MuJoCo's body poses for 50 random configurations within the joint
 // limits. The base is at the world origin, so world frame = pelvis frame. Returns links checked.

@@ -4,13 +4,14 @@
 #include <memory>
 #include <string>
 
+#include "g1_fixture.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/gco.hpp"
 #include "pmg/gco/synthetic_gait.hpp"
 
 namespace pmg::gco::test {
 
-inline const std::string kG1Urdf = "config/robots/g1/g1_29dof_rev_1_0.urdf";
+inline const std::string kG1Urdf = pmg::test::g1UrdfPath();
 
 inline std::shared_ptr<const LegModel> g1Legs() {
   static const std::shared_ptr<const LegModel> model = LegModel::fromUrdfFile(kG1Urdf);

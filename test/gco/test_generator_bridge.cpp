@@ -1,6 +1,7 @@
 // Generator + GCO on the shipped G1 clips (config/clips/g1): the complete issue-4 tick.
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
@@ -12,8 +13,8 @@ namespace {
 
 struct Fixture {
   Fixture()
-      : robot(loadRobotConfig("config/robots/g1/g1.yaml")),
-        model(std::make_shared<const GeneratorModel>(loadClipLibrary("config/clips/g1", robot), pmg::generatorJointSpace(robot))),
+      : robot(pmg::test::g1Robot()),
+        model(std::make_shared<const GeneratorModel>(loadClipLibrary(pmg::test::g1ClipDir(), robot), pmg::generatorJointSpace(robot))),
         legs(LegModel::fromRobotConfig(robot)) {}
   RobotConfig robot;
   std::shared_ptr<const GeneratorModel> model;

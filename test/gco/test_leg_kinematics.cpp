@@ -1,6 +1,7 @@
 // KDL leg chains of the G1: structure, symmetry and Jacobian vs. finite differences of FK.
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "gco_test_util.hpp"
 #include "pmg/common/robot_config.hpp"
 
@@ -18,7 +19,7 @@ TEST(LegModel, G1ChainsHaveTheSixLegJointsInOrder) {
 
 TEST(LegModel, MissingFileAndLinkNameTheProblem) {
   try {
-    LegModel::fromUrdfFile("config/robots/g1/missing.urdf");
+    LegModel::fromUrdfFile(pmg::test::sourcePath("config/robots/g1/missing.urdf"));
     FAIL() << "expected an exception";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("missing.urdf"), std::string::npos) << e.what();
@@ -34,7 +35,7 @@ TEST(LegModel, MissingFileAndLinkNameTheProblem) {
 }
 
 TEST(LegModel, FromRobotConfigMatchesTheUrdfChains) {
-  const RobotConfig cfg = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& cfg = pmg::test::g1Robot();
   const auto legs = LegModel::fromRobotConfig(cfg);
   const auto ref = test::g1Legs();
   LegKinematics a(legs), b(ref);

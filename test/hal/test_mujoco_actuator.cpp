@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg {
 namespace {
@@ -19,16 +21,10 @@ const int kKnee = 3;  // left_knee_joint
 
 // The shipped G1 config with an actuator block (inline YAML map) on the left knee.
 RobotConfig configWithKneeActuator(const std::string& block) {
-  std::ifstream in("config/robots/g1/g1.yaml");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = std::regex_replace(ss.str(), std::regex("(mirror: right_knee_joint, mirror_sign: 1)\\}"),
+  const std::string text = std::regex_replace(test::g1RobotConfigText(), std::regex("(mirror: right_knee_joint, mirror_sign: 1)\\}"),
                                               "$1, actuator: " + block + "}", std::regex_constants::format_first_only);
-  const std::string path = "config/robots/g1/.test_actuator.yaml";
-  std::ofstream(path) << text;
-  RobotConfig c = loadRobotConfig(path);
-  std::filesystem::remove(path);
-  return c;
+  const test::TempDir dir;
+  return loadRobotConfig(dir.write("actuator.yaml", text));
 }
 
 MujocoBackendOptions gantry() {
@@ -58,7 +54,7 @@ std::vector<double> kneeResponse(MujocoBackend& sim, const RobotConfig& robot, d
 }
 
 TEST(MujocoActuator, StictionHoldsAJointTheIdealMotorMoves) {
-  const RobotConfig ideal = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& ideal = test::g1Robot();
   const RobotConfig sticky = configWithKneeActuator("{fc_Nm: 4.0, fs_Nm: 5.0}");
   MujocoBackend a(ideal, gantry()), b(sticky, gantry());
   EXPECT_FALSE(a.hasActuatorModel(kKnee));
@@ -99,7 +95,7 @@ TEST(MujocoActuator, TransportDelayMakesTheResponseLate) {
 }
 
 TEST(MujocoActuator, ZeroOffsetShowsInTheEncoderReading) {
-  const RobotConfig ideal = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& ideal = test::g1Robot();
   const RobotConfig offset = configWithKneeActuator("{offset_rad: 0.03}");
   MujocoBackend a(ideal, gantry()), b(offset, gantry());
   LowState sa, sb;

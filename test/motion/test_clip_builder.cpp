@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/motion/clip_builder.hpp"
@@ -39,7 +40,7 @@ RobotMotion knownContactMotion(const RobotConfig& robot, int frames) {
 }
 
 TEST(ClipBuilder, ContactSegmentationOnKnownContacts) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& robot = pmg::test::g1Robot();
   const RobotMotion m = knownContactMotion(robot, 300);
   ContactOptions opt;
   opt.height_threshold = 0.005;
@@ -92,8 +93,8 @@ TEST(ClipBuilder, PeriodicHelpers) {
 }
 
 TEST(ClipBuilder, MirrorSwapsSidesAndIsAnInvolution) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
-  const DynamicClip lat = readDynamicClip("config/clips/g1/walk_lateral_left.yaml", robot);
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const DynamicClip lat = readDynamicClip(pmg::test::g1ClipPath("walk_lateral_left"), robot);
   const DynamicClip m = mirrorClip(lat, robot, "walk_lateral_right");
   EXPECT_EQ(m.direction, -lat.direction);
   EXPECT_EQ(m.meta.provenance, "mocap_mirrored");
@@ -183,8 +184,8 @@ TEST(ClipBuilder, RobotContactLabelsFollowTheDocumentedRules) {
 }
 
 TEST(ClipBuilder, RotateClipPhaseKeepsTheMotion) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
-  const ClipLibrary lib = loadClipLibrary("config/clips/g1", robot);
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const ClipLibrary lib = loadClipLibrary(pmg::test::g1ClipDir(), robot);
   const DynamicClip& c = lib.dynamic_clips.front();
   DynamicClip r = c;
   const Eigen::Index N = c.q.rows();
@@ -205,7 +206,7 @@ TEST(ClipBuilder, RotateClipPhaseKeepsTheMotion) {
 }
 
 TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& robot = pmg::test::g1Robot();
   const std::vector<int> mirror = robot.mirrorIndex();
   StaticClip s;
   s.name = "lopsided";
@@ -233,7 +234,7 @@ TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
 }
 
 TEST(ClipBuilder, KeepLegDirectionsShortensWithoutTurningTheLegs) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& robot = pmg::test::g1Robot();
   const KinematicModel model(robot);
   const std::vector<std::string> names = robot.jointNames();
   auto idx = [&](const char* j) { return static_cast<Eigen::Index>(std::find(names.begin(), names.end(), j) - names.begin()); };

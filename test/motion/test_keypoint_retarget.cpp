@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/motion/keypoint_retarget.hpp"
@@ -16,7 +17,7 @@ using namespace pmg;
 using namespace pmg::motion;
 
 TEST(KeypointRetarget, RecoversJointAnglesOfASyntheticRobotMotion) {
-  const RobotConfig robot = loadRobotConfig("config/robots/g1/g1.yaml");
+  const RobotConfig& robot = pmg::test::g1Robot();
   const KinematicModel model(robot);
   const auto n = static_cast<Eigen::Index>(robot.numJoints());
   Eigen::VectorXd q0 = robot.defaultPose();

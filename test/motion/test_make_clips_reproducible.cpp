@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/clips/clip_io.hpp"
 
@@ -36,9 +37,9 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
     const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
-  const pmg::RobotConfig robot = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
   int files = 0;
-  for (const auto& e : fs::directory_iterator("config/clips/g1")) {
+  for (const auto& e : fs::directory_iterator(pmg::test::g1ClipDir())) {
     if (!e.is_regular_file()) continue;
     const std::string name = e.path().filename().string();
     SCOPED_TRACE(name);

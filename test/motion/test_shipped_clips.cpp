@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/motion/clip_builder.hpp"
@@ -19,8 +20,8 @@
 
 namespace {
 
-const char* kRobot = "config/robots/g1/g1.yaml";
-const char* kClipDir = "config/clips/g1";
+const std::string kRobot = pmg::test::g1RobotConfigPath();
+const std::string kClipDir = pmg::test::g1ClipDir();
 
 std::string slurp(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

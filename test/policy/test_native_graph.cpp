@@ -24,7 +24,7 @@ class NativeModels : public ::testing::TestWithParam<std::string> {};
 TEST_P(NativeModels, MatchesOnnxRuntimeAndReferences) {
   PolicyRobotSpec spec = g1Spec();
   const std::string path = GetParam();
-  if (path.rfind("config/", 0) == 0) spec.pmg = {{"enabled", "true"}, {"gco", "true"}};
+  if (path.find("/config/policies/") != std::string::npos) spec.pmg = {{"enabled", "true"}, {"gco", "true"}};
   PolicyRunner ort(path, spec);
   PolicyRunner native(path, spec, nativeOptions());
   // Reference pairs plus perturbed inputs (not stored anywhere): both engines agree.
@@ -44,7 +44,7 @@ TEST_P(NativeModels, MatchesOnnxRuntimeAndReferences) {
 
 INSTANTIATE_TEST_SUITE_P(Committed, NativeModels,
                          ::testing::Values(kDataDir + "g1_legs_ok.onnx", kDataDir + "g1_legs_waist_hist3_ok.onnx",
-                                           kDataDir + "g1_legs_512_256_128.onnx", std::string("config/policies/g1_pmg_policy.onnx")));
+                                           kDataDir + "g1_legs_512_256_128.onnx", pmg::test::sourcePath("config/policies/g1_pmg_policy.onnx")));
 
 TEST(NativeGraph, NanOutputDetected) {
   PolicyRunner runner(kDataDir + "nan_output.onnx", g1Spec(), nativeOptions());

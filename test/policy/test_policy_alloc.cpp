@@ -1,55 +1,27 @@
-// Allocation accounting of the per-tick path: a global operator new counter is switched on
-// around ObservationAssembler::setTerm/commit, PolicyRunner::step and LimbSeparation::compose.
-// The counter sees every operator new in the process, ONNX Runtime's included (it links the
-// same libstdc++).
-#include <atomic>
+// Allocation accounting of the per-tick path: the test-support allocation guard, in its
+// process-wide mode, is switched on around ObservationAssembler::setTerm/commit,
+// PolicyRunner::step and LimbSeparation::compose. It sees every operator new in the process,
+// ONNX Runtime's included (it links the same libstdc++).
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "pmg/policy/limb_separation.hpp"
 #include "pmg/policy/observation.hpp"
 #include "pmg/policy/onnx_session.hpp"
 #include "pmg/policy/policy_runner.hpp"
 #include "test_policy_common.hpp"
 
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-
-void* countedAlloc(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t n) { return countedAlloc(n); }
-void* operator new[](std::size_t n) { return countedAlloc(n); }
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return std::malloc(n == 0 ? 1 : n);
-}
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
 namespace pmg::policy::test {
 namespace {
 
+// Counts every thread's operator new calls (ONNX Runtime may allocate on its own threads).
 struct Counting {
-  Counting() {
-    g_allocations = 0;
-    g_counting = true;
-  }
-  ~Counting() { g_counting = false; }
-  long count() const { return g_allocations.load(); }
+  pmg::test::AllocationGuard guard{pmg::test::AllocationScope::kProcess};
+  long count() const { return static_cast<long>(guard.count()); }
 };
 
 TEST(PolicyAllocation, CounterSeesAllocations) {

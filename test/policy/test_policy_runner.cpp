@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/policy/policy_runner.hpp"
 #include "test_policy_common.hpp"
 
@@ -132,9 +133,9 @@ TEST(PolicyRunner, TighterToleranceThanFloatNoiseStillPasses) {
 // pose, PD gains, 100 Hz period): a change to config/robots/g1/g1.yaml that breaks it fails here,
 // which means the policy has to be retrained or re-exported.
 TEST(PolicyRunner, ShippedPolicyMatchesRobotConfig) {
-  PolicyRobotSpec spec = loadPolicyRobotSpec("config/robots/g1/g1.yaml", 0.01);
+  PolicyRobotSpec spec = loadPolicyRobotSpec(pmg::test::g1RobotConfigPath(), 0.01);
   spec.pmg = {{"enabled", "true"}, {"gco", "true"}, {"mode", "pmg"}};  // full PMG (GCO)
-  PolicyRunner runner("config/policies/g1_pmg_policy.onnx", spec);
+  PolicyRunner runner(pmg::test::sourcePath("config/policies/g1_pmg_policy.onnx"), spec);
   EXPECT_EQ(runner.actionSize(), 12);
   EXPECT_EQ(runner.observationSize(), 62);
   EXPECT_LT(runner.referenceMaxAbsError(), 1e-5f);

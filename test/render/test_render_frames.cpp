@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/common/mujoco_model.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/render/gl_context.hpp"
@@ -25,7 +26,7 @@ using test::difference;
 class RenderFrames : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    robot_ = std::make_unique<RobotConfig>(loadRobotConfig("config/robots/g1/g1.yaml"));
+    robot_ = std::make_unique<RobotConfig>(pmg::test::g1Robot());
     const char* display = std::getenv("DISPLAY");
     if (display == nullptr || display[0] == '\0') {  // CI: no display, bring a private Xvfb
       xvfb_ = std::make_unique<test::ScopedXvfb>();

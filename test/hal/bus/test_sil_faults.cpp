@@ -11,6 +11,7 @@
 #include <system_error>
 #include <thread>
 
+#include "g1_fixture.hpp"
 #include "alloc_counter.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
@@ -36,8 +37,8 @@ std::uint16_t basePort(int attempt) {
 class SilRig {
  public:
   explicit SilRig(bool gantry = true) {
-    robot_ = pmg::loadRobotConfig("config/robots/g1/g1.yaml");
-    BusPlan plan = BusPlan::fromYaml("config/hal/g1_can.yaml");
+    robot_ = pmg::test::g1Robot();
+    BusPlan plan = BusPlan::fromYaml(pmg::test::g1CanPlanPath());
     pmg::MujocoBackendOptions mo;
     mo.gantry.enabled = gantry;
     std::unique_ptr<CanTransport> imu;
