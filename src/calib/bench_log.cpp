@@ -57,6 +57,9 @@ Table read_csv(const std::string& path) {
       if (cells[c].empty() || end == cells[c].c_str() || *end != '\0')
         throw std::runtime_error(fmt::format("{}: line {}, column '{}': '{}' is not a number", path, row,
                                              tab.header[c], cells[c]));
+      if (!std::isfinite(v))
+        throw std::runtime_error(fmt::format("{}: line {}, column '{}': '{}' is not a finite number", path, row,
+                                             tab.header[c], cells[c]));
       tab.cols[c].push_back(v);
     }
   }

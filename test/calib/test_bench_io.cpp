@@ -89,6 +89,12 @@ TEST(RigConfig, LoadsShippedRigsAndRejectsBadValues) {
   EXPECT_EQ(error_of([&] { load_rig_config(bad); }), bad + ":2: motor.torque_limit_Nm: expected a finite number, got '.inf'");
 }
 
+TEST(BenchLog, CsvNonFiniteValueIsRefused) {
+  const std::string bad = ::testing::TempDir() + "nan_log.csv";
+  std::ofstream(bad) << "t,q_cmd,q\n0,0,0\n0.001,nan,0\n0.002,0,0\n";
+  EXPECT_EQ(error_of([&] { load_bench_log(bad); }), bad + ": line 3, column 'q_cmd': 'nan' is not a finite number");
+}
+
 TEST(BenchLog, BamJsonTypoNamesFileLineAndNearestKey) {
   const std::string bad = ::testing::TempDir() + "bam_typo.json";
   std::ofstream(bad) << "{\"kp\": 32, \"entries\": [\n"
