@@ -87,7 +87,7 @@ ActuatorBlock load_actuator_file(const std::string& path) {
   const yaml::YamlDocument doc = yaml::loadYamlDocument(path);
   ActuatorFile f;
   yaml::readYaml(doc, &f);
-  const yaml::YamlSource src = yaml::detail::child(doc.source, "actuator");
+  const yaml::YamlSource src = yaml::childSource(doc.source, "actuator");
   return read_block(f.actuator, src, yaml::location(doc.source, f.actuator));
 }
 

@@ -222,6 +222,9 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
     ++cmd.sequence;
     if (backend.exchange(cmd, st) == BackendStatus::kFault)
       throw std::runtime_error(fmt::format("captureZeroPoses: backend '{}' fault at t = {:.3f} s", backend.name(), st.time));
+    if (st.mode == Mode::kDamping)  // the HAL supervisor (makeHalStack) stopped the motors
+      throw std::runtime_error(fmt::format("captureZeroPoses: the HAL supervisor latched damping at t = {:.3f} s: {}",
+                                           st.time, toString(st.fault)));
     if (t0 < 0) t0 = st.time;
     out.duration_s = st.time - t0;
   };

@@ -208,7 +208,7 @@ void readZeroOffsetMap(const YAML::Node& map, const yaml::YamlSource& src, const
                                     yaml::nearestKey(name, names) + "'?)");
     const double v = values.at(name);
     if (std::fabs(v) > 0.5)
-      yaml::fail(yaml::detail::child(src, name), kv.second, "expected |offset| <= 0.5 rad, got " + kv.second.Scalar());
+      yaml::fail(yaml::childSource(src, name), kv.second, "expected |offset| <= 0.5 rad, got " + kv.second.Scalar());
     (*out)[static_cast<std::size_t>(i)] = v;
   }
 }
@@ -218,7 +218,7 @@ std::vector<double> readZeroOffsetDocument(const yaml::YamlDocument& doc, const 
   if (doc.root.IsMap() && doc.root["zero_offsets"]) {
     ZeroResultFile f;
     yaml::readYaml(doc, &f);
-    readZeroOffsetMap(f.zero_offsets, yaml::detail::child(doc.source, "zero_offsets"), robot, &out);
+    readZeroOffsetMap(f.zero_offsets, yaml::childSource(doc.source, "zero_offsets"), robot, &out);
   } else {
     readZeroOffsetMap(doc.root, doc.source, robot, &out);
   }
@@ -248,13 +248,13 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
   RobotFile file;
   file.robot.c = &c;
   yaml::readYaml(doc, &file);
-  const yaml::YamlSource joints_src = yaml::detail::child(doc.source, "joints");
+  const yaml::YamlSource joints_src = yaml::childSource(doc.source, "joints");
   const YAML::Node joints_node = doc.root["joints"];
   for (std::size_t i = 0; i < file.joints.size(); ++i) {
     JointEntry& e = file.joints[i];
     if (e.j.mirror.empty()) e.j.mirror = e.j.name;
     if (const YAML::Node& a = e.actuator; !a.IsNull()) {
-      const yaml::YamlSource asrc = yaml::detail::child(yaml::detail::item(joints_src, i), "actuator");
+      const yaml::YamlSource asrc = yaml::childSource(yaml::itemSource(joints_src, i), "actuator");
       if (a.IsScalar()) {  // path of an actuator file with a top-level `actuator:` map
         const std::string afile = (fs::path(doc.source.base_dir) / a.Scalar()).lexically_normal().string();
         yaml::YamlDocument adoc;
@@ -282,7 +282,7 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
     c.joints.push_back(e.j);
   }
   if (const YAML::Node& z = file.zero_offsets; !z.IsNull()) {  // optional: pmg_calib_zero result (map or file)
-    const yaml::YamlSource zsrc = yaml::detail::child(doc.source, "zero_offsets");
+    const yaml::YamlSource zsrc = yaml::childSource(doc.source, "zero_offsets");
     std::vector<double> offsets;
     if (z.IsScalar()) {
       const std::string zfile = (fs::path(doc.source.base_dir) / z.Scalar()).lexically_normal().string();

@@ -108,6 +108,14 @@ void fail(const YamlSource& source, const YAML::Node& at, const std::string& mes
   throw ConfigError(text + message);
 }
 
+YamlSource childSource(const YamlSource& source, const std::string& key) { return detail::child(source, key); }
+
+YamlSource itemSource(const YamlSource& source, std::size_t index) { return detail::item(source, index); }
+
+void rejectUnknownKeys(const YAML::Node& map, const YamlSource& source, const std::vector<std::string>& valid) {
+  detail::checkUnknownKeys(map, source, std::set<std::string>(valid.begin(), valid.end()), valid);
+}
+
 namespace detail {
 
 bool readBool(const YAML::Node& n, const YamlSource& s) {

@@ -235,6 +235,21 @@ TEST(YamlArchive, SourceWithoutLinesNamesOnlyTheFile) {
   }
 }
 
+TEST(YamlArchive, PublicHelpersForCustomReaders) {
+  const yaml::YamlSource root{"f.yaml", "/d", ""};
+  EXPECT_EQ(yaml::childSource(root, "safety").key_path, "safety");
+  EXPECT_EQ(yaml::itemSource(yaml::childSource(root, "joints"), 3).key_path, "joints[3]");
+  EXPECT_EQ(yaml::childSource(yaml::itemSource(yaml::childSource(root, "joints"), 3), "kp").key_path, "joints[3].kp");
+  const yaml::YamlDocument doc = yaml::parseYamlDocument("a: 1\nbb: 2\n", "f.yaml");
+  EXPECT_NO_THROW(yaml::rejectUnknownKeys(doc.root, doc.source, {"a", "bb"}));
+  try {
+    yaml::rejectUnknownKeys(doc.root, doc.source, {"a", "b"});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_STREQ(e.what(), "f.yaml:2: unknown key 'bb' at the top level (did you mean 'b'?)");
+  }
+}
+
 TEST(YamlArchive, EditDistanceAndNearestKey) {
   EXPECT_EQ(yaml::editDistance("kitten", "sitting"), 3u);
   EXPECT_EQ(yaml::editDistance("", "abc"), 3u);

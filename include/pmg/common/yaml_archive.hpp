@@ -124,6 +124,14 @@ std::string location(const YamlSource& source, const YAML::Node& node);
 /// Throws ConfigError("<file>:<line>: <key_path>: <message>") (key path omitted when empty).
 [[noreturn]] void fail(const YamlSource& source, const YAML::Node& at, const std::string& message);
 
+/// The source of the value of `key` in the map at `source` (key path "safety" -> "safety.limits").
+YamlSource childSource(const YamlSource& source, const std::string& key);
+/// The source of item `index` of the list at `source` (key path "joints" -> "joints[3]").
+YamlSource itemSource(const YamlSource& source, std::size_t index);
+/// Rejects duplicate keys and keys of `map` not in `valid` (the unknown-key message of the archive:
+/// file:line, key, the nearest valid key). No-op unless `map` is a map. @throws ConfigError.
+void rejectUnknownKeys(const YAML::Node& map, const YamlSource& source, const std::vector<std::string>& valid);
+
 /// One field as declared by Serialize(), for documentation and --help output.
 struct FieldInfo {
   std::string name;
