@@ -420,6 +420,8 @@ std::vector<Case> allCases() {
       {"bus_nan_codec_range", Kind::kBusPlan, file(kPlan, "q_min: -12.5, q_max: 12.5, qd_min: -30.0",
                                                    "q_min: .nan, q_max: 12.5, qd_min: -30.0"),
        error({"q_min"})},
+      {"bus_duplicate_motor_id", Kind::kBusPlan,
+       file(kPlan, "motor_id: 2, command_can_id: 2", "motor_id: 1, command_can_id: 2"), error({"motor_id"})},
       {"bus_truncated", Kind::kBusPlan, text([] { return firstHalf(shipped("config/hal/g1_can.yaml")); }), error()},
 
       // --- calibration rigs (config/bench) -------------------------------------------------------
@@ -438,6 +440,11 @@ std::vector<Case> allCases() {
       {"log_inf_time", Kind::kBenchLogCsv, file(kLog, "0.02,0.2,0.010", "1e400,0.2,0.010"), error({"t"})},
       {"log_empty", Kind::kBenchLogCsv, text([] { return std::string(); }), error()},
       {"log_binary_garbage", Kind::kBenchLogCsv, text([] { return garbage(); }), error()},
+      {"log_json_no_entries", Kind::kBenchLogJson, text([kBam] {
+         const std::string t = shipped(kBam);
+         return t.substr(0, t.find("\"entries\": [")) + "\"entries\": []}";
+       }),
+       error({"entries"})},
       {"log_json_truncated", Kind::kBenchLogJson, text([kBam] { return firstHalf(shipped(kBam)); }), error()},
       {"log_json_wrong_type", Kind::kBenchLogJson, file(kBam, "\"position\": -0.01380582709097089",
                                                         "\"position\": \"abc\""),
@@ -450,6 +457,11 @@ std::vector<Case> allCases() {
        error({"max_gyro_rms"})},
       {"zero_short_leg_kp", Kind::kZeroProtocol,
        file(kZero, "leg_kp: [400, 400, 400, 500, 400, 400]", "leg_kp: [400, 400]"), error({"leg_kp"})},
+      {"zero_no_poses", Kind::kZeroProtocol, text([kZero] {
+         const std::string t = shipped(kZero);
+         return t.substr(0, t.find("  poses:")) + "  poses: []\n";
+       }),
+       error({"poses"})},
       {"zero_empty", Kind::kZeroProtocol, text([] { return std::string(); }), error()},
       {"zres_unknown_joint", Kind::kZeroResult, zres("left_knee_joint", "left_knee_jiont"), error({"left_knee_jiont"})},
       {"zres_nan_offset", Kind::kZeroResult, zres("0.01", ".nan"), error({"left_knee_joint"})},
@@ -465,6 +477,7 @@ std::vector<Case> allCases() {
       {"clip_unknown_joint", Kind::kDynamicClip, file(kWalk, "[left_hip_pitch_joint,", "[left_hip_pich_joint,"),
        error({"left_hip_pich_joint"})},
       {"clip_inf_contact", Kind::kDynamicClip, file(kWalk, "mu: 0.234375", "mu: .inf"), error({"mu"})},
+      {"clip_short_row", Kind::kDynamicClip, file(kWalk, "  - [-0.459786, ", "  - ["), error({"q"})},
       {"clip_truncated", Kind::kDynamicClip, text([kWalk] { return firstHalf(shipped(kWalk)); }), error()},
       {"clip_static_unknown_axis", Kind::kStaticClip, file(kSquat, "axis: height", "axis: heigth"), error({"axis"})},
       {"clip_static_huge_value", Kind::kStaticClip, file(kSquat, "values: [0.423704", "values: [1e300"),
@@ -473,7 +486,7 @@ std::vector<Case> allCases() {
 
       // --- ONNX policy contracts -------------------------------------------------------------------
       {"contract_unknown_key", Kind::kContract, contract("controls_waist: false", "controls_waistt: false"),
-       error({"controls_waistt"}), kYaml},
+       error({"controls_waistt"})},
       {"contract_nan_action_scale", Kind::kContract, contract("scale: [0.25,", "scale: [.nan,"), error({"scale"})},
       {"contract_inf_action_clip", Kind::kContract, contract("clip: 10.0", "clip: .inf"), error({"clip"})},
       {"contract_negative_term_size", Kind::kContract, contract("{name: base_ang_vel_B, size: 3,", "{name: base_ang_vel_B, size: -3,"),
@@ -499,6 +512,8 @@ std::vector<Case> allCases() {
       {"script_wrong_type_segments", Kind::kCommandScript, text([] { return std::string("segments: 5\n"); }),
        error({"segments"})},
       {"script_eval_unknown_key", Kind::kCommandScript, file(kEval, "ramp:", "rampp:"), error({"rampp"})},
+      {"script_huge_duration", Kind::kCommandScript, file(kScript, "duration: 3.0, vx", "duration: 1e300, vx"),
+       error({"duration"})},
       {"script_empty", Kind::kCommandScript, text([] { return std::string(); }), error()},
 
       // --- controller configs ----------------------------------------------------------------------
@@ -825,6 +840,10 @@ TEST(BadInputTable, CoversEveryKindWithAtLeast60Cases) {
                  Kind::kCanCommand, Kind::kImuFrame, Kind::kUdpDatagram, Kind::kLcmPacket}) {
     EXPECT_GT(per_kind[k], 0) << kindName(k);
   }
+  int pending = 0;
+  for (const Case& c : cases) pending += c.pending != nullptr ? 1 : 0;
+  std::printf("bad-input cases: %zu (%d pending)\n", cases.size(), pending);
+  for (const auto& [kind, n] : per_kind) std::printf("  %-26s %d\n", kindName(kind), n);
   std::set<std::string> names;
   for (const Case& c : cases) EXPECT_TRUE(names.insert(c.name).second) << "duplicate case name " << c.name;
 }
