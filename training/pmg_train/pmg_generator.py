@@ -62,16 +62,40 @@ def _wrap_np(phi):
     return 0.0 if phi >= 1.0 else phi
 
 
+def rotate_phase(c: Clip, shift: int) -> Clip:
+    """pmg::rotateClipPhase: new sample k = old sample k + shift; contact centres move by -shift/N."""
+    n = c.q.shape[0]
+    shift %= n
+    if shift == 0:
+        return c
+    s = (np.arange(n) + shift) % n
+    contact = c.contact.copy()
+    contact[:, 0] = [_wrap_np(mu - shift / n) for mu in c.contact[:, 0]]
+    return Clip(c.name, c.axis, c.direction, c.nominal_scale, c.period, c.q[s].copy(), c.qd[s].copy(),
+                c.v_base[s].copy(), c.omega_base[s].copy(), c.base_height[s].copy(), contact)
+
+
+def align_on_left_touchdown(c: Clip) -> Clip:
+    """pmg::alignPhaseOnLeftTouchdown: phi = 0 at the left foot's touchdown mu - sigma (std::lround)."""
+    n = c.q.shape[0]
+    start = c.contact[0, 0] - c.contact[0, 1]
+    start -= math.floor(start)
+    return rotate_phase(c, int(math.floor(start * n + 0.5)) % n)
+
+
 def time_reversed(c: Clip) -> Clip:
+    """pmg::timeReverseClip (src/clips/clip_transforms.cpp)."""
     n = c.q.shape[0]
     s = (n - np.arange(n)) % n
     contact = c.contact.copy()
     contact[:, 0] = [_wrap_np(1.0 - mu) for mu in c.contact[:, 0]]
-    return Clip(c.name + "_time_reversed", c.axis, -c.direction, c.nominal_scale, c.period, c.q[s].copy(),
-                -c.qd[s], -c.v_base[s], -c.omega_base[s], c.base_height[s].copy(), contact)
+    return align_on_left_touchdown(
+        Clip(c.name + "_time_reversed", c.axis, -c.direction, c.nominal_scale, c.period, c.q[s].copy(),
+             -c.qd[s], -c.v_base[s], -c.omega_base[s], c.base_height[s].copy(), contact))
 
 
 def mirrored(c: Clip, js: JointSpace) -> Clip:
+    """pmg::mirrorClip (src/clips/clip_transforms.cpp)."""
     q = c.q[:, js.mirror_index] * js.mirror_sign[None, :]
     qd = c.qd[:, js.mirror_index] * js.mirror_sign[None, :]
     v = c.v_base.copy()
@@ -80,8 +104,9 @@ def mirrored(c: Clip, js: JointSpace) -> Clip:
     w[:, 0] = -c.omega_base[:, 0]
     w[:, 2] = -c.omega_base[:, 2]
     contact = c.contact[::-1].copy()
-    return Clip(c.name + "_mirrored", c.axis, -c.direction, c.nominal_scale, c.period, q, qd, v, w,
-                c.base_height.copy(), contact)
+    direction = c.direction if c.axis == 0 else -c.direction
+    return align_on_left_touchdown(Clip(c.name + "_mirrored", c.axis, direction, c.nominal_scale, c.period, q, qd, v, w,
+                                        c.base_height.copy(), contact))
 
 
 class GeneratorModel:
