@@ -124,12 +124,12 @@ TEST(BusPlan, G1PlansFromYaml) {
   EXPECT_NEAR(knee.reply_limits.q_min, -0.287267, 1e-9);
   EXPECT_NEAR(knee.ranges.tau_max, 150.0, 1e-12);
 
-  BusPlan fd = BusPlan::fromYaml("config/hal/g1_canfd.yaml");
+  BusPlan fd = BusPlan::fromYaml(pmg::test::sourcePath("config/hal/g1_canfd.yaml"));
   EXPECT_EQ(fd.buses().size(), 5u);
   EXPECT_EQ(fd.motorCount(), 29u);
 
   try {
-    BusPlan::fromYaml("config/hal/g1_can_per_limb.yaml");
+    BusPlan::fromYaml(pmg::test::sourcePath("config/hal/g1_can_per_limb.yaml"));
     FAIL() << "per-limb classic plan must be refused";
   } catch (const std::invalid_argument& e) {
     const std::string msg = e.what();
