@@ -6,18 +6,20 @@
 
 #include <gtest/gtest.h>
 
+#include "g1_fixture.hpp"
 #include "pmg/motion/amp_npz.hpp"
 #include "pmg/motion/bvh.hpp"
 #include "pmg/motion/deepmimic.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
 using namespace pmg::motion;
 
+/// Writes @p text to a per-process scratch folder (removed at exit) and returns the path.
 std::string tempFile(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / name;
-  std::ofstream(path) << text;
-  return path.string();
+  static const pmg::test::TempDir scratch("motion_importers");
+  return scratch.write(name, text);
 }
 
 std::string errorOf(const std::function<void()>& f) {
@@ -30,7 +32,7 @@ std::string errorOf(const std::function<void()>& f) {
 }
 
 TEST(Importers, DeepMimicWalkIsOneCycleAtThirtyHertz) {
-  const DeepMimicMotion m = readDeepMimicMotion("data/motions/deepmimic/humanoid3d_walk.txt");
+  const DeepMimicMotion m = readDeepMimicMotion(pmg::test::sourcePath("data/motions/deepmimic/humanoid3d_walk.txt"));
   EXPECT_TRUE(m.loop_wrap);
   EXPECT_EQ(m.frames.size(), 39u);
   EXPECT_NEAR(m.fps, 30.0, 0.01);
@@ -45,7 +47,7 @@ TEST(Importers, DeepMimicWalkIsOneCycleAtThirtyHertz) {
 }
 
 TEST(Importers, CmuBvhSquatGoesDownAndUp) {
-  const BvhMotion b = readBvh("data/motions/cmu_bvh/cmu_115_07_squat_excerpt.bvh");
+  const BvhMotion b = readBvh(pmg::test::sourcePath("data/motions/cmu_bvh/cmu_115_07_squat_excerpt.bvh"));
   EXPECT_EQ(b.numFrames(), 125);
   EXPECT_EQ(b.num_channels, 96);
   const HumanMotion h = bvhToHuman(b, 0.056444);
@@ -57,11 +59,11 @@ TEST(Importers, CmuBvhSquatGoesDownAndUp) {
 }
 
 TEST(Importers, AmpNpzWalk) {
-  const auto arrays = readNpz("data/motions/isaaclab_amp/humanoid_walk.npz");
+  const auto arrays = readNpz(pmg::test::sourcePath("data/motions/isaaclab_amp/humanoid_walk.npz"));
   ASSERT_EQ(arrays.count("dof_positions"), 1u);
   EXPECT_EQ(arrays.at("dof_positions").shape, (std::vector<std::size_t>{154, 28}));
   EXPECT_EQ(arrays.at("dof_names").descr, "<U16");
-  const HumanMotion h = ampNpzToHuman("data/motions/isaaclab_amp/humanoid_walk.npz");
+  const HumanMotion h = ampNpzToHuman(pmg::test::sourcePath("data/motions/isaaclab_amp/humanoid_walk.npz"));
   EXPECT_EQ(h.numFrames(), 154);
   EXPECT_DOUBLE_EQ(h.fps, 60.0);
   // SOURCE.md: pelvis speed ~1.5 m/s.
@@ -88,7 +90,7 @@ TEST(Importers, MalformedFilesNameFileAndLine) {
 }
 
 TEST(Importers, MirroredHumanMotionSwapsSides) {
-  const HumanMotion h = deepMimicToHuman(readDeepMimicMotion("data/motions/deepmimic/humanoid3d_walk.txt"));
+  const HumanMotion h = deepMimicToHuman(readDeepMimicMotion(pmg::test::sourcePath("data/motions/deepmimic/humanoid3d_walk.txt")));
   const HumanMotion m = h.mirrored();
   const auto L = static_cast<std::size_t>(Keypoint::kLeftKnee), R = static_cast<std::size_t>(Keypoint::kRightKnee);
   for (std::size_t k = 0; k < h.frames.size(); k += 7) {
