@@ -143,6 +143,17 @@ void writeAllOrNothing(const std::vector<std::pair<fs::path, std::string>>& file
   }
 }
 
+/// Creates @p dir if needed and checks that a file can be created in it.
+/// @throws std::runtime_error naming the folder.
+void checkOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create the output folder" + (ec ? ": " + ec.message() : ""));
+  const fs::path probe = fs::path(dir) / ".pmg_make_clips.probe";
+  if (!std::ofstream(probe, std::ios::binary | std::ios::trunc)) throw std::runtime_error(dir + ": cannot write into the output folder");
+  fs::remove(probe, ec);
+}
+
 /// Sole tracks of a built clip (phase, height [m], speed [m/s], contact label per foot) as CSV.
 void writeSoleTracks(const DynamicClip& clip, const KinematicModel& model, const std::string& path) {
   const ClipSoleTracks t = clipSoleTracks(clip, model);
@@ -229,6 +240,7 @@ int main(int argc, char** argv) {
 
   const RobotContactOptions robot_contacts;
   try {
+    checkOutputFolder(out_dir);  // before minutes of work, not after
     const RobotConfig robot = loadRobotConfig(robot_yaml);
     const KinematicModel model(robot);
     std::string report =

@@ -77,7 +77,12 @@ TEST(ClipTransforms, MirrorSwapsSidesAndIsAnInvolution) {
   const Eigen::Index N = lat.q.rows();
   const double start = lat.contact[1].mu - lat.contact[1].sigma;
   const Eigen::Index shift = std::lround((start - std::floor(start)) * static_cast<double>(N)) % N;
-  for (Eigen::Index k = 0; k < N; ++k) EXPECT_DOUBLE_EQ(m.q(k, lk), lat.q((k + shift) % N, rk));
+  const int lr = robot.jointIndex("left_hip_roll_joint"), rr = robot.jointIndex("right_hip_roll_joint");
+  for (Eigen::Index k = 0; k < N; ++k) {
+    EXPECT_DOUBLE_EQ(m.q(k, lk), lat.q((k + shift) % N, rk));
+    EXPECT_DOUBLE_EQ(m.q(k, lr), -lat.q((k + shift) % N, rr));  // roll changes sign
+  }
+  EXPECT_NO_THROW(validateClip(m, robot, "mirror"));
   // Mirroring twice gives the clip back (for a clip aligned on its left touchdown, contacts away from
   // half-sample ties: the shipped clips' contact intervals start half-way between samples).
   DynamicClip aligned = lat;

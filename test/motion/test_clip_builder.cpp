@@ -1,5 +1,6 @@
 // Clip building: contact segmentation on a motion with known contacts, gait-cycle cutting, the
-// contact model {μ, σ}, periodic helpers, and mirroring.
+// contact model {μ, σ}, periodic helpers, robot-sole contact labels and the posture templates
+// (symmetrised, leg directions kept). Mirror and phase rotation: test/clips/test_clip_transforms.cpp.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -92,25 +93,6 @@ TEST(ClipBuilder, PeriodicHelpers) {
   EXPECT_LT(s.cwiseAbs().maxCoeff(), 1.0);
 }
 
-TEST(ClipBuilder, MirrorSwapsSidesAndIsAnInvolution) {
-  const RobotConfig& robot = pmg::test::g1Robot();
-  const DynamicClip lat = readDynamicClip(pmg::test::g1ClipPath("walk_lateral_left"), robot);
-  const DynamicClip m = mirrorClip(lat, robot, "walk_lateral_right");
-  EXPECT_EQ(m.direction, -lat.direction);
-  EXPECT_EQ(m.meta.provenance, "mocap_mirrored");
-  EXPECT_NEAR(m.v_base.col(1).mean(), -lat.v_base.col(1).mean(), 1e-12);
-  EXPECT_NEAR(m.contact[0].sigma, lat.contact[1].sigma, 1e-12);
-  // Left hip roll of the mirror = −(right hip roll of the source), up to the phase rotation.
-  const int l = robot.jointIndex("left_hip_roll_joint"), r = robot.jointIndex("right_hip_roll_joint");
-  EXPECT_NEAR(m.q.col(l).mean(), -lat.q.col(r).mean(), 1e-9);
-  EXPECT_NO_THROW(validateClip(m, robot, "mirror"));
-  const DynamicClip back = mirrorClip(m, robot, lat.name);
-  EXPECT_EQ(back.direction, lat.direction);
-  // Mirroring twice gives the source back up to a phase rotation: same per-joint means and ranges.
-  EXPECT_LT((back.q.colwise().mean() - lat.q.colwise().mean()).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_LT((back.q.colwise().maxCoeff() - lat.q.colwise().maxCoeff()).cwiseAbs().maxCoeff(), 1e-9);
-}
-
 }  // namespace
 
 namespace {
@@ -181,28 +163,6 @@ TEST(ClipBuilder, RobotContactLabelsFollowTheDocumentedRules) {
   ClipSoleTracks mismatched = tracksOf({0, 0}, {0, 0}, {0, 0});
   mismatched.relative_speed.resize(1);
   EXPECT_THROW(robotContactLabels(mismatched, opt), std::invalid_argument);
-}
-
-TEST(ClipBuilder, RotateClipPhaseKeepsTheMotion) {
-  const RobotConfig& robot = pmg::test::g1Robot();
-  const ClipLibrary lib = loadClipLibrary(pmg::test::g1ClipDir(), robot);
-  const DynamicClip& c = lib.dynamic_clips.front();
-  DynamicClip r = c;
-  const Eigen::Index N = c.q.rows();
-  rotateClipPhase(r, 5);
-  for (Eigen::Index k = 0; k < N; ++k) {
-    EXPECT_EQ(r.q.row(k), c.q.row((k + 5) % N));
-    EXPECT_EQ(r.v_base.row(k), c.v_base.row((k + 5) % N));
-    EXPECT_EQ(r.base_height(k), c.base_height((k + 5) % N));
-  }
-  for (std::size_t f = 0; f < kNumFeet; ++f) {
-    double expect = c.contact[f].mu - 5.0 / static_cast<double>(N);
-    expect -= std::floor(expect);
-    EXPECT_NEAR(r.contact[f].mu, expect, 1e-12);
-    EXPECT_EQ(r.contact[f].sigma, c.contact[f].sigma);
-  }
-  rotateClipPhase(r, N - 5);
-  EXPECT_EQ(r.q, c.q);
 }
 
 TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
