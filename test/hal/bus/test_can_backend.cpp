@@ -14,6 +14,7 @@
 
 #include "g1_fixture.hpp"
 #include "alloc_counter.hpp"
+#include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
@@ -336,6 +337,27 @@ TEST(CanBackend, SetupErrors) {
   s.plan_file = pmg::test::g1CanPlanPath();
   s.transport = "carrier-pigeon";
   EXPECT_THROW(makeCanBackend(s), std::runtime_error);
+}
+
+// makeCanBackend checks the plan against the robot config (the source of truth for bus/motor ids)
+// before it opens any transport: a mismatch names both files, the joint and both ids.
+TEST(CanBackend, SetupRefusesAPlanThatDisagreesWithTheRobotConfig) {
+  pmg::RobotConfig robot = pmg::test::g1Robot();
+  robot.joints[9].motor_id = 12;  // right knee: can1 motor 4 in config/hal/g1_can.yaml
+  CanBackendSetup s;
+  s.plan_file = pmg::test::g1CanPlanPath();
+  s.robot = &robot;
+  s.transport = "carrier-pigeon";  // never reached
+  try {
+    makeCanBackend(s);
+    FAIL() << "mismatch accepted";
+  } catch (const pmg::ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(s.plan_file), std::string::npos) << msg;
+    EXPECT_NE(msg.find(robot.source_file), std::string::npos) << msg;
+    EXPECT_NE(msg.find("joint 'right_knee_joint' is on bus can1 with motor_id 4"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("says bus can1 with motor_id 12"), std::string::npos) << msg;
+  }
 }
 
 TEST(ImuFrame, RoundTripAndRejects) {
