@@ -32,8 +32,10 @@ namespace {
 
 // Reads and validates one block; `where` prefixes validate() messages.
 ActuatorBlock read_block(const YAML::Node& map, const yaml::YamlSource& src, const std::string& where) {
-  if (!map.IsMap()) yaml::fail(src, map, "expected a map of actuator parameters, got " +
-                                             std::string(map.IsNull() ? "nothing" : map.IsSequence() ? "a list" : "'" + map.Scalar() + "'"));
+  if (!map.IsMap()) {
+    const std::string got = map.IsNull() ? "nothing" : map.IsSequence() ? "a list" : "'" + map.Scalar() + "'";
+    yaml::fail(src, map, "expected a map of actuator parameters, got " + got);
+  }
   ActuatorBlock b;
   yaml::readYaml(map, src, &b);
   try {

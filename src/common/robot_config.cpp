@@ -234,7 +234,8 @@ std::string RobotConfig::validate() const {
 
 void validate(const RobotConfig& c) {
   const std::string msg = c.validate();
-  if (!msg.empty()) throw ConfigError((c.source_file.empty() ? std::string("<robot config>") : c.source_file) + ": " + msg);
+  const std::string& f = c.source_file.empty() ? std::string("<robot config>") : c.source_file;
+  if (!msg.empty()) throw ConfigError(f + ": " + msg);
 }
 
 std::vector<double> loadZeroOffsetFile(const std::string& path, const RobotConfig& robot) {
@@ -268,7 +269,8 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
         if (adoc.root.size() != 1) {
           for (const auto& kv : adoc.root)
             if (kv.first.Scalar() != "actuator")
-              yaml::fail(adoc.source, kv.first, "unknown key '" + kv.first.Scalar() + "' (an actuator file has only `actuator:`)");
+              yaml::fail(adoc.source, kv.first,
+                         "unknown key '" + kv.first.Scalar() + "' (an actuator file has only `actuator:`)");
         }
         e.j.actuator_yaml = YAML::Dump(adoc.root["actuator"]);
         e.j.actuator_source = yaml::location(adoc.source, adoc.root["actuator"]) + ": actuator";

@@ -77,7 +77,8 @@ TEST(RigConfig, LoadsShippedRigsAndRejectsBadValues) {
   const std::string bad = ::testing::TempDir() + "rig_typo.yaml";
   const std::string motor = "motor: {control: pd, kp_Nm_per_rad: 4, kd_Nms_per_rad: 0.1, armature_kgm2: 0.001}\n";
   std::ofstream(bad) << "rig:\n  type: pendulum\n  mass_kg: 1\n  com_m: 0.1\n  gravity: 9.81\n" << motor;
-  EXPECT_EQ(error_of([&] { load_rig_config(bad); }), bad + ":5: unknown key 'gravity' in 'rig' (did you mean 'gravity_mps2'?)");
+  EXPECT_EQ(error_of([&] { load_rig_config(bad); }),
+            bad + ":5: unknown key 'gravity' in 'rig' (did you mean 'gravity_mps2'?)");
   std::ofstream(bad) << "rig: {type: pendulum, mass_kg: 1, com_m: 0.1}\n" << motor << "sim: {dt: 0.001}\n";
   EXPECT_EQ(error_of([&] { load_rig_config(bad); }), bad + ":3: unknown key 'dt' in 'sim' (did you mean 'dt_s'?)");
   std::ofstream(bad) << "rig: {type: pendulm, mass_kg: 1, com_m: 0.1}\n" << motor;
@@ -86,7 +87,8 @@ TEST(RigConfig, LoadsShippedRigsAndRejectsBadValues) {
   std::ofstream(bad) << "rig: {type: pendulum, mass_kg: 1, com_m: 0.1}\n"
                      << "motor: {control: pd, kp_Nm_per_rad: 4, kd_Nms_per_rad: 0.1, armature_kgm2: 0.001, "
                         "torque_limit_Nm: .inf}\n";
-  EXPECT_EQ(error_of([&] { load_rig_config(bad); }), bad + ":2: motor.torque_limit_Nm: expected a finite number, got '.inf'");
+  EXPECT_EQ(error_of([&] { load_rig_config(bad); }),
+            bad + ":2: motor.torque_limit_Nm: expected a finite number, got '.inf'");
 }
 
 TEST(BenchLog, CsvNonFiniteValueIsRefused) {
@@ -98,8 +100,10 @@ TEST(BenchLog, CsvNonFiniteValueIsRefused) {
 TEST(BenchLog, BamJsonTypoNamesFileLineAndNearestKey) {
   const std::string bad = ::testing::TempDir() + "bam_typo.json";
   std::ofstream(bad) << "{\"kp\": 32, \"entries\": [\n"
-                        "{\"timestamp\": 0, \"goal_position\": 0, \"position\": 0, \"speed\": 0, \"torque_enable\": true},\n"
-                        "{\"timestamp\": 0.01, \"goal_position\": 0, \"positon\": 0, \"speed\": 0, \"torque_enable\": true}]}\n";
+                        "{\"timestamp\": 0, \"goal_position\": 0, \"position\": 0, \"speed\": 0,"
+                        " \"torque_enable\": true},\n"
+                        "{\"timestamp\": 0.01, \"goal_position\": 0, \"positon\": 0, \"speed\": 0,"
+                        " \"torque_enable\": true}]}\n";
   EXPECT_EQ(error_of([&] { load_bench_log(bad); }),
             bad + ":3: unknown key 'positon' in 'entries[1]' (did you mean 'position'?)");
 }
@@ -154,7 +158,8 @@ TEST(ActuatorYaml, RoundTripAndUnknownKeyRejected) {
   EXPECT_EQ(error_of([&] { load_actuator_file(bad); }),
             bad + ":3: unknown key 'delay' in 'actuator' (did you mean 'delay_s'?)");
   std::ofstream(bad) << "actuator: {fc_Nm: .nan}\n";
-  EXPECT_EQ(error_of([&] { load_actuator_file(bad); }), bad + ":1: actuator.fc_Nm: expected a finite number, got '.nan'");
+  EXPECT_EQ(error_of([&] { load_actuator_file(bad); }),
+            bad + ":1: actuator.fc_Nm: expected a finite number, got '.nan'");
   std::ofstream(bad) << "actuator: {torque_limit_Nm: .inf}\n";
   EXPECT_TRUE(std::isinf(load_actuator_file(bad).params.torque_limit_Nm));  // .inf = no saturation
   std::ofstream(bad) << "actuator: {fc_Nm: 0.1}\nactuater: {}\n";

@@ -26,7 +26,9 @@ struct Gains {
     a->Visit("kp", &kp, "stiffness [N*m/rad]");
     a->Visit("kd", &kd, "damping [N*m*s/rad]");
   }
-  std::string validate() const { return kp >= 0 && kp <= 5000 ? "" : "kp = " + std::to_string(kp) + ": expected 0..5000"; }
+  std::string validate() const {
+    return kp >= 0 && kp <= 5000 ? "" : "kp = " + std::to_string(kp) + ": expected 0..5000";
+  }
 };
 
 struct Safety {
@@ -149,7 +151,8 @@ TEST(YamlArchive, TypeErrorsNameLineKeyPathAndExpectedType) {
   EXPECT_EQ(errorOf("name: g1\ncount: 1.5\n"), "cfg.yaml:2: count: expected an integer, got '1.5'");
   EXPECT_EQ(errorOf("name: g1\nid: 300\n"), "cfg.yaml:2: id: expected an integer in 0..255, got 300");
   EXPECT_EQ(errorOf("name: g1\nid: -1\n"), "cfg.yaml:2: id: expected an integer in 0..255, got -1");
-  EXPECT_EQ(errorOf("name: g1\njoints:\n  - {kp: fast}\n"), "cfg.yaml:3: joints[0].kp: expected a finite number, got 'fast'");
+  EXPECT_EQ(errorOf("name: g1\njoints:\n  - {kp: fast}\n"),
+            "cfg.yaml:3: joints[0].kp: expected a finite number, got 'fast'");
   EXPECT_EQ(errorOf("name: [a]\n"), "cfg.yaml:1: name: expected a string, got a list");
   EXPECT_EQ(errorOf("name: g1\nsafety: {hal_supervisor: maybe}\n"),
             "cfg.yaml:2: safety.hal_supervisor: expected true or false, got 'maybe'");

@@ -263,7 +263,8 @@ TEST(GcoOptions, YamlReadsFieldsAndRejectsUnknownKeys) {
     parseGcoOptionsYaml("w_foot_hieght: 1\n", "cfg/gco.yaml");
     FAIL();
   } catch (const pmg::ConfigError& e) {
-    EXPECT_STREQ(e.what(), "cfg/gco.yaml:1: unknown key 'w_foot_hieght' at the top level (did you mean 'w_foot_height'?)");
+    EXPECT_STREQ(e.what(),
+                 "cfg/gco.yaml:1: unknown key 'w_foot_hieght' at the top level (did you mean 'w_foot_height'?)");
   }
   try {
     parseGcoOptionsYaml("gco:\n  dt: 0.01\n  limits: {v_x_max: 1.2, heigth_max: 0.8}\n", "cfg/gco.yaml");

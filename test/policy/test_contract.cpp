@@ -140,7 +140,8 @@ TEST(Contract, UnknownKeysNameTheNearestKey) {
   const Case cases[] = {
       {base + "policyy: {}\n", "policyy",
        "m.onnx: policyy: unknown key at line 13 of the pmg.contract metadata (did you mean 'pmg'?)"},
-      {"kpp: [1, 1]\n" + base, "kpp", "m.onnx: kpp: unknown key at line 1 of the pmg.contract metadata (did you mean 'kp'?)"},
+      {"kpp: [1, 1]\n" + base, "kpp",
+       "m.onnx: kpp: unknown key at line 1 of the pmg.contract metadata (did you mean 'kp'?)"},
       {base + "version: 2\n", "version", "m.onnx: version: duplicate key at line 13 of the pmg.contract metadata"},
   };
   for (const Case& c : cases) {

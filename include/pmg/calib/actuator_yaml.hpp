@@ -55,7 +55,8 @@ struct ActuatorBlock {
     a->Visit("rate_hz", &params.rate_hz, "driver PD rate [Hz] (0 = every physics step)");
     a->Visit("delay_s", &params.delay_s, "command transport delay [s]");
     a->Visit("offset_rad", &params.offset_rad, "encoder reading - true angle [rad]");
-    a->Visit("torque_limit_Nm", &params.torque_limit_Nm, "torque saturation [N m] (.inf = none)", yaml::kAllowNonFinite);
+    a->Visit("torque_limit_Nm", &params.torque_limit_Nm, "torque saturation [N m] (.inf = none)",
+             yaml::kAllowNonFinite);
     a->Visit("tau_stall_Nm", &params.tau_stall_Nm, "torque-speed envelope [N m] (0 = off)");
     a->Visit("w_max_rad_per_s", &params.w_max_rad_per_s, "no-load speed [rad/s]");
     a->Visit("fc_Nm", &params.fc_Nm, "Coulomb friction [N m]");

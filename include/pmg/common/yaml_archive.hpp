@@ -29,7 +29,9 @@
 ///   };
 ///   enum class Bus { kCan, kUdp };
 ///   // Enums are read from strings through a table found by argument-dependent lookup:
-///   inline std::vector<std::pair<std::string, Bus>> yamlEnumNames(Bus) { return {{"can", Bus::kCan}, {"udp", Bus::kUdp}}; }
+///   inline std::vector<std::pair<std::string, Bus>> yamlEnumNames(Bus) {
+///     return {{"can", Bus::kCan}, {"udp", Bus::kUdp}};
+///   }
 ///   struct Motor {
 ///     std::string joint;                 // required: a->Visit(..., yaml::kRequired)
 ///     std::optional<double> offset;      // absent or null = std::nullopt
@@ -157,7 +159,8 @@ struct IsSerializable<T, std::void_t<decltype(std::declval<T&>().Serialize(stati
 template <class T, class = void>
 struct HasValidate : std::false_type {};
 template <class T>
-struct HasValidate<T, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const T&>().validate()), std::string>>>
+struct HasValidate<
+    T, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const T&>().validate()), std::string>>>
     : std::true_type {};
 template <class T, class = void>
 struct HasThrowingValidate : std::false_type {};

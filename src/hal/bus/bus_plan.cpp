@@ -319,8 +319,9 @@ std::vector<BusConfig> BusPlan::parseYaml(const std::string& path, BusPlanOption
         const YAML::Node mn = buses_node[b]["motors"][k]["type"];
         yaml::YamlSource src = doc.source;
         src.key_path = "buses[" + std::to_string(b) + "].motors[" + std::to_string(k) + "].type";
-        yaml::fail(src, mn, "unknown motor type '" + m.type + "' (define it in motor_types" +
-                                (names.empty() ? std::string(")") : "; did you mean '" + yaml::nearestKey(m.type, names) + "'?)"));
+        const std::string hint =
+            names.empty() ? std::string(")") : "; did you mean '" + yaml::nearestKey(m.type, names) + "'?)";
+        yaml::fail(src, mn, "unknown motor type '" + m.type + "' (define it in motor_types" + hint);
       }
       s.ranges = it->second.r;
       s.reply_limits.qd_abs_max = std::max(std::fabs(s.ranges.qd_min), std::fabs(s.ranges.qd_max));
