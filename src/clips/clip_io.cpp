@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <sstream>
 #include <utility>
 
@@ -184,11 +183,7 @@ struct ClipReader {
   yaml::YamlDocument doc;
   ClipFields fields;
 
-  yaml::YamlSource at(const std::string& key) const {
-    yaml::YamlSource s = doc.source;
-    s.key_path = key;
-    return s;
-  }
+  yaml::YamlSource at(const std::string& key) const { return yaml::childSource(doc.source, key); }
 
   /// rows × cols numbers of `key` (a list of rows, or one list when cols == 0: a vector).
   Eigen::MatrixXd matrix(const std::string& key, const YAML::Node& node, Eigen::Index rows, Eigen::Index cols,
@@ -223,16 +218,16 @@ yaml::YamlDocument openClipDocument(const std::string& path, const char* expecte
   if (!fs::is_regular_file(path, ec)) throw ClipFormatError(path + ": cannot open clip file (no such file)");
   yaml::YamlDocument doc = yaml::loadYamlDocument(path);
   if (!doc.root.IsMap()) yaml::fail(doc.source, doc.root, "expected a YAML mapping at the top level");
-  yaml::YamlSource src = doc.source;
-  src.key_path = "format_version";
-  const YAML::Node v = doc.root["format_version"];
+  const YAML::Node& root = doc.root;  // const: a look-up never inserts a key
+  yaml::YamlSource src = yaml::childSource(doc.source, "format_version");
+  const YAML::Node v = root["format_version"];
   if (!v) yaml::fail(doc.source, doc.root, "missing required key 'format_version'");
   int version = 0;
   yaml::readYaml(v, src, &version);
   if (version != kClipFormatVersion)
     yaml::fail(src, v, fmt::format("= {}: expected {} (this reader's version)", version, kClipFormatVersion));
-  src.key_path = "kind";
-  const YAML::Node k = doc.root["kind"];
+  src = yaml::childSource(doc.source, "kind");
+  const YAML::Node k = root["kind"];
   if (!k) yaml::fail(doc.source, doc.root, "missing required key 'kind'");
   std::string kind;
   yaml::readYaml(k, src, &kind);
@@ -265,7 +260,7 @@ void checkKeys(const YAML::Node& map, const yaml::YamlSource& source, Fields& fi
   fields.Serialize(&declared);
   std::vector<std::string> valid;
   for (const yaml::FieldInfo& f : declared.fields) valid.push_back(f.name);
-  yaml::detail::checkUnknownKeys(map, source, std::set<std::string>(valid.begin(), valid.end()), valid);
+  yaml::rejectUnknownKeys(map, source, valid);
 }
 
 ClipReader readFields(const std::string& path, const char* kind, const RobotConfig& robot) {
@@ -394,7 +389,7 @@ void writeClip(const DynamicClip& clip, const std::string& path) { writeText(cli
 void writeClip(const StaticClip& clip, const std::string& path) { writeText(clipToYaml(clip), path); }
 
 ClipKind readClipKind(const std::string& path) {
-  const yaml::YamlDocument doc = asClipError([&] { return openClipDocument(path, nullptr); });
+  const yaml::YamlDocument doc = asClipError([&] { return openClipDocument(path, nullptr); });  // const look-ups
   return doc.root["kind"].Scalar() == "dynamic" ? ClipKind::kDynamic : ClipKind::kStatic;
 }
 

@@ -148,7 +148,9 @@ TEST_F(ShippedClips, ContactScheduleMatchesTheRobotSoles) {
       for (std::size_t f = 0; f < 2; ++f) {
         const double d = std::abs(phi - c.contact[f].mu), dist = std::min(d, 1.0 - d);
         in[f] = dist < c.contact[f].sigma - 1e-9;
-        if (in[f]) EXPECT_LT(t.height(k, static_cast<Eigen::Index>(f)), opt.exit_height) << "foot " << f << " sample " << k;
+        if (in[f]) {
+          EXPECT_LT(t.height(k, static_cast<Eigen::Index>(f)), opt.exit_height) << "foot " << f << " sample " << k;
+        }
       }
       if (in[0] && in[1]) {
         ++double_support;

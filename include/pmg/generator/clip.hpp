@@ -64,7 +64,7 @@ struct ClipMetadata {
   /// "mocap" (retargeted real capture), "mocap_mirrored" (left/right mirror of a real capture),
   /// "mocap_time_reversed" or "synthesized" (not from capture; must be declared as such).
   std::string provenance = "mocap";
-  std::string retargeting;   ///< retargeting method, e.g. "joint_angle_map_v1", "ceres_keypoints_v1"
+  std::string retargeting;   ///< retargeting method, e.g. "ceres_keypoints_v1"
   std::string notes;         ///< free text (what was done to the data)
 };
 
