@@ -10,7 +10,9 @@
 ///  - every floating-point field must be finite (`.inf`, `.nan` refused) unless flagged kAllowNonFinite;
 ///  - a missing file or a YAML syntax error names the path (and line); no raw yaml-cpp text escapes
 ///    without the file name;
-///  - a duplicate key in one map is an error.
+///  - a duplicate key in one map is an error;
+///  - unknown keys are reported before missing required ones, so a misspelt required key is named
+///    as unknown next to its correct spelling.
 ///
 /// Example:
 /// @code
