@@ -21,6 +21,7 @@
 #include "pmg/controller/controller_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/zero_offset_backend.hpp"
 
 namespace {
@@ -129,7 +130,10 @@ int main(int argc, char** argv) {
       report("without the twist_* poses", [](const auto& p) { return p.name.rfind("twist", 0) != 0; });
       return 0;
     }
-    std::unique_ptr<pmg::HalBackend> backend;
+    // The motors move only through the same safety stack as pmg_controller (makeHalStack: backend
+    // -> zero offsets of the robot config -> SafeBackend), engaged through soft stand.
+    pmg::HalStackConfig hs = cc ? cc->halStack() : pmg::HalStackConfig{};
+    std::unique_ptr<pmg::HalBackend> device;
     std::vector<double> injected;
     if (backend_name == "mujoco") {
       pmg::MujocoBackendOptions bo = cc ? cc->mujoco : pmg::MujocoBackendOptions{};
@@ -140,29 +144,28 @@ int main(int argc, char** argv) {
         bo.encoder_offsets = pmg::calib::randomLegOffsets(robot, *model, static_cast<unsigned>(inject_seed), max_offset);
       if (!inject_file.empty()) bo.encoder_offsets = pmg::calib::loadJointValues(inject_file, robot);
       injected = bo.encoder_offsets;
-      backend = std::make_unique<pmg::MujocoBackend>(robot, bo);
+      device = std::make_unique<pmg::MujocoBackend>(robot, bo);
     } else {
       if (!cc || cc->backend != pmg::BackendKind::kCan)
         throw pmg::ConfigError(config_path + ": --backend can needs a controller config with backend: can");
       if (inject_seed >= 0 || !inject_file.empty())
         throw std::invalid_argument("--inject-offsets / --inject-random only apply to --backend mujoco");
-      pmg::hal::bus::CanBackendSetup setup;
-      setup.plan_file = cc->can.plan_file;
-      setup.transport = cc->can.transport;
-      setup.udp_base_port = static_cast<std::uint16_t>(cc->can.udp_port);
-      setup.paced = cc->can.paced;
-      backend = std::make_unique<PacedBackend>(pmg::hal::bus::makeCanBackend(setup));
+      hs.backend = pmg::BackendKind::kCan;
+      hs.lockstep = false;
+      device = std::make_unique<PacedBackend>(pmg::makeCanBackendFor(hs));
     }
-
-    auto* sil = dynamic_cast<pmg::MujocoBackend*>(backend.get());
-    // Offsets already in the robot config are applied below the tool; it estimates what remains and
-    // reports the total (config + residual).
+    auto* sil = dynamic_cast<pmg::MujocoBackend*>(device.get());
+    // The protocol's leg gains (stiffer than the walking gains) are declared to the supervisor.
+    pmg::calib::declareProtocolGains(protocol, robot, *model, hs);
+    // Offsets already in the robot config are applied below the tool (by the stack); it estimates
+    // what remains and reports the total (config + residual).
     pmg::calib::ZeroVector z_config;
     for (int j = 0; j < pmg::calib::kZeroJoints; ++j) z_config(j) = -robot.joints[static_cast<std::size_t>(idx[static_cast<std::size_t>(j)])].zero_offset;
-    if (robot.zeroOffsets().cwiseAbs().maxCoeff() > 0.0) {
+    if (robot.zeroOffsets().cwiseAbs().maxCoeff() > 0.0)
       fmt::print("applying the robot config's zero_offsets below the tool; results are totals\n");
-      backend = std::make_unique<pmg::ZeroOffsetBackend>(std::move(backend), robot.zeroOffsets());
-    }
+    pmg::HalStack stack = pmg::makeHalStack(robot, hs, std::move(device));
+    pmg::engageActive(stack, robot);
+    pmg::HalBackend* backend = stack.backend.get();
     const auto feet = [&](const char* tag) {
       if (sil == nullptr || !sil_truth) return;
       for (const std::string& b : {robot.left_foot_link, robot.right_foot_link}) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "pmg/calib/zero_calibration.hpp"
+#include "pmg/hal/hal_stack.hpp"
 #include "pmg/common/mujoco_model.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/common/yaml_archive.hpp"
@@ -212,7 +213,7 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   double t0 = -1.0;
   const auto exchange = [&](bool gains) {
     for (int i = 0; i < n; ++i) {
-      MotorCommand& m = cmd.motors[static_cast<std::size_t>(i)];
+      pmg::MotorCommand& m = cmd.motors[static_cast<std::size_t>(i)];
       m.q = target(i);
       m.qd = 0.0;
       m.kp = gains ? kp(i) : 0.0;
@@ -451,6 +452,20 @@ ZeroCapture captureZeroPoses(HalBackend& backend, const RobotConfig& robot, std:
   say(fmt::format("home again: orientation drift {:.5f} rad{}", out.home_drift,
                   out.feet_moved ? "  FEET MOVED (max_home_drift exceeded)" : ""));
   return out;
+}
+
+void declareProtocolGains(const ZeroProtocol& protocol, const RobotConfig& robot, const gco::LegModel& model,
+                          HalStackConfig& stack) {
+  const Eigen::VectorXd kp = robot.kp(), kd = robot.kd();
+  stack.stand_kp.assign(kp.data(), kp.data() + kp.size());
+  stack.stand_kd.assign(kd.data(), kd.data() + kd.size());
+  const std::array<int, kZeroJoints> idx = zeroJointIndices(model, robot);
+  for (int j = 0; j < kZeroJoints; ++j) {
+    const auto i = static_cast<std::size_t>(idx[static_cast<std::size_t>(j)]);
+    if (!protocol.leg_kp.empty()) stack.stand_kp[i] = protocol.leg_kp[static_cast<std::size_t>(j % 6)];
+    if (!protocol.leg_kd.empty()) stack.stand_kd[i] = protocol.leg_kd[static_cast<std::size_t>(j % 6)];
+  }
+  stack.soft_stand_duration_s = 0.2;
 }
 
 }  // namespace pmg::calib

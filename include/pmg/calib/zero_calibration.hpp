@@ -52,6 +52,7 @@
 
 namespace pmg {
 class HalBackend;
+struct HalStackConfig;
 struct RobotConfig;
 }  // namespace pmg
 
@@ -250,5 +251,12 @@ std::vector<ZeroSample> synthesizeZeroSamples(std::shared_ptr<const gco::LegMode
 
 /// Full-joint-vector index of each of the 12 calibrated joints (left chain, right chain).
 std::array<int, kZeroJoints> zeroJointIndices(const gco::LegModel& model, const RobotConfig& robot);
+
+/// Declares the protocol's leg gains to the HAL supervisor of @p stack (makeHalStack()): the soft
+/// stand uses them (the walking gains let the robot tip while it stands up on the calibration
+/// floor), the gain ceilings admit them, and the stand is short (the robot starts standing). The
+/// capture then runs through the same safety stack as pmg_controller.
+void declareProtocolGains(const ZeroProtocol& protocol, const RobotConfig& robot, const gco::LegModel& model,
+                          HalStackConfig& stack);
 
 }  // namespace pmg::calib

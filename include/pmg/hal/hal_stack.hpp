@@ -12,6 +12,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "pmg/hal/backend.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
@@ -43,6 +44,12 @@ struct HalStackConfig {
   bool lockstep = true;                ///< CAN: lockstep with pmg_sil (else real time)
   double soft_stand_duration_s = 1.0;  ///< supervisor soft stand [s]
   double damping_kd_scale = 1.0;       ///< damping mode kd = scale · robot config kd
+  /// Per-joint gain ceilings of the supervisor [N·m/rad, N·m·s/rad] (n values or empty). A tool
+  /// that needs stiffer gains than 2 kp / 4 kd of the robot config (the zero-point protocol's
+  /// 400 N·m/rad legs) declares them here; the ceiling is the larger of the two.
+  std::vector<double> kp_max, kd_max;
+  /// Per-joint soft-stand gains (n values or empty = the robot config's kp / kd).
+  std::vector<double> stand_kp, stand_kd;
 };
 
 /// The stack: the outermost backend (owns the others) and its supervisor.
@@ -57,5 +64,16 @@ struct HalStack {
 /// @throws ConfigError / std::runtime_error naming the file, port or field (setup only).
 HalStack makeHalStack(const RobotConfig& robot, const HalStackConfig& config,
                       std::unique_ptr<HalBackend> custom = nullptr);
+
+/// The motor-bus backend of @p config (config.can, config.lockstep), without the layers above it;
+/// for tools that wrap it (pacing) before handing it to makeHalStack() as its backend.
+/// @throws std::runtime_error naming the plan file, interface or port.
+std::unique_ptr<HalBackend> makeCanBackendFor(const HalStackConfig& config);
+
+/// For tools that exchange with the stack directly (no HalRunner, e.g. pmg_calib_zero): requests
+/// soft stand once the motors and the IMU answer, holds the standing pose until the stand is
+/// complete, then requests active. @throws std::runtime_error naming the mode and the fault if the
+/// supervisor does not get there within @p timeout_s [s].
+void engageActive(HalStack& stack, const RobotConfig& robot, double timeout_s = 10.0);
 
 }  // namespace pmg
