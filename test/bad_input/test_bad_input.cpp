@@ -19,10 +19,12 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <map>
 #include <regex>
 #include <set>
 #include <stdexcept>
+#include <system_error>
 #include <string>
 #include <vector>
 
@@ -49,6 +51,7 @@
 #include "pmg/hal/bus/bus_plan.hpp"
 #include "pmg/hal/bus/imu_protocol.hpp"
 #include "pmg/hal/bus/mit_protocol.hpp"
+#include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/bus/udp_transport.hpp"
 #include "pmg/policy/contract.hpp"
 #include "pmg/policy/onnx_session.hpp"
@@ -90,6 +93,7 @@ enum class Kind {
   kCanCommand,        // MitProtocol::decodeCommand (driver side, pmg_sil); input: as above
   kImuFrame,          // decodeImu; input: as above
   kUdpDatagram,       // UdpCanTransport::receive on a real loopback socket
+  kSilFrame,          // SilDriverEmulator (pmg_sil's motor drivers): a frame on bus 0; input: as kCanReply
   kLcmPacket,         // LcmCommandDecoder::decode; input: channel '\0' packet bytes
 };
 
@@ -113,6 +117,7 @@ const char* kindName(Kind k) {
     case Kind::kCanCommand: return "CAN command";
     case Kind::kImuFrame: return "IMU frame";
     case Kind::kUdpDatagram: return "UDP datagram";
+    case Kind::kSilFrame: return "SIL driver frame";
     case Kind::kLcmPacket: return "LCM packet";
   }
   return "?";
@@ -582,6 +587,12 @@ std::vector<Case> allCases() {
       {"udp_id_over_11_bits", Kind::kUdpDatagram, rawDatagram([](std::string& d) { d[9] = 0x10; }), rejected("rx_errors")},
       {"udp_binary_garbage", Kind::kUdpDatagram, text([] { return garbage(70); }), rejected("rx_errors")},
 
+      // --- frames the SIL motor-driver emulator (pmg_sil) receives -------------------------------
+      {"sil_unknown_can_id", Kind::kSilFrame, frame(validCommand, [](CanFrame& f) { f.id = 0x7F0; }), rejected("rejected")},
+      {"sil_extended_id", Kind::kSilFrame, frame(validCommand, [](CanFrame& f) { f.extended = true; }), rejected("rejected")},
+      {"sil_truncated_command", Kind::kSilFrame, frame(validCommand, [](CanFrame& f) { f.len = 5; }), rejected("rejected")},
+      {"sil_fd_command", Kind::kSilFrame, frame(validCommand, [](CanFrame& f) { f.fd = true; }), rejected("rejected")},
+
       // --- LCM command packets ---------------------------------------------------------------------
       {"lcm_source_length_0", Kind::kLcmPacket,
        text([] { return packet(kVelocityChannel, withSourceLength(encoded(velocityMsg()), 7, 0)); }), rejected("bad string")},
@@ -742,6 +753,50 @@ Outcome sendDatagram(const std::string& d) {
                                   ", rx_errors " + std::to_string(errors) + ")"};
 }
 
+/// The physics behind the emulated drivers: holds still (the emulator only needs a period).
+class StillSim final : public HalBackend {
+ public:
+  explicit StillSim(double period) : period_(period) {}
+  const char* name() const noexcept override { return "still"; }
+  double cyclePeriod() const noexcept override { return period_; }
+  BackendStatus exchange(const LowCommand&, LowState& state) noexcept override {
+    state.num_motors = 29;
+    return BackendStatus::kOk;
+  }
+
+ private:
+  double period_;
+};
+
+/// Sends the frame in @p d to bus 0 of a SilDriverEmulator on the G1 plan and runs one cycle: it
+/// must be dropped and counted (SilCounters::rejected), and a valid command afterwards still taken.
+Outcome sendToSil(const std::string& d) {
+  static const hal::bus::BusPlan plan = hal::bus::BusPlan::fromYaml(g1CanPlanPath());
+  std::unique_ptr<hal::bus::SilDriverEmulator> sil;
+  std::vector<std::unique_ptr<hal::bus::CanTransport>> host;
+  std::unique_ptr<hal::bus::CanTransport> imu;
+  for (int attempt = 0;; ++attempt) {
+    const auto base = static_cast<std::uint16_t>(40000 + ((::getpid() + 53 * attempt) % 1000) * 20);
+    try {
+      sil = std::make_unique<hal::bus::SilDriverEmulator>(plan, std::make_unique<StillSim>(plan.options().period_s), base);
+      host = hal::bus::makeHostUdpTransports(plan, base, imu);
+      break;
+    } catch (const std::system_error&) {
+      sil.reset();
+      if (attempt >= 20) throw;
+    }
+  }
+  if (host[0]->send(frameOf(d)) != hal::bus::TxStatus::kOk) throw std::runtime_error("send to the SIL failed");
+  sil->runCycle(0.05, true);
+  const hal::bus::SilCounters bad = sil->counters();
+  host[0]->send(validCommand());
+  sil->runCycle(0.05, true);
+  if (sil->counters().commands != bad.commands + 1) return {Outcome::kThrew, "the emulator stopped taking commands"};
+  if (bad.commands != 0 || bad.controls != 0) return {Outcome::kAccepted, "taken as a command or control frame"};
+  if (bad.rejected == 1) return {Outcome::kRejected, "rejected"};
+  return {Outcome::kRejected, "dropped without being counted"};
+}
+
 Outcome decodeLcm(const std::string& p) {
 #if !PMG_BAD_INPUT_HAVE_LCM_DECODER
   (void)p;
@@ -776,6 +831,7 @@ Outcome run(const Case& c, const TempDir& dir, std::string* file) {
     case Kind::kCanCommand:
     case Kind::kImuFrame: return decodeFrame(c.kind, input);
     case Kind::kUdpDatagram: return sendDatagram(input);
+    case Kind::kSilFrame: return sendToSil(input);
     case Kind::kLcmPacket: return decodeLcm(input);
     default:
       *file = std::string(c.name) + fileExtension(c.kind);
@@ -837,7 +893,7 @@ TEST(BadInputTable, CoversEveryKindWithAtLeast60Cases) {
   for (Kind k : {Kind::kRobotConfig, Kind::kGcoOptions, Kind::kBusPlan, Kind::kRig, Kind::kBenchLogCsv,
                  Kind::kBenchLogJson, Kind::kZeroProtocol, Kind::kZeroResult, Kind::kDynamicClip, Kind::kStaticClip,
                  Kind::kContract, Kind::kOnnxModel, Kind::kCommandScript, Kind::kControllerConfig, Kind::kCanReply,
-                 Kind::kCanCommand, Kind::kImuFrame, Kind::kUdpDatagram, Kind::kLcmPacket}) {
+                 Kind::kCanCommand, Kind::kImuFrame, Kind::kUdpDatagram, Kind::kSilFrame, Kind::kLcmPacket}) {
     EXPECT_GT(per_kind[k], 0) << kindName(k);
   }
   int pending = 0;

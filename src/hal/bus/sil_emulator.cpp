@@ -126,9 +126,18 @@ bool SilDriverEmulator::pollFrames(bool reply_now) {
         }
         continue;
       }
-      if (bus_off_[b] || fr.extended || fr.id >= 0x800) continue;
+      if (bus_off_[b]) continue;  // the emulated controller is off the bus
+      // A frame no driver of this bus takes (extended or foreign id, wrong kind or length) is
+      // dropped and counted, as a real bus would leave it unanswered.
+      if (fr.extended || fr.id >= 0x800) {
+        ++counters_.rejected;
+        continue;
+      }
       const int k = route_[b][fr.id];
-      if (k < 0) continue;
+      if (k < 0) {
+        ++counters_.rejected;
+        continue;
+      }
       const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];
       const auto j = static_cast<std::size_t>(m.joint_index);
       ControlRequest cr{};
@@ -146,6 +155,7 @@ bool SilDriverEmulator::pollFrames(bool reply_now) {
         c.tau_ff = m.direction * mc.tau_ff;
         ++counters_.commands;
       } else {
+        ++counters_.rejected;
         continue;
       }
       addressed_[j] = 1;

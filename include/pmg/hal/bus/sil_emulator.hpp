@@ -55,6 +55,8 @@ struct SilCounters {
   std::uint64_t cycles = 0, commands = 0, controls = 0, replies = 0, dropped = 0, late = 0,
                 duplicated = 0, corrupted = 0, silenced = 0, bus_off_injected = 0, restarts_seen = 0,
                 imu_frames = 0;
+  /// Data frames no emulated driver takes: extended or unknown id, not a command or control frame.
+  std::uint64_t rejected = 0;
 };
 
 /// UDP ports of bus `b` (host side, SIL side) for a plan with `num_buses` buses; b = num_buses is the IMU.
