@@ -18,6 +18,7 @@
 #include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/hal_runner.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/safety/safe_backend.hpp"
 
 using namespace pmg::hal::bus;
@@ -62,11 +63,12 @@ class SilRig {
     co.lockstep = true;
     auto can = std::make_unique<CanBackend>(plan, std::move(transports), std::move(imu), co);
     can_ = can.get();
-    pmg::hal::safety::SafetyOptions so = pmg::hal::safety::SafetyOptions::fromRobot(robot_);
-    so.soft_stand_duration_s = 0.5;
-    auto safe = std::make_unique<pmg::hal::safety::SafeBackend>(std::move(can), so);
-    safe_ = safe.get();
-    hal_ = std::make_unique<pmg::HalRunner>(std::move(safe), static_cast<int>(robot_.numJoints()));
+    // The one HAL stack (makeHalStack: zero offsets, SafeBackend) around the CAN backend.
+    pmg::HalStackConfig hs;
+    hs.soft_stand_duration_s = 0.5;
+    pmg::HalStack stack = pmg::makeHalStack(robot_, hs, std::move(can));
+    safe_ = stack.safety;
+    hal_ = std::make_unique<pmg::HalRunner>(std::move(stack.backend), static_cast<int>(robot_.numJoints()));
   }
   ~SilRig() {
     stop_ = true;
