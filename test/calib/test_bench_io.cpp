@@ -10,6 +10,7 @@
 #include "pmg/calib/bench_log.hpp"
 #include "pmg/calib/bench_sim.hpp"
 #include "pmg/calib/dynamics_calibration.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg::calib {
 namespace {
@@ -74,7 +75,8 @@ TEST(RigConfig, LoadsShippedRigsAndRejectsBadValues) {
   EXPECT_NE(e.find("bad_rig.yaml"), std::string::npos) << e;
   EXPECT_NE(e.find("rig.mass_kg"), std::string::npos) << e;
   // Typos and non-finite numbers name the file, line, key (and the nearest key).
-  const std::string bad = ::testing::TempDir() + "rig_typo.yaml";
+  const pmg::test::TempDir bad_dir;
+  const std::string bad = bad_dir.file("rig_typo.yaml");
   const std::string motor = "motor: {control: pd, kp_Nm_per_rad: 4, kd_Nms_per_rad: 0.1, armature_kgm2: 0.001}\n";
   std::ofstream(bad) << "rig:\n  type: pendulum\n  mass_kg: 1\n  com_m: 0.1\n  gravity: 9.81\n" << motor;
   EXPECT_EQ(error_of([&] { load_rig_config(bad); }),
@@ -92,13 +94,15 @@ TEST(RigConfig, LoadsShippedRigsAndRejectsBadValues) {
 }
 
 TEST(BenchLog, CsvNonFiniteValueIsRefused) {
-  const std::string bad = ::testing::TempDir() + "nan_log.csv";
+  const pmg::test::TempDir bad_dir;
+  const std::string bad = bad_dir.file("nan_log.csv");
   std::ofstream(bad) << "t,q_cmd,q\n0,0,0\n0.001,nan,0\n0.002,0,0\n";
   EXPECT_EQ(error_of([&] { load_bench_log(bad); }), bad + ": line 3, column 'q_cmd': 'nan' is not a finite number");
 }
 
 TEST(BenchLog, BamJsonTypoNamesFileLineAndNearestKey) {
-  const std::string bad = ::testing::TempDir() + "bam_typo.json";
+  const pmg::test::TempDir bad_dir;
+  const std::string bad = bad_dir.file("bam_typo.json");
   std::ofstream(bad) << "{\"kp\": 32, \"entries\": [\n"
                         "{\"timestamp\": 0, \"goal_position\": 0, \"position\": 0, \"speed\": 0,"
                         " \"torque_enable\": true},\n"
@@ -142,7 +146,8 @@ TEST(ActuatorYaml, RoundTripAndUnknownKeyRejected) {
   b.params.torque_limit_Nm = 25.0;
   b.armature_kgm2 = 0.01;
   b.kp_scale = 1.2;
-  const std::string path = ::testing::TempDir() + "act.yaml";
+  const pmg::test::TempDir path_dir;
+  const std::string path = path_dir.file("act.yaml");
   write_actuator_file(path, b, "test");
   const ActuatorBlock r = load_actuator_file(path);
   EXPECT_DOUBLE_EQ(r.params.fc_Nm, 0.12);
@@ -153,7 +158,8 @@ TEST(ActuatorYaml, RoundTripAndUnknownKeyRejected) {
   const std::string e = error_of([] { parse_actuator_block(YAML::Load("{fc_nm: 0.1}"), "robot.yaml"); });
   EXPECT_EQ(e, "robot.yaml: unknown key 'fc_nm' in 'actuator' (did you mean 'fc_Nm'?)");
   // In a file: the line of the misspelt key.
-  const std::string bad = ::testing::TempDir() + "act_typo.yaml";
+  const pmg::test::TempDir bad_dir;
+  const std::string bad = bad_dir.file("act_typo.yaml");
   std::ofstream(bad) << "actuator:\n  fc_Nm: 0.1\n  delay: 0.002\n";
   EXPECT_EQ(error_of([&] { load_actuator_file(bad); }),
             bad + ":3: unknown key 'delay' in 'actuator' (did you mean 'delay_s'?)");

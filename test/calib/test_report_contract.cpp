@@ -8,6 +8,7 @@
 #include "pmg/calib/actuator_yaml.hpp"
 #include "pmg/calib/dynamics_calibration.hpp"
 #include "pmg/calib/log_generator.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg::calib {
 namespace {
@@ -24,7 +25,8 @@ TEST(ReportContract, JsonHasTheKeysOtherToolsRead) {
   o.kd_log = 0.08;
   const BenchLog train = generate_bench_log(rig, truth, o);
   // Through the CSV the CLI reads: write, read back, compare.
-  const std::string csv = ::testing::TempDir() + "train.csv";
+  const pmg::test::TempDir csv_dir;
+  const std::string csv = csv_dir.file("train.csv");
   write_bench_log_csv(train, csv);
   const BenchLog back = load_bench_log(csv);
   ASSERT_EQ(back.size(), train.size());

@@ -9,6 +9,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "temp_dir.hpp"
 
 namespace pmg::calib {
 namespace {
@@ -199,7 +200,8 @@ TEST_F(ZeroEstimatorTest, BadOptionsNameTheField) {
 }
 
 TEST_F(ZeroEstimatorTest, BadProtocolNamesFileAndField) {
-  const std::string path = ::testing::TempDir() + "/bad_zero_protocol.yaml";
+  const pmg::test::TempDir path_dir;
+  const std::string path = path_dir.file("bad_zero_protocol.yaml");
   {
     std::ofstream f(path);
     f << "zero_calibration:\n  move_s: 0.05\n  poses:\n    - {name: a, dp: [0, 0, -0.05]}\n";
@@ -274,7 +276,8 @@ TEST_F(ZeroEstimatorTest, BadProtocolNamesFileAndField) {
 TEST_F(ZeroEstimatorTest, ProtocolSwitchesParse) {
   EXPECT_TRUE(protocol_->start_from_current);
   EXPECT_FALSE(protocol_->flatten_feet);
-  const std::string path = ::testing::TempDir() + "/zero_protocol_defaults.yaml";
+  const pmg::test::TempDir path_dir;
+  const std::string path = path_dir.file("zero_protocol_defaults.yaml");
   {
     std::ofstream f(path);
     f << "zero_calibration:\n  poses:\n    - {name: a, dp: [0, 0, -0.05]}\n";

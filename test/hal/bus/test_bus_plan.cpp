@@ -7,6 +7,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/bus/bus_plan.hpp"
+#include "temp_dir.hpp"
 
 using namespace pmg::hal::bus;
 
@@ -140,7 +141,8 @@ TEST(BusPlan, G1PlansFromYaml) {
 }
 
 TEST(BusPlan, YamlErrorsNameFileAndField) {
-  const std::string path = ::testing::TempDir() + "pmg_bad_plan.yaml";
+  const pmg::test::TempDir path_dir;
+  const std::string path = path_dir.file("pmg_bad_plan.yaml");
   {
     std::ofstream f(path);
     f << "motor_types:\n  a: {kp_min: 0, kp_max: 10}\nbuses:\n  - name: can0\n    motors:\n"
