@@ -5,7 +5,7 @@
 /// validateClip() (clip_validation.hpp). Setup-time code: allocates and throws pmg::ClipFormatError.
 ///
 /// Reading is strict: an unknown key is an error naming the file, the line, the key and the
-/// nearest valid key ("walk.yaml:7: unknown key 'perod' (did you mean 'period'?)").
+/// nearest valid key ("walk.yaml:8: unknown key 'perod' at the top level (did you mean 'period'?)").
 ///
 /// Writing is deterministic: every number is printed with a fixed format ("%.6f", negative zero
 /// printed as 0), keys in a fixed order, so the same clip gives a byte-identical file, and
@@ -37,10 +37,11 @@ enum class ClipKind { kDynamic, kStatic };
 ClipKind readClipKind(const std::string& path);
 
 /// Reads and validates a dynamic clip file. @throws ClipFormatError (file, line, field, range),
-/// including when format_version is not kClipFormatVersion or `kind` is not "dynamic".
+/// including when format_version is not kClipFormatVersion or `kind` is not "dynamic"; a plain
+/// pmg::ConfigError naming the robot config when its joints do not match its URDF (validateClip()).
 DynamicClip readDynamicClip(const std::string& path, const RobotConfig& robot,
                             const ClipValidationOptions& options = {});
-/// Reads and validates a static clip file. @throws ClipFormatError.
+/// Reads and validates a static clip file. @throws ClipFormatError / ConfigError as above.
 StaticClip readStaticClip(const std::string& path, const RobotConfig& robot,
                           const ClipValidationOptions& options = {});
 
