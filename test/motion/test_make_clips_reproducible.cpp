@@ -14,6 +14,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/clips/clip_io.hpp"
+#include "temp_dir.hpp"
 
 #ifndef PMG_MAKE_CLIPS_EXE
 #error "PMG_MAKE_CLIPS_EXE must name the pmg_make_clips executable"
@@ -31,7 +32,8 @@ std::string slurp(const fs::path& p) {
 }
 
 TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
-  const fs::path tmp = fs::temp_directory_path() / ("pmg_make_clips_" + std::to_string(::getpid()));
+  const pmg::test::TempDir tmp_dir;  // removed at the end, also when an assertion stops the test
+  const fs::path tmp = tmp_dir.path();
   for (const char* run : {"a", "b"}) {
     fs::create_directories(tmp / run);
     const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
@@ -59,7 +61,6 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
     }
   }
   EXPECT_GE(files, 9);  // 8 clips + report.md
-  fs::remove_all(tmp);
 }
 
 }  // namespace
