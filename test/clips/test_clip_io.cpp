@@ -1,17 +1,15 @@
 // Clip file I/O (src/clips/clip_io.cpp): write → read round trip, deterministic text, errors that
 // name the file, the line, the field and the expected range, and unknown keys refused with the
 // nearest valid key.
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include "g1_fixture.hpp"
+#include "temp_dir.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/clips/clip_io.hpp"
 
@@ -21,12 +19,7 @@ using namespace pmg;
 
 class ClipIo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    robot_ = pmg::test::g1Robot();
-    dir_ = std::filesystem::temp_directory_path() / ("pmg_clip_io_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void SetUp() override { robot_ = pmg::test::g1Robot(); }
 
   DynamicClip makeClip() const {
     const auto n = static_cast<Eigen::Index>(robot_.numJoints());
@@ -76,7 +69,8 @@ class ClipIo : public ::testing::Test {
   }
 
   RobotConfig robot_;
-  std::filesystem::path dir_;
+  const pmg::test::TempDir tmp_;  ///< removed with the fixture
+  const std::filesystem::path dir_ = tmp_.path();
 };
 
 TEST_F(ClipIo, RoundTripIsExactToTheTextPrecisionAndByteIdentical) {
@@ -150,6 +144,23 @@ TEST_F(ClipIo, LibraryRejectsDuplicateAxisDirection) {
   const ClipLibrary lib = loadClipLibrary(dir_.string(), robot_);
   EXPECT_EQ(lib.dynamic_clips.size(), 1u);
   EXPECT_THROW(loadClipLibrary((dir_ / "missing").string(), robot_), ClipFormatError);
+}
+
+TEST_F(ClipIo, WriteReplacesTheFileWholeAndLeavesNoTemporaryFile) {
+  const std::string path = write("w.yaml", "an older, longer text that must not survive in part\n");
+  writeClip(makeClip(), path);
+  EXPECT_EQ(readDynamicClip(path, robot_).name, "walk_forward");
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir_)) files += e.path().filename() != "w.yaml" ? 100 : 1;
+  EXPECT_EQ(files, 1);  // no ".w.yaml.tmp" left behind
+  // A folder that cannot be created: the error names the file.
+  const std::string blocked = write("blocker", "a file, not a folder\n") + "/sub/w.yaml";
+  try {
+    writeClip(makeClip(), blocked);
+    FAIL() << "wrote into a file";
+  } catch (const ClipFormatError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(blocked + ": cannot open", 0), 0u) << e.what();
+  }
 }
 
 TEST_F(ClipIo, StaticClipRoundTripAndValueOrder) {
