@@ -91,6 +91,7 @@ enum class Kind {
   kControllerConfig,  // loadControllerConfig
   kCanReply,          // MitProtocol::decodeReply (host side); input: a UDP-CAN datagram of the frame
   kCanCommand,        // MitProtocol::decodeCommand (driver side, pmg_sil); input: as above
+  kMotorCommand,      // MitProtocol::encodeCommand (host side); input: q, qd, kp, kd, tau_ff as 5 doubles
   kImuFrame,          // decodeImu; input: as above
   kUdpDatagram,       // UdpCanTransport::receive on a real loopback socket
   kSilFrame,          // SilDriverEmulator (pmg_sil's motor drivers): a frame on bus 0; input: as kCanReply
@@ -115,6 +116,7 @@ const char* kindName(Kind k) {
     case Kind::kControllerConfig: return "controller config";
     case Kind::kCanReply: return "CAN reply";
     case Kind::kCanCommand: return "CAN command";
+    case Kind::kMotorCommand: return "motor command (encode)";
     case Kind::kImuFrame: return "IMU frame";
     case Kind::kUdpDatagram: return "UDP datagram";
     case Kind::kSilFrame: return "SIL driver frame";
@@ -266,6 +268,14 @@ std::function<std::string()> frame(CanFrame (*base)(), F mutate) {
     CanFrame f = base();
     mutate(f);
     return datagram(f);
+  };
+}
+
+/// A joint-side motor command (q, qd, kp, kd, tau_ff) as raw bytes.
+std::function<std::string()> motorCommand(double q, double qd, double kp, double kd, double tau) {
+  return [=] {
+    const double v[5] = {q, qd, kp, kd, tau};
+    return std::string(reinterpret_cast<const char*>(v), sizeof v);
   };
 }
 
@@ -562,6 +572,12 @@ std::vector<Case> allCases() {
       {"can_command_error_frame", Kind::kCanCommand,
        frame(validCommand, [](CanFrame& f) { f.error = true; f.id = hal::bus::kErrorProtocol; }), rejected("not a command")},
       {"can_command_empty", Kind::kCanCommand, frame(validCommand, [](CanFrame& f) { f.len = 0; }), rejected("not a command")},
+      {"motor_command_nan_position", Kind::kMotorCommand,
+       motorCommand(std::numeric_limits<double>::quiet_NaN(), 0.0, 50.0, 1.0, 0.0), rejected("not encoded")},
+      {"motor_command_inf_stiffness", Kind::kMotorCommand,
+       motorCommand(0.1, 0.0, std::numeric_limits<double>::infinity(), 1.0, 0.0), rejected("not encoded")},
+      {"motor_command_minus_inf_torque", Kind::kMotorCommand,
+       motorCommand(0.1, 0.0, 50.0, 1.0, -std::numeric_limits<double>::infinity()), rejected("not encoded")},
       {"imu_nan_gyro", Kind::kImuFrame, imuWith([](ImuState& s) { s.gyro[1] = std::numeric_limits<double>::quiet_NaN(); }),
        rejected("not an IMU sample")},
       {"imu_inf_acc", Kind::kImuFrame, imuWith([](ImuState& s) { s.acc[2] = std::numeric_limits<double>::infinity(); }),
@@ -687,6 +703,19 @@ CanFrame frameOf(const std::string& d) {
   if (!hal::bus::decodeUdpCan(reinterpret_cast<const std::uint8_t*>(d.data()), d.size(), f))
     throw std::logic_error("bad-input case: the test frame does not encode");
   return f;
+}
+
+Outcome encodeMotorCommand(const std::string& d) {
+  double v[5];
+  if (d.size() != sizeof v) throw std::logic_error("bad-input case: a motor command is 5 doubles");
+  std::memcpy(v, d.data(), sizeof v);
+  const hal::bus::MitProtocol mit;
+  CanFrame f;
+  f.len = 0;
+  if (mit.encodeCommand(leftHipPitchMotor(), hal::bus::MotorCommand{v[0], v[1], v[2], v[3], v[4]}, f))
+    return {Outcome::kAccepted, "encoded into a frame"};
+  if (f.len != 0) return {Outcome::kRejected, "refused, but the frame was written"};
+  return {Outcome::kRejected, "not encoded"};
 }
 
 Outcome decodeFrame(Kind kind, const std::string& d) {
@@ -830,6 +859,7 @@ Outcome run(const Case& c, const TempDir& dir, std::string* file) {
     case Kind::kCanReply:
     case Kind::kCanCommand:
     case Kind::kImuFrame: return decodeFrame(c.kind, input);
+    case Kind::kMotorCommand: return encodeMotorCommand(input);
     case Kind::kUdpDatagram: return sendDatagram(input);
     case Kind::kSilFrame: return sendToSil(input);
     case Kind::kLcmPacket: return decodeLcm(input);
@@ -893,7 +923,7 @@ TEST(BadInputTable, CoversEveryKindWithAtLeast60Cases) {
   for (Kind k : {Kind::kRobotConfig, Kind::kGcoOptions, Kind::kBusPlan, Kind::kRig, Kind::kBenchLogCsv,
                  Kind::kBenchLogJson, Kind::kZeroProtocol, Kind::kZeroResult, Kind::kDynamicClip, Kind::kStaticClip,
                  Kind::kContract, Kind::kOnnxModel, Kind::kCommandScript, Kind::kControllerConfig, Kind::kCanReply,
-                 Kind::kCanCommand, Kind::kImuFrame, Kind::kUdpDatagram, Kind::kSilFrame, Kind::kLcmPacket}) {
+                 Kind::kCanCommand, Kind::kMotorCommand, Kind::kImuFrame, Kind::kUdpDatagram, Kind::kSilFrame, Kind::kLcmPacket}) {
     EXPECT_GT(per_kind[k], 0) << kindName(k);
   }
   int pending = 0;
