@@ -96,6 +96,7 @@ TickStatus Controller::tick(double now) noexcept {
   // ---- shape
   shaper_.update(sample_, now, dt_);
   const bool active = state_.mode == Mode::kActive;
+  ever_active_ = ever_active_ || active;
   if (active && prev_mode_ != Mode::kActive) {
     // Entering active from the standing pose: the generator, the actor and the command start
     // from rest; the reference limiter starts from the standing pose the supervisor held.

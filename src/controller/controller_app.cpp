@@ -50,6 +50,8 @@ std::string RunSummary::text() const {
     os << line;
   }
   os << (fell() ? " -- the robot fell\n" : "\n");
+  if (never_active) os << "never reached active (safety.startup: active): the motors or the IMU did not answer, or the stand was refused\n";
+  if (!backend_report.empty()) os << "backend: " << backend_report << "\n";
   return os.str();
 }
 
@@ -161,6 +163,8 @@ RunSummary ControllerApp::finish() {
   }
   s.reference_limited_ticks = controller_->referenceLimiter().limitedTicks();
   s.mode_requests_posted = controller_->modeRequestsPosted();
+  s.never_active = config_.startup == StartupMode::kActive && !controller_->everActive();
+  s.backend_report = inner_->report();
   hal::safety::SafetyStatus hs;
   if (safety_->status(hs)) {
     s.final_mode = hs.mode;

@@ -83,6 +83,8 @@ class Controller {
   /// Mode requests the loop forwarded to the supervisor (operator and start-up sequence).
   std::uint64_t modeRequestsPosted() const noexcept { return requests_posted_; }
   const ControllerConfig& config() const noexcept { return config_; }
+  /// Whether the supervisor was active on any tick so far.
+  bool everActive() const noexcept { return ever_active_; }
 
  private:
   void holdStandingPose() noexcept;
@@ -111,6 +113,7 @@ class Controller {
   double last_tick_wall_ = -1;
   double dt_ = 0.01;
   bool fixed_generator_ = false;
+  bool ever_active_ = false;
   VelocityCommand fixed_u_d_{};
 };
 

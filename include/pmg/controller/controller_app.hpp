@@ -51,9 +51,13 @@ struct RunSummary {
   int fault_joint = -1;                ///< joint index for per-joint faults
   double fault_time = 0.0;             ///< [s] HAL time of the fault
   double fault_value = 0.0;            ///< offending value (height [m], angle [rad], ...)
+  /// safety.startup: active, yet the supervisor never reached active (e.g. no motor ever replied).
+  bool never_active = false;
+  std::string backend_report;          ///< the backend's own account (HalBackend::report()), "" if none
   bool fell() const noexcept { return fault == FaultCode::kFallTilt || fault == FaultCode::kFallHeight; }
-  /// 0: ended without a fault; 3: fell or faulted (the robot is in damping).
-  int exitCode() const noexcept { return fault == FaultCode::kNone ? 0 : 3; }
+  /// 0: ended without a fault; 3: fell or faulted (the robot is in damping); 4: never became active
+  /// although the config asked for it.
+  int exitCode() const noexcept { return fault != FaultCode::kNone ? 3 : (never_active ? 4 : 0); }
   /// Multi-line human-readable summary naming the final mode and the fault in words.
   std::string text() const;
 };

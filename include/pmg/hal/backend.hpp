@@ -4,6 +4,8 @@
 /// motor buses (CAN, see include/pmg/hal/bus/), or a test mock. One controller binary, one HAL;
 /// only the backend changes (chosen in the controller config).
 
+#include <string>
+
 #include "pmg/hal/types.hpp"
 
 namespace pmg {
@@ -28,6 +30,10 @@ class HalBackend {
   /// Sends @p command to the motors, advances one cycle (the SIL steps its physics by one
   /// cycle), and fills @p state with the replies and the IMU.
   virtual BackendStatus exchange(const LowCommand& command, LowState& state) noexcept = 0;
+  /// Health report for the end-of-run summary, naming what went wrong in words (motors that never
+  /// replied, rejected frames, ...); "" when there is nothing to report. Reporting side only (after
+  /// a run): may allocate.
+  virtual std::string report() const { return {}; }
 };
 
 }  // namespace pmg

@@ -73,6 +73,35 @@ CanBackend::~CanBackend() {
   }
 }
 
+std::string CanBackend::report() const {
+  std::string out;
+  const auto line = [&](const std::string& l) { out += (out.empty() ? "" : "\n") + l; };
+  int silent_total = 0, total = 0;
+  for (const BusConfig& bus : plan_.buses()) {
+    std::string silent, lossy;
+    for (const MotorSpec& m : bus.motors) {
+      ++total;
+      const MotorLinkCounters& c = motor_counters_[static_cast<std::size_t>(m.joint_index)];
+      if (c.replies == 0) {
+        silent += (silent.empty() ? "" : ", ") + m.name;
+        ++silent_total;
+      } else if (c.missing > 0 || c.rejected > 0) {
+        lossy += (lossy.empty() ? "" : ", ") + m.name + " (" + std::to_string(c.missing) + " missing, " +
+                 std::to_string(c.rejected) + " rejected)";
+      }
+    }
+    if (!silent.empty()) line("bus " + bus.name + ": no reply at all from " + silent);
+    if (!lossy.empty()) line("bus " + bus.name + ": " + lossy);
+  }
+  if (cycles_ > 0 && silent_total == total)
+    line("no motor replied in " + std::to_string(cycles_) +
+         " cycles: is the bus up (SocketCAN interfaces) or pmg_sil running on the configured port?");
+  if (unroutable_ > 0) line(std::to_string(unroutable_) + " frames with an id no motor of the plan uses (wrong bus plan?)");
+  if (imu_rejected_ > 0) line(std::to_string(imu_rejected_) + " IMU frames rejected");
+  if (cycles_ > 0 && imu_frames_ == 0) line("no IMU frame received");
+  return out;
+}
+
 bool CanBackend::allReplied() const noexcept {
   for (std::size_t b = 0; b < transports_.size(); ++b) {
     if (transports_[b]->state() == BusState::kBusOff) continue;  // nothing will come

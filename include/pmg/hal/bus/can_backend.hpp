@@ -71,6 +71,8 @@ class CanBackend final : public pmg::HalBackend {
   ~CanBackend() override;
 
   const char* name() const noexcept override { return "can"; }
+  /// Motors that never replied or missed replies, rejected / unroutable frames and the IMU, per bus.
+  std::string report() const override;
   double cyclePeriod() const noexcept override { return plan_.options().period_s; }
   pmg::BackendStatus exchange(const pmg::LowCommand& command, pmg::LowState& state) noexcept override;
 
