@@ -4,7 +4,7 @@
 //  - a named error: the loader throws, and what() names the file and the offending key/field;
 //  - a counted rejection: a noexcept decoder refuses the input with a named status, and the
 //    component's counter for it goes up.
-// Never a crash, a hang, or a silent acceptance. A row marked `pending` names the owner of the
+// Never a crash, a hang (each case has kCaseTimeout), or a silent acceptance. A row marked `pending` names the owner of the
 // fix that is not in yet: it runs, and is skipped (reported by name, with what happened) while it
 // fails; once it passes it must be flipped to enforced (the skip message says so).
 #include <arpa/inet.h>
@@ -13,11 +13,13 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <limits>
 #include <memory>
 #include <map>
@@ -894,13 +896,23 @@ std::string mismatch(const Case& c, const Outcome& out, const std::string& file)
   return "";
 }
 
+constexpr std::chrono::seconds kCaseTimeout{30};
+
 class BadInput : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BadInput, EndsInANamedErrorOrACountedRejection) {
   const Case& c = GetParam();
   const TempDir dir;
   std::string file;
-  const Outcome out = run(c, dir, &file);
+  // A hang is a failure too: no case may take more than kCaseTimeout (the process cannot cancel a
+  // stuck thread, so it ends with the case named).
+  auto pending_outcome = std::async(std::launch::async, [&] { return run(c, dir, &file); });
+  if (pending_outcome.wait_for(kCaseTimeout) != std::future_status::ready) {
+    std::fprintf(stderr, "bad-input case %s (%s): no outcome after %lld s: a hang\n", c.name, kindName(c.kind),
+                 static_cast<long long>(kCaseTimeout.count()));
+    std::_Exit(3);
+  }
+  const Outcome out = pending_outcome.get();
   const std::string why = mismatch(c, out, file);
   RecordProperty("kind", kindName(c.kind));
   if (c.pending != nullptr) {
