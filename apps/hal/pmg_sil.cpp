@@ -61,9 +61,8 @@ int main(int argc, char** argv) {
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const BusPlan plan = BusPlan::fromYaml(plan_path);
-    if (plan.options().num_joints != static_cast<int>(robot.numJoints()))
-      throw std::runtime_error(plan_path + ": num_joints " + std::to_string(plan.options().num_joints) +
-                               " differs from the robot's " + std::to_string(robot.numJoints()) + " joints");
+    // The robot config is the source of truth for the wiring: the plan must agree joint by joint.
+    pmg::hal::bus::checkPlanAgainstRobot(plan.buses(), plan_path, robot);
     pmg::MujocoBackendOptions mo;
     mo.cycle_period = plan.options().period_s;
     mo.gantry.enabled = !no_gantry;

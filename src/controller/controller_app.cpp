@@ -50,7 +50,7 @@ std::string RunSummary::text() const {
     os << line;
   }
   os << (fell() ? " -- the robot fell\n" : "\n");
-  if (never_active) os << "never reached active (safety.startup: active): the motors or the IMU did not answer, or the stand was refused\n";
+  if (never_active) os << "never reached active (safety.startup: active): the motors or the IMU never all answered\n";
   if (!backend_report.empty()) os << "backend: " << backend_report << "\n";
   return os.str();
 }
@@ -163,7 +163,10 @@ RunSummary ControllerApp::finish() {
   }
   s.reference_limited_ticks = controller_->referenceLimiter().limitedTicks();
   s.mode_requests_posted = controller_->modeRequestsPosted();
-  s.never_active = config_.startup == StartupMode::kActive && !controller_->everActive();
+  // Asked to engage, but the motors or the IMU never all answered (a short run that was still
+  // standing up is not this).
+  s.never_active = config_.startup == StartupMode::kActive && !controller_->everActive() &&
+                   !controller_->startupStandPosted();
   s.backend_report = inner_->report();
   hal::safety::SafetyStatus hs;
   if (safety_->status(hs)) {

@@ -85,6 +85,8 @@ class Controller {
   const ControllerConfig& config() const noexcept { return config_; }
   /// Whether the supervisor was active on any tick so far.
   bool everActive() const noexcept { return ever_active_; }
+  /// Whether the start-up sequence found every motor and the IMU answering (and asked to stand).
+  bool startupStandPosted() const noexcept { return startup_stand_posted_; }
 
  private:
   void holdStandingPose() noexcept;

@@ -51,7 +51,7 @@ struct RunSummary {
   int fault_joint = -1;                ///< joint index for per-joint faults
   double fault_time = 0.0;             ///< [s] HAL time of the fault
   double fault_value = 0.0;            ///< offending value (height [m], angle [rad], ...)
-  /// safety.startup: active, yet the supervisor never reached active (e.g. no motor ever replied).
+  /// safety.startup: active, yet the motors or the IMU never all answered, so the robot never stood up.
   bool never_active = false;
   std::string backend_report;          ///< the backend's own account (HalBackend::report()), "" if none
   bool fell() const noexcept { return fault == FaultCode::kFallTilt || fault == FaultCode::kFallHeight; }
