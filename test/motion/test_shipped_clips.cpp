@@ -49,6 +49,7 @@ TEST_F(ShippedClips, LibraryLoadsWithTheFoundationTemplates) {
 
 TEST_F(ShippedClips, WithinJointLimitsAndPlausible) {
   const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
+  ASSERT_FALSE(lib.dynamic_clips.empty());  // the loop below must check something
   for (const auto& c : lib.dynamic_clips) {
     SCOPED_TRACE(c.name);
     for (Eigen::Index k = 0; k < c.q.rows(); ++k)
@@ -137,6 +138,7 @@ TEST_F(ShippedClips, ContactScheduleMatchesTheRobotSoles) {
   const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
   const pmg::KinematicModel model(robot_);
   const pmg::motion::RobotContactOptions opt;
+  ASSERT_FALSE(lib.dynamic_clips.empty());  // the loop below must check something
   for (const auto& c : lib.dynamic_clips) {
     SCOPED_TRACE(c.name);
     const pmg::motion::ClipSoleTracks t = pmg::motion::clipSoleTracks(c, model);
