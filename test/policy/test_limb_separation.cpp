@@ -13,6 +13,7 @@ namespace {
 void checkSplit(const std::string& file, std::size_t n_actor) {
   const PolicyRobotSpec spec = g1Spec();
   PolicyRunner runner(kDataDir + file, spec);
+  ASSERT_FALSE(runner.contract().reference_pairs.empty()) << file;
   ASSERT_TRUE(runner.step(runner.contract().reference_pairs[0].obs.data()).ok());
   LimbSeparation split(runner.contract());
   ASSERT_EQ(split.numJoints(), 29u);

@@ -28,6 +28,7 @@ TEST_P(NativeModels, MatchesOnnxRuntimeAndReferences) {
   PolicyRunner ort(path, spec);
   PolicyRunner native(path, spec, nativeOptions());
   // Reference pairs plus perturbed inputs (not stored anywhere): both engines agree.
+  ASSERT_FALSE(ort.contract().reference_pairs.empty()) << path << " has no reference pairs to compare on";
   std::vector<float> obs;
   int k = 0;
   for (const auto& ref : ort.contract().reference_pairs) {
@@ -48,6 +49,7 @@ INSTANTIATE_TEST_SUITE_P(Committed, NativeModels,
 
 TEST(NativeGraph, NanOutputDetected) {
   PolicyRunner runner(kDataDir + "nan_output.onnx", g1Spec(), nativeOptions());
+  ASSERT_FALSE(runner.contract().reference_pairs.empty());
   std::vector<float> obs = runner.contract().reference_pairs[0].obs;
   ASSERT_TRUE(runner.step(obs.data()).ok());
   obs[0] = -1.0f;  // sqrt(obs[0]) -> NaN
