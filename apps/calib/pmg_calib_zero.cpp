@@ -22,28 +22,29 @@
 #include "pmg/hal/bus/can_backend.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/hal_stack.hpp"
+#include "pmg/hal/realtime.hpp"
 #include "pmg/hal/zero_offset_backend.hpp"
 
 namespace {
 
-/// Paces a hardware backend to its cycle period on the wall clock (the SIL runs in lockstep).
+/// Paces a hardware backend to its cycle period on the one real-time clock (hal::rt; the SIL runs
+/// in lockstep).
 class PacedBackend final : public pmg::HalBackend {
  public:
   explicit PacedBackend(std::unique_ptr<pmg::HalBackend> inner) : inner_(std::move(inner)) {}
   const char* name() const noexcept override { return inner_->name(); }
   double cyclePeriod() const noexcept override { return inner_->cyclePeriod(); }
+  std::string report() const override { return inner_->report(); }
   pmg::BackendStatus exchange(const pmg::LowCommand& c, pmg::LowState& s) noexcept override {
-    const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-        std::chrono::duration<double>(inner_->cyclePeriod()));
-    if (next_ == std::chrono::steady_clock::time_point{}) next_ = std::chrono::steady_clock::now();
-    next_ += period;
-    std::this_thread::sleep_until(next_);
+    if (next_ < 0) next_ = pmg::hal::rt::now();
+    next_ += inner_->cyclePeriod();
+    pmg::hal::rt::sleepUntil(next_);
     return inner_->exchange(c, s);
   }
 
  private:
   std::unique_ptr<pmg::HalBackend> inner_;
-  std::chrono::steady_clock::time_point next_{};
+  double next_ = -1.0;
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "pmg/common/cli_checks.hpp"
 #include "pmg/controller/controller_app.hpp"
 
 namespace {
@@ -28,7 +29,7 @@ int main(int argc, char** argv) {
   bool realtime = false, lockstep = false, no_lcm = false;
   app.add_option("--config", config_path, "controller config YAML")->required()->check(CLI::ExistingFile);
   app.add_option("--duration", duration, "run time [s]; 0 = the script's length (lockstep) or until Ctrl-C")
-      ->check(CLI::Range(0.0, 1e7));
+      ->check(pmg::cli::finiteIn(0.0, 1e7));
   app.add_option("--script", script_path, "scripted command sequence YAML (instead of LCM input)")
       ->check(CLI::ExistingFile);
   app.add_option("--log", log_path, "record telemetry as an LCM event log (lcm-logger format)");
@@ -44,10 +45,6 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"udp", "socketcan"}));
   app.add_option("--can-port", can_port, "UDP base port of pmg_sil")->check(CLI::Range(1024, 65000));
   CLI11_PARSE(app, argc, argv);
-  if (!std::isfinite(duration)) {  // CLI::Range lets NaN through
-    std::fprintf(stderr, "pmg_controller: --duration: expected a finite number of seconds >= 0\n");
-    return 2;
-  }
 
   try {
     pmg::ControllerConfig config = pmg::loadControllerConfig(config_path);

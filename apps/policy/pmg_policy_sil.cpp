@@ -41,6 +41,7 @@
 #include <CLI/CLI.hpp>
 #include <mujoco/mujoco.h>
 
+#include "pmg/common/cli_checks.hpp"
 #include "pmg/common/data_paths.hpp"
 #include "pmg/controller/controller_app.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
@@ -85,10 +86,10 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "runs (seed k perturbs the initial pose, and the sensor noise)")->check(CLI::Range(1, 100));
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
-  app.add_option("--duration", duration, "override the sequence duration [s]")->check(CLI::Range(0.0, 1e5));
+  app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
   app.add_option("--frame-period", frame_period, "period of the body-position log <out>/frames<k>.csv [s] (frame strips)")
-      ->check(CLI::Range(0.01, 10.0));
+      ->check(pmg::cli::finiteIn(0.01, 10.0));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadControllerConfig(controller_path);

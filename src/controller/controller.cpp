@@ -41,6 +41,18 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
       throw ConfigError(config_.source_file + ": commands.max_velocity[" + std::to_string(i) + "] = " +
                         std::to_string(L.max_velocity[i]) + " exceeds generator.max_command[" + std::to_string(i) +
                         "] = " + std::to_string(gmax[i]) + ": expected <= (one set of limits, docs/controller.md)");
+  // ... and GCO's u' range (the policy's training range) must contain them too.
+  const gco::CommandLimits& G = config_.gco.limits;
+  const auto inside = [&](const char* what, double lo, double hi, double glo, double ghi) {
+    if (lo < glo - 1e-12 || hi > ghi + 1e-12)
+      throw ConfigError(config_.source_file + ": commands: " + what + " [" + std::to_string(lo) + ", " +
+                        std::to_string(hi) + "] exceeds the GCO limits [" + std::to_string(glo) + ", " +
+                        std::to_string(ghi) + "] of " + config_.gco_file + ": expected inside");
+  };
+  inside("max_velocity[0]", -L.max_velocity[0], L.max_velocity[0], G.v_x_min, G.v_x_max);
+  inside("max_velocity[1]", -L.max_velocity[1], L.max_velocity[1], G.v_y_min, G.v_y_max);
+  inside("max_velocity[2]", -L.max_velocity[2], L.max_velocity[2], G.yaw_rate_min, G.yaw_rate_max);
+  inside("height_range", L.height_range[0], L.height_range[1], G.height_min, G.height_max);
   dt_ = 1.0 / config_.loop_rate_hz;
   ref_out_ = pmg_->generatorOutput();  // sizes the vectors once
   command_.num_motors = n;

@@ -217,14 +217,19 @@ TEST(LcmCommandSource, ReceiveThreadSurvivesMalformedPacketsAndCountsThem) {
       tx.publish(c.channel, c.bytes.data(), static_cast<unsigned>(c.bytes.size()));
       ++sent_bad;
     }
+  // UDP may drop datagrams on a loaded machine: the valid command is re-sent until it arrives.
   const auto good = velocityPacket(0.77);
-  tx.publish(kVelocityChannel, good.data(), static_cast<unsigned>(good.size()));
-  for (int i = 0; i < 200 && sink.received.load() == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int i = 0; i < 100 && sink.received.load() == 0; ++i) {
+    tx.publish(kVelocityChannel, good.data(), static_cast<unsigned>(good.size()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   source.stop();
-  ASSERT_EQ(sink.received.load(), 1) << "the valid command got through the flood";
+  ASSERT_GE(sink.received.load(), 1) << "the valid command got through the flood";
   EXPECT_DOUBLE_EQ(sink.vx.load(), 0.77);
-  EXPECT_EQ(source.counters().accepted(), 1u);
-  EXPECT_EQ(source.counters().rejected(), sent_bad);
+  EXPECT_EQ(source.counters().accepted(), static_cast<std::uint64_t>(sink.received.load()));
+  EXPECT_GT(source.counters().rejected(), 0u);
+  EXPECT_LE(source.counters().rejected(), sent_bad) << "every rejection is one of the packets sent";
+  EXPECT_EQ(source.counters().count(DecodeResult::kInternalError), 0u);
 }
 
 }  // namespace

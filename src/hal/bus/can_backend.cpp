@@ -91,6 +91,13 @@ std::string CanBackend::report() const {
       }
     }
     if (!silent.empty()) line("bus " + bus.name + ": no reply at all from " + silent);
+    const std::size_t b = static_cast<std::size_t>(&bus - plan_.buses().data());
+    const TransportCounters& t = transports_[b]->counters();
+    if (t.rx_error_frames > 0 || t.bus_off_events > 0 || t.tx_errors > 0 || t.tx_queue_full > 0 || t.rx_errors > 0)
+      line("bus " + bus.name + ": " + std::to_string(t.rx_error_frames) + " error frames, " +
+           std::to_string(t.bus_off_events) + " bus-off events, " + std::to_string(t.tx_errors + t.tx_bus_off) +
+           " failed sends, " + std::to_string(t.tx_queue_full) + " full transmit queues, " +
+           std::to_string(t.rx_errors) + " bad reads");
     if (!lossy.empty()) line("bus " + bus.name + ": " + lossy);
   }
   if (cycles_ > 0 && silent_total == total)
