@@ -12,11 +12,11 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include "pmg/calib/zero_calibration.hpp"
 #include "pmg/calib/zero_io.hpp"
 #include "pmg/common/data_paths.hpp"
+#include "pmg/common/yaml_archive.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/controller/controller_config.hpp"
 #include "pmg/hal/bus/can_backend.hpp"
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     // Config: a controller config names its robot config; else it is the robot config.
     pmg::RobotConfig robot;
     std::unique_ptr<pmg::ControllerConfig> cc;
-    if (YAML::LoadFile(config_path)["robot"].IsScalar()) {
+    if (pmg::yaml::loadYamlDocument(config_path).root["robot"].IsScalar()) {  // names the file on a bad YAML
       cc = std::make_unique<pmg::ControllerConfig>(pmg::loadControllerConfig(config_path));
       robot = cc->robot;
     } else {
