@@ -83,6 +83,13 @@ BenchLog from_pmg_csv(const std::string& path, const Table& tab) {
     const int c = column(tab, name);
     if (c >= 0) dst = tab.cols[c];
   };
+  // Unknown columns are errors (a typo would otherwise silently drop a signal).
+  static const std::vector<std::string> known = {"t", "q_cmd", "q", "dq", "tau", "kp", "kd", "dq_cmd", "tau_ff", "enabled"};
+  for (const std::string& h : tab.header)
+    if (std::find(known.begin(), known.end(), h) == known.end())
+      throw std::runtime_error(fmt::format("{}: unknown column '{}' in the header (did you mean '{}'?); expected some of "
+                                           "t,q_cmd,q,dq,tau,kp,kd,dq_cmd,tau_ff,enabled",
+                                           path, h, yaml::nearestKey(h, known)));
   log.t = req("t");
   log.q_cmd = req("q_cmd");
   log.q = req("q");

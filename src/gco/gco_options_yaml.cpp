@@ -16,6 +16,9 @@ struct GcoFile {
 };
 
 GcoOptions read(const yaml::YamlDocument& doc) {
+  // An empty file is a mistake (a truncated or wrong file), not "all defaults": name it.
+  if (!doc.root || doc.root.IsNull())
+    yaml::fail(doc.source, doc.root, "empty file: expected the GCO options (a map, or a document with 'gco:')");
   // Accept either the bare mapping or a document with a top-level `gco:` section.
   if (doc.root.IsMap() && doc.root["gco"]) {
     GcoFile f;
