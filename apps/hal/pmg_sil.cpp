@@ -107,13 +107,14 @@ int main(int argc, char** argv) {
     const SilCounters& c = sil.counters();
     std::printf("pmg_sil: %llu cycles (%.2f s simulated); commands %llu, replies %llu, dropped %llu, late %llu, "
                 "duplicated %llu, corrupted %llu, silenced %llu, bus-off injected %llu, restarts seen %llu, "
-                "IMU frames %llu\n",
+                "IMU frames %llu, frames no driver takes %llu\n",
                 static_cast<unsigned long long>(c.cycles), static_cast<double>(c.cycles) * period,
                 static_cast<unsigned long long>(c.commands), static_cast<unsigned long long>(c.replies),
                 static_cast<unsigned long long>(c.dropped), static_cast<unsigned long long>(c.late),
                 static_cast<unsigned long long>(c.duplicated), static_cast<unsigned long long>(c.corrupted),
                 static_cast<unsigned long long>(c.silenced), static_cast<unsigned long long>(c.bus_off_injected),
-                static_cast<unsigned long long>(c.restarts_seen), static_cast<unsigned long long>(c.imu_frames));
+                static_cast<unsigned long long>(c.restarts_seen), static_cast<unsigned long long>(c.imu_frames),
+                static_cast<unsigned long long>(c.rejected));
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_sil: %s\n", e.what());

@@ -34,7 +34,7 @@ enum class DecodeResult : std::uint8_t {
   kTruncated,       ///< fewer bytes than the type's encoding needs
   kTrailingBytes,   ///< more bytes than the encoding (padded or concatenated packets)
   kBadFingerprint,  ///< the 8-byte type hash does not match the channel's type
-  kBadString,       ///< `source` length field ≤ 0, > 64, beyond the packet, or not NUL-terminated
+  kBadString,       ///< `source` length field ≤ 0 or > 64, or not NUL-terminated (one beyond the packet: kTruncated)
   kNonFinite,       ///< NaN/Inf in a command value
   kUnknownMode,     ///< mode code outside 0..4
   kInternalError,   ///< an exception inside the decoder (never expected; counted, not thrown)
