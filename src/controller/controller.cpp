@@ -90,7 +90,7 @@ TickStatus Controller::tick(double now) noexcept {
   }
   // Start-up sequence (safety.startup: active): stand up once every input is healthy, engage
   // once standing. Posted once each; after a fault only an operator re-engages.
-  if (config_.startup == StartupMode::kActive) {
+  if (config_.startup == StartupMode::kActive && !startup_active_posted_) {
     bool inputs_ok = state_.imu.valid && state_.num_motors == n;
     for (int i = 0; i < n && inputs_ok; ++i) inputs_ok = state_.motors[static_cast<std::size_t>(i)].valid;
     if (!startup_stand_posted_ && state_.mode == Mode::kPassive && inputs_ok) {
@@ -129,10 +129,9 @@ TickStatus Controller::tick(double now) noexcept {
     const GeneratorOutput& out = pmg_->generatorOutput();
     status.generator = out.status;
     status.gco = static_cast<std::int32_t>(g.status);
-    ref_out_ = out;  // same sizes: no allocation
-    for (int i = 0; i < n; ++i) q_ref_[static_cast<std::size_t>(i)] = out.q_ref[i];
-    status.reference_limited = limiter_.apply(q_ref_.data(), n, dt_);
-    for (int i = 0; i < n; ++i) ref_out_.q_ref[i] = q_ref_[static_cast<std::size_t>(i)];
+    ref_out_ = out;  // same sizes: no allocation; the limiter bounds its reference in place
+    status.reference_limited = limiter_.apply(ref_out_.q_ref.data(), n, dt_);
+    for (int i = 0; i < n; ++i) q_ref_[static_cast<std::size_t>(i)] = ref_out_.q_ref[i];
 
     // ---- policy (legs) or the references directly
     if (policy_) {

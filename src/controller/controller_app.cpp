@@ -93,8 +93,7 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
   controller_ = std::make_unique<Controller>(config_, std::move(generator), std::move(policy), *hal_,
                                              safety_->requests(), telemetry_.get(),
                                              lcm_input_ ? &lcm_input_->counters() : nullptr);
-  runner_ = std::make_unique<Runner>(config_.runner(), *hal_,
-                                     [this](double now) { last_status_ = controller_->tick(now); });
+  runner_ = std::make_unique<Runner>(config_.runner(), *hal_, [this](double now) { loopTick(now); });
   hal_->cycle();  // prime: the first tick has a state
   if (telemetry_) telemetry_->start();
 }
@@ -110,37 +109,38 @@ TickStatus ControllerApp::stepLockstep(const CommandSample& sample) noexcept {
   return last_status_;
 }
 
+void ControllerApp::loopTick(double now) noexcept {
+  // The script (a command source, when run() has one) writes the input, then the controller
+  // ticks, then the observer sees the result.
+  if (script_ != nullptr && !script_->segments.empty()) {
+    segment_ = script_->segmentIndex(now);
+    script_sample_.command = script_->at(now);
+    script_sample_.velocity_time = script_sample_.posture_time = now;
+    if (segment_ != last_segment_) {
+      last_segment_ = segment_;
+      const ModeRequest m = script_->segments[segment_].mode;
+      if (m != ModeRequest::kNone) {
+        script_sample_.mode_request = m;
+        ++script_sample_.mode_request_seq;
+      }
+    }
+    controller_->setInput(script_sample_);
+  }
+  last_status_ = controller_->tick(now);
+  if (observer_ != nullptr && *observer_) (*observer_)(now, last_status_, segment_);
+}
+
 RunSummary ControllerApp::run(double duration, const CommandScript* script, const std::atomic<bool>* stop,
                               const TickObserver& observer) {
-  CommandSample sample;
-  std::size_t last_segment = static_cast<std::size_t>(-1);
-  std::size_t segment = 0;
-  Controller& c = *controller_;
-  // The tick the runner calls: the script (a command source) writes the input, then the
-  // controller ticks, then the observer sees the result.
-  runner_ = std::make_unique<Runner>(config_.runner(), *hal_, [&, this](double now) {
-    if (script != nullptr && !script->segments.empty()) {
-      segment = script->segmentIndex(now);
-      sample.command = script->at(now);
-      sample.velocity_time = sample.posture_time = now;
-      if (segment != last_segment) {
-        last_segment = segment;
-        const ModeRequest m = script->segments[segment].mode;
-        if (m != ModeRequest::kNone) {
-          sample.mode_request = m;
-          ++sample.mode_request_seq;
-        }
-      }
-      c.setInput(sample);
-    }
-    last_status_ = c.tick(now);
-    if (observer) observer(now, last_status_, segment);
-  });
+  script_ = script;
+  observer_ = &observer;
+  last_segment_ = static_cast<std::size_t>(-1);
+  segment_ = 0;
   if (lcm_input_ && script == nullptr) lcm_input_->start();
   report_ = runner_->run(duration, stop);
   if (lcm_input_) lcm_input_->stop();
-  runner_ = std::make_unique<Runner>(config_.runner(), *hal_,
-                                     [this](double now) { last_status_ = controller_->tick(now); });
+  script_ = nullptr;
+  observer_ = nullptr;
   return finish();
 }
 

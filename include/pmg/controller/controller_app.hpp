@@ -102,6 +102,9 @@ class ControllerApp {
   const ControllerConfig& config() const noexcept { return config_; }
 
  private:
+  /// The runner's tick: script input (during run()), controller tick, observer.
+  void loopTick(double now) noexcept;
+
   ControllerConfig config_;
   std::unique_ptr<HalRunner> hal_;
   hal::safety::SafeBackend* safety_ = nullptr;
@@ -112,6 +115,10 @@ class ControllerApp {
   std::unique_ptr<Runner> runner_;
   TickStatus last_status_{};
   RunReport report_{};
+  const CommandScript* script_ = nullptr;  // during run()
+  const TickObserver* observer_ = nullptr; // during run()
+  CommandSample script_sample_{};
+  std::size_t segment_ = 0, last_segment_ = static_cast<std::size_t>(-1);
 };
 
 }  // namespace pmg

@@ -16,7 +16,6 @@
 #include <string>
 
 #include "pmg/hal/hal_runner.hpp"
-#include "pmg/hal/timing.hpp"
 
 namespace pmg {
 
@@ -73,20 +72,16 @@ class Runner {
   RunReport run(double duration, const std::atomic<bool>* stop);
 
   const RunnerOptions& options() const noexcept { return options_; }
-  /// Timing of the loop ticks (measured by the runner around the tick function).
-  TimingStats& loopTiming() noexcept { return loop_timing_; }
   std::int64_t ticks() const noexcept { return ticks_.load(); }
 
  private:
-  void timedTick(double now) noexcept;
+  void countedTick(double now) noexcept;
   RunnerOptions options_;
   HalRunner& hal_;
   Tick tick_;
   std::atomic<std::int64_t> ticks_{0};
   std::atomic<double> t0_{0.0};        // real time: CLOCK_MONOTONIC at the start
   std::atomic<bool> realtime_{false};  // the clock in use (read by command threads through now())
-  double last_tick_start_ = -1.0;
-  TimingStats loop_timing_;
 };
 
 }  // namespace pmg
