@@ -17,6 +17,15 @@ find_library(KDL_PARSER_LIBRARY kdl_parser REQUIRED)
 find_program(LCM_GEN_EXECUTABLE lcm-gen REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 find_package(pagmo QUIET)
+# Teleoperation and authenticated commands (issue 13, docs/teleop.md): SDL2's GameController API
+# (pmg_gamepad), libsodium (crypto_auth HMAC on every command channel), Boost.Beast + OpenSSL
+# (pmg_vr_bridge's HTTPS/WSS server and its self-signed certificate), nlohmann-json (the page's
+# pose messages).
+pkg_check_modules(SDL2 REQUIRED IMPORTED_TARGET sdl2)
+pkg_check_modules(SODIUM REQUIRED IMPORTED_TARGET libsodium)
+find_package(Boost 1.74 REQUIRED)
+find_package(OpenSSL REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
 # Rendering (pmg_render_log): GLFW for an OpenGL context (Xvfb on headless machines), libpng.
 find_package(glfw3 3.3 QUIET)
 find_package(PNG QUIET)

@@ -2,7 +2,8 @@
 # One idempotent set-up for a fresh Debian bookworm machine (or this project's CI):
 #   1. system packages (apt-get): compilers, CMake, Eigen, urdfdom, KDL, MuJoCo 2.2, NLopt, Ceres,
 #      LCM, yaml-cpp, GoogleTest, Google Benchmark, CLI11, spdlog/fmt, pagmo (CMA-ES); GLFW, libpng,
-#      Xvfb and Mesa's software OpenGL for pmg_render_log (docs/render.md);
+#      Xvfb and Mesa's software OpenGL for pmg_render_log (docs/render.md); SDL2, libsodium,
+#      Boost.Beast, OpenSSL, nlohmann-json and headless Chromium for teleoperation (docs/teleop.md);
 #   2. Python packages for the plotting/report scripts (pip);
 #   3. ONNX Runtime 1.24.4: libonnxruntime.so from the PyPI wheel + onnxruntime_c_api.h from the Go
 #      module github.com/yalue/onnxruntime_go@v1.27.0, unpacked into third_party/onnxruntime/ (ignored
@@ -21,6 +22,7 @@ apt_packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libspdlog-dev libfmt-dev libpagmo-dev
   python3 python3-pip
   libglfw3-dev libpng-dev xvfb libgl1-mesa-dri
+  libsdl2-dev libsodium-dev libboost-dev libssl-dev nlohmann-json3-dev chromium
 )
 missing=()
 for p in "${apt_packages[@]}"; do

@@ -22,6 +22,7 @@
 
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/modes.hpp"
+#include "pmg/teleop/vr_sample.hpp"
 
 namespace pmg {
 
@@ -42,6 +43,8 @@ struct CommandSample {
   double posture_time = -1.0;   ///< receive time of the posture part [s]; < 0: none yet
   ModeRequest mode_request = ModeRequest::kNone;
   std::uint32_t mode_request_seq = 0;  ///< increments with every mode request
+  teleop::VrSample vr;                 ///< newest VR teleoperation sample (PMG_VR_POSE)
+  double vr_time = -1.0;               ///< its receive time [s, controller clock]; < 0: none yet
 };
 
 /// Command limits: the operator's envelope. Validated once (validate()); the shaper clamps to it.
