@@ -244,9 +244,9 @@ const char* toString(VerifyResult r) noexcept {
 
 std::string VerifierOptions::validate() const {
   if (!(std::isfinite(max_age_s) && max_age_s > 0.0 && max_age_s <= 60.0))
-    return "security.max_message_age_s = " + std::to_string(max_age_s) + ": expected (0, 60] s";
+    return "max_message_age_s = " + std::to_string(max_age_s) + ": expected (0, 60] s";
   if (max_senders < 1 || max_senders > kMaxSendersLimit)
-    return "security.max_senders = " + std::to_string(max_senders) + ": expected 1.." +
+    return "max_senders = " + std::to_string(max_senders) + ": expected 1.." +
            std::to_string(kMaxSendersLimit);
   return {};
 }

@@ -86,7 +86,17 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
           config_.lcm_url,
           [](void* c, const CommandSample& s) noexcept { static_cast<ControllerApp*>(c)->controller_->setInput(s); },
           this, [](const void* c) noexcept { return static_cast<const ControllerApp*>(c)->runner_->now(); }, this);
+      // security.key_file: every command must carry a valid MAC trailer; plain ones are refused.
+      if (config_.security.enabled()) {
+        lcm_input_->requireAuthentication(config_.security.key, config_.security.verifier);
+        std::fprintf(stderr, "[pmg] LCM commands authenticated (key id %s, max age %.3g s)\n",
+                     comms::keyId(config_.security.key).c_str(), config_.security.verifier.max_age_s);
+      } else if (config_.lcm_url.find("ttl=0") == std::string::npos) {
+        std::fprintf(stderr, "[pmg] warning: LCM commands are not authenticated (security.key_file empty) and the "
+                             "URL '%s' is not host-local (ttl=0)\n", config_.lcm_url.c_str());
+      }
     } catch (const std::exception& e) {
+      lcm_input_.reset();  // never a half-configured (e.g. unauthenticated) command input
       std::fprintf(stderr, "[pmg] warning: %s; commands only from a script\n", e.what());
     }
   }

@@ -161,6 +161,20 @@ struct TelemetryYaml {
   }
 };
 
+struct SecurityYaml {
+  std::string key_file;
+  comms::VerifierOptions v;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("key_file", &key_file, "MAC key of the command channels (pmg_keygen, mode 0600); \"\" = plain commands",
+             yaml::kPath);
+    a->Visit("max_message_age_s", &v.max_age_s,
+             "largest |wall clock - send time| of a command, (0, 60] s (hosts' clocks synchronised)");
+    a->Visit("max_senders", &v.max_senders, "senders active at once on one channel, 1..64");
+  }
+  std::string validate() const { return v.validate(); }
+};
+
 struct ControllerYaml {
   std::string robot, clips, gco;
   BackendKind backend = BackendKind::kMujoco;
@@ -173,6 +187,7 @@ struct ControllerYaml {
   SafetyYaml safety;
   std::optional<PolicyYaml> policy;
   TelemetryYaml telemetry;
+  SecurityYaml security;
   template <class A>
   void Serialize(A* a) {
     a->Visit("robot", &robot, "robot config YAML", yaml::kPath | yaml::kRequired);
@@ -188,6 +203,7 @@ struct ControllerYaml {
     a->Visit("safety", &safety, "supervisor settings");
     a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
     a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
+    a->Visit("security", &security, "authenticated LCM command channels (docs/teleop_security.md)");
   }
 };
 
@@ -267,6 +283,15 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.lcm_enabled = y.telemetry.lcm;
   c.lcm_url = y.telemetry.lcm_url;
   c.log_file = y.telemetry.log_file;
+  c.security.key_file = y.security.key_file;
+  c.security.verifier = y.security.v;
+  if (c.security.enabled()) {
+    try {
+      c.security.key = comms::loadAuthKey(c.security.key_file);
+    } catch (const ConfigError& e) {
+      fail("security", std::string("key_file: ") + e.what());
+    }
+  }
   return c;
 }
 

@@ -8,6 +8,7 @@
 #include <pmg_lcm/mode_command_t.hpp>
 #include <pmg_lcm/posture_command_t.hpp>
 #include <pmg_lcm/velocity_command_t.hpp>
+#include <pmg_lcm/vr_pose_t.hpp>
 
 namespace pmg {
 
@@ -21,10 +22,28 @@ const char* toString(DecodeResult r) noexcept {
     case DecodeResult::kBadString: return "bad string";
     case DecodeResult::kNonFinite: return "non-finite value";
     case DecodeResult::kUnknownMode: return "unknown mode code";
+    case DecodeResult::kOutOfRange: return "out of range";
+    case DecodeResult::kUnauthenticated: return "unauthenticated";
+    case DecodeResult::kBadMac: return "bad MAC";
+    case DecodeResult::kReplayed: return "replayed";
+    case DecodeResult::kStale: return "stale";
+    case DecodeResult::kTooManySenders: return "too many senders";
     case DecodeResult::kInternalError: return "internal decoder error";
     case DecodeResult::kCount: break;
   }
   return "unknown";
+}
+
+DecodeResult toDecodeResult(comms::VerifyResult r) noexcept {
+  switch (r) {
+    case comms::VerifyResult::kOk: return DecodeResult::kAccepted;
+    case comms::VerifyResult::kUnauthenticated: return DecodeResult::kUnauthenticated;
+    case comms::VerifyResult::kBadMac: return DecodeResult::kBadMac;
+    case comms::VerifyResult::kReplayed: return DecodeResult::kReplayed;
+    case comms::VerifyResult::kStale: return DecodeResult::kStale;
+    case comms::VerifyResult::kTooManySenders: return DecodeResult::kTooManySenders;
+  }
+  return DecodeResult::kInternalError;
 }
 
 std::uint64_t LcmInputCounters::rejected() const noexcept {
@@ -139,15 +158,103 @@ DecodeResult decodeMode(Reader& r, ModeRequest& request) noexcept {
   return DecodeResult::kAccepted;
 }
 
+/// Decodes PMG_VR_POSE (lcmtypes/vr_pose_t.lcm, field order) into @p out.
+DecodeResult decodeVrPose(Reader& r, teleop::VrSample& out) noexcept {
+  DecodeResult h = checkHeader(r, pmg_lcm::vr_pose_t::getHash());
+  if (h != DecodeResult::kAccepted) return h;
+  teleop::VrSample v;
+  std::uint64_t xr_time = 0, frame = 0;
+  if (!r.u64(xr_time) || !r.u64(frame)) return DecodeResult::kTruncated;
+  v.xr_time_us = static_cast<std::int64_t>(xr_time);
+  v.frame = static_cast<std::int64_t>(frame);
+  // Every double of the message, in wire order, into its VrSample field.
+  const auto f64s = [&r](double* p, int n) noexcept {
+    for (int i = 0; i < n; ++i)
+      if (!r.f64(p[i])) return false;
+    return true;
+  };
+  std::int8_t valid[2] = {0, 0};
+  std::int32_t buttons[2] = {0, 0};
+  if (!f64s(v.head_position.data(), 3) || !f64s(v.head_quat.data(), 4) || !r.i8(valid[0]) || !r.i8(valid[1]))
+    return DecodeResult::kTruncated;
+  for (auto& p : v.hand_position)
+    if (!f64s(p.data(), 3)) return DecodeResult::kTruncated;
+  for (auto& q : v.hand_quat)
+    if (!f64s(q.data(), 4)) return DecodeResult::kTruncated;
+  if (!f64s(v.grip.data(), 2) || !f64s(v.trigger.data(), 2) || !r.i32(buttons[0]) || !r.i32(buttons[1]))
+    return DecodeResult::kTruncated;
+  for (auto& t : v.thumbstick)
+    if (!f64s(t.data(), 2)) return DecodeResult::kTruncated;
+  if (const DecodeResult e = finish(r); e != DecodeResult::kAccepted) return e;
+
+  // Finite first (a NaN is "non-finite", not "out of range"), then the ranges.
+  bool finite = true;
+  const auto all = [&finite](const double* p, std::size_t n) noexcept {
+    for (std::size_t i = 0; i < n; ++i) finite = finite && std::isfinite(p[i]);
+  };
+  all(v.head_position.data(), 3);
+  all(v.head_quat.data(), 4);
+  for (int k = 0; k < 2; ++k) {
+    all(v.hand_position[k].data(), 3);
+    all(v.hand_quat[k].data(), 4);
+    all(v.thumbstick[k].data(), 2);
+  }
+  all(v.grip.data(), 2);
+  all(v.trigger.data(), 2);
+  if (!finite) return DecodeResult::kNonFinite;
+  const auto unit = [](const std::array<double, 4>& q) noexcept {
+    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    return std::fabs(n - 1.0) <= kVrQuaternionTolerance;
+  };
+  const auto in = [](double x, double lo, double hi) noexcept { return x >= lo && x <= hi; };
+  constexpr std::uint32_t kKnownButtons =
+      teleop::kVrButtonLower | teleop::kVrButtonUpper | teleop::kVrButtonThumbstick | teleop::kVrButtonMenu;
+  bool ok = unit(v.head_quat);
+  for (int k = 0; k < 2; ++k) {
+    ok = ok && unit(v.hand_quat[k]) && in(v.grip[k], 0.0, 1.0) && in(v.trigger[k], 0.0, 1.0) &&
+         in(v.thumbstick[k][0], -1.0, 1.0) && in(v.thumbstick[k][1], -1.0, 1.0) && (valid[k] == 0 || valid[k] == 1) &&
+         (static_cast<std::uint32_t>(buttons[k]) & ~kKnownButtons) == 0;
+    v.hand_valid[k] = valid[k] == 1;
+    v.buttons[k] = static_cast<std::uint32_t>(buttons[k]);
+  }
+  if (!ok) return DecodeResult::kOutOfRange;
+  out = v;
+  return DecodeResult::kAccepted;
+}
+
 }  // namespace
+
+LcmCommandDecoder::LcmCommandDecoder() = default;
+LcmCommandDecoder::~LcmCommandDecoder() = default;
+
+void LcmCommandDecoder::requireAuthentication(const comms::AuthKey& key, const comms::VerifierOptions& options,
+                                              comms::MessageVerifier::WallClock clock, const void* clock_context) {
+  verifier_ = std::make_unique<comms::MessageVerifier>(key, options, clock, clock_context);
+}
 
 DecodeResult LcmCommandDecoder::decode(std::string_view channel, const void* data, std::size_t size,
                                        double receive_time_s, CommandSample& sample) noexcept {
   DecodeResult result = DecodeResult::kUnknownChannel;
   if (data == nullptr) size = 0;
+  const bool known = channel == kVelocityChannel || channel == kPostureChannel || channel == kModeChannel ||
+                     channel == kVrPoseChannel;
+  if (known && verifier_) {
+    // Authentication before anything is decoded; the raw checks then see the payload alone (its
+    // exact size excludes the trailer).
+    std::size_t payload_size = 0;
+    result = toDecodeResult(verifier_->verify(channel, data, size, payload_size));
+    if (result != DecodeResult::kAccepted) {
+      counters_.add(result);
+      return result;
+    }
+    size = payload_size;
+    result = DecodeResult::kUnknownChannel;
+  }
   Reader r(data, size);
   Command u = sample.command;
-  if (channel == kVelocityChannel) {
+  if (!known) {
+    // counted below as kUnknownChannel
+  } else if (channel == kVelocityChannel) {
     result = decodeVelocity(r, u);
     if (result == DecodeResult::kAccepted) {
       sample.command.vx = u.vx;
@@ -170,6 +277,9 @@ DecodeResult LcmCommandDecoder::decode(std::string_view channel, const void* dat
       sample.mode_request = request;
       ++sample.mode_request_seq;
     }
+  } else if (channel == kVrPoseChannel) {
+    result = decodeVrPose(r, sample.vr);  // writes sample.vr only when accepted
+    if (result == DecodeResult::kAccepted) sample.vr_time = receive_time_s;
   }
   counters_.add(result);
   return result;
@@ -194,11 +304,19 @@ LcmCommandSource::LcmCommandSource(const std::string& url, Sink sink, void* sink
         self->sink_(self->sink_context_, self->sample_);
     }
   };
-  for (const char* ch : {kVelocityChannel, kPostureChannel, kModeChannel})
-    lcm_->subscribeFunction(ch, &Raw::handle, this);
+  for (const char* ch : {kVelocityChannel, kPostureChannel, kModeChannel, kVrPoseChannel}) {
+    lcm::Subscription* sub = lcm_->subscribeFunction(ch, &Raw::handle, this);
+    if (sub == nullptr) throw std::runtime_error(std::string("LCM: cannot subscribe to ") + ch);
+    sub->setQueueCapacity(kLcmQueueCapacity);
+  }
 }
 
 LcmCommandSource::~LcmCommandSource() { stop(); }
+
+void LcmCommandSource::requireAuthentication(const comms::AuthKey& key, const comms::VerifierOptions& options) {
+  if (running_.load()) throw std::logic_error("LcmCommandSource::requireAuthentication after start()");
+  decoder_.requireAuthentication(key, options);
+}
 
 void LcmCommandSource::start() {
   if (running_.exchange(true)) return;

@@ -239,8 +239,8 @@ TEST_F(VerifierTest, VerifyAllocatesNothing) {
 
 TEST(VerifierOptions, ValidateNamesTheFieldAndRange) {
   EXPECT_EQ(VerifierOptions{}.validate(), "");
-  EXPECT_NE(VerifierOptions({0.0, 8}).validate().find("security.max_message_age_s"), std::string::npos);
-  EXPECT_NE(VerifierOptions({0.5, 0}).validate().find("security.max_senders"), std::string::npos);
+  EXPECT_NE(VerifierOptions({0.0, 8}).validate().find("max_message_age_s = 0"), std::string::npos);
+  EXPECT_NE(VerifierOptions({0.5, 0}).validate().find("max_senders = 0"), std::string::npos);
   EXPECT_NE(VerifierOptions({0.5, 65}).validate().find("expected 1..64"), std::string::npos);
   EXPECT_THROW(MessageVerifier(keyOf(1), VerifierOptions{-1.0, 8}), std::invalid_argument);
 }

@@ -137,7 +137,8 @@ struct VerifierOptions {
   /// Most senders active at once on one channel (a sender stays active for 2·max_age_s after its
   /// last accepted message). Range 1..kMaxSendersLimit.
   int max_senders = 8;
-  /// Empty when valid, else "security.<field> = <value>: expected ...".
+  /// Empty when valid, else "<field> = <value>: expected ..." (the field names of the controller
+  /// config's `security:` block).
   std::string validate() const;
 };
 /// Upper bound of VerifierOptions::max_senders.

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "pmg/common/robot_config.hpp"
+#include "pmg/comms/auth.hpp"
 #include "pmg/controller/commands.hpp"
 #include "pmg/gco/gco.hpp"
 #include "pmg/generator/generator.hpp"
@@ -23,6 +24,16 @@ namespace pmg {
 enum class StartupMode {
   kActive,   ///< request soft stand as soon as every input is healthy, then active once standing
   kPassive,  ///< stay passive until an operator requests a mode (robot hardware default)
+};
+
+/// Authentication of the LCM command channels (`security:`; docs/teleop_security.md).
+struct SecurityConfig {
+  /// Absolute path of the MAC key (pmg_keygen; owner-only file); "" = commands are not
+  /// authenticated (plain LCM, anyone who reaches the multicast group can command).
+  std::string key_file;
+  comms::AuthKey key;               ///< loaded from key_file by loadControllerConfig()
+  comms::VerifierOptions verifier;  ///< max_message_age_s [s], max_senders (per channel)
+  bool enabled() const noexcept { return !key_file.empty(); }
 };
 
 struct ControllerConfig {
@@ -54,6 +65,7 @@ struct ControllerConfig {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool lcm_enabled = true;       ///< receive commands / publish telemetry over LCM
   std::string log_file;          ///< LCM event log to record ("" = none)
+  SecurityConfig security;       ///< authenticated command channels (`security:`)
 
   int cyclesPerTick() const { return static_cast<int>(hal_rate_hz / loop_rate_hz + 0.5); }
   /// The HAL stack this config asks for (makeHalStack()).

@@ -1,14 +1,19 @@
 #pragma once
 /// @file lcm_command_source.hpp
-/// Operator commands from LCM (PMG_VELOCITY_COMMAND, PMG_POSTURE_COMMAND, PMG_MODE_COMMAND;
-/// lcmtypes/*.lcm) into the 100 Hz loop.
+/// Operator commands from LCM (PMG_VELOCITY_COMMAND, PMG_POSTURE_COMMAND, PMG_MODE_COMMAND,
+/// PMG_VR_POSE; lcmtypes/*.lcm) into the 100 Hz loop.
 ///
-/// Every packet is hostile until proven otherwise. LcmCommandDecoder checks the raw bytes before
-/// anything is decoded: the type fingerprint, the exact encoded size (no truncation, no trailing
-/// padding), the `source` string's length field (1..64 bytes including its NUL, NUL-terminated),
-/// finite numbers and a known mode code (pmg::modeRequestFromWire). A packet that fails any check
-/// is dropped and counted by cause (LcmInputCounters); nothing is printed from the receive path and
-/// no exception can leave it. LcmCommandSource runs the receive thread.
+/// Every packet is hostile until proven otherwise. With a key configured (controller config
+/// `security.key_file`, LcmCommandDecoder::requireAuthentication()) the packet's authentication
+/// trailer is verified first (pmg::comms::MessageVerifier: MAC, replay, age, sender table;
+/// include/pmg/comms/auth.hpp) and plain packets are refused; the checks below then run on the
+/// payload without its trailer. LcmCommandDecoder checks the raw bytes before anything is decoded:
+/// the type fingerprint, the exact encoded size (no truncation, no trailing padding), the `source`
+/// string's length field (1..64 bytes including its NUL, NUL-terminated), finite numbers, a known
+/// mode code (pmg::modeRequestFromWire) and, for PMG_VR_POSE, ranges (unit quaternions to 1e-3,
+/// grip/trigger in [0, 1], thumbsticks in [−1, 1], booleans 0/1, known button bits). A packet that
+/// fails any check is dropped and counted by cause (LcmInputCounters); nothing is printed from the
+/// receive path and no exception can leave it. LcmCommandSource runs the receive thread.
 
 #include <array>
 #include <atomic>
@@ -19,6 +24,8 @@
 #include <string_view>
 #include <thread>
 
+#include "pmg/comms/auth.hpp"
+#include "pmg/comms/channels.hpp"
 #include "pmg/controller/commands.hpp"
 
 namespace lcm {
@@ -37,6 +44,13 @@ enum class DecodeResult : std::uint8_t {
   kBadString,       ///< `source` length field ≤ 0 or > 64, or not NUL-terminated (one beyond the packet: kTruncated)
   kNonFinite,       ///< NaN/Inf in a command value
   kUnknownMode,     ///< mode code outside 0..4
+  kOutOfRange,      ///< VR pose: quaternion not unit (|‖q‖−1| > 1e-3), grip/trigger outside [0, 1],
+                    ///< thumbstick outside [−1, 1], boolean not 0/1, unknown button bits
+  kUnauthenticated, ///< key configured: no (or a malformed) authentication trailer, e.g. a plain packet
+  kBadMac,          ///< key configured: the tag does not match (forged, wrong key, altered, other channel)
+  kReplayed,        ///< key configured: seq not above the sender's last accepted one on this channel
+  kStale,           ///< key configured: |wall clock − send time| > security.max_message_age_s
+  kTooManySenders,  ///< key configured: a new sender while security.max_senders are active on the channel
   kInternalError,   ///< an exception inside the decoder (never expected; counted, not thrown)
   kCount
 };
@@ -59,18 +73,39 @@ class LcmInputCounters {
   std::array<std::atomic<std::uint64_t>, kNumDecodeResults> counts_{};
 };
 
-/// Channel names of the command types.
-inline constexpr const char* kVelocityChannel = "PMG_VELOCITY_COMMAND";
-inline constexpr const char* kPostureChannel = "PMG_POSTURE_COMMAND";
-inline constexpr const char* kModeChannel = "PMG_MODE_COMMAND";
+// Channel names of the command types (kVelocityChannel, kPostureChannel, kModeChannel,
+// kVrPoseChannel): include/pmg/comms/channels.hpp.
 /// Longest accepted `source` string, including its terminating NUL [bytes].
 inline constexpr std::int32_t kMaxSourceBytes = 64;
+/// Packets LCM queues per command channel before the receive thread takes them (LCM's default is
+/// 30). Under a flood, packets beyond it are dropped inside LCM (not counted here); at a few µs
+/// per packet (verify + decode) a full queue is worked off in about a millisecond.
+inline constexpr int kLcmQueueCapacity = 256;
+/// Largest accepted |‖q‖ − 1| of a VR pose quaternion.
+inline constexpr double kVrQuaternionTolerance = 1e-3;
 
-/// Decodes raw LCM command packets into a CommandSample. noexcept; allocates nothing.
+/// The authentication cause of a verifier outcome (kOk → kAccepted).
+DecodeResult toDecodeResult(comms::VerifyResult r) noexcept;
+
+/// Decodes raw LCM command packets into a CommandSample. decode() is noexcept and allocates
+/// nothing (also with authentication: the verifier's table is sized in requireAuthentication()).
 class LcmCommandDecoder {
  public:
-  /// Checks and decodes one packet of @p channel. On kAccepted updates @p sample (the velocity or
-  /// posture part with its receive time @p receive_time_s, or a new mode request with
+  LcmCommandDecoder();
+  ~LcmCommandDecoder();
+  LcmCommandDecoder(const LcmCommandDecoder&) = delete;
+  LcmCommandDecoder& operator=(const LcmCommandDecoder&) = delete;
+
+  /// Setup: from now on every packet must carry a valid trailer signed with @p key
+  /// (include/pmg/comms/auth.hpp); plain packets are refused (kUnauthenticated). @p clock: the
+  /// wall clock [µs since the Unix epoch] of the age check (nullptr: the system clock; tests
+  /// inject one). @throws std::invalid_argument if @p options is invalid.
+  void requireAuthentication(const comms::AuthKey& key, const comms::VerifierOptions& options,
+                             comms::MessageVerifier::WallClock clock = nullptr, const void* clock_context = nullptr);
+  bool authenticated() const noexcept { return verifier_ != nullptr; }
+
+  /// Checks and decodes one packet of @p channel. On kAccepted updates @p sample (the velocity,
+  /// posture or VR part with its receive time @p receive_time_s, or a new mode request with
   /// mode_request_seq incremented); otherwise leaves it unchanged. Counts every outcome.
   DecodeResult decode(std::string_view channel, const void* data, std::size_t size, double receive_time_s,
                       CommandSample& sample) noexcept;
@@ -80,9 +115,10 @@ class LcmCommandDecoder {
 
  private:
   LcmInputCounters counters_;
+  std::unique_ptr<comms::MessageVerifier> verifier_;
 };
 
-/// The LCM command source: a receive thread that decodes the command channels and writes the
+/// The LCM command source: a receive thread that decodes the four command channels and writes the
 /// newest CommandSample to @p sink (the loop reads it once per tick). start()/stop() are setup
 /// calls; the thread itself never throws and never prints per packet.
 class LcmCommandSource {
@@ -96,6 +132,11 @@ class LcmCommandSource {
   ~LcmCommandSource();
   LcmCommandSource(const LcmCommandSource&) = delete;
   LcmCommandSource& operator=(const LcmCommandSource&) = delete;
+
+  /// Setup, before start(): authenticated commands only (LcmCommandDecoder::requireAuthentication()).
+  /// @throws std::logic_error once started; std::invalid_argument for bad @p options.
+  void requireAuthentication(const comms::AuthKey& key, const comms::VerifierOptions& options);
+  bool authenticated() const noexcept { return decoder_.authenticated(); }
 
   void start();
   void stop();
