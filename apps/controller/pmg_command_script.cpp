@@ -1,20 +1,18 @@
 // pmg_command_script: publishes a command script over LCM in real time (50 Hz), as a gamepad or VR
 // bridge would: PMG_VELOCITY_COMMAND, PMG_POSTURE_COMMAND and, at segment starts that name one,
 // PMG_MODE_COMMAND. Reads the one script format (docs/controller.md) that pmg_controller and
-// pmg_policy_sil read.
+// pmg_policy_sil read. With --key every message carries the authentication trailer
+// (pmg::comms::CommandPublisher; docs/teleop_security.md), as a controller with
+// `security.key_file` requires.
 //
-//   pmg_command_script --script config/commands/demo.yaml [--rate 50] [--lcm-url udpm://...]
+//   pmg_command_script --script config/commands/demo.yaml [--rate 50] [--lcm-url udpm://...] [--key FILE]
 #include <csignal>
 #include <cstdio>
 
 #include <CLI/CLI.hpp>
-#include <lcm/lcm-cpp.hpp>
-#include <pmg_lcm/mode_command_t.hpp>
-#include <pmg_lcm/posture_command_t.hpp>
-#include <pmg_lcm/velocity_command_t.hpp>
 
+#include "pmg/comms/command_publisher.hpp"
 #include "pmg/controller/commands.hpp"
-#include "pmg/controller/lcm_command_source.hpp"
 #include "pmg/hal/realtime.hpp"
 
 namespace {
@@ -24,16 +22,18 @@ extern "C" void onSignal(int) { g_stop = 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"pmg_command_script: publish a scripted command sequence over LCM"};
-  std::string script_path, url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string script_path, url = pmg::kDefaultLcmUrl, key_file;
   double rate = 50.0;
   app.add_option("--script", script_path, "command script YAML")->required()->check(CLI::ExistingFile);
   app.add_option("--rate", rate, "publish rate [Hz]")->check(CLI::Range(1.0, 1000.0));
-  app.add_option("--lcm-url", url, "LCM provider URL");
+  app.add_option("--lcm-url", url, "LCM provider URL (default: ttl=0, host only)");
+  app.add_option("--key", key_file, "key file (pmg_keygen, mode 0600): sign every message");
   CLI11_PARSE(app, argc, argv);
   try {
     const pmg::CommandScript script = pmg::loadCommandScript(script_path);
-    lcm::LCM lcm(url);
-    if (!lcm.good()) throw std::runtime_error("LCM provider '" + url + "' not available");
+    pmg::comms::CommandPublisher publisher(url, key_file, "script");
+    if (publisher.authenticated())
+      std::printf("signing every message (key id %s, sender id %08x)\n", publisher.keyId().c_str(), publisher.senderId());
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     const double t0 = pmg::hal::rt::now();
@@ -43,7 +43,6 @@ int main(int argc, char** argv) {
       if (t > script.duration()) break;
       const std::size_t k = script.segmentIndex(t);
       const pmg::Command u = script.at(t);
-      const auto utime = static_cast<int64_t>(t * 1e6);
       if (k != last_segment) {
         last_segment = k;
         const pmg::CommandSegment& seg = script.segments[k];
@@ -52,32 +51,17 @@ int main(int argc, char** argv) {
                     u.height ? std::to_string(*u.height).c_str() : "none", seg.mode != pmg::ModeRequest::kNone ? " mode " : "",
                     seg.mode != pmg::ModeRequest::kNone ? pmg::toString(seg.mode) : "");
         std::fflush(stdout);
-        if (seg.mode != pmg::ModeRequest::kNone) {
-          pmg_lcm::mode_command_t m;
-          m.utime = utime;
-          m.mode = static_cast<int8_t>(seg.mode);
-          m.source = "script";
-          lcm.publish(pmg::kModeChannel, &m);
-        }
+        if (seg.mode != pmg::ModeRequest::kNone) publisher.publishMode(seg.mode);
       }
-      pmg_lcm::velocity_command_t v;
-      v.utime = utime;
-      v.vx = u.vx;
-      v.vy = u.vy;
-      v.wz = u.wz;
-      v.source = "script";
-      lcm.publish(pmg::kVelocityChannel, &v);
-      pmg_lcm::posture_command_t p;
-      p.utime = utime;
-      p.pitch = u.pitch;
-      p.roll = u.roll;
-      p.has_height = u.height.has_value();
-      p.height = u.height.value_or(0.0);
-      p.source = "script";
-      lcm.publish(pmg::kPostureChannel, &p);
+      publisher.publishVelocity(u.vx, u.vy, u.wz);
+      publisher.publishPosture(u.pitch, u.roll, u.height);
       pmg::hal::rt::sleepUntil(next + 1.0 / rate);
     }
-    return 0;
+    if (publisher.failed() > 0)
+      std::fprintf(stderr, "pmg_command_script: %llu of %llu messages could not be published\n",
+                   static_cast<unsigned long long>(publisher.failed()),
+                   static_cast<unsigned long long>(publisher.failed() + publisher.published()));
+    return publisher.failed() > 0 ? 1 : 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_command_script: %s\n", e.what());
     return 1;

@@ -19,7 +19,11 @@ CommandPublisher::CommandPublisher(const std::string& lcm_url, const std::string
     : source_(std::move(source)) {
   if (source_.empty() || source_.size() > kMaxSourceChars || source_.find('\0') != std::string::npos)
     throw std::invalid_argument("CommandPublisher: source '" + source_ + "': expected 1..63 characters");
-  if (!key_file.empty()) signer_ = std::make_unique<MessageSigner>(loadAuthKey(key_file));
+  if (!key_file.empty()) {
+    const AuthKey key = loadAuthKey(key_file);
+    signer_ = std::make_unique<MessageSigner>(key);
+    key_id_ = comms::keyId(key);
+  }
   lcm_ = std::make_unique<lcm::LCM>(lcm_url);
   if (!lcm_->good()) throw std::runtime_error("LCM provider '" + lcm_url + "' not available");
   buffer_.reserve(4096);

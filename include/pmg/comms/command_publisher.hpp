@@ -63,6 +63,8 @@ class CommandPublisher {
   bool authenticated() const noexcept { return signer_ != nullptr; }
   /// Sender id of the trailers (random per process; 0 when not authenticated).
   std::uint32_t senderId() const noexcept;
+  /// The key's public id (pmg::comms::keyId(), as pmg_controller prints it); "" when not authenticated.
+  const std::string& keyId() const noexcept { return key_id_; }
   /// Messages handed to LCM successfully / refused or failed.
   std::uint64_t published() const noexcept { return published_.load(std::memory_order_relaxed); }
   std::uint64_t failed() const noexcept { return failed_.load(std::memory_order_relaxed); }
@@ -73,6 +75,7 @@ class CommandPublisher {
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<MessageSigner> signer_;
   std::string source_;
+  std::string key_id_;
   std::mutex mutex_;
   std::vector<std::uint8_t> buffer_;
   std::atomic<std::uint64_t> published_{0}, failed_{0};
