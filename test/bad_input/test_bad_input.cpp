@@ -61,6 +61,7 @@
 #include "pmg_lcm/mode_command_t.hpp"
 #include "pmg_lcm/posture_command_t.hpp"
 #include "pmg_lcm/velocity_command_t.hpp"
+#include "pmg_lcm/vr_pose_t.hpp"
 
 namespace pmg::test {
 namespace {
@@ -71,6 +72,7 @@ using hal::bus::CanFrame;
 constexpr const char* kVelocityChannel = "PMG_VELOCITY_COMMAND";
 constexpr const char* kPostureChannel = "PMG_POSTURE_COMMAND";
 constexpr const char* kModeChannel = "PMG_MODE_COMMAND";
+constexpr const char* kVrPoseChannel = "PMG_VR_POSE";
 #endif
 
 // ---------------------------------------------------------------------------------------------
@@ -350,6 +352,17 @@ pmg_lcm::mode_command_t modeMsg(int code) {
   return m;
 }
 
+pmg_lcm::vr_pose_t vrPoseMsg() {
+  pmg_lcm::vr_pose_t m{};
+  m.utime = 1000;
+  m.frame = 7;
+  m.head_position[2] = 1.6;
+  m.head_quat[0] = 1.0;
+  for (auto& q : m.hand_quat) q[0] = 1.0;
+  m.source = "vr";
+  return m;
+}
+
 /// channel '\0' bytes
 std::string packet(const std::string& channel, const std::string& bytes) { return channel + std::string(1, '\0') + bytes; }
 
@@ -550,6 +563,16 @@ std::vector<Case> allCases() {
       {"ctrl_missing_robot", Kind::kControllerConfig,
        text([] { return dropLine(controllerText("g1_sil.yaml"), "robot: "); }), error({"robot"})},
       {"ctrl_binary_garbage", Kind::kControllerConfig, text([] { return garbage(); }), error()},
+      {"ctrl_security_key_fil", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "security:\n  key_fil: robot.key\n"; }), error({"key_fil"})},
+      {"ctrl_security_missing_key_file", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "security:\n  key_file: /nonexistent/pmg/robot.key\n"; }),
+       error({"security", "/nonexistent/pmg/robot.key", "cannot open"})},
+      {"ctrl_security_max_senders_0", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "security:\n  max_senders: 0\n"; }), error({"max_senders"})},
+      {"ctrl_security_nan_max_age", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "security:\n  max_message_age_s: .nan\n"; }),
+       error({"max_message_age_s"})},
 
       // --- CAN frames (MIT protocol) ---------------------------------------------------------------
       {"can_reply_truncated", Kind::kCanReply, frame(validReply, [](CanFrame& f) { f.len = 5; }),
@@ -649,6 +672,18 @@ std::vector<Case> allCases() {
        rejected("non-finite value")},
       {"lcm_unknown_channel", Kind::kLcmPacket, text([] { return packet("PMG_VELOCITY_COMMANDS", encoded(velocityMsg())); }),
        rejected("unknown channel")},
+      {"lcm_vr_non_unit_quaternion", Kind::kLcmPacket,
+       text([] { auto m = vrPoseMsg(); m.head_quat[0] = 1.01; return packet(kVrPoseChannel, encoded(m)); }),
+       rejected("out of range")},
+      {"lcm_vr_grip_above_1", Kind::kLcmPacket,
+       text([] { auto m = vrPoseMsg(); m.grip[1] = 1.5; return packet(kVrPoseChannel, encoded(m)); }),
+       rejected("out of range")},
+      {"lcm_vr_nan_hand_position", Kind::kLcmPacket,
+       text([] { auto m = vrPoseMsg(); m.hand_position[0][1] = std::numeric_limits<double>::quiet_NaN(); return packet(kVrPoseChannel, encoded(m)); }),
+       rejected("non-finite value")},
+      {"lcm_vr_truncated", Kind::kLcmPacket,
+       text([] { std::string b = encoded(vrPoseMsg()); b.resize(b.size() - 30); return packet(kVrPoseChannel, b); }),
+       rejected("truncated")},
   };
 }
 

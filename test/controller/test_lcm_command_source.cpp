@@ -408,6 +408,20 @@ TEST_F(AuthenticatedDecoder, SignedPacketsOfEveryChannelAreAccepted) {
   EXPECT_EQ(decoder_.counters().rejected(), 0u);
 }
 
+// The trailer is invisible to LCM's own decoders (lcm-spy, lcm-logger, generated types): they read
+// the message and ignore the bytes after it.
+TEST_F(AuthenticatedDecoder, LcmGeneratedDecodersReadSignedMessages) {
+  const auto b = sign(key_, kVrPoseChannel, encode(vrPose()), 1);
+  pmg_lcm::vr_pose_t m;
+  EXPECT_EQ(m.decode(b.data(), 0, static_cast<int>(b.size())), static_cast<int>(b.size() - comms::kAuthTrailerBytes));
+  EXPECT_EQ(m.frame, 42);
+  EXPECT_EQ(m.source, "vr");
+  const auto v = sign(key_, kVelocityChannel, velocityPacket(0.33), 1);
+  pmg_lcm::velocity_command_t vm;
+  EXPECT_GT(vm.decode(v.data(), 0, static_cast<int>(v.size())), 0);
+  EXPECT_DOUBLE_EQ(vm.vx, 0.33);
+}
+
 std::vector<Case> badSignedPackets(const comms::AuthKey& key) {
   std::vector<Case> c;
   const auto v = velocityPacket(0.9);
