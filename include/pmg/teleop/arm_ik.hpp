@@ -22,8 +22,11 @@
 ///   3. Damped least squares on the weighted 6-D pose error e = [w_p (p* − p); w_o log(R* Rᵀ)]
 ///      with the KDL Jacobian J (6×7, T frame, reference point H):
 ///        Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e + (I − J⁺J) k_n (q_nominal − q),
-///      λ² = damping² + error_damping·½|e|² (adaptive damping: large far away and near
-///      singularities such as the stretched arm, small at convergence).
+///      λ² = λ_max²·(1 − σ_min²/ε²) when the smallest singular value σ_min of the weighted J is
+///      below ε (0 otherwise; Chiaverini's variable damping: the stretched arm), plus
+///      error_damping·½|e|² (Sugihara's: large far from the target, vanishing at convergence).
+///      J⁺ in the null-space projector is the undamped pseudo-inverse (rank-truncated), so the
+///      pull does not disturb the pose task.
 ///   4. Hard bounds (never violated on output): joint limits ∩ [q_seed − max_joint_step,
 ///      q_seed + max_joint_step] (continuity with the previous solution). A joint pushed against
 ///      its bound is removed from J for the rest of the iteration (active set) so the others
@@ -70,8 +73,9 @@ struct ArmPose {
 /// Tuning of ArmIk. Defaults are for the 100 Hz teleop tick with a seed from the previous tick.
 struct ArmIkOptions {
   int max_iterations = 8;            ///< DLS iterations per solve (both arms together), 1..1000
-  double damping = 0.01;             ///< λ₀: base damping of the weighted DLS [m], 0..1
-  double error_damping = 1.0;        ///< adaptive part: λ² += error_damping·½|e|² [1/m⁰], 0..100
+  double damping = 0.05;             ///< λ_max: damping at a singularity (σ_min = 0) [m], 0..1
+  double singular_value_threshold = 0.04;  ///< ε: damping starts when σ_min of J_w < ε [m], > 0
+  double error_damping = 0.5;        ///< error part: λ² += error_damping·½|e_w|² [1], 0..100
   double position_weight = 1.0;      ///< w_p: weight of the position error [1] (error in m), > 0
   double orientation_weight = 0.3;   ///< w_o: weight of the orientation error [m/rad], ≥ 0
   double nullspace_gain = 0.1;       ///< k_n: pull toward the nominal pose per iteration [1], 0..1
@@ -80,6 +84,10 @@ struct ArmIkOptions {
   double max_iteration_step = 0.3;   ///< Δq per iteration, max-norm [rad], > 0 (Newton step cap)
   double position_tolerance = 2e-4;  ///< converged when |p* − p| ≤ this [m], > 0
   double orientation_tolerance = 2e-3;  ///< ... and the rotation angle of R* Rᵀ ≤ this [rad], > 0
+  /// Off-line use only (0 in the loop: a restart jumps the joints): when an arm has not converged,
+  /// retry it up to this many times from pseudo-random seeds inside its bounds (one arm at a
+  /// time, the other frozen), keeping the best result. Each restart costs up to max_iterations.
+  int max_restarts = 0;              ///< 0..1000
   bool avoid_collisions = true;      ///< false: capsules are only measured (min_capsule_distance_m)
   double collision_margin = 0.01;    ///< d_s: capsule surfaces are kept this far apart [m], 0..0.1
   double collision_activation = 0.04;  ///< pairs closer than this constrain the step [m], > margin
@@ -93,7 +101,8 @@ struct ArmIkOptions {
   template <class A>
   void Serialize(A* a) {
     a->Visit("max_iterations", &max_iterations, "DLS iterations per solve, 1..1000");
-    a->Visit("damping", &damping, "base damping [m]");
+    a->Visit("damping", &damping, "damping at a singularity [m]");
+    a->Visit("singular_value_threshold", &singular_value_threshold, "[m]");
     a->Visit("error_damping", &error_damping, "adaptive damping factor");
     a->Visit("position_weight", &position_weight, "[1]");
     a->Visit("orientation_weight", &orientation_weight, "[m/rad]");
@@ -102,6 +111,7 @@ struct ArmIkOptions {
     a->Visit("max_iteration_step", &max_iteration_step, "per iteration [rad]");
     a->Visit("position_tolerance", &position_tolerance, "[m]");
     a->Visit("orientation_tolerance", &orientation_tolerance, "[rad]");
+    a->Visit("max_restarts", &max_restarts, "off-line restarts from random seeds, 0..1000");
     a->Visit("avoid_collisions", &avoid_collisions, "capsule collision avoidance");
     a->Visit("collision_margin", &collision_margin, "[m]");
     a->Visit("collision_activation", &collision_activation, "[m]");
@@ -174,12 +184,13 @@ class ArmIk {
   /// Joint limits of this arm from the robot config [rad].
   const ArmJoints& lower(int hand) const noexcept;
   const ArmJoints& upper(int hand) const noexcept;
-  /// p_TS: shoulder point S in T [m] (the shoulder roll joint origin at q = 0, the centre of the
-  /// workspace shell).
+  /// p_TS: shoulder point S in T [m], the centre of the workspace shell: the shoulder roll joint
+  /// origin at q = 0 projected onto the shoulder pitch axis (fixed in T).
   Eigen::Vector3d shoulderPosition(int hand) const noexcept;
   /// Largest |p_TH − p_TS| with the arm stretched (elbow and wrist swept over their limits) [m].
   double reach(int hand) const noexcept;
-  /// Smallest |p_TH − p_TS| the elbow limit allows [m] (inner radius of the workspace shell).
+  /// Smallest |p_TH − p_TS| with the wrist straight, elbow swept over its limits [m] (inner radius
+  /// of the workspace shell; a bent wrist can bring the palm closer).
   double minReach(int hand) const noexcept;
   /// The capsule model used for collisions (stated constants, arm_capsules.hpp).
   const ArmCapsuleModel& capsules() const noexcept;
