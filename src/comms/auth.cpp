@@ -207,6 +207,23 @@ std::int64_t wallClockNowUs() noexcept {
       .count();
 }
 
+bool hasTrailerHeader(const void* data, std::size_t size) noexcept {
+  if (data == nullptr || size < kAuthTrailerBytes) return false;
+  const std::uint8_t* t = static_cast<const std::uint8_t*>(data) + (size - kAuthTrailerBytes);
+  return std::memcmp(t, kAuthMagic, 4) == 0 && t[4] == kAuthVersion && t[5] == 0 && t[6] == 0 && t[7] == 0;
+}
+
+bool tagValid(const AuthKey& key, std::string_view channel, const void* data, std::size_t size) noexcept {
+  if (!hasTrailerHeader(data, size)) return false;
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  const std::size_t n = size - kAuthTrailerBytes;
+  std::uint8_t tag[kAuthTagBytes];
+  computeTag(key, channel, bytes, n, bytes + n, tag);
+  const bool ok = crypto_verify_32(tag, bytes + n + kAuthSignedBytes) == 0;
+  sodium_memzero(tag, sizeof tag);
+  return ok;
+}
+
 // ------------------------------------------------------------------------------ signer
 
 MessageSigner::MessageSigner(const AuthKey& key) : key_(key) {
@@ -278,11 +295,10 @@ VerifyResult MessageVerifier::verify(std::string_view channel, const void* data,
                                      std::size_t& payload_size) noexcept {
   if (data == nullptr || size < kAuthTrailerBytes || channel.size() > kMaxChannelBytes)
     return VerifyResult::kUnauthenticated;
+  if (!hasTrailerHeader(data, size)) return VerifyResult::kUnauthenticated;
   const auto* bytes = static_cast<const std::uint8_t*>(data);
   const std::size_t n = size - kAuthTrailerBytes;
   const std::uint8_t* t = bytes + n;
-  if (std::memcmp(t, kAuthMagic, 4) != 0 || t[4] != kAuthVersion || t[5] != 0 || t[6] != 0 || t[7] != 0)
-    return VerifyResult::kUnauthenticated;
 
   std::uint8_t tag[kAuthTagBytes];
   computeTag(key_, channel, bytes, n, t, tag);

@@ -109,8 +109,16 @@ bool CommandPublisher::publishEncoded(const std::string& channel, const std::vec
     failed_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
+  std::size_t n = lcm_bytes.size();
+  if (hasTrailerHeader(lcm_bytes.data(), n)) {
+    if (signer_ && !tagValid(signer_->key(), channel, lcm_bytes.data(), n)) {
+      failed_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
+    n -= kAuthTrailerBytes;
+  }
   std::lock_guard<std::mutex> lock(mutex_);
-  buffer_.assign(lcm_bytes.begin(), lcm_bytes.end());
+  buffer_.assign(lcm_bytes.begin(), lcm_bytes.begin() + static_cast<std::ptrdiff_t>(n));
   return send(channel.c_str());
 }
 

@@ -249,6 +249,8 @@ DecodeResult LcmCommandDecoder::decode(std::string_view channel, const void* dat
     }
     size = payload_size;
     result = DecodeResult::kUnknownChannel;
+  } else if (known && comms::hasTrailerHeader(data, size)) {
+    size -= comms::kAuthTrailerBytes;  // no key configured: a signed message's trailer is ignored
   }
   Reader r(data, size);
   Command u = sample.command;

@@ -237,6 +237,20 @@ TEST_F(VerifierTest, VerifyAllocatesNothing) {
   EXPECT_LT(ok, msgs.size());
 }
 
+TEST(AuthTrailer, HeaderAndTagChecksForTools) {
+  const AuthKey key = keyOf(1);
+  const auto m = signedMessage(key, "CH", payload(30), 1, 2, 3);
+  EXPECT_TRUE(hasTrailerHeader(m.data(), m.size()));
+  EXPECT_TRUE(tagValid(key, "CH", m.data(), m.size()));
+  EXPECT_FALSE(tagValid(key, "CH2", m.data(), m.size()));
+  EXPECT_FALSE(tagValid(keyOf(2), "CH", m.data(), m.size()));
+  const auto plain = payload(200);
+  EXPECT_FALSE(hasTrailerHeader(plain.data(), plain.size()));
+  EXPECT_FALSE(tagValid(key, "CH", plain.data(), plain.size()));
+  EXPECT_FALSE(hasTrailerHeader(m.data(), kAuthTrailerBytes - 1));
+  EXPECT_FALSE(hasTrailerHeader(nullptr, 100));
+}
+
 TEST(VerifierOptions, ValidateNamesTheFieldAndRange) {
   EXPECT_EQ(VerifierOptions{}.validate(), "");
   EXPECT_NE(VerifierOptions({0.0, 8}).validate().find("max_message_age_s = 0"), std::string::npos);

@@ -408,6 +408,20 @@ TEST_F(AuthenticatedDecoder, SignedPacketsOfEveryChannelAreAccepted) {
   EXPECT_EQ(decoder_.counters().rejected(), 0u);
 }
 
+// Without a key nothing is verified, and a signed commander's packets are decoded without their
+// trailer (a keyed gamepad, or a recorded signed log, against a controller without a key).
+TEST(LcmCommandDecoder, WithoutAKeySignedPacketsAreDecodedWithoutTheTrailer) {
+  LcmCommandDecoder decoder;
+  CommandSample s;
+  const auto v = sign(testKey(1), kVelocityChannel, velocityPacket(0.61), 5);
+  ASSERT_EQ(decoder.decode(kVelocityChannel, v.data(), v.size(), 1.0, s), DecodeResult::kAccepted);
+  EXPECT_DOUBLE_EQ(s.command.vx, 0.61);
+  auto extra = v;
+  extra.push_back(0);  // one byte after the trailer: no trailer at the end any more
+  EXPECT_EQ(decoder.decode(kVelocityChannel, extra.data(), extra.size(), 1.0, s), DecodeResult::kTrailingBytes);
+  EXPECT_FALSE(decoder.authenticated());
+}
+
 // The trailer is invisible to LCM's own decoders (lcm-spy, lcm-logger, generated types): they read
 // the message and ignore the bytes after it.
 TEST_F(AuthenticatedDecoder, LcmGeneratedDecodersReadSignedMessages) {

@@ -92,6 +92,13 @@ struct AuthTrailerFields {
 void writeTrailer(const AuthKey& key, std::string_view channel, const std::uint8_t* payload, std::size_t size,
                   const AuthTrailerFields& fields, std::uint8_t* trailer_out) noexcept;
 
+/// True when the last kAuthTrailerBytes of @p data start like a trailer (magic, version, reserved
+/// bytes). Says nothing about the tag: for handling signed messages where no key is configured.
+bool hasTrailerHeader(const void* data, std::size_t size) noexcept;
+/// True when @p data ends in a trailer whose tag is valid for @p channel under @p key (no replay or
+/// age check: for tools that re-publish recorded messages). noexcept, allocation-free.
+bool tagValid(const AuthKey& key, std::string_view channel, const void* data, std::size_t size) noexcept;
+
 /// Wall clock [µs since the Unix epoch] (std::chrono::system_clock).
 std::int64_t wallClockNowUs() noexcept;
 
@@ -109,6 +116,7 @@ class MessageSigner {
   /// Same, stamped with wallClockNowUs().
   void sign(std::string_view channel, std::vector<std::uint8_t>& message) { sign(channel, message, wallClockNowUs()); }
   std::uint32_t senderId() const noexcept { return sender_id_; }
+  const AuthKey& key() const noexcept { return key_; }
   /// The seq the next message will carry.
   std::uint64_t nextSeq() const noexcept { return next_seq_; }
 

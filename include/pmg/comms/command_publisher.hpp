@@ -55,8 +55,11 @@ class CommandPublisher {
   bool publishMode(pmg::ModeRequest m);
   /// PMG_VR_POSE: @p m as given, except `source` (set to this publisher's) and `utime` (set to now).
   bool publishVrPose(const pmg_lcm::vr_pose_t& m);
-  /// Publishes already LCM-encoded bytes on @p channel, signing them when keyed (for replay tools
-  /// and tests; a message with an existing trailer would get a second one).
+  /// Publishes already LCM-encoded bytes on @p channel (replay tools, tests), signing them when
+  /// keyed. Bytes that already end in a trailer (a recorded signed message): keyed, the trailer is
+  /// replaced by a fresh one only if its tag is valid under this publisher's key, else the message
+  /// is refused (false, counted as failed: a recorded forgery is never re-signed); unkeyed, the
+  /// trailer is removed.
   bool publishEncoded(const std::string& channel, const std::vector<std::uint8_t>& lcm_bytes);
 
   /// True when a key was loaded (every message carries a trailer).

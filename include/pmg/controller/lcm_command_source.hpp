@@ -7,7 +7,9 @@
 /// `security.key_file`, LcmCommandDecoder::requireAuthentication()) the packet's authentication
 /// trailer is verified first (pmg::comms::MessageVerifier: MAC, replay, age, sender table;
 /// include/pmg/comms/auth.hpp) and plain packets are refused; the checks below then run on the
-/// payload without its trailer. LcmCommandDecoder checks the raw bytes before anything is decoded:
+/// payload without its trailer. Without a key, a packet that ends in a trailer (a signed
+/// commander, a recorded signed log) is decoded without it: the trailer is not checked, as nothing
+/// is. LcmCommandDecoder checks the raw bytes before anything is decoded:
 /// the type fingerprint, the exact encoded size (no truncation, no trailing padding), the `source`
 /// string's length field (1..64 bytes including its NUL, NUL-terminated), finite numbers, a known
 /// mode code (pmg::modeRequestFromWire) and, for PMG_VR_POSE, ranges (unit quaternions to 1e-3,
