@@ -127,7 +127,7 @@ struct GamepadSticksConfig {
 
 /// Posture set points: stepped by the d-pad, bounded to ranges inside pmg::CommandLimits.
 struct GamepadPostureConfig {
-  double standing_height = 0.78;                ///< height the first height step starts from [m]
+  double standing_height = 0.76;  ///< height the first height step starts from [m] (≈ the controller's standing height)
   std::array<double, 2> height_range{0.55, 0.80};  ///< pelvis height [m], inside CommandLimits::height_range
   double height_step = 0.02;                    ///< change per d-pad press [m]
   double height_rate = 0.10;                    ///< change while held beyond hold_delay [m/s]
