@@ -4,18 +4,17 @@
 //
 //   pmg_gamepad [--config config/teleop/gamepad.yaml] [--lcm-url URL] [--key FILE] [--rate 50]
 //               [--duration S] [--virtual-script FILE] [--controller NAME]
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <memory>
 #include <string>
 
-#include <CLI/CLI.hpp>
-
-#include "pmg/comms/channels.hpp"
-#include "pmg/comms/command_publisher.hpp"
 #include "pmg/common/cli_checks.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/common/data_paths.hpp"
+#include "pmg/comms/channels.hpp"
+#include "pmg/comms/command_publisher.hpp"
 #include "pmg/hal/modes.hpp"
 #include "pmg/hal/realtime.hpp"
 #include "pmg/teleop/gamepad.hpp"
@@ -124,8 +123,8 @@ int main(int argc, char** argv) {
       if (out.mode != pmg::ModeRequest::kNone) {
         publisher.publishMode(out.mode);
         std::fprintf(stderr, "t=%7.2f s  mode request: %s%s\n", t, pmg::toString(out.mode),
-                     out.estop_latched ? " (e-stop latched)" : out.link == pmg::teleop::GamepadLink::kLost
-                                                                   ? " (controller lost)"
+                     out.estop_latched                             ? " (e-stop latched)"
+                     : out.link == pmg::teleop::GamepadLink::kLost ? " (controller lost)"
                                                                    : "");
       }
       const bool changed = reader.name() != last_name || out.link != last_link || out.estop_latched != last_latched;

@@ -127,17 +127,17 @@ struct GamepadSticksConfig {
 
 /// Posture set points: stepped by the d-pad, bounded to ranges inside pmg::CommandLimits.
 struct GamepadPostureConfig {
-  double standing_height = 0.76;  ///< height the first height step starts from [m] (≈ the controller's standing height)
+  double standing_height = 0.76;  ///< first height step starts here [m] (≈ the controller's standing height)
   std::array<double, 2> height_range{0.55, 0.80};  ///< pelvis height [m], inside CommandLimits::height_range
-  double height_step = 0.02;                    ///< change per d-pad press [m]
-  double height_rate = 0.10;                    ///< change while held beyond hold_delay [m/s]
-  std::array<double, 2> pitch_range{-0.2, 0.5};  ///< torso pitch (forward bend +) [rad], inside CommandLimits
-  double pitch_step = 0.05;                     ///< [rad]
-  double pitch_rate = 0.20;                     ///< [rad/s]
-  std::array<double, 2> roll_range{-0.2, 0.2};  ///< torso roll (lean right +) [rad], inside CommandLimits
-  double roll_step = 0.05;                      ///< [rad]
-  double roll_rate = 0.20;                      ///< [rad/s]
-  double hold_delay = 0.4;                      ///< a d-pad press held this long starts the continuous change [s]
+  double height_step = 0.02;                       ///< change per d-pad press [m]
+  double height_rate = 0.10;                       ///< change while held beyond hold_delay [m/s]
+  std::array<double, 2> pitch_range{-0.2, 0.5};    ///< torso pitch (forward bend +) [rad], inside CommandLimits
+  double pitch_step = 0.05;                        ///< [rad]
+  double pitch_rate = 0.20;                        ///< [rad/s]
+  std::array<double, 2> roll_range{-0.2, 0.2};     ///< torso roll (lean right +) [rad], inside CommandLimits
+  double roll_step = 0.05;                         ///< [rad]
+  double roll_rate = 0.20;                         ///< [rad/s]
+  double hold_delay = 0.4;                         ///< a d-pad press held this long starts the continuous change [s]
   template <class A>
   void Serialize(A* a) {
     a->Visit("standing_height", &standing_height, "height the first height step starts from [m]");
@@ -197,7 +197,8 @@ struct GamepadLinkConfig {
     a->Visit("stale_timeout", &stale_timeout, "state age that counts as a lost controller [s]");
     a->Visit("damping_timeout", &damping_timeout, "time after the loss until the damping request [s]");
     a->Visit("damping_on_loss", &damping_on_loss, "request damping after damping_timeout of loss");
-    a->Visit("estop_repeat", &estop_repeat, "repeat period of the damping request while the e-stop is latched [s], 0 = once");
+    a->Visit("estop_repeat", &estop_repeat,
+             "repeat period of the damping request while the e-stop is latched [s], 0 = once");
   }
   std::string validate() const;
 };
@@ -234,27 +235,27 @@ const char* toString(GamepadLink l) noexcept;
 
 /// The mapper's output of one update: the operator command to publish.
 struct GamepadOutput {
-  double vx = 0.0;  ///< forward velocity, heading frame [m/s]
-  double vy = 0.0;  ///< lateral velocity, left positive [m/s]
-  double wz = 0.0;  ///< yaw rate, counter-clockwise positive [rad/s]
-  double pitch = 0.0;            ///< torso pitch, forward bend positive [rad]
-  double roll = 0.0;             ///< torso roll, lean right positive [rad]
-  std::optional<double> height;  ///< pelvis height [m]; nullopt = no height command (standing height)
+  double vx = 0.0;                        ///< forward velocity, heading frame [m/s]
+  double vy = 0.0;                        ///< lateral velocity, left positive [m/s]
+  double wz = 0.0;                        ///< yaw rate, counter-clockwise positive [rad/s]
+  double pitch = 0.0;                     ///< torso pitch, forward bend positive [rad]
+  double roll = 0.0;                      ///< torso roll, lean right positive [rad]
+  std::optional<double> height;           ///< pelvis height [m]; nullopt = no height command (standing height)
   ModeRequest mode = ModeRequest::kNone;  ///< request to publish on this update (kNone: none)
   GamepadLink link = GamepadLink::kNone;
-  bool estop_latched = false;      ///< e-stop chord seen and not yet re-armed
-  bool waiting_for_centre = false; ///< velocity held at 0 until the sticks are seen inside their dead zones
+  bool estop_latched = false;       ///< e-stop chord seen and not yet re-armed
+  bool waiting_for_centre = false;  ///< velocity held at 0 until the sticks are seen inside their dead zones
 };
 
 /// What the mapper did so far (status lines and the run summary).
 struct GamepadCounters {
   std::uint64_t updates = 0;
-  std::uint64_t mode_requests = 0;    ///< requests output (every kind, repeats of the e-stop included)
-  std::uint64_t estops = 0;           ///< e-stop latches
-  std::uint64_t losses = 0;           ///< transitions into GamepadLink::kLost
-  std::uint64_t loss_dampings = 0;    ///< damping requests sent because of a loss
-  std::uint64_t invalid_states = 0;   ///< states with non-finite values (treated as lost)
-  std::uint64_t dropped_requests = 0; ///< edges that lost against a higher-priority request on the same update
+  std::uint64_t mode_requests = 0;     ///< requests output (every kind, repeats of the e-stop included)
+  std::uint64_t estops = 0;            ///< e-stop latches
+  std::uint64_t losses = 0;            ///< transitions into GamepadLink::kLost
+  std::uint64_t loss_dampings = 0;     ///< damping requests sent because of a loss
+  std::uint64_t invalid_states = 0;    ///< states with non-finite values (treated as lost)
+  std::uint64_t dropped_requests = 0;  ///< edges that lost against a higher-priority request on the same update
 };
 
 /// GamepadState → operator command. Pure logic, no SDL, no I/O; construction validates the config
@@ -297,8 +298,8 @@ class GamepadMapper {
   void request(ModeRequest m) noexcept;
 
   GamepadConfig config_;
-  std::uint32_t estop_mask_ = 0, stand_mask_ = 0, walk_mask_ = 0, damping_mask_ = 0, reset_mask_ = 0,
-                neutral_mask_ = 0, mode_layer_mask_ = 0, pitch_layer_mask_ = 0;
+  std::uint32_t estop_mask_ = 0, stand_mask_ = 0, walk_mask_ = 0, damping_mask_ = 0, reset_mask_ = 0, neutral_mask_ = 0,
+                mode_layer_mask_ = 0, pitch_layer_mask_ = 0;
   std::uint32_t controls_ = 0, prev_controls_ = 0;
   bool have_prev_ = false;  ///< prev_controls_ belongs to the current connection
   bool ever_connected_ = false;

@@ -30,8 +30,8 @@ std::string checkRange(const char* field, const std::array<double, 2>& r, const 
   if (!finite(r[0]) || !finite(r[1]) || r[0] > r[1])
     return shown + ": expected finite [min, max] with min <= max " + unit;
   if (r[0] < limit[0] || r[1] > limit[1])
-    return shown + ": expected inside [" + num(limit[0]) + ", " + num(limit[1]) + "] " + unit + " (CommandLimits::" +
-           limit_name + ", " + kLimitsSource + ")";
+    return shown + ": expected inside [" + num(limit[0]) + ", " + num(limit[1]) + "] " + unit +
+           " (CommandLimits::" + limit_name + ", " + kLimitsSource + ")";
   if (must < r[0] || must > r[1]) return shown + ": must contain " + num(must) + " " + unit;
   return {};
 }
@@ -58,12 +58,29 @@ bool isDpad(GamepadControl c) {
 }  // namespace
 
 const char* toString(GamepadControl c) noexcept {
-  static constexpr const char* kNames[] = {"a",          "b",             "x",         "y",
-                                           "back",       "guide",         "start",     "leftstick",
-                                           "rightstick", "leftshoulder",  "rightshoulder", "dpup",
-                                           "dpdown",     "dpleft",        "dpright",   "misc1",
-                                           "paddle1",    "paddle2",       "paddle3",   "paddle4",
-                                           "touchpad",   "lefttrigger",   "righttrigger"};
+  static constexpr const char* kNames[] = {"a",
+                                           "b",
+                                           "x",
+                                           "y",
+                                           "back",
+                                           "guide",
+                                           "start",
+                                           "leftstick",
+                                           "rightstick",
+                                           "leftshoulder",
+                                           "rightshoulder",
+                                           "dpup",
+                                           "dpdown",
+                                           "dpleft",
+                                           "dpright",
+                                           "misc1",
+                                           "paddle1",
+                                           "paddle2",
+                                           "paddle3",
+                                           "paddle4",
+                                           "touchpad",
+                                           "lefttrigger",
+                                           "righttrigger"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == static_cast<std::size_t>(GamepadControl::kCount));
   const auto i = static_cast<std::size_t>(c);
   return i < static_cast<std::size_t>(GamepadControl::kCount) ? kNames[i] : "?";
@@ -126,12 +143,12 @@ std::string GamepadPostureConfig::validate() const {
   if (!e.empty()) return e;
   e = checkRange("roll_range", roll_range, limits.roll_range, "roll_range", 0.0, "rad");
   if (!e.empty()) return e;
-  const std::pair<const char*, double> steps[] = {{"height_step", height_step}, {"pitch_step", pitch_step},
-                                                  {"roll_step", roll_step}};
+  const std::pair<const char*, double> steps[] = {
+      {"height_step", height_step}, {"pitch_step", pitch_step}, {"roll_step", roll_step}};
   for (const auto& [name, v] : steps)
     if (!within(v, 0.0, 0.2)) return std::string(name) + " = " + num(v) + ": expected 0..0.2";
-  const std::pair<const char*, double> rates[] = {{"height_rate", height_rate}, {"pitch_rate", pitch_rate},
-                                                  {"roll_rate", roll_rate}};
+  const std::pair<const char*, double> rates[] = {
+      {"height_rate", height_rate}, {"pitch_rate", pitch_rate}, {"roll_rate", roll_rate}};
   for (const auto& [name, v] : rates)
     if (!within(v, 0.0, 2.0)) return std::string(name) + " = " + num(v) + ": expected 0..2 per second";
   if (!within(hold_delay, 0.0, 5.0)) return "hold_delay = " + num(hold_delay) + ": expected 0..5 s";
@@ -142,7 +159,7 @@ std::string GamepadButtonsConfig::validate() const {
   if (!within(trigger_threshold, 0.05, 0.95))
     return "trigger_threshold = " + num(trigger_threshold) + ": expected 0.05..0.95";
   const std::pair<const char*, const std::vector<GamepadControl>*> bindings[] = {
-      {"estop", &estop}, {"stand", &stand},   {"walk", &walk},
+      {"estop", &estop},     {"stand", &stand}, {"walk", &walk},
       {"damping", &damping}, {"reset", &reset}, {"neutral_posture", &neutral_posture}};
   for (const auto& [name, b] : bindings) {
     const std::string e = checkBinding(name, *b, std::string(name) == "estop" ? 2 : 1);
@@ -156,8 +173,10 @@ std::string GamepadButtonsConfig::validate() const {
         return std::string(na) + (ma == mb ? " is the same binding as " : " is contained in ") + nb + ": pressing " +
                nb + " would also trigger " + na;
     }
-  if (isDpad(mode_layer)) return std::string("mode_layer = ") + toString(mode_layer) + ": expected a control that is not on the d-pad";
-  if (isDpad(pitch_layer)) return std::string("pitch_layer = ") + toString(pitch_layer) + ": expected a control that is not on the d-pad";
+  if (isDpad(mode_layer))
+    return std::string("mode_layer = ") + toString(mode_layer) + ": expected a control that is not on the d-pad";
+  if (isDpad(pitch_layer))
+    return std::string("pitch_layer = ") + toString(pitch_layer) + ": expected a control that is not on the d-pad";
   if (mode_layer == pitch_layer) return "pitch_layer: must differ from mode_layer";
   return {};
 }
@@ -177,9 +196,10 @@ GamepadConfig parseGamepadConfig(const std::string& yaml_text, const std::string
 }
 
 std::string GamepadConfig::validate() const {
-  const std::pair<const char*, std::string> checks[] = {
-      {"sticks", sticks.validate()}, {"posture", posture.validate()}, {"buttons", buttons.validate()},
-      {"link", link.validate()}};
+  const std::pair<const char*, std::string> checks[] = {{"sticks", sticks.validate()},
+                                                        {"posture", posture.validate()},
+                                                        {"buttons", buttons.validate()},
+                                                        {"link", link.validate()}};
   for (const auto& [section, e] : checks)
     if (!e.empty()) return std::string(section) + ": " + e;
   return {};

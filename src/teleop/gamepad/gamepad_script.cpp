@@ -1,10 +1,11 @@
 // Gamepad scripts for the virtual controller (include/pmg/teleop/gamepad_script.hpp).
+#include "pmg/teleop/gamepad_script.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <string>
 
 #include "pmg/common/yaml_archive.hpp"
-#include "pmg/teleop/gamepad_script.hpp"
 
 namespace pmg::teleop {
 namespace {

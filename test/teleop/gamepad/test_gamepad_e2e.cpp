@@ -4,6 +4,9 @@
 //     the mapper produced;
 //  2. the pmg_gamepad executable plays a virtual-controller script (stand, walk, forward, unplug)
 //     and the commands on LCM follow it; SIGTERM stops it cleanly.
+#include <fcntl.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,17 +15,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <fcntl.h>
-#include <string>
-#include <thread>
-#include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 #include <pmg_lcm/mode_command_t.hpp>
 #include <pmg_lcm/posture_command_t.hpp>
 #include <pmg_lcm/velocity_command_t.hpp>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "g1_fixture.hpp"
 #include "pmg/comms/auth.hpp"

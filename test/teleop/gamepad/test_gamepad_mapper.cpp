@@ -1,11 +1,11 @@
 // GamepadMapper (src/teleop/gamepad/gamepad_mapper.cpp), its config and the virtual-controller
 // script: pure logic, no SDL. Time is simulated (50 Hz updates), so every expected value is exact.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
@@ -202,7 +202,8 @@ TEST(GamepadMapper, PostureStepsHoldsAndStaysInItsRanges) {
   d.run(10);  // held 0.2 s < hold_delay: no further change
   EXPECT_NEAR(*d.mapper.output().height, p.standing_height - p.height_step, 1e-12);
   d.run(30);  // held 0.8 s in all: rate × (0.8 − 0.4) s more (± one update)
-  EXPECT_NEAR(*d.mapper.output().height, p.standing_height - p.height_step - p.height_rate * 0.4, p.height_rate * kDt + 1e-9);
+  EXPECT_NEAR(*d.mapper.output().height, p.standing_height - p.height_step - p.height_rate * 0.4,
+              p.height_rate * kDt + 1e-9);
   d.run(500);  // 10 s: bounded
   EXPECT_DOUBLE_EQ(*d.mapper.output().height, p.height_range[0]);
   d.release();
@@ -433,7 +434,7 @@ TEST(GamepadMapper, StaleStateIsALossAfterTheStaleTimeout) {
     if (o.mode == ModeRequest::kDamping) damping_at = t;
   }
   const GamepadLinkConfig& l = d.mapper.config().link;
-  EXPECT_GT(zero_at - last, l.stale_timeout);  // moving while the state is fresh ...
+  EXPECT_GT(zero_at - last, l.stale_timeout);               // moving while the state is fresh ...
   EXPECT_LE(zero_at - last, l.stale_timeout + kDt + 1e-9);  // ... and zero at once after
   EXPECT_NEAR(damping_at - zero_at, l.damping_timeout, kDt + 1e-9);
   EXPECT_EQ(d.requests.size(), 1u);
@@ -470,10 +471,12 @@ TEST(GamepadMapper, NonFiniteStateCountsAsLost) {
 TEST(GamepadMapper, UpdateAllocatesNothing) {
   Driver d;
   d.step();
-  const std::initializer_list<GamepadControl> chords[] = {
-      {GamepadControl::kLeftTrigger, GamepadControl::kDpadUp}, {GamepadControl::kRightShoulder, GamepadControl::kX},
-      {GamepadControl::kDpadDown}, {GamepadControl::kRightTrigger, GamepadControl::kDpadUp},
-      {GamepadControl::kLeftTrigger, GamepadControl::kB}, {GamepadControl::kLeftTrigger, GamepadControl::kStart}};
+  const std::initializer_list<GamepadControl> chords[] = {{GamepadControl::kLeftTrigger, GamepadControl::kDpadUp},
+                                                          {GamepadControl::kRightShoulder, GamepadControl::kX},
+                                                          {GamepadControl::kDpadDown},
+                                                          {GamepadControl::kRightTrigger, GamepadControl::kDpadUp},
+                                                          {GamepadControl::kLeftTrigger, GamepadControl::kB},
+                                                          {GamepadControl::kLeftTrigger, GamepadControl::kStart}};
   test::AllocationGuard guard;
   for (int i = 0; i < 3000; ++i) {
     d.s.left_y = std::sin(0.01 * i);
@@ -512,22 +515,29 @@ struct BadConfig {
 
 TEST(GamepadConfig, BadConfigsAreRejectedNamingTheFieldAndRange) {
   const BadConfig cases[] = {
-      {"unknown key", "sticks:\n  vx: {dead_zone: 0.1}\n  vz: {max: 0.3}\n", {"bad.yaml:3", "unknown key 'vz'", "did you mean"}},
+      {"unknown key",
+       "sticks:\n  vx: {dead_zone: 0.1}\n  vz: {max: 0.3}\n",
+       {"bad.yaml:3", "unknown key 'vz'", "did you mean"}},
       {"misspelt section", "postur:\n  height_step: 0.01\n", {"bad.yaml:1", "unknown key 'postur'", "posture"}},
-      {"vx above the command limit", "sticks:\n  vx: {max: 1.5}\n", {"bad.yaml:", "sticks", "vx.max = 1.5", "(0, 1]", "CommandLimits"}},
+      {"vx above the command limit",
+       "sticks:\n  vx: {max: 1.5}\n",
+       {"bad.yaml:", "sticks", "vx.max = 1.5", "(0, 1]", "CommandLimits"}},
       {"vy above the command limit", "sticks:\n  vy: {max: 0.6}\n", {"vy.max = 0.6", "(0, 0.5]"}},
       {"dead zone", "sticks:\n  wz: {dead_zone: 0.7}\n", {"sticks.wz", "dead_zone = 0.7", "0..0.5"}},
       {"negative accel", "sticks:\n  vx: {accel: -1}\n", {"accel = -1", "(0, 100]"}},
       {"expo", "sticks:\n  vx: {expo: 2}\n", {"expo = 2", "0..1"}},
       {"not a number", "sticks:\n  vx: {max: fast}\n", {"bad.yaml:2", "sticks.vx.max", "number"}},
       {"infinite", "sticks:\n  vx: {max: .inf}\n", {"sticks.vx.max", "finite"}},
-      {"height range outside the limits", "posture:\n  height_range: [0.3, 0.8]\n",
+      {"height range outside the limits",
+       "posture:\n  height_range: [0.3, 0.8]\n",
        {"posture", "height_range = [0.3, 0.8]", "[0.45, 0.85]", "CommandLimits::height_range"}},
       {"height range without the standing height", "posture:\n  height_range: [0.5, 0.7]\n", {"must contain 0.76"}},
       {"pitch range", "posture:\n  pitch_range: [0.1, 0.5]\n", {"pitch_range", "must contain 0"}},
       {"roll range order", "posture:\n  roll_range: [0.2, -0.2]\n", {"roll_range", "min <= max"}},
       {"step", "posture:\n  height_step: 0.5\n", {"height_step = 0.5", "0..0.2"}},
-      {"unknown control", "buttons:\n  walk: [rb, x]\n", {"bad.yaml:2", "buttons.walk[0]", "'rightshoulder'", "got 'rb'"}},
+      {"unknown control",
+       "buttons:\n  walk: [rb, x]\n",
+       {"bad.yaml:2", "buttons.walk[0]", "'rightshoulder'", "got 'rb'"}},
       {"one-button e-stop", "buttons:\n  estop: [b]\n", {"buttons", "estop: expected exactly 2"}},
       {"three-button chord", "buttons:\n  stand: [lefttrigger, dpup, a]\n", {"stand: expected 1 or 2"}},
       {"binding inside another", "buttons:\n  damping: [b]\n", {"damping is contained in estop"}},

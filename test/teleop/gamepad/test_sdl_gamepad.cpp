@@ -3,10 +3,10 @@
 // GameController API, hot plug is followed, and an unplugged controller stops the mapper's output.
 // No hardware and no display needed. The reader only opens controllers named "pmg test pad", so a
 // real controller plugged into the test machine does not disturb the test.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <memory>
-
-#include <gtest/gtest.h>
 
 #include "pmg/teleop/gamepad.hpp"
 #include "pmg/teleop/gamepad_sdl.hpp"
@@ -39,7 +39,8 @@ TEST(SdlGamepad, ReadsAxesTriggersAndButtonsOfAVirtualController) {
   in.right_y = -1.0;
   in.left_trigger = 1.0;
   in.right_trigger = 0.6;
-  in.buttons = controlBit(GamepadControl::kB) | controlBit(GamepadControl::kDpadUp) | controlBit(GamepadControl::kStart);
+  in.buttons =
+      controlBit(GamepadControl::kB) | controlBit(GamepadControl::kDpadUp) | controlBit(GamepadControl::kStart);
   pad.set(in);
   s = reader.poll(2.0);
   ASSERT_TRUE(s.attached);
