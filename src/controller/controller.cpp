@@ -7,6 +7,7 @@
 #include "pmg/controller/telemetry.hpp"
 #include "pmg/hal/realtime.hpp"
 #include "pmg/policy/policy_stage.hpp"
+#include "pmg/teleop/teleop_mode.hpp"
 
 namespace pmg {
 
@@ -55,6 +56,7 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   inside("height_range", L.height_range[0], L.height_range[1], G.height_min, G.height_max);
   dt_ = 1.0 / config_.loop_rate_hz;
   ref_out_ = pmg_->generatorOutput();  // sizes the vectors once
+  if (config_.teleop.enabled) teleop_ = std::make_unique<teleop::TeleopMode>(robot, config_.teleop);
   command_.num_motors = n;
   holdStandingPose();
 }
@@ -105,9 +107,20 @@ TickStatus Controller::tick(double now) noexcept {
     }
   }
 
-  // ---- shape
-  shaper_.update(sample_, now, dt_);
+  // ---- teleop, shape
   const bool active = state_.mode == Mode::kActive;
+  const CommandSample* input = &sample_;
+  if (teleop_) {
+    if (!active) {
+      teleop_->reset();
+    } else if (teleop_->updateCommand(sample_, now, config_.commands.standing_height).command_override) {
+      teleop_sample_ = sample_;
+      teleop_sample_.command = teleop_->status().command;
+      teleop_sample_.velocity_time = teleop_sample_.posture_time = now;
+      input = &teleop_sample_;
+    }
+  }
+  shaper_.update(*input, now, dt_);
   ever_active_ = ever_active_ || active;
   if (active && prev_mode_ != Mode::kActive) {
     // Entering active from the standing pose: the generator, the actor and the command start
@@ -116,6 +129,7 @@ TickStatus Controller::tick(double now) noexcept {
     shaper_.reset();
     pmg_->reset(0.0);
     if (policy_) policy_->reset();
+    if (teleop_) teleop_->reset();
     limiter_.reset(q_ref_.data(), n);
   }
   if (!active) shaper_.reset();  // the command takes effect only while the loop drives the motors
@@ -130,6 +144,7 @@ TickStatus Controller::tick(double now) noexcept {
     status.generator = out.status;
     status.gco = static_cast<std::int32_t>(g.status);
     ref_out_ = out;  // same sizes: no allocation; the limiter bounds its reference in place
+    if (teleop_) teleop_->applyArms(ref_out_.q_ref.data(), ref_out_.qd_ref.data(), n, dt_);
     status.reference_limited = limiter_.apply(ref_out_.q_ref.data(), n, dt_);
     for (int i = 0; i < n; ++i) q_ref_[static_cast<std::size_t>(i)] = ref_out_.q_ref[i];
 

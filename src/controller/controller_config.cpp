@@ -188,6 +188,7 @@ struct ControllerYaml {
   std::optional<PolicyYaml> policy;
   TelemetryYaml telemetry;
   SecurityYaml security;
+  teleop::TeleopConfig teleop;
   template <class A>
   void Serialize(A* a) {
     a->Visit("robot", &robot, "robot config YAML", yaml::kPath | yaml::kRequired);
@@ -203,6 +204,7 @@ struct ControllerYaml {
     a->Visit("safety", &safety, "supervisor settings");
     a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
     a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
+    a->Visit("teleop", &teleop, "VR teleoperation (docs/teleop.md)");
     a->Visit("security", &security, "authenticated LCM command channels (docs/teleop_security.md)");
   }
 };
@@ -283,6 +285,8 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.lcm_enabled = y.telemetry.lcm;
   c.lcm_url = y.telemetry.lcm_url;
   c.log_file = y.telemetry.log_file;
+  c.teleop = y.teleop;
+  if (const std::string e = c.teleop.validate(); !e.empty()) fail("teleop", e);
   c.security.key_file = y.security.key_file;
   c.security.verifier = y.security.v;
   if (c.security.enabled()) {

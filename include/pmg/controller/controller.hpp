@@ -4,9 +4,12 @@
 ///
 ///  read      newest HAL state (incl. the supervisor's mode) and operator input (lock-free);
 ///            operator mode requests go to the HAL supervisor, the only mode state machine;
+///  teleop    (teleop.enabled) the VR stream: once engaged the headset's command replaces the
+///            other sources' (teleop_mode.hpp);
 ///  shape     CommandShaper: validate, clamp to the one CommandLimits, slew;
-///  generate  PMG generator + GCO (kActive only), then ReferenceRateLimiter bounds every joint
-///            reference's speed (CommandLimits::max_reference_speed);
+///  generate  PMG generator + GCO (kActive only); teleop's arm IK replaces the arm references of
+///            the arms it controls; then ReferenceRateLimiter bounds every joint reference's
+///            speed (CommandLimits::max_reference_speed);
 ///  policy    the trained actor (legs) and limb separation, when one is configured;
 ///  write     the motor command to the HAL (the supervisor passes it on only in kActive) and one
 ///            telemetry frame to the publisher.
@@ -29,6 +32,9 @@
 namespace pmg {
 namespace policy {
 class PolicyStage;
+}
+namespace teleop {
+class TeleopMode;
 }
 class TelemetryPublisher;
 class LcmInputCounters;
@@ -83,6 +89,8 @@ class Controller {
   /// Mode requests the loop forwarded to the supervisor (operator and start-up sequence).
   std::uint64_t modeRequestsPosted() const noexcept { return requests_posted_; }
   const ControllerConfig& config() const noexcept { return config_; }
+  /// The teleoperation stage (config teleop.enabled), or nullptr.
+  const teleop::TeleopMode* teleop() const noexcept { return teleop_.get(); }
   /// Whether the supervisor was active on any tick so far.
   bool everActive() const noexcept { return ever_active_; }
   /// Whether the start-up sequence found every motor and the IMU answering (and asked to stand).
@@ -95,6 +103,8 @@ class Controller {
   const ControllerConfig& config_;
   std::unique_ptr<gco::GeneratorWithGco> pmg_;
   std::unique_ptr<policy::PolicyStage> policy_;
+  std::unique_ptr<teleop::TeleopMode> teleop_;
+  CommandSample teleop_sample_{};
   HalRunner& hal_;
   hal::safety::ModeRequestMailbox& requests_;
   TelemetryPublisher* telemetry_;

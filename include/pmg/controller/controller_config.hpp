@@ -17,6 +17,7 @@
 #include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/runner.hpp"
+#include "pmg/teleop/teleop_mode.hpp"
 
 namespace pmg {
 
@@ -65,6 +66,8 @@ struct ControllerConfig {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool lcm_enabled = true;       ///< receive commands / publish telemetry over LCM
   std::string log_file;          ///< LCM event log to record ("" = none)
+  /// VR teleoperation (`teleop:`; docs/teleop.md): headset → locomotion/posture, hands → arm IK.
+  teleop::TeleopConfig teleop;
   SecurityConfig security;       ///< authenticated command channels (`security:`)
 
   int cyclesPerTick() const { return static_cast<int>(hal_rate_hz / loop_rate_hz + 0.5); }

@@ -1,0 +1,155 @@
+// VR teleoperation through the product path (ControllerApp: shaper, generator, GCO, policy,
+// supervisor, MuJoCo 2.2 SIL) with config/controller/g1_sil_teleop.yaml, the stream fed as the
+// LCM receiver would: a headset walk makes the robot walk that way; a dropped stream stops the
+// robot and its arms settle back onto the PMG reference; the tick allocates nothing.
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "g1_fixture.hpp"
+#include "pmg/controller/controller_app.hpp"
+#include "pmg/teleop/teleop_mode.hpp"
+
+namespace pmg {
+namespace {
+
+using teleop::ArmMode;
+using teleop::kLeftHand;
+using teleop::kRightHand;
+
+ControllerConfig teleopConfig() {
+  ControllerConfig c = loadControllerConfig(test::sourcePath("config/controller/g1_sil_teleop.yaml"));
+  c.lcm_enabled = false;
+  c.log_file.clear();
+  c.timing = TimingMode::kLockstep;
+  return c;
+}
+
+teleop::VrSample operatorAt(double x, double y, double z = 1.6, double yaw = 0.0) {
+  teleop::VrSample s;
+  s.head_position = {x, y, z};
+  s.head_quat = {std::cos(yaw / 2), 0, 0, std::sin(yaw / 2)};
+  s.hand_valid = {true, true};
+  // Hands in front of the chest, relative to the head.
+  s.hand_position = {{{x + 0.30, y + 0.20, z - 0.45}, {x + 0.30, y - 0.20, z - 0.45}}};
+  return s;
+}
+
+// Drives the app in lockstep, tick by tick, with the VR stream as the LCM source writes it.
+class Session {
+ public:
+  explicit Session(ControllerApp& app) : app_(app) {}
+  void tick(const teleop::VrSample& vr, bool stream = true) {
+    const double now = static_cast<double>(ticks_) * 0.01;
+    if (stream) {
+      sample_.vr = vr;
+      sample_.vr_time = now;
+    }
+    app_.stepLockstep(sample_);
+    ++ticks_;
+    min_height_ = std::min(min_height_, base()[2]);
+  }
+  void run(const teleop::VrSample& vr, double seconds, bool stream = true) {
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / 0.01)); ++k) tick(vr, stream);
+  }
+  void pressA(teleop::VrSample vr) {
+    vr.buttons[kRightHand] |= teleop::kVrButtonLower;
+    run(vr, 0.05);
+    vr.buttons[kRightHand] = 0;
+    run(vr, 0.05);
+  }
+  std::array<double, 3> base() const { return app_.controller().lastState().base_position; }
+  double minHeight() const { return min_height_; }
+
+ private:
+  ControllerApp& app_;
+  CommandSample sample_;
+  long ticks_ = 0;
+  double min_height_ = 10.0;
+};
+
+TEST(TeleopSil, HeadsetWalkMovesTheRobotThatWay) {
+  ControllerApp app(teleopConfig());
+  ASSERT_NE(app.controller().teleop(), nullptr);
+  Session s(app);
+  s.run(operatorAt(0, 0), 1.0);  // stand up, engage the actor; teleop not engaged yet
+  ASSERT_EQ(app.controller().mode(), Mode::kActive);
+  s.pressA(operatorAt(0, 0));
+  ASSERT_TRUE(app.controller().teleop()->status().engaged);
+  // The operator steps 0.3 m forward and stays there: the robot walks forward.
+  const auto p0 = s.base();
+  s.run(operatorAt(0.30, 0.0), 4.0);
+  const auto p1 = s.base();
+  // Back to the origin (robot stops), then 0.25 m to the left: the robot walks left.
+  s.run(operatorAt(0.0, 0.0), 2.0);
+  const auto p2 = s.base();
+  s.run(operatorAt(0.0, 0.25), 4.0);
+  const auto p3 = s.base();
+  std::printf("[ SIL ] headset +0.30 m x for 4 s: robot moved (%.2f, %.2f) m; headset +0.25 m y for 4 s: (%.2f, %.2f) m\n",
+              p1[0] - p0[0], p1[1] - p0[1], p3[0] - p2[0], p3[1] - p2[1]);
+  EXPECT_GT(p1[0] - p0[0], 0.6) << "forward";
+  EXPECT_LT(std::fabs(p1[1] - p0[1]), 0.5 * (p1[0] - p0[0]));
+  EXPECT_GT(p3[1] - p2[1], 0.25) << "left";
+  EXPECT_LT(std::fabs(p3[0] - p2[0]), 0.6 * (p3[1] - p2[1]));
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+  EXPECT_GT(s.minHeight(), 0.6) << "the robot fell";
+}
+
+TEST(TeleopSil, DroppedStreamStopsTheRobotAndItsArmsSettle) {
+  ControllerApp app(teleopConfig());
+  const ControllerConfig& config = app.config();
+  Session s(app);
+  s.run(operatorAt(0, 0), 1.0);
+  s.pressA(operatorAt(0, 0));
+  // Walk forward with both grips held, the hands 5 cm ahead of and above where the robot's
+  // hands are in its nominal pose (the shipped policy was trained with arm perturbations of at
+  // most 0.3 rad around PMG's arms; docs/teleop.md, "Limits").
+  const teleop::TeleopMode& tm = *app.controller().teleop();
+  teleop::VrSample vr = operatorAt(0.3, 0.0);
+  vr.grip = {1.0, 1.0};
+  for (int h = 0; h < 2; ++h) {
+    const auto hh = static_cast<std::size_t>(h);
+    const Eigen::Vector3d want = tm.ik().forwardKinematics(h, tm.ik().nominal(h)).position + Eigen::Vector3d(0.05, 0.0, 0.05);
+    const Eigen::Vector3d now = tm.armTarget(vr, h).position;
+    for (int k = 0; k < 3; ++k) vr.hand_position[hh][static_cast<std::size_t>(k)] += (want[k] - now[k]) / tm.config().arm_scale;
+  }
+  s.run(vr, 1.5);
+  ASSERT_EQ(tm.status().arm[kLeftHand], ArmMode::kFollowing);
+  ASSERT_EQ(tm.status().arm[kRightHand], ArmMode::kFollowing);
+  // Measure the tick's allocations while the arms follow.
+  {
+    test::AllocationGuard guard(test::AllocationScope::kThisThread);
+    s.run(vr, 0.5);
+    EXPECT_EQ(guard.count(), 0u) << "the teleop tick allocated";
+  }
+  // The stream drops.
+  const auto before = s.base();
+  // Zero within the stale timeout (0.25 s) plus the shaper's deceleration (0.375 m/s at 1 m/s²).
+  s.run(vr, 0.7, false);
+  EXPECT_EQ(app.controller().commands().vector()[0], 0.0) << "velocity command not zero 0.7 s after the drop";
+  s.run(vr, 3.0, false);
+  const auto p_a = s.base();
+  s.run(vr, 1.0, false);
+  const auto p_b = s.base();
+  EXPECT_FALSE(tm.status().engaged);
+  EXPECT_EQ(tm.status().arm[kLeftHand], ArmMode::kPmg);
+  EXPECT_EQ(tm.status().arm[kRightHand], ArmMode::kPmg);
+  EXPECT_LT(std::hypot(p_b[0] - p_a[0], p_b[1] - p_a[1]), 0.06) << "the robot still walks 3.5 s after the drop";
+  // The arms settled: references on PMG's, joints at rest near them.
+  const LowState& st = app.controller().lastState();
+  for (int h = 0; h < 2; ++h) {
+    for (int j : tm.ik().jointIndices(h)) {
+      const auto k = static_cast<std::size_t>(j);
+      EXPECT_LT(std::fabs(st.motors[k].qd), 0.3) << config.robot.joints[k].name;
+      EXPECT_LT(std::fabs(st.motors[k].q - app.controller().reference()[k]), 0.1) << config.robot.joints[k].name;
+    }
+  }
+  std::printf("[ SIL ] stream dropped: robot moved %.2f m before stopping\n", std::hypot(p_a[0] - before[0], p_a[1] - before[1]));
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+  EXPECT_GT(s.minHeight(), 0.6) << "the robot fell";
+}
+
+}  // namespace
+}  // namespace pmg
