@@ -14,33 +14,44 @@
 ///   wrist yaw → rubber hand. ArmJoints is that order.
 ///
 /// Method (per solve, both arms together, at most ArmIkOptions::max_iterations iterations):
-///   1. Target check: non-finite, or |quaternion| off 1 by more than `quaternion_norm_tolerance` →
-///      kInvalidTarget, q unchanged. The quaternion is normalised.
+///   1. Input check: a non-finite target, or a quaternion whose norm is off 1 by more than
+///      `quaternion_norm_tolerance` → kInvalidTarget, that arm's q unchanged (the quaternion is
+///      normalised otherwise). A seed outside the joint limits is clamped into them.
 ///   2. Workspace clamp: the target position p_TH is moved onto the shell
-///      r_min·(1 + m) ≤ |p_TH − p_TS| ≤ reach·(1 − m) around the shoulder point S (m =
+///      minReach·(1 + m) ≤ |p_TH − p_TS| ≤ reach·(1 − m) around the shoulder point S (m =
 ///      workspace_margin); ArmIkResult::workspace_clamped and status kUnreachableClamped say so.
+///      (The shell is a radius test: a target inside it may still be out of reach of the joint
+///      limits; the IK then ends at the closest pose it finds, status kMaxIterations.)
 ///   3. Damped least squares on the weighted 6-D pose error e = [w_p (p* − p); w_o log(R* Rᵀ)]
-///      with the KDL Jacobian J (6×7, T frame, reference point H):
-///        Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e + (I − J⁺J) k_n (q_nominal − q),
-///      λ² = λ_max²·(1 − σ_min²/ε²) when the smallest singular value σ_min of the weighted J is
-///      below ε (0 otherwise; Chiaverini's variable damping: the stretched arm), plus
-///      error_damping·½|e|² (Sugihara's: large far from the target, vanishing at convergence).
-///      J⁺ in the null-space projector is the undamped pseudo-inverse (rank-truncated), so the
-///      pull does not disturb the pose task.
+///      with the hand Jacobian J (6×7, T frame, reference point H; built from the joint axes of
+///      the KDL forward-kinematics frames, equal to KDL::ChainJntToJacSolver's, see jacobian()):
+///        Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e + α N k_n (q_nominal − q),   N = I − Jᵀ (J Jᵀ + μ² I)⁻¹ J,
+///      λ² = λ_max²·(1 − σ_min²/ε²) when the smallest singular value σ_min of the weighted J
+///      (inverse iteration on the Cholesky factor, warm-started) is below ε, else 0 (Chiaverini's
+///      variable damping: the stretched arm), plus error_damping·½|e|² (Sugihara's: large far from
+///      the target, vanishing at convergence). μ² = 1e-10 m²: N is the undamped null-space
+///      projector, so the pull toward the nominal pose does not disturb the hand. α ∈ [0, 1]
+///      scales the pull so it never pushes a joint out of its bounds. Every solve takes at least one
+///      step, so the null-space pull (the elbow swivel toward the nominal posture) acts while the
+///      hand holds still. The step is capped at max_iteration_step per joint.
 ///   4. Hard bounds (never violated on output): joint limits ∩ [q_seed − max_joint_step,
-///      q_seed + max_joint_step] (continuity with the previous solution). A joint pushed against
-///      its bound is removed from J for the rest of the iteration (active set) so the others
-///      take over its share of the task.
+///      q_seed + max_joint_step] (continuity with the previous solution). A joint the task step
+///      pushes past its bound is pinned there and the task is re-solved with the others (active set).
 ///   5. Collisions: capsules (pmg::teleop::ArmCapsuleModel, arm_capsules.hpp) for torso, head,
 ///      pelvis, upper arm, forearm and hand. Every pair closer than `collision_activation` adds the
-///      linearised constraint d + nᵀ(J_a Δq_a − J_b Δq_b) ≥ collision_margin (point Jacobians at
-///      the closest points; arm–arm pairs couple both arms); Δq is projected onto these half-spaces
-///      and the box. A step that would still bring a pair closer than min(d_before, margin) is
-///      halved (up to 4 times) or rejected, so a collision-free seed stays collision-free.
+///      linearised constraint d + ∇d·Δq ≥ d_s, with d_s = collision_margin, or d + 0.2 (margin − d)
+///      for a pair already inside the margin (∇d from the point Jacobians at the closest points;
+///      arm–arm pairs couple both arms); Δq is projected onto these half-spaces and the box. A
+///      step after which a pair would be closer than min(its distance before, margin / 2) is halved
+///      (up to 4 times), then dropped. Hence: from a seed with every pair ≥ margin / 2 apart, every
+///      output keeps every pair ≥ margin / 2 apart (and a pair already closer never gets closer).
+///   6. Stop: an arm stops iterating when converged (both tolerances), or when two iterations in a
+///      row each removed < 1 % of its error (stop_when_stalled), or at max_iterations.
+///      max_restarts > 0 (off-line only) retries unconverged arms from pseudo-random seeds.
 ///
 /// Real time: setup (constructor) allocates and throws; solve(), forwardKinematics() and the
-/// accessors are noexcept and allocation-free (KDL solvers, Jacobians and frame vectors are sized
-/// at setup; fixed-size Eigen matrices; test/teleop/ik/test_arm_ik.cpp proves it with
+/// accessors are noexcept and allocation-free (the KDL FK solver and its frame vector are sized at
+/// setup; fixed-size Eigen matrices; test/teleop/ik/test_arm_ik.cpp proves it with
 /// pmg::test::AllocationGuard). Not thread-safe: one instance per thread.
 
 #include <array>
@@ -84,12 +95,17 @@ struct ArmIkOptions {
   double max_iteration_step = 0.3;   ///< Δq per iteration, max-norm [rad], > 0 (Newton step cap)
   double position_tolerance = 2e-4;  ///< converged when |p* − p| ≤ this [m], > 0
   double orientation_tolerance = 2e-3;  ///< ... and the rotation angle of R* Rᵀ ≤ this [rad], > 0
+  /// Stop an arm's iterations when two in a row each removed less than 1 % of its error (the step
+  /// bound, a joint limit or a collision holds it; the next solve goes on). false for off-line
+  /// solves from far seeds, where the error may plateau before it falls again.
+  bool stop_when_stalled = true;
   /// Off-line use only (0 in the loop: a restart jumps the joints): when an arm has not converged,
   /// retry it up to this many times from pseudo-random seeds inside its bounds (one arm at a
   /// time, the other frozen), keeping the best result. Each restart costs up to max_iterations.
   int max_restarts = 0;              ///< 0..1000
   bool avoid_collisions = true;      ///< false: capsules are only measured (min_capsule_distance_m)
   double collision_margin = 0.01;    ///< d_s: capsule surfaces are kept this far apart [m], 0..0.1
+                                     ///< (guaranteed: ≥ d_s / 2 from a seed that had it; method step 5)
   double collision_activation = 0.04;  ///< pairs closer than this constrain the step [m], > margin
   double workspace_margin = 0.02;    ///< m: targets are clamped to reach·(1 − m) [1], 0..0.5
   double quaternion_norm_tolerance = 0.05;  ///< | |q| − 1 | above this = kInvalidTarget [1], 0..0.5
@@ -111,6 +127,7 @@ struct ArmIkOptions {
     a->Visit("max_iteration_step", &max_iteration_step, "per iteration [rad]");
     a->Visit("position_tolerance", &position_tolerance, "[m]");
     a->Visit("orientation_tolerance", &orientation_tolerance, "[rad]");
+    a->Visit("stop_when_stalled", &stop_when_stalled, "stop iterating when the error stops falling");
     a->Visit("max_restarts", &max_restarts, "off-line restarts from random seeds, 0..1000");
     a->Visit("avoid_collisions", &avoid_collisions, "capsule collision avoidance");
     a->Visit("collision_margin", &collision_margin, "[m]");
@@ -122,8 +139,10 @@ struct ArmIkOptions {
 
 enum class ArmIkStatus {
   kConverged,           ///< within position_tolerance and orientation_tolerance of the target
-  kMaxIterations,       ///< iteration budget or step bound (continuity) reached first; q is the best so far
-  kUnreachableClamped,  ///< the target was outside the workspace and was clamped onto it
+  kMaxIterations,       ///< not converged within this solve: iteration budget, stall, continuity bound, joint
+                        ///< limit or collision; q is the iterate reached (the next solve continues)
+  kUnreachableClamped,  ///< the target was outside the workspace shell and was clamped onto it (the arm is
+                        ///< then solved for the clamped target; errors are relative to it)
   kInvalidTarget,       ///< non-finite target or non-unit quaternion (or non-finite seed); see ArmIk::solve
   kInactive,            ///< arm not active in this solve: q unchanged
 };
@@ -171,6 +190,11 @@ class ArmIk {
 
   /// X_TH for hand 0 = left, 1 = right (pmg::teleop::Hand). Non-finite q gives NaN.
   ArmPose forwardKinematics(int hand, const ArmJoints& q) const noexcept;
+
+  /// Geometric Jacobian of hand H in T at q (6×7): rows ∂p_TH/∂q [m/rad] then the angular velocity
+  /// of H in T [1]; the reference point is H's origin (as KDL::ChainJntToJacSolver). NaN for a
+  /// non-finite q.
+  Eigen::Matrix<double, 6, kArmDofs> jacobian(int hand, const ArmJoints& q) const noexcept;
 
   /// Smallest capsule surface distance of all pairs checked by the IK at (q_left, q_right) [m]
   /// (< 0: penetration). `per_hand` (optional) receives each arm's smallest distance.

@@ -8,11 +8,9 @@
 #include <vector>
 #include <cstdint>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Cholesky>
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
-#include <kdl/chainjnttojacsolver.hpp>
-#include <kdl/jacobian.hpp>
 #include <kdl/jntarray.hpp>
 
 #include "pmg/common/config_error.hpp"
@@ -44,7 +42,11 @@ constexpr int kProjectionSweeps = 4;
 /// Passes of the joint-limit active set (each may pin more joints to their bounds).
 constexpr int kActiveSetPasses = 8;
 constexpr int kMaxPairs = 32;
-/// Squared singular values below this count as zero (rank loss) [m²].
+/// An iteration that keeps more than this fraction of the weighted error counts as stalled.
+constexpr double kStallRatio = 0.99;
+/// Consecutive stalled iterations after which an arm stops for this solve.
+constexpr int kStallIterations = 2;
+/// μ²: regularisation of the "undamped" inverse of J Jᵀ (null-space projector) [m²].
 constexpr double kSingularEps = 1e-10;
 
 /// One collision pair: arm capsule (arm_a, cap_a) against a body capsule (arm_b = −1) or a
@@ -147,9 +149,7 @@ struct ArmIk::Impl {
   struct Arm {
     KDL::Chain chain;
     std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
-    std::unique_ptr<KDL::ChainJntToJacSolver> jac_solver;
     KDL::JntArray jq;
-    KDL::Jacobian jac;
     std::vector<KDL::Frame> frames;  ///< (segments) link frames in T, sized at setup
     std::array<int, kArmDofs> joint_segment{};  ///< chain segment holding each joint
     std::array<int, kNumArmCapsules> capsule_segment{};  ///< chain segment each capsule is fixed in
@@ -173,6 +173,8 @@ struct ArmIk::Impl {
   std::array<Eigen::Vector3d, 2> p_target{};  ///< p*_TH after the workspace clamp [m]
   std::array<Eigen::Matrix3d, 2> R_target{};  ///< R*_TH
   std::array<Vec7, 2> box_lo{}, box_hi{};     ///< hard bounds of this solve: limits ∩ seed ± max_joint_step
+  /// Per arm: last estimate of the direction of σ_min of J_w Jᵀ_w (warm start of the inverse iteration).
+  std::array<Vec6, 2> v_min{Vec6::Constant(1.0 / std::sqrt(6.0)), Vec6::Constant(1.0 / std::sqrt(6.0))};
 
   /// DLS iterations of the arms in `solving` from the state in cur / cur_pairs (results: counters).
   void iterate(const std::array<bool, 2>& solving, std::array<ArmIkResult, 2>& results) noexcept;
@@ -216,8 +218,12 @@ struct ArmIk::Impl {
     return true;
   }
 
-  /// Distances of all pairs at the states st.
-  void evalPairs(const std::array<ArmState, 2>& st, std::array<PairState, kMaxPairs>& out) const noexcept {
+  /// Distances of all pairs at the states st. exact = false: a pair whose bounding spheres are
+  /// farther apart than collision_activation gets that lower bound as its distance (no closest
+  /// points); both uses in the solve (constraint activation, line-search floor) only need to
+  /// know that it is beyond collision_activation.
+  void evalPairs(const std::array<ArmState, 2>& st, std::array<PairState, kMaxPairs>& out,
+                 bool exact = true) const noexcept {
     for (int k = 0; k < num_pairs; ++k) {
       const Pair& p = pairs[k];
       const Eigen::Vector3d& a0 = st[p.arm_a].cap[p.cap_a][0];
@@ -234,9 +240,16 @@ struct ArmIk::Impl {
         b1 = st[p.arm_b].cap[p.cap_b][1];
         rb = caps.arm[p.arm_b][p.cap_b].radius;
       }
+      PairState& ps = out[k];
+      if (!exact) {
+        const double bound = (0.5 * (a0 + a1 - b0 - b1)).norm() - 0.5 * ((a1 - a0).norm() + (b1 - b0).norm()) - ra - rb;
+        if (bound > opt.collision_activation) {
+          ps.d = bound;
+          continue;
+        }
+      }
       double s = 0.0, t = 0.0;
       const double axis_distance = segmentSegmentDistance(a0, a1, b0, b1, &s, &t);
-      PairState& ps = out[k];
       ps.c_a = a0 + s * (a1 - a0);
       ps.c_b = b0 + t * (b1 - b0);
       ps.d = axis_distance - ra - rb;
@@ -264,27 +277,32 @@ struct ArmIk::Impl {
   }
 
   /// Weighted pose error e_w = [w_p (p* − p); w_o log(R* Rᵀ)] of arm state st.
-  Vec6 poseError(const ArmState& st, const Eigen::Vector3d& p_target, const Eigen::Matrix3d& R_target) const noexcept {
+  Vec6 poseError(const ArmState& st, const Eigen::Vector3d& p_star, const Eigen::Matrix3d& R_star) const noexcept {
     Vec6 e;
-    e.head<3>() = opt.position_weight * (p_target - st.p_TH);
-    const Eigen::AngleAxisd aa(Eigen::Matrix3d(R_target * st.R_TH.transpose()));
+    e.head<3>() = opt.position_weight * (p_star - st.p_TH);
+    const Eigen::AngleAxisd aa(Eigen::Matrix3d(R_star * st.R_TH.transpose()));
     e.tail<3>() = opt.orientation_weight * aa.angle() * aa.axis();
     return e;
+  }
+
+  /// Hand Jacobian of arm h at st, weighted: rows [w_p ∂p_TH/∂q; w_o ∂ω_TH/∂q] (T frame, reference
+  /// point H), columns [a_j × (p_TH − o_j); a_j] from the KDL link frames of kinematics().
+  Mat67 weightedJacobian(const ArmState& st, double w_p, double w_o) const noexcept {
+    Mat67 J;
+    for (int j = 0; j < kArmDofs; ++j) {
+      J.block<3, 1>(0, j) = w_p * st.axis[j].cross(st.p_TH - st.origin[j]);
+      J.block<3, 1>(3, j) = w_o * st.axis[j];
+    }
+    return J;
   }
 
   /// One damped-least-squares step of arm h with the null-space pull and the joint-limit active
   /// set. lo_room/hi_room: how far each joint may move in this step (box − q), lo ≤ 0 ≤ hi.
   Vec7 dlsStep(int h, const ArmState& st, const Vec6& e_w, const Vec7& lo_room, const Vec7& hi_room) noexcept {
-    Arm& a = arms[h];
-    for (int j = 0; j < kArmDofs; ++j) a.jq(j) = st.q[j];
-    Mat67 J_w = Mat67::Zero();
-    if (a.jac_solver->JntToJac(a.jq, a.jac) >= 0) {
-      for (int r = 0; r < 6; ++r) {
-        const double w = r < 3 ? opt.position_weight : opt.orientation_weight;
-        for (int j = 0; j < kArmDofs; ++j) J_w(r, j) = w * a.jac(r, j);
-      }
-    }
+    const Arm& a = arms[h];
+    const Mat67 J_w = weightedJacobian(st, opt.position_weight, opt.orientation_weight);
     const double error_damping2 = opt.error_damping * 0.5 * e_w.squaredNorm();
+    const double eps2 = opt.singular_value_threshold * opt.singular_value_threshold;
 
     // 1. Task step with the joint-limit active set: a joint the step pushes past its bound is
     //    pinned there and the task is re-solved with the others.
@@ -292,28 +310,30 @@ struct ArmIk::Impl {
     Vec7 dq_pinned = Vec7::Zero();
     Vec7 dq = Vec7::Zero();
     Mat67 J_m = J_w;
-    Vec6 s2 = Vec6::Zero();
-    Mat66 U = Mat66::Identity();
+    Eigen::LLT<Mat66> llt0;  // of J_m J_mᵀ + μ² I (μ² = kSingularEps): the (nearly) undamped inverse
     for (int pass = 0; pass < kActiveSetPasses; ++pass) {
       J_m = J_w;
       for (int j = 0; j < kArmDofs; ++j) {
         if (pinned[j]) J_m.col(j).setZero();
       }
       const Vec6 r = e_w - J_w * dq_pinned;
-      // J Jᵀ = U diag(σ²) Uᵀ. Damping λ² = λ_max² (1 − σ_min²/ε²) below the threshold ε (Chiaverini)
-      // plus the error term.
-      const Eigen::SelfAdjointEigenSolver<Mat66> es(J_m * J_m.transpose());
-      s2 = es.eigenvalues().cwiseMax(0.0);
-      U = es.eigenvectors();
-      const double eps2 = opt.singular_value_threshold * opt.singular_value_threshold;
+      const Mat66 A0 = J_m * J_m.transpose();
+      llt0.compute(A0 + kSingularEps * Mat66::Identity());
+      // σ_min² of J_m by inverse iteration (warm-started with the last direction of this arm), then
+      // λ² = λ_max² (1 − σ_min²/ε²) below the threshold ε (Chiaverini) plus the error term.
+      Vec6& v = v_min[h];
+      v = llt0.solve(v);  // one step per iteration: the warm start follows J from tick to tick
+      const double nv = v.norm();
+      v = nv > 0.0 && std::isfinite(nv) ? Vec6(v / nv) : Vec6::Constant(1.0 / std::sqrt(6.0));
+      const double s2_min = std::max(0.0, v.dot(A0 * v));
       double lambda2 = error_damping2;
-      if (s2(0) < eps2) lambda2 += opt.damping * opt.damping * (1.0 - s2(0) / eps2);
-      Vec6 u_r = U.transpose() * r;
-      for (int i = 0; i < 6; ++i) {
-        const double den = s2(i) + lambda2;
-        u_r(i) = den > kSingularEps ? u_r(i) / den : 0.0;
+      if (s2_min < eps2) lambda2 += opt.damping * opt.damping * (1.0 - s2_min / eps2);
+      if (lambda2 > kSingularEps) {
+        const Eigen::LLT<Mat66> llt(A0 + lambda2 * Mat66::Identity());
+        dq = J_m.transpose() * llt.solve(r);
+      } else {
+        dq = J_m.transpose() * llt0.solve(r);
       }
-      dq = J_m.transpose() * (U * u_r);
       for (int j = 0; j < kArmDofs; ++j) {
         if (pinned[j]) dq(j) = dq_pinned(j);
       }
@@ -336,16 +356,14 @@ struct ArmIk::Impl {
     }
     for (int j = 0; j < kArmDofs; ++j) dq(j) = std::clamp(dq(j), lo_room(j), hi_room(j));
 
-    // 2. Null-space pull toward the nominal pose, projected with the undamped pseudo-inverse of the
-    //    free joints' J (directions with σ² ≤ kSingularEps dropped) so it does not disturb the task,
-    //    and scaled down (never pinning a joint) to stay inside the box and the step cap.
+    // 2. Null-space pull toward the nominal pose, projected with the (nearly) undamped
+    //    pseudo-inverse of the free joints' J, N = I − J_mᵀ (J_m J_mᵀ + μ² I)⁻¹ J_m, so it does not
+    //    disturb the task, and scaled down (never pinning a joint) to stay inside the box and cap.
     Vec7 z = Vec7::Zero();
     for (int j = 0; j < kArmDofs; ++j) {
       if (!pinned[j]) z(j) = opt.nullspace_gain * (a.nominal[j] - st.q[j]);
     }
-    Vec6 u_z = U.transpose() * (J_m * z);
-    for (int i = 0; i < 6; ++i) u_z(i) = s2(i) > kSingularEps ? u_z(i) / s2(i) : 0.0;
-    Vec7 dq_n = z - J_m.transpose() * (U * u_z);
+    Vec7 dq_n = z - J_m.transpose() * llt0.solve(J_m * z);
     double alpha = 1.0;
     for (int j = 0; j < kArmDofs; ++j) {
       if (pinned[j]) {
@@ -408,9 +426,7 @@ ArmIk::ArmIk(const RobotConfig& robot, const ArmIkOptions& options) : impl_(std:
       }
     }
     a.fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(a.chain);
-    a.jac_solver = std::make_unique<KDL::ChainJntToJacSolver>(a.chain);
     a.jq = KDL::JntArray(kArmDofs);
-    a.jac = KDL::Jacobian(kArmDofs);
     a.frames.assign(a.chain.getNrOfSegments(), KDL::Frame::Identity());
 
     // Shoulder point S: the roll joint origin projected onto the pitch axis (both at q = 0); the
@@ -484,6 +500,9 @@ void ArmIk::Impl::iterate(const std::array<bool, 2>& solving, std::array<ArmIkRe
   const ArmIkOptions& o = opt;
   const double floor_margin = 0.5 * o.collision_margin;
   std::array<bool, 2> done{};
+  std::array<double, 2> e_prev{};
+  std::array<bool, 2> was_within{};
+  std::array<int, 2> stalls{};
   std::array<Vec7, 2> dq;
   for (int it = 0; it < o.max_iterations; ++it) {
     std::array<Vec6, 2> e_w;
@@ -493,12 +512,23 @@ void ArmIk::Impl::iterate(const std::array<bool, 2>& solving, std::array<ArmIkRe
       e_w[h] = poseError(cur[h], p_target[h], R_target[h]);
       const double ep = (p_target[h] - cur[h].p_TH).norm();
       const double eo = rotationAngle(R_target[h] * cur[h].R_TH.transpose());
+      const bool within = ep <= o.position_tolerance && eo <= o.orientation_tolerance;
+      const double e_norm = e_w[h].norm();
       // A converged arm still takes the first iteration's step: it carries the null-space pull, so
       // the redundancy (elbow swivel) keeps moving toward the nominal pose while the hand holds.
-      if (ep <= o.position_tolerance && eo <= o.orientation_tolerance && (it > 0 || o.nullspace_gain == 0.0)) {
+      if (within && (it > 0 || o.nullspace_gain == 0.0)) {
         done[h] = true;
         continue;
       }
+      // Stalled (the last two iterations each removed less than 1 % of the error: the step bound, a
+      // joint limit or a collision holds the arm): more iterations cannot help this solve.
+      stalls[h] = it > 0 && !was_within[h] && e_norm > kStallRatio * e_prev[h] ? stalls[h] + 1 : 0;
+      if (o.stop_when_stalled && stalls[h] >= kStallIterations) {
+        done[h] = true;
+        continue;
+      }
+      e_prev[h] = e_norm;
+      was_within[h] = within;
       moving[h] = true;
     }
     if (!moving[0] && !moving[1]) break;
@@ -577,7 +607,7 @@ void ArmIk::Impl::iterate(const std::array<bool, 2>& solving, std::array<ArmIkRe
         }
       }
       if (!o.avoid_collisions) break;
-      evalPairs(trial, trial_pairs);
+      evalPairs(trial, trial_pairs, false);
       std::array<bool, 2> violates{};
       for (int k = 0; k < num_pairs; ++k) {
         const double floor = std::min(cur_pairs[k].d, floor_margin);
@@ -605,7 +635,7 @@ void ArmIk::Impl::iterate(const std::array<bool, 2>& solving, std::array<ArmIkRe
     if (o.avoid_collisions) {
       cur_pairs = trial_pairs;
     } else {
-      evalPairs(cur, cur_pairs);
+      evalPairs(cur, cur_pairs, false);
     }
     if (!progressed) break;  // stalled against the bounds or a collision
   }
@@ -678,7 +708,7 @@ void ArmIk::solve(const std::array<ArmPose, 2>& targets_T, const std::array<bool
     }
     return;
   }
-  m.evalPairs(m.cur, m.cur_pairs);
+  m.evalPairs(m.cur, m.cur_pairs, false);
   m.iterate(solving, results);
 
   // Restarts (off-line use): one arm at a time from pseudo-random seeds in its box (the other arm
@@ -704,7 +734,7 @@ void ArmIk::solve(const std::array<ArmPose, 2>& targets_T, const std::array<bool
           ArmJoints seed;
           for (int j = 0; j < kArmDofs; ++j) seed[j] = m.box_lo[h](j) + (m.box_hi[h](j) - m.box_lo[h](j)) * uniform();
           if (!m.kinematics(h, seed, m.cur[h])) break;
-          m.evalPairs(m.cur, m.cur_pairs);
+          m.evalPairs(m.cur, m.cur_pairs, false);
           seeded = true;
           for (int k = 0; k < m.num_pairs; ++k) {
             const Pair& p = m.pairs[k];
@@ -720,6 +750,7 @@ void ArmIk::solve(const std::array<ArmPose, 2>& targets_T, const std::array<bool
     }
   }
 
+  m.evalPairs(m.cur, m.cur_pairs);  // exact distances for the results
   for (int h = 0; h < 2; ++h) {
     ArmIkResult& r = results[h];
     r.min_capsule_distance_m = std::numeric_limits<double>::infinity();
@@ -752,6 +783,15 @@ ArmPose ArmIk::forwardKinematics(int hand, const ArmJoints& q) const noexcept {
   pose.position = st.p_TH;
   pose.orientation = Eigen::Quaterniond(st.R_TH).normalized();
   return pose;
+}
+
+Eigen::Matrix<double, 6, kArmDofs> ArmIk::jacobian(int hand, const ArmJoints& q) const noexcept {
+  const int h = hand == 1 ? 1 : 0;
+  ArmState& st = impl_->scratch[h];
+  if (!finite(q) || !impl_->kinematics(h, q, st)) {
+    return Eigen::Matrix<double, 6, kArmDofs>::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return impl_->weightedJacobian(st, 1.0, 1.0);
 }
 
 double ArmIk::minCapsuleDistance(const std::array<ArmJoints, 2>& q, std::array<double, 2>* per_hand) const noexcept {

@@ -19,8 +19,8 @@ namespace pmg::teleop::ik_streams {
 /// arms clear of the torso. Clamped to the joint limits.
 inline std::array<ArmJoints, 2> smoothArmTrajectory(const ArmIk& ik, double t) {
   constexpr double kPi = 3.14159265358979323846;
-  constexpr std::array<double, kArmDofs> kOffset{-0.3, 0.3, 0.0, -0.3, 0.0, 0.0, 0.0};
-  constexpr std::array<double, kArmDofs> kAmplitude{0.5, 0.25, 0.4, 0.4, 0.5, 0.4, 0.4};
+  constexpr std::array<double, kArmDofs> kOffset{-0.3, 0.3, 0.0, -0.4, 0.0, 0.0, 0.0};
+  constexpr std::array<double, kArmDofs> kAmplitude{0.5, 0.25, 0.4, 0.35, 0.5, 0.4, 0.4};
   constexpr std::array<double, kArmDofs> kFrequency{0.17, 0.23, 0.13, 0.29, 0.37, 0.31, 0.19};
   constexpr std::array<double, kArmDofs> kPhase{0.0, 1.1, 2.3, 0.7, 1.9, 2.9, 0.4};
   constexpr std::array<double, kArmDofs> kMirror{1, -1, -1, 1, -1, 1, -1};

@@ -2,6 +2,9 @@
 // errors, FK → IK round trips, the FK pose stream, joint limits, workspace clamp, continuity,
 // capsule collisions, invalid targets and allocation-free solving.
 #include <gtest/gtest.h>
+#include <kdl/chainjnttojacsolver.hpp>
+#include <kdl/jacobian.hpp>
+#include <kdl/jntarray.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +19,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/common/kinematics.hpp"
+#include "pmg/common/yaml_archive.hpp"
 #include "arm_ik_streams.hpp"
 #include "pmg/teleop/arm_ik.hpp"
 #include "temp_dir.hpp"
@@ -35,6 +39,7 @@ ArmIkOptions globalOptions(int restarts) {
   o.max_joint_step = 10.0;
   o.max_iterations = 300;
   o.max_restarts = restarts;
+  o.stop_when_stalled = false;
   return o;
 }
 
@@ -130,6 +135,48 @@ TEST_F(ArmIkTest, ForwardKinematicsAgreesWithTheRobotKinematicModel) {
       EXPECT_LT((p.position - X.translation()).norm(), 1e-12);
       EXPECT_LT(rotationError(p.orientation, Eigen::Quaterniond(X.linear())), 1e-9);
     }
+  }
+}
+
+TEST_F(ArmIkTest, JacobianAgreesWithKdlsJacobianSolver) {
+  const KinematicModel model(test::g1Robot());
+  std::mt19937 rng(4);
+  for (int h = 0; h < 2; ++h) {
+    const LimbChain limb = model.chain("torso_link", h == 0 ? "left_rubber_hand" : "right_rubber_hand");
+    KDL::ChainJntToJacSolver solver(limb.chain);
+    KDL::JntArray q_kdl(kArmDofs);
+    KDL::Jacobian J_kdl(kArmDofs);
+    for (int i = 0; i < 20; ++i) {
+      const Q2 q = randomFreeConfig(rng, -1.0);
+      for (int j = 0; j < kArmDofs; ++j) q_kdl(j) = q[h][j];
+      ASSERT_GE(solver.JntToJac(q_kdl, J_kdl), 0);
+      const Eigen::Matrix<double, 6, kArmDofs> J = ik().jacobian(h, q[h]);
+      EXPECT_LT((J - J_kdl.data).cwiseAbs().maxCoeff(), 1e-12);
+    }
+  }
+  EXPECT_TRUE(ik().jacobian(0, {std::nan(""), 0, 0, 0, 0, 0, 0}).hasNaN());
+}
+
+TEST_F(ArmIkTest, OptionsLoadFromYamlStrictly) {
+  test::TempDir dir;
+  const ArmIkOptions o = yaml::loadYamlFile<ArmIkOptions>(
+      dir.write("ik.yaml", "max_iterations: 12\nmax_joint_step: 0.05\navoid_collisions: false\n"));
+  EXPECT_EQ(o.max_iterations, 12);
+  EXPECT_EQ(o.max_joint_step, 0.05);
+  EXPECT_FALSE(o.avoid_collisions);
+  EXPECT_EQ(o.damping, ArmIkOptions{}.damping);
+  try {
+    (void)yaml::loadYamlFile<ArmIkOptions>(dir.write("typo.yaml", "max_joint_stp: 0.05\n"));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("typo.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("max_joint_step"), std::string::npos) << e.what();
+  }
+  try {
+    (void)yaml::loadYamlFile<ArmIkOptions>(dir.write("range.yaml", "collision_margin: 0.5\n"));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("collision_margin"), std::string::npos) << e.what();
   }
 }
 
