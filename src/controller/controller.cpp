@@ -210,6 +210,11 @@ void Controller::publish(double now, const TickStatus& status, double wall_start
   f.policy_status = status.policy;
   f.commands_rejected = shaper_.counters().rejected_nan + (input_counters_ ? input_counters_->rejected() : 0);
   f.reference_limited = limiter_.limitedTicks();
+  if (teleop_) {
+    const teleop::TeleopStatus& t = teleop_->status();
+    f.teleop = (t.engaged ? 1 : 0) | (t.stream_fresh ? 2 : 0) | (static_cast<int>(t.arm[0]) << 2) |
+               (static_cast<int>(t.arm[1]) << 4);
+  }
   f.hal_runtime = state_.hal_runtime;
   f.hal_period = state_.hal_period;
   f.hal_overruns = state_.hal_overruns;

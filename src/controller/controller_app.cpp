@@ -52,6 +52,9 @@ std::string RunSummary::text() const {
   os << (fell() ? " -- the robot fell\n" : "\n");
   if (never_active) os << "never reached active (safety.startup: active): the motors or the IMU never all answered\n";
   if (!backend_report.empty()) os << "backend: " << backend_report << "\n";
+  if (teleop_enabled)
+    os << "VR teleop: engaged " << teleop_engagements << " times; stream went stale while engaged " << teleop_stale_events
+       << " times\n";
   return os.str();
 }
 
@@ -178,6 +181,11 @@ RunSummary ControllerApp::finish() {
   s.never_active = config_.startup == StartupMode::kActive && !controller_->everActive() &&
                    !controller_->startupStandPosted();
   s.backend_report = inner_->report();
+  if (const teleop::TeleopMode* t = controller_->teleop()) {
+    s.teleop_enabled = true;
+    s.teleop_engagements = t->status().engagements;
+    s.teleop_stale_events = t->status().stale_events;
+  }
   hal::safety::SafetyStatus hs;
   if (safety_->status(hs)) {
     s.final_mode = hs.mode;

@@ -102,6 +102,7 @@ void TelemetryPublisher::drain() {
     msg.policy_status = f.policy_status;
     msg.commands_rejected = static_cast<std::int64_t>(f.commands_rejected);
     msg.reference_limited = static_cast<std::int64_t>(f.reference_limited);
+    msg.teleop = f.teleop;
     const int size = msg.getEncodedSize();
     buffer.resize(static_cast<std::size_t>(size));
     msg.encode(buffer.data(), 0, size);

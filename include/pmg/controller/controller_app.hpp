@@ -54,6 +54,8 @@ struct RunSummary {
   /// safety.startup: active, yet the motors or the IMU never all answered, so the robot never stood up.
   bool never_active = false;
   std::string backend_report;          ///< the backend's own account (HalBackend::report()), "" if none
+  bool teleop_enabled = false;         ///< the config's teleop.enabled
+  std::uint64_t teleop_engagements = 0, teleop_stale_events = 0;  ///< VR teleop engage / stale-stream events
   bool fell() const noexcept { return fault == FaultCode::kFallTilt || fault == FaultCode::kFallHeight; }
   /// 0: ended without a fault; 3: fell or faulted (the robot is in damping); 4: never became active
   /// although the config asked for it.

@@ -44,6 +44,7 @@ struct TelemetryFrame {
   std::int32_t policy_status = -1;           ///< -1: no policy
   std::uint64_t commands_rejected = 0;       ///< LCM decode failures + NaN commands so far
   std::uint64_t reference_limited = 0;       ///< ticks the reference rate limiter acted, so far
+  std::int32_t teleop = -1;                  ///< VR teleop state bits (controller_state_t.teleop); -1 disabled
   double loop_runtime = 0;   ///< compute time of this tick [s]
   double loop_period = 0;    ///< time since the previous tick start [s] (wall clock)
   double loop_budget = 0.01; ///< the loop period [s] (deadline)

@@ -146,6 +146,8 @@ TEST(TeleopSil, DroppedStreamStopsTheRobotAndItsArmsSettle) {
       EXPECT_LT(std::fabs(st.motors[k].q - app.controller().reference()[k]), 0.1) << config.robot.joints[k].name;
     }
   }
+  const std::string summary = app.finish().text();
+  EXPECT_NE(summary.find("VR teleop: engaged 1 times; stream went stale while engaged 1 times"), std::string::npos) << summary;
   std::printf("[ SIL ] stream dropped: robot moved %.2f m before stopping\n", std::hypot(p_a[0] - before[0], p_a[1] - before[1]));
   EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
   EXPECT_GT(s.minHeight(), 0.6) << "the robot fell";
