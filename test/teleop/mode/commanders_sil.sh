@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The commanders against the SIL, in real time, authenticated (issue 13, "Done when"):
+#   gamepad: pmg_controller (gantry config, startup passive, a key) + pmg_gamepad with an SDL virtual
+#            controller playing gamepad_short_script.yaml: the robot stands, engages, follows the
+#            stick (vx in telemetry), and goes to damping 1 s after the controller is unplugged;
+#            every packet is signed and accepted, none rejected.
+#   vr:      pmg_controller (g1_sil_teleop.yaml: the policy on the ground, a key) + pmg_vr_replay of
+#            the recorded synthetic VR session (data/vr/sessions/): teleop engages and the robot walks
+#            the way the headset went.
+# Usage: commanders_sil.sh BIN_DIR SOURCE_DIR gamepad|vr
+set -euo pipefail
+bin="$(cd "$1" && pwd)"; src="$(cd "$2" && pwd)"; which="$3"
+tmp="$(mktemp -d)"
+pids=()
+cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$tmp"; }
+trap cleanup EXIT
+port=$((7700 + RANDOM % 200))
+url="udpm://239.255.76.67:${port}?ttl=0"
+"$bin/pmg_keygen" --out "$tmp/commands.key" >/dev/null
+
+# A copy of a shipped config with absolute paths, a private LCM port, the key and a telemetry log.
+make_config() {  # $1 = shipped config, $2 = output
+  sed -e "s#\.\./#$src/config/#g" -e "s#udpm://239.255.76.67:7667?ttl=0#$url#" "$1" > "$2"
+  printf '\nsecurity:\n  key_file: %s\n' "$tmp/commands.key" >> "$2"
+}
+fail() { echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true; exit 1; }
+column_max() {  # $1 = csv, $2 = column name -> max value
+  python3 - "$1" "$2" <<'PY'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+print(max(float(r[sys.argv[2]]) for r in rows))
+PY
+}
+
+case "$which" in
+gamepad)
+  make_config "$src/config/controller/g1_sil.yaml" "$tmp/ctl.yaml"
+  sed -i 's/^  startup: active/  startup: passive/' "$tmp/ctl.yaml"
+  grep -q "startup: passive" "$tmp/ctl.yaml" || fail "could not set startup: passive"
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 10 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  pids+=($!); ctl=$!
+  sleep 0.5
+  SDL_VIDEODRIVER=dummy "$bin/pmg_gamepad" --key "$tmp/commands.key" --lcm-url "$url" \
+      --virtual-script "$src/test/teleop/mode/gamepad_short_script.yaml" > "$tmp/gamepad.txt" 2>&1 || fail "pmg_gamepad: $(cat "$tmp/gamepad.txt")"
+  wait "$ctl" || true
+  cat "$tmp/controller.txt"
+  grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
+  accepted=$(sed -n 's/.*LCM command packets: accepted \([0-9]*\).*/\1/p' "$tmp/controller.txt")
+  [ "${accepted:-0}" -gt 300 ] || fail "only ${accepted:-0} command packets accepted"
+  grep -q "final mode: damping" "$tmp/controller.txt" || fail "not in damping after the controller was unplugged"
+  "$bin/pmg_log_export" --log "$tmp/run.lcmlog" --csv "$tmp/run.csv" >/dev/null
+  vx=$(column_max "$tmp/run.csv" vx)
+  python3 -c "import sys; sys.exit(0 if $vx > 0.3 else 1)" || fail "the shaped vx command never exceeded 0.3 m/s (max $vx)"
+  echo "PASS gamepad: $accepted signed packets accepted, none rejected; max shaped vx $vx m/s; damping after unplug"
+  ;;
+vr)
+  make_config "$src/config/controller/g1_sil_teleop.yaml" "$tmp/ctl.yaml"
+  session="$src/data/vr/sessions/synthetic_walk.lcmlog"
+  [ -f "$session" ] || fail "no recorded session $session"
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 12 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  pids+=($!); ctl=$!
+  sleep 1.5
+  "$bin/pmg_vr_replay" --log "$session" --key "$tmp/commands.key" --lcm-url "$url" > "$tmp/replay.txt" 2>&1 || fail "pmg_vr_replay: $(cat "$tmp/replay.txt")"
+  wait "$ctl" || true
+  cat "$tmp/controller.txt"
+  grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
+  grep -q "VR teleop: engaged [1-9]" "$tmp/controller.txt" || fail "teleop never engaged"
+  grep -q "final mode: active" "$tmp/controller.txt" || fail "the robot did not stay active"
+  "$bin/pmg_log_export" --log "$tmp/run.lcmlog" --csv "$tmp/run.csv" >/dev/null
+  x=$(column_max "$tmp/run.csv" base_x)
+  python3 -c "import sys; sys.exit(0 if $x > 0.3 else 1)" || fail "the robot did not walk forward (max pelvis x $x m)"
+  echo "PASS vr: teleop engaged from the replayed session; pelvis reached x = $x m"
+  ;;
+*) echo "usage: $0 BIN_DIR SOURCE_DIR gamepad|vr"; exit 2 ;;
+esac
