@@ -7,6 +7,7 @@
 //
 // Exit codes: 0 stopped normally (SIGINT/SIGTERM or --duration), 1 setup error (certificate, port,
 // LCM, key file), 2 bad command line.
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -14,12 +15,10 @@
 #include <string>
 #include <thread>
 
-#include <CLI/CLI.hpp>
-
-#include "pmg/comms/channels.hpp"
-#include "pmg/comms/command_publisher.hpp"
 #include "pmg/common/cli_checks.hpp"
 #include "pmg/common/data_paths.hpp"
+#include "pmg/comms/channels.hpp"
+#include "pmg/comms/command_publisher.hpp"
 #include "pmg/teleop/vr_certificate.hpp"
 #include "pmg/teleop/vr_protocol.hpp"
 #include "pmg/teleop/vr_server.hpp"
@@ -37,8 +36,8 @@ std::string rejectionSummary(const pmg::teleop::VrServerStats& s) {
   std::string out;
   for (int r = 1; r < pmg::teleop::kVrRejectCount; ++r)
     if (s.rejected[r] > 0)
-      out += (out.empty() ? "" : ", ") + std::string(pmg::teleop::toString(static_cast<pmg::teleop::VrReject>(r))) + " " +
-             std::to_string(s.rejected[r]);
+      out += (out.empty() ? "" : ", ") + std::string(pmg::teleop::toString(static_cast<pmg::teleop::VrReject>(r))) +
+             " " + std::to_string(s.rejected[r]);
   return out;
 }
 
@@ -58,7 +57,9 @@ int main(int argc, char** argv) {
   double duration = 0.0, stats_period = 5.0, idle_timeout = 10.0;
   int max_clients = 2;
   bool no_token = false;
-  app.add_option("--port", port, "HTTPS port (page and WebSocket /ws)")->check(CLI::Range(1, 65535))->capture_default_str();
+  app.add_option("--port", port, "HTTPS port (page and WebSocket /ws); 0: any free port (printed)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
   app.add_option("--bind", bind, "address to listen on (IPv4/IPv6 literal)")->capture_default_str();
   app.add_option("--cert-dir", cert_dir,
                  "folder of the self-signed certificate, key and access token (created on first run; default "
@@ -118,7 +119,8 @@ int main(int argc, char** argv) {
 
     std::printf("pmg_vr_bridge: certificate %s (%s)\n", cert.cert_file.string().c_str(),
                 cert.created ? "generated now" : "reused");
-    std::printf("  SHA-256 fingerprint %s\n  valid until %s; names:", cert.sha256_fingerprint.c_str(), cert.not_after.c_str());
+    std::printf("  SHA-256 fingerprint %s\n  valid until %s; names:", cert.sha256_fingerprint.c_str(),
+                cert.not_after.c_str());
     for (const auto& n : cert.subject_alt_names) std::printf(" %s", n.c_str());
     std::printf("\n  web root %s\n  LCM %s, channel %s, %s\n", opt.web_root.string().c_str(), lcm_url.c_str(),
                 pmg::kVrPoseChannel, publisher.authenticated() ? "signed" : "UNSIGNED (no --key)");
@@ -150,14 +152,16 @@ int main(int argc, char** argv) {
       if (now >= next_stats) {
         const vr::VrServerStats s = server.stats();
         const double dt = now - last_t;
-        std::printf("[%8.2f s] clients %d  rx %.1f msg/s  published %llu (%.1f/s)  rejected %llu%s%s%s  standby %llu  "
-                    "lcm failures %llu\n",
-                    now - t0, s.clients, static_cast<double>(s.messages - last.messages) / dt,
-                    static_cast<unsigned long long>(s.published), static_cast<double>(s.published - last.published) / dt,
-                    static_cast<unsigned long long>(s.rejected_total), s.rejected_total ? " (" : "",
-                    rejectionSummary(s).c_str(), s.rejected_total ? ")" : "", static_cast<unsigned long long>(s.standby),
-                    static_cast<unsigned long long>(s.publish_failures));
-        if (!s.last_error.empty() && s.last_error != last.last_error) std::printf("           last error: %s\n", s.last_error.c_str());
+        std::printf(
+            "[%8.2f s] clients %d  rx %.1f msg/s  published %llu (%.1f/s)  rejected %llu%s%s%s  standby %llu  "
+            "lcm failures %llu\n",
+            now - t0, s.clients, static_cast<double>(s.messages - last.messages) / dt,
+            static_cast<unsigned long long>(s.published), static_cast<double>(s.published - last.published) / dt,
+            static_cast<unsigned long long>(s.rejected_total), s.rejected_total ? " (" : "",
+            rejectionSummary(s).c_str(), s.rejected_total ? ")" : "", static_cast<unsigned long long>(s.standby),
+            static_cast<unsigned long long>(s.publish_failures));
+        if (!s.last_error.empty() && s.last_error != last.last_error)
+          std::printf("           last error: %s\n", s.last_error.c_str());
         std::fflush(stdout);
         last = s;
         last_t = now;
@@ -166,14 +170,15 @@ int main(int argc, char** argv) {
     }
     server.stop();
     const vr::VrServerStats s = server.stats();
-    std::printf("pmg_vr_bridge: stopped after %.1f s: %llu sessions, %llu messages, %llu published, %llu rejected%s%s%s, "
-                "%llu standby, %llu timeouts, %llu TLS failures, %llu internal errors\n",
-                monotonicSeconds() - t0, static_cast<unsigned long long>(s.ws_sessions),
-                static_cast<unsigned long long>(s.messages), static_cast<unsigned long long>(s.published),
-                static_cast<unsigned long long>(s.rejected_total), s.rejected_total ? " (" : "", rejectionSummary(s).c_str(),
-                s.rejected_total ? ")" : "", static_cast<unsigned long long>(s.standby),
-                static_cast<unsigned long long>(s.ws_timeouts), static_cast<unsigned long long>(s.tls_failures),
-                static_cast<unsigned long long>(s.internal_errors));
+    std::printf(
+        "pmg_vr_bridge: stopped after %.1f s: %llu sessions, %llu messages, %llu published, %llu rejected%s%s%s, "
+        "%llu standby, %llu timeouts, %llu TLS failures, %llu internal errors\n",
+        monotonicSeconds() - t0, static_cast<unsigned long long>(s.ws_sessions),
+        static_cast<unsigned long long>(s.messages), static_cast<unsigned long long>(s.published),
+        static_cast<unsigned long long>(s.rejected_total), s.rejected_total ? " (" : "", rejectionSummary(s).c_str(),
+        s.rejected_total ? ")" : "", static_cast<unsigned long long>(s.standby),
+        static_cast<unsigned long long>(s.ws_timeouts), static_cast<unsigned long long>(s.tls_failures),
+        static_cast<unsigned long long>(s.internal_errors));
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pmg_vr_bridge: %s\n", e.what());

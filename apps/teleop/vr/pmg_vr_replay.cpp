@@ -7,16 +7,15 @@
 //
 // Exit codes: 0 done or stopped (SIGINT/SIGTERM), 1 setup error (log, LCM, key), 2 bad command
 // line, 3 the log holds no valid PMG_VR_POSE event.
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <thread>
 
-#include <CLI/CLI.hpp>
-
+#include "pmg/common/cli_checks.hpp"
 #include "pmg/comms/channels.hpp"
 #include "pmg/comms/command_publisher.hpp"
-#include "pmg/common/cli_checks.hpp"
 #include "pmg/teleop/vr_protocol.hpp"
 #include "pmg/teleop/vr_replay.hpp"
 
@@ -31,11 +30,15 @@ int main(int argc, char** argv) {
   std::string lcm_url = pmg::kDefaultLcmUrl;
   double speed = 1.0;
   bool loop = false;
-  app.add_option("--log", log_path, "LCM log with PMG_VR_POSE events (lcm-logger)")->required()->check(CLI::ExistingFile);
+  app.add_option("--log", log_path, "LCM log with PMG_VR_POSE events (lcm-logger)")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("--key", key_file, "authentication key file (pmg_keygen, mode 0600); none: unsigned messages")
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", lcm_url, "LCM provider URL")->capture_default_str();
-  app.add_option("--speed", speed, "time scale (2: twice as fast)")->check(pmg::cli::finiteIn(0.01, 100.0))->capture_default_str();
+  app.add_option("--speed", speed, "time scale (2: twice as fast)")
+      ->check(pmg::cli::finiteIn(0.01, 100.0))
+      ->capture_default_str();
   app.add_flag("--loop", loop, "start over at the end until stopped (frame and XR time keep growing)");
   try {
     app.parse(argc, argv);
@@ -48,7 +51,8 @@ int main(int argc, char** argv) {
     const std::vector<vr::VrLogEvent> events = vr::readVrLog(log_path, &rs);
     std::printf("pmg_vr_replay: %s: %llu events, %zu PMG_VR_POSE poses", log_path.c_str(),
                 static_cast<unsigned long long>(rs.events), events.size());
-    if (rs.other_channels > 0) std::printf(", %llu on other channels (skipped)", static_cast<unsigned long long>(rs.other_channels));
+    if (rs.other_channels > 0)
+      std::printf(", %llu on other channels (skipped)", static_cast<unsigned long long>(rs.other_channels));
     if (rs.rejected > 0)
       std::printf(", %llu rejected (first: %s)", static_cast<unsigned long long>(rs.rejected), rs.first_error.c_str());
     std::printf("\n");
@@ -66,8 +70,8 @@ int main(int argc, char** argv) {
     vr::VrReplayOptions opt;
     opt.speed = speed;
     opt.loop = loop;
-    const vr::VrReplayStats st =
-        vr::replayVrLog(events, opt, [&publisher](const pmg_lcm::vr_pose_t& m) { return publisher.publishVrPose(m); }, &g_stop);
+    const vr::VrReplayStats st = vr::replayVrLog(
+        events, opt, [&publisher](const pmg_lcm::vr_pose_t& m) { return publisher.publishVrPose(m); }, &g_stop);
     std::printf("pmg_vr_replay: published %llu, failed %llu, %llu full passes, max lateness %.2f ms\n",
                 static_cast<unsigned long long>(st.published), static_cast<unsigned long long>(st.failed),
                 static_cast<unsigned long long>(st.loops), st.max_late_s * 1e3);

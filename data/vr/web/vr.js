@@ -318,8 +318,9 @@ async function startXr(mode) {
     const layer = session.renderState.baseLayer;
     gl.bindFramebuffer(gl.FRAMEBUFFER, layer.framebuffer);
     const ok = link.state === 'connected';
-    if (transparent) gl.clearColor(0, 0, 0, 0);  // passthrough
-    else gl.clearColor(ok ? 0.05 : 0.35, ok ? 0.12 : 0.08, 0.08, 1);  // red tint while the link is down
+    // The link state inside the headset: a red tint while the link is down (premultiplied alpha).
+    if (transparent) gl.clearColor(ok ? 0 : 0.3, 0, 0, ok ? 0 : 0.3);  // passthrough
+    else gl.clearColor(ok ? 0.05 : 0.35, ok ? 0.12 : 0.08, 0.08, 1);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     const viewer = frame.getViewerPose(space);
     if (!viewer) return;  // tracking lost: send nothing (the robot side sees a stale stream)

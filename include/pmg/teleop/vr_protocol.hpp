@@ -37,10 +37,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <pmg_lcm/vr_pose_t.hpp>
 #include <string>
 #include <string_view>
-
-#include <pmg_lcm/vr_pose_t.hpp>
 
 #include "pmg/teleop/vr_sample.hpp"
 
@@ -63,21 +62,22 @@ inline constexpr double kVrMaxTimeMs = 1e12;
 /// Why a message from the page was refused. kAccepted is 0; the rest are counted per reason.
 enum class VrReject : int {
   kAccepted = 0,
-  kTooLarge,             ///< more than kVrMaxMessageBytes bytes
-  kBinaryFrame,          ///< a binary WebSocket message (the protocol is text only)
-  kBadJson,              ///< not valid JSON (includes NaN/Infinity literals, trailing garbage)
-  kDuplicateKey,         ///< the same key twice in one object
-  kNotObject,            ///< top level is not an object
-  kUnknownType,          ///< "type" is not "pose"
-  kUnknownKey,           ///< a key the protocol does not define
-  kMissingKey,           ///< a required key is absent
-  kWrongType,            ///< a value of the wrong JSON type (string for number, 2 hands != array of 2 ...)
-  kNonFinite,            ///< a number that is not finite (overflowing literals such as 1e999)
-  kOutOfRange,           ///< a number outside its range (grip > 1, |p| > 100 m, frame < 0 ...)
-  kNotUnitQuaternion,    ///< |‖q‖ − 1| > kVrQuatNormTolerance
-  kUnknownButtonBits,    ///< `buttons` has bits outside VrButton
-  kFrameNotIncreasing,   ///< session check: frame ≤ the previous accepted frame of this connection
-  kRateLimited,          ///< session check: more messages per second than the server allows
+  kTooLarge,            ///< more than kVrMaxMessageBytes bytes
+  kBinaryFrame,         ///< a binary WebSocket message (the protocol is text only)
+  kBadJson,             ///< not valid JSON (includes NaN/Infinity literals, trailing garbage)
+  kDuplicateKey,        ///< the same key twice in one object
+  kNotObject,           ///< top level is not an object
+  kUnknownType,         ///< "type" is not "pose"
+  kUnknownKey,          ///< a key the protocol does not define
+  kMissingKey,          ///< a required key is absent
+  kWrongType,           ///< a value of the wrong JSON type (string for number, 2 hands != array of 2 ...)
+  kNonFinite,           ///< a number that is not finite (checkVrPoseMessage; JSON text cannot carry one:
+                        ///< NaN/Infinity and overflowing literals such as 1e999 are kBadJson)
+  kOutOfRange,          ///< a number outside its range (grip > 1, |p| > 100 m, frame < 0 ...)
+  kNotUnitQuaternion,   ///< |‖q‖ − 1| > kVrQuatNormTolerance
+  kUnknownButtonBits,   ///< `buttons` has bits outside VrButton
+  kFrameNotIncreasing,  ///< session check: frame ≤ the previous accepted frame of this connection
+  kRateLimited,         ///< session check: more messages per second than the server allows
   kCount
 };
 inline constexpr int kVrRejectCount = static_cast<int>(VrReject::kCount);

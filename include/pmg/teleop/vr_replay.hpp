@@ -13,10 +13,9 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <pmg_lcm/vr_pose_t.hpp>
 #include <string>
 #include <vector>
-
-#include <pmg_lcm/vr_pose_t.hpp>
 
 namespace pmg::teleop {
 

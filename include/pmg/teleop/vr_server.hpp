@@ -66,27 +66,27 @@ struct VrServerOptions {
 
 /// Counters since start (a consistent snapshot).
 struct VrServerStats {
-  std::uint64_t tls_connections = 0;    ///< TCP connections accepted
-  std::uint64_t tls_failures = 0;       ///< TLS handshakes that failed (e.g. certificate not accepted)
+  std::uint64_t tls_connections = 0;      ///< TCP connections accepted
+  std::uint64_t tls_failures = 0;         ///< TLS handshakes that failed (e.g. certificate not accepted)
   std::uint64_t refused_connections = 0;  ///< over max_connections, closed at once
   std::uint64_t http_requests = 0;
-  std::uint64_t http_errors = 0;        ///< answered with 4xx
-  std::uint64_t ws_sessions = 0;        ///< WebSocket sessions opened (accepted upgrades)
-  std::uint64_t ws_refused = 0;         ///< upgrades refused: origin, token, busy
-  std::uint64_t ws_replaced = 0;        ///< stale sessions replaced by a new connection
-  std::uint64_t ws_timeouts = 0;        ///< sessions closed by the idle timeout
-  std::uint64_t ws_errors = 0;          ///< sessions ended by a protocol or transport error
-  std::uint64_t takeovers = 0;          ///< active role passed to another session
-  std::uint64_t messages = 0;           ///< WebSocket messages received
-  std::uint64_t accepted = 0;           ///< valid pose messages
-  std::uint64_t published = 0;          ///< given to the sink, which reported success
-  std::uint64_t publish_failures = 0;   ///< the sink reported failure or threw
-  std::uint64_t standby = 0;            ///< valid poses of a non-active session (not published)
+  std::uint64_t http_errors = 0;       ///< answered with 4xx
+  std::uint64_t ws_sessions = 0;       ///< WebSocket sessions opened (accepted upgrades)
+  std::uint64_t ws_refused = 0;        ///< upgrades refused: origin, token, busy
+  std::uint64_t ws_replaced = 0;       ///< stale sessions replaced by a new connection
+  std::uint64_t ws_timeouts = 0;       ///< sessions closed by the idle timeout
+  std::uint64_t ws_errors = 0;         ///< sessions ended by a protocol or transport error
+  std::uint64_t takeovers = 0;         ///< active role passed to another session
+  std::uint64_t messages = 0;          ///< WebSocket messages received
+  std::uint64_t accepted = 0;          ///< valid pose messages
+  std::uint64_t published = 0;         ///< given to the sink, which reported success
+  std::uint64_t publish_failures = 0;  ///< the sink reported failure or threw
+  std::uint64_t standby = 0;           ///< valid poses of a non-active session (not published)
   std::uint64_t rejected_total = 0;
   std::uint64_t rejected[kVrRejectCount] = {};  ///< per VrReject
-  std::uint64_t internal_errors = 0;    ///< exceptions caught on the I/O thread
-  int clients = 0;                      ///< open WebSocket sessions now
-  std::string last_error;               ///< last rejection / failure, one line
+  std::uint64_t internal_errors = 0;            ///< exceptions caught on the I/O thread
+  int clients = 0;                              ///< open WebSocket sessions now
+  std::string last_error;                       ///< last rejection / failure, one line
 };
 
 /// Receives each published sample: @p receive_utime is the receive time [µs, wall clock].

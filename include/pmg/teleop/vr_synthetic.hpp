@@ -29,16 +29,16 @@ inline constexpr double kVrSyntheticRateHz = 72.0;
 /// Gamepad stick axes).
 struct VrWirePose {
   std::int64_t frame = 0;
-  double t_ms = 0.0;                               ///< XR time [ms]
-  std::array<double, 3> head_p{};                  ///< F_xr [m]
-  std::array<double, 4> head_q{0, 0, 0, 1};        ///< F_xr, x y z w
+  double t_ms = 0.0;                         ///< XR time [ms]
+  std::array<double, 3> head_p{};            ///< F_xr [m]
+  std::array<double, 4> head_q{0, 0, 0, 1};  ///< F_xr, x y z w
   std::array<bool, 2> valid{};
-  std::array<std::array<double, 3>, 2> hand_p{};   ///< F_xr [m]
-  std::array<std::array<double, 4>, 2> hand_q{};   ///< F_xr, x y z w
+  std::array<std::array<double, 3>, 2> hand_p{};  ///< F_xr [m]
+  std::array<std::array<double, 4>, 2> hand_q{};  ///< F_xr, x y z w
   std::array<double, 2> grip{};
   std::array<double, 2> trigger{};
   std::array<std::uint32_t, 2> buttons{};
-  std::array<std::array<double, 2>, 2> stick{};    ///< Gamepad axes[2], axes[3] (y down)
+  std::array<std::array<double, 2>, 2> stick{};  ///< Gamepad axes[2], axes[3] (y down)
 };
 
 /// The synthetic pattern at @p frame (≥ 0).

@@ -1,5 +1,20 @@
 #include "pmg/teleop/vr_certificate.hpp"
 
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
+#include <openssl/bio.h>
+#include <openssl/bn.h>
+#include <openssl/err.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/rand.h>
+#include <openssl/x509.h>
+#include <openssl/x509v3.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -11,22 +26,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
-
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <ifaddrs.h>
-#include <netinet/in.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <openssl/bio.h>
-#include <openssl/bn.h>
-#include <openssl/err.h>
-#include <openssl/evp.h>
-#include <openssl/pem.h>
-#include <openssl/rand.h>
-#include <openssl/x509.h>
-#include <openssl/x509v3.h>
 
 namespace pmg::teleop {
 
@@ -136,7 +135,8 @@ bool isDnsName(const std::string& s) {
 
 void addExtension(X509* x, X509V3_CTX* ctx, int nid, const std::string& value, const fs::path& file) {
   Ptr<X509_EXTENSION> ext(X509V3_EXT_conf_nid(nullptr, ctx, nid, value.c_str()));
-  if (!ext || X509_add_ext(x, ext.get(), -1) != 1) fail(file, "cannot add extension '" + value + "': " + opensslError());
+  if (!ext || X509_add_ext(x, ext.get(), -1) != 1)
+    fail(file, "cannot add extension '" + value + "': " + opensslError());
 }
 
 void generate(const fs::path& cert_file, const fs::path& key_file, const std::vector<std::string>& names) {
@@ -154,8 +154,8 @@ void generate(const fs::path& cert_file, const fs::path& key_file, const std::ve
   X509_set_pubkey(x.get(), key.get());
   X509_NAME* name = X509_get_subject_name(x.get());
   X509_NAME_add_entry_by_txt(name, "O", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("pmg"), -1, -1, 0);
-  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("pmg_vr_bridge"), -1,
-                             -1, 0);
+  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("pmg_vr_bridge"), -1, -1,
+                             0);
   X509_set_issuer_name(x.get(), name);
 
   std::string san;
@@ -184,7 +184,8 @@ void generate(const fs::path& cert_file, const fs::path& key_file, const std::ve
 
   Ptr<BIO> key_bio(BIO_new(BIO_s_mem()));
   Ptr<BIO> cert_bio(BIO_new(BIO_s_mem()));
-  if (!key_bio || !cert_bio || PEM_write_bio_PrivateKey(key_bio.get(), key.get(), nullptr, nullptr, 0, nullptr, nullptr) != 1 ||
+  if (!key_bio || !cert_bio ||
+      PEM_write_bio_PrivateKey(key_bio.get(), key.get(), nullptr, nullptr, 0, nullptr, nullptr) != 1 ||
       PEM_write_bio_X509(cert_bio.get(), x.get()) != 1)
     fail(cert_file, "cannot encode PEM: " + opensslError());
   writeFileAtomically(key_file, bioString(key_bio.get()), 0600);
@@ -224,13 +225,14 @@ void describe(X509* x, VrCertificateInfo& info) {
     const GENERAL_NAME* g = sk_GENERAL_NAME_value(gens.get(), i);
     if (g->type == GEN_DNS) {
       const ASN1_STRING* s = g->d.dNSName;
-      info.subject_alt_names.push_back(
-          "DNS:" + std::string(reinterpret_cast<const char*>(ASN1_STRING_get0_data(s)), static_cast<std::size_t>(ASN1_STRING_length(s))));
+      info.subject_alt_names.push_back("DNS:" + std::string(reinterpret_cast<const char*>(ASN1_STRING_get0_data(s)),
+                                                            static_cast<std::size_t>(ASN1_STRING_length(s))));
     } else if (g->type == GEN_IPADD) {
       const ASN1_OCTET_STRING* s = g->d.iPAddress;
       char text[INET6_ADDRSTRLEN] = "?";
       const int len = ASN1_STRING_length(s);
-      if (len == 4 || len == 16) ::inet_ntop(len == 4 ? AF_INET : AF_INET6, ASN1_STRING_get0_data(s), text, sizeof text);
+      if (len == 4 || len == 16)
+        ::inet_ntop(len == 4 ? AF_INET : AF_INET6, ASN1_STRING_get0_data(s), text, sizeof text);
       info.subject_alt_names.push_back(std::string("IP Address:") + text);
     }
   }
@@ -241,8 +243,10 @@ void describe(X509* x, VrCertificateInfo& info) {
 }  // namespace
 
 fs::path defaultVrConfigDir() {
-  if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg != nullptr && *xdg == '/') return fs::path(xdg) / "pmg" / "vr";
-  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0') return fs::path(home) / ".config" / "pmg" / "vr";
+  if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg != nullptr && *xdg == '/')
+    return fs::path(xdg) / "pmg" / "vr";
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0')
+    return fs::path(home) / ".config" / "pmg" / "vr";
   throw std::runtime_error("neither XDG_CONFIG_HOME nor HOME is set: give --cert-dir");
 }
 
@@ -279,9 +283,9 @@ VrCertificateInfo ensureVrCertificate(const fs::path& dir, const std::vector<std
   const bool have_cert = fs::exists(info.cert_file, ec);
   const bool have_key = fs::exists(info.key_file, ec);
   if (have_cert != have_key)
-    fail(have_cert ? info.key_file : info.cert_file,
-         "missing while " + (have_cert ? info.cert_file : info.key_file).string() +
-             " exists; remove both to generate a new pair");
+    fail(have_cert ? info.key_file : info.cert_file, "missing while " +
+                                                         (have_cert ? info.cert_file : info.key_file).string() +
+                                                         " exists; remove both to generate a new pair");
   bool make = !have_cert;
   if (have_cert) {
     Ptr<X509> x = readCert(info.cert_file);
@@ -318,8 +322,7 @@ std::string ensureVrAccessToken(const fs::path& dir) {
     std::ifstream in(file);
     std::string token;
     std::getline(in, token);
-    if (token.size() < 8 || token.size() > 64 ||
-        !std::all_of(token.begin(), token.end(), [](char c) {
+    if (token.size() < 8 || token.size() > 64 || !std::all_of(token.begin(), token.end(), [](char c) {
           return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
         }))
       fail(file, "expected one line of 8 to 64 characters [A-Za-z0-9_-]; remove it to generate a new token");

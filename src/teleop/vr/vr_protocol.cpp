@@ -3,9 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
-#include <vector>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 namespace pmg::teleop {
 
@@ -111,7 +110,8 @@ struct ParseGuard {
 VrReject parseImpl(std::string_view text, VrSample& out, std::string* detail) {
   Checker c{VrReject::kAccepted, detail};
   if (text.size() > kVrMaxMessageBytes) {
-    c.fail(VrReject::kTooLarge, "", std::to_string(text.size()) + " bytes, at most " + std::to_string(kVrMaxMessageBytes));
+    c.fail(VrReject::kTooLarge, "",
+           std::to_string(text.size()) + " bytes, at most " + std::to_string(kVrMaxMessageBytes));
     return c.reason;
   }
   ParseGuard guard;
@@ -174,7 +174,8 @@ VrReject parseImpl(std::string_view text, VrSample& out, std::string* detail) {
     return c.reason;
   }
   if (type->get_ref<const std::string&>() != "pose") {
-    c.fail(VrReject::kUnknownType, "type", "'" + type->get_ref<const std::string&>().substr(0, 32) + "', expected 'pose'");
+    c.fail(VrReject::kUnknownType, "type",
+           "'" + type->get_ref<const std::string&>().substr(0, 32) + "', expected 'pose'");
     return c.reason;
   }
   if (!c.keys(j, "", {"type", "frame", "t", "head", "hands"})) return c.reason;
@@ -240,23 +241,40 @@ bool finiteAll(const double* v, std::size_t n) {
 
 const char* toString(VrReject r) noexcept {
   switch (r) {
-    case VrReject::kAccepted: return "accepted";
-    case VrReject::kTooLarge: return "too_large";
-    case VrReject::kBinaryFrame: return "binary_frame";
-    case VrReject::kBadJson: return "bad_json";
-    case VrReject::kDuplicateKey: return "duplicate_key";
-    case VrReject::kNotObject: return "not_object";
-    case VrReject::kUnknownType: return "unknown_type";
-    case VrReject::kUnknownKey: return "unknown_key";
-    case VrReject::kMissingKey: return "missing_key";
-    case VrReject::kWrongType: return "wrong_type";
-    case VrReject::kNonFinite: return "non_finite";
-    case VrReject::kOutOfRange: return "out_of_range";
-    case VrReject::kNotUnitQuaternion: return "not_unit_quaternion";
-    case VrReject::kUnknownButtonBits: return "unknown_button_bits";
-    case VrReject::kFrameNotIncreasing: return "frame_not_increasing";
-    case VrReject::kRateLimited: return "rate_limited";
-    case VrReject::kCount: break;
+    case VrReject::kAccepted:
+      return "accepted";
+    case VrReject::kTooLarge:
+      return "too_large";
+    case VrReject::kBinaryFrame:
+      return "binary_frame";
+    case VrReject::kBadJson:
+      return "bad_json";
+    case VrReject::kDuplicateKey:
+      return "duplicate_key";
+    case VrReject::kNotObject:
+      return "not_object";
+    case VrReject::kUnknownType:
+      return "unknown_type";
+    case VrReject::kUnknownKey:
+      return "unknown_key";
+    case VrReject::kMissingKey:
+      return "missing_key";
+    case VrReject::kWrongType:
+      return "wrong_type";
+    case VrReject::kNonFinite:
+      return "non_finite";
+    case VrReject::kOutOfRange:
+      return "out_of_range";
+    case VrReject::kNotUnitQuaternion:
+      return "not_unit_quaternion";
+    case VrReject::kUnknownButtonBits:
+      return "unknown_button_bits";
+    case VrReject::kFrameNotIncreasing:
+      return "frame_not_increasing";
+    case VrReject::kRateLimited:
+      return "rate_limited";
+    case VrReject::kCount:
+      break;
   }
   return "unknown";
 }

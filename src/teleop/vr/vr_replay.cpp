@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <thread>
-
-#include <lcm/lcm-cpp.hpp>
 
 #include "pmg/comms/channels.hpp"
 #include "pmg/teleop/vr_protocol.hpp"
@@ -72,16 +71,18 @@ VrReplayStats replayVrLog(const std::vector<VrLogEvent>& events, const VrReplayO
   // One pass lasts from the first event to the last plus one typical period (median spacing), so
   // that the loop seam keeps the stream's rate.
   std::vector<std::int64_t> gaps;
-  for (std::size_t i = 1; i < events.size(); ++i) gaps.push_back(std::max<std::int64_t>(0, events[i].log_utime - events[i - 1].log_utime));
+  for (std::size_t i = 1; i < events.size(); ++i)
+    gaps.push_back(std::max<std::int64_t>(0, events[i].log_utime - events[i - 1].log_utime));
   std::int64_t period = 0;
   if (!gaps.empty()) {
     std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
     period = gaps[gaps.size() / 2];
   }
   const std::int64_t pass_us = std::max<std::int64_t>(1, events.back().log_utime - events.front().log_utime + period);
-  const std::int64_t frames_per_pass = std::max<std::int64_t>(1, events.back().msg.frame - events.front().msg.frame + 1);
-  const std::int64_t xr_per_pass = std::max<std::int64_t>(0, events.back().msg.xr_time_us - events.front().msg.xr_time_us) +
-                                   period;
+  const std::int64_t frames_per_pass =
+      std::max<std::int64_t>(1, events.back().msg.frame - events.front().msg.frame + 1);
+  const std::int64_t xr_per_pass =
+      std::max<std::int64_t>(0, events.back().msg.xr_time_us - events.front().msg.xr_time_us) + period;
   const auto start = Clock::now();
   for (std::int64_t pass = 0; !stopped(); ++pass) {
     std::int64_t offset_us = 0;  // log time since the first event, kept monotonic

@@ -1,17 +1,8 @@
 #include "pmg/teleop/vr_server.hpp"
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <fstream>
-#include <future>
-#include <mutex>
-#include <optional>
-#include <sstream>
-#include <stdexcept>
-#include <thread>
-#include <vector>
+#include <openssl/crypto.h>
 
+#include <algorithm>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
@@ -22,8 +13,17 @@
 #include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <future>
+#include <mutex>
 #include <nlohmann/json.hpp>
-#include <openssl/crypto.h>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include "pmg/teleop/vr_static_files.hpp"
 
@@ -244,9 +244,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       doRead();  // reads the client's close frame
       return;
     }
-    srv_->count([](VrServerStats& s) {
-      ++s.ws_sessions;
-    });
+    srv_->count([](VrServerStats& s) { ++s.ws_sessions; });
     srv_->event("client #" + std::to_string(id_) + " connected from " + peer_);
     window_start_ = now;
     doRead();
@@ -297,11 +295,17 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     doRead();
   }
 
-  void onReadError(beast::error_code ec) {
+  void onReadError(beast::error_code ec, bool deferred = false) {
+    if (ec == net::error::operation_aborted && !closing_ && !timed_out_ && !deferred) {
+      // Possibly Beast's idle timeout delivered to a pending status write: classify once that
+      // write's handler has run.
+      net::post(ws_.get_executor(), [self = shared_from_this(), ec] { self->onReadError(ec, true); });
+      return;
+    }
     status_timer_.cancel();
     if (ec == websocket::error::closed || closing_) {
       if (!closing_) srv_->event("client #" + std::to_string(id_) + " closed the connection");
-    } else if (ec == beast::error::timeout) {
+    } else if (ec == beast::error::timeout || timed_out_) {
       srv_->count([](VrServerStats& s) { ++s.ws_timeouts; });
       srv_->event("client #" + std::to_string(id_) + " timed out (no answer to pings)");
     } else {
@@ -341,8 +345,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       window_count_ = 0;
     }
     if (++window_count_ > srv_->opt.max_message_rate_hz) {
-      reject(VrReject::kRateLimited, "more than " + std::to_string(static_cast<long>(srv_->opt.max_message_rate_hz)) +
-                                         " messages per second");
+      reject(VrReject::kRateLimited,
+             "more than " + std::to_string(static_cast<long>(srv_->opt.max_message_rate_hz)) + " messages per second");
       return;
     }
     if (!ws_.got_text()) {
@@ -418,8 +422,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     out_ = j.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
     writing_ = true;
     ws_.text(true);
-    ws_.async_write(net::buffer(out_), [self = shared_from_this()](beast::error_code, std::size_t) {
+    ws_.async_write(net::buffer(out_), [self = shared_from_this()](beast::error_code ec, std::size_t) {
       self->writing_ = false;  // a failed write also fails the pending read, which ends the session
+      // Beast hands its idle timeout to the first pending operation; the read then sees "aborted".
+      if (ec == beast::error::timeout) self->timed_out_ = true;
     });
   }
 
@@ -434,6 +440,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::string refuse_reason_;
   bool closing_ = false;
   bool writing_ = false;
+  bool timed_out_ = false;
   std::string out_;
   Clock::time_point last_rx_{};
   Clock::time_point last_valid_{};
@@ -516,11 +523,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void upgrade(http::request<http::string_body>&& req) {
     const std::string target(req.target());
-    if (target.substr(0, target.find('?')) != "/ws") return sendError(req, http::status::not_found, "no WebSocket here\n");
+    if (target.substr(0, target.find('?')) != "/ws")
+      return sendError(req, http::status::not_found, "no WebSocket here\n");
     const auto origin = req.find(http::field::origin);
     if (origin != req.end() && !originMatchesHost(sv(origin->value()), sv(req[http::field::host]))) {
       srv_->count([](VrServerStats& s) { ++s.ws_refused; });
-      srv_->event("WebSocket from " + peer_ + " refused: Origin '" + std::string(origin->value()) + "' is not this host");
+      srv_->event("WebSocket from " + peer_ + " refused: Origin '" + std::string(origin->value()) +
+                  "' is not this host");
       return sendError(req, http::status::forbidden, "cross-origin WebSocket refused\n");
     }
     std::uint16_t code = 0;
@@ -611,9 +620,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 // Impl
 
 void VrServer::Impl::doAccept() {
-  acceptor.async_accept([self = shared_from_this()](beast::error_code ec, tcp::socket s) {
-    self->onAccept(ec, std::move(s));
-  });
+  acceptor.async_accept(
+      [self = shared_from_this()](beast::error_code ec, tcp::socket s) { self->onAccept(ec, std::move(s)); });
 }
 
 void VrServer::Impl::onAccept(beast::error_code ec, tcp::socket socket) {
@@ -712,7 +720,8 @@ void VrServer::Impl::shutdown() {
   beast::error_code ec;
   acceptor.close(ec);
   for (const auto& w : ws_sessions)
-    if (auto s = w.lock()) s->closeWith(static_cast<std::uint16_t>(websocket::close_code::going_away), "server stopping");
+    if (auto s = w.lock())
+      s->closeWith(static_cast<std::uint16_t>(websocket::close_code::going_away), "server stopping");
   for (const auto& w : http_sessions)
     if (auto s = w.lock()) s->drop();
   // Clients that do not answer the closing handshake within 0.5 s are cut off, so that every
@@ -749,7 +758,8 @@ void VrServerOptions::validate() const {
   requireRange("stale_after_s", stale_after_s, 0.05, 60.0);
   requireRange("status_period_s", status_period_s, 0.05, 10.0);
   requireRange("max_message_rate_hz", max_message_rate_hz, 1.0, 10000.0);
-  if (cert_file.empty() || key_file.empty()) throw std::invalid_argument("VrServerOptions: cert_file and key_file are required");
+  if (cert_file.empty() || key_file.empty())
+    throw std::invalid_argument("VrServerOptions: cert_file and key_file are required");
   if (web_root.empty()) throw std::invalid_argument("VrServerOptions.web_root is empty");
 }
 
@@ -759,7 +769,8 @@ VrServer::VrServer(const VrServerOptions& options, VrSampleSink sink) : impl_(st
   impl_->sink = std::move(sink);
   std::error_code fec;
   if (!std::filesystem::is_regular_file(options.web_root / "index.html", fec))
-    throw std::runtime_error(options.web_root.string() + ": no index.html (give --web-root, the folder of the VR page)");
+    throw std::runtime_error(options.web_root.string() +
+                             ": no index.html (give --web-root, the folder of the VR page)");
   auto& tls = impl_->tls;
   tls.set_options(ssl::context::default_workarounds | ssl::context::no_sslv2 | ssl::context::no_sslv3 |
                   ssl::context::no_tlsv1 | ssl::context::no_tlsv1_1 | ssl::context::single_dh_use);
@@ -770,7 +781,8 @@ VrServer::VrServer(const VrServerOptions& options, VrSampleSink sink) : impl_(st
   if (ec) throw std::runtime_error(options.key_file.string() + ": cannot load private key (" + ec.message() + ")");
 
   const auto address = net::ip::make_address(options.bind_address, ec);
-  if (ec) throw std::runtime_error("bind address '" + options.bind_address + "': not an IP address (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error("bind address '" + options.bind_address + "': not an IP address (" + ec.message() + ")");
   const tcp::endpoint ep(address, options.port);
   const std::string where = options.bind_address + ":" + std::to_string(options.port);
   auto& acc = impl_->acceptor;

@@ -5,6 +5,12 @@
 // reconnect by itself. Skipped with a message when chromium or LCM multicast is missing.
 //
 // Prints the page's message rate and its reconnect time (drop → first pose of the new session).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -13,13 +19,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include "g1_fixture.hpp"
 #include "pmg/comms/command_publisher.hpp"
@@ -108,7 +107,8 @@ std::string tail(const fs::path& file) {
 TEST(VrBrowser, HeadlessChromiumLoadsThePageConnectsAndStreamsPosesToLcm) {
   const std::string chromium = findChromium();
   if (chromium.empty())
-    GTEST_SKIP() << "chromium not found (Debian package 'chromium', or set PMG_CHROMIUM=/path/to/chrome): browser test skipped";
+    GTEST_SKIP()
+        << "chromium not found (Debian package 'chromium', or set PMG_CHROMIUM=/path/to/chrome): browser test skipped";
   const std::string url = test::vr::privateLcmUrl();
   if (const std::string why = test::vr::multicastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
 
@@ -123,18 +123,21 @@ TEST(VrBrowser, HeadlessChromiumLoadsThePageConnectsAndStreamsPosesToLcm) {
   o.key_file = cert.key_file;
   o.web_root = test::sourcePath("data/vr/web");
   o.access_token = "browser-test-token";
-  VrServer server(o, [&](const VrSample& s, std::int64_t utime) { return publisher.publishVrPose(toVrPoseMessage(s, utime)); });
+  VrServer server(
+      o, [&](const VrSample& s, std::int64_t utime) { return publisher.publishVrPose(toVrPoseMessage(s, utime)); });
   server.start();
 
-  const std::string page = "https://127.0.0.1:" + std::to_string(server.port()) + "/?synthetic=1&token=" + o.access_token;
+  const std::string page =
+      "https://127.0.0.1:" + std::to_string(server.port()) + "/?synthetic=1&token=" + o.access_token;
   const fs::path log = tmp.path() / "chromium.log";
   const auto launched = Clock::now();
   Browser browser(chromium, page, tmp.path() / "profile", log);
   ASSERT_TRUE(browser.started()) << "cannot start " << chromium;
 
   // The page loads (index.html, vr.js, style.css), connects and streams.
-  ASSERT_GE(listener.waitFor(1, 15000ms), 1u) << "no pose on LCM within 15 s; server: " << server.stats().last_error
-                                               << "\nchromium output:\n" << tail(log);
+  ASSERT_GE(listener.waitFor(1, 15000ms), 1u)
+      << "no pose on LCM within 15 s; server: " << server.stats().last_error << "\nchromium output:\n"
+      << tail(log);
   const auto first = listener.received().front().at;
   std::printf("[measure] chromium start -> first pose on LCM: %.0f ms\n",
               std::chrono::duration<double, std::milli>(first - launched).count());

@@ -1,12 +1,11 @@
 // The bridge's self-signed certificate and access token (vr_certificate.cpp): generated once with
 // a private key (0600) and a SAN naming 127.0.0.1, reused afterwards, unsafe or broken files refused.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-
-#include <sys/stat.h>
-
-#include <gtest/gtest.h>
 
 #include "g1_fixture.hpp"
 #include "pmg/teleop/vr_certificate.hpp"
@@ -23,7 +22,9 @@ unsigned modeOf(const fs::path& p) {
   return st.st_mode & 0777;
 }
 
-bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
 
 TEST(VrCertificate, FirstRunGeneratesPrivateKeyAndSanThenReuses) {
   test::TempDir tmp;

@@ -1,10 +1,10 @@
 // The page → bridge protocol (vr_protocol.cpp): every malformed message is refused with its cause
 // and changes nothing; the WebXR → V frame conversion; the synthetic pattern passes the checks.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "pmg/teleop/vr_protocol.hpp"
 #include "pmg/teleop/vr_synthetic.hpp"
@@ -67,14 +67,17 @@ std::vector<Bad> badMessages() {
   c.push_back({"frame a float", with("\"frame\":100", "\"frame\":100.5"), VrReject::kWrongType, "frame"});
   c.push_back({"frame a string", with("\"frame\":100", "\"frame\":\"100\""), VrReject::kWrongType, "frame"});
   c.push_back({"frame negative", with("\"frame\":100", "\"frame\":-1"), VrReject::kOutOfRange, "frame"});
-  c.push_back({"frame above 2^53", with("\"frame\":100", "\"frame\":9007199254740993"), VrReject::kOutOfRange, "frame"});
-  c.push_back({"frame above int64", with("\"frame\":100", "\"frame\":18446744073709551615"), VrReject::kOutOfRange,
-               "frame"});
+  c.push_back(
+      {"frame above 2^53", with("\"frame\":100", "\"frame\":9007199254740993"), VrReject::kOutOfRange, "frame"});
+  c.push_back(
+      {"frame above int64", with("\"frame\":100", "\"frame\":18446744073709551615"), VrReject::kOutOfRange, "frame"});
   c.push_back({"head.p of 2", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":["), VrReject::kWrongType, "head.p"});
   c.push_back({"head.p string element", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":[\"0\","), VrReject::kWrongType,
                "head.p[0]"});
-  c.push_back({"head.p null", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":[null,"), VrReject::kWrongType, "head.p[0]"});
-  c.push_back({"head far away", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":[1000,"), VrReject::kOutOfRange, "head.p[0]"});
+  c.push_back(
+      {"head.p null", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":[null,"), VrReject::kWrongType, "head.p[0]"});
+  c.push_back(
+      {"head far away", with("\"head\":{\"p\":[0,", "\"head\":{\"p\":[1000,"), VrReject::kOutOfRange, "head.p[0]"});
   c.push_back({"head.q not unit", with("\"q\":[0,", "\"q\":[0.3,"), VrReject::kNotUnitQuaternion, "head.q"});
   {
     VrWirePose p = syntheticWirePose(100);

@@ -1,17 +1,20 @@
 // Recorded VR sessions (vr_replay.cpp): the shipped recording reads back valid, replays with its
 // original spacing (scaled by the speed), loops with growing frame numbers, and reaches LCM
 // through the CommandPublisher; bad events of a log are skipped and counted.
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <mutex>
 #include <thread>
 #include <vector>
 
-#include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
-
 #include "g1_fixture.hpp"
+#include "pmg/comms/auth.hpp"
+#include "pmg/comms/channels.hpp"
 #include "pmg/comms/command_publisher.hpp"
 #include "pmg/teleop/vr_protocol.hpp"
 #include "pmg/teleop/vr_replay.hpp"
@@ -83,12 +86,15 @@ TEST(VrReplay, LoopsWithGrowingFramesAndStops) {
   VrReplayOptions o;
   o.speed = 20.0;
   o.loop = true;
-  const VrReplayStats st = replayVrLog(part, o, [&](const pmg_lcm::vr_pose_t& m) {
-    frames.push_back(m.frame);
-    xr.push_back(m.xr_time_us);
-    if (frames.size() == 50) stop = true;
-    return true;
-  }, &stop);
+  const VrReplayStats st = replayVrLog(
+      part, o,
+      [&](const pmg_lcm::vr_pose_t& m) {
+        frames.push_back(m.frame);
+        xr.push_back(m.xr_time_us);
+        if (frames.size() == 50) stop = true;
+        return true;
+      },
+      &stop);
   EXPECT_EQ(st.published, 50u);
   EXPECT_EQ(st.loops, 2u);
   for (std::size_t i = 1; i < frames.size(); ++i) {
@@ -153,12 +159,95 @@ TEST(VrReplay, ReplayedPosesReachLcmThroughTheCommandPublisher) {
   replayVrLog(part, o, [&](const pmg_lcm::vr_pose_t& m) { return publisher.publishVrPose(m); });
   ASSERT_GE(listener.waitFor(60, 2000ms), 57u);
   const auto got = listener.received();
-  const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const auto wall =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   for (const auto& r : got) {
-    EXPECT_NEAR(static_cast<double>(r.msg.utime), static_cast<double>(wall), 5e6) << "utime is the replay time, not the recording's";
+    EXPECT_NEAR(static_cast<double>(r.msg.utime), static_cast<double>(wall), 5e6)
+        << "utime is the replay time, not the recording's";
     EXPECT_EQ(r.msg.source, "vr");
   }
   EXPECT_EQ(got.front().msg.frame, part.front().msg.frame);
+}
+
+// A session recorded with signed messages cannot be sent again as it is (the controller's verifier
+// refuses the old trailers), but pmg_vr_replay's path (decode, re-publish through a keyed
+// CommandPublisher) produces messages the verifier accepts.
+TEST(VrReplay, SignedReplayOfASignedRecordingPassesTheVerifier) {
+  const std::string url = test::vr::privateLcmUrl();
+  if (const std::string why = test::vr::multicastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
+  test::TempDir tmp;
+  const comms::AuthKey key = comms::generateAuthKey();
+  const std::string key_file = tmp.file("vr.key");
+  comms::writeAuthKeyFile(key_file, key);
+  const std::string log = tmp.file("signed.lcmlog");
+  std::vector<std::vector<std::uint8_t>> recorded;
+  {
+    lcm::LogFile out(log, "w");
+    comms::MessageSigner signer(key);
+    const std::int64_t t0 = comms::wallClockNowUs() - 60'000'000;  // recorded a minute ago
+    for (int i = 0; i < 30; ++i) {
+      const std::int64_t t = t0 + i * 13889;
+      const pmg_lcm::vr_pose_t m = toVrPoseMessage(syntheticSample(i), t);
+      std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+      m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      signer.sign(kVrPoseChannel, bytes, t);
+      lcm::LogEvent e;
+      e.timestamp = t;
+      e.channel = kVrPoseChannel;
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = bytes.data();
+      out.writeEvent(&e);
+      recorded.push_back(bytes);
+    }
+  }
+  comms::MessageVerifier verifier(key, comms::VerifierOptions{});
+  std::size_t payload = 0;
+  EXPECT_EQ(verifier.verify(kVrPoseChannel, recorded[0].data(), recorded[0].size(), payload),
+            comms::VerifyResult::kStale)
+      << "the recorded bytes themselves are refused";
+
+  struct Raw {
+    std::mutex mutex;
+    std::vector<std::vector<std::uint8_t>> packets;
+    static void on(const lcm::ReceiveBuffer* b, const std::string&, Raw* r) {
+      const auto* d = static_cast<const std::uint8_t*>(b->data);
+      std::lock_guard<std::mutex> lock(r->mutex);
+      r->packets.emplace_back(d, d + b->data_size);
+    }
+  } raw;
+  lcm::LCM rx(url);
+  rx.subscribeFunction(kVrPoseChannel, &Raw::on, &raw);
+  std::atomic<bool> stop{false};
+  std::thread rx_thread([&] {
+    while (!stop) rx.handleTimeout(20);
+  });
+  comms::CommandPublisher publisher(url, key_file, kVrSource);
+  ASSERT_TRUE(publisher.authenticated());
+  VrReplayOptions o;
+  o.speed = 10.0;
+  const auto events = readVrLog(log);
+  ASSERT_EQ(events.size(), 30u) << "signed events decode (the trailer is ignored)";
+  replayVrLog(events, o, [&](const pmg_lcm::vr_pose_t& m) { return publisher.publishVrPose(m); });
+  for (int i = 0; i < 100; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(raw.mutex);
+      if (raw.packets.size() >= 30) break;
+    }
+    std::this_thread::sleep_for(10ms);
+  }
+  stop = true;
+  rx_thread.join();
+  std::lock_guard<std::mutex> lock(raw.mutex);
+  ASSERT_GE(raw.packets.size(), 28u);
+  std::int64_t frame = -1;
+  for (const auto& p : raw.packets) {
+    ASSERT_EQ(verifier.verify(kVrPoseChannel, p.data(), p.size(), payload), comms::VerifyResult::kOk);
+    pmg_lcm::vr_pose_t m;
+    ASSERT_EQ(m.decode(p.data(), 0, static_cast<int>(payload)), static_cast<int>(payload));
+    EXPECT_GT(m.frame, frame);
+    frame = m.frame;
+  }
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 // Static files of the VR page (vr_static_files.cpp): MIME types, and no request target reaches a
 // file outside the web root (dot segments, encoded dots, symlinks, backslashes, NUL).
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "g1_fixture.hpp"
 #include "pmg/teleop/vr_static_files.hpp"
@@ -59,15 +59,15 @@ TEST(VrStaticFiles, ShippedPageIsServable) {
 TEST(VrStaticFiles, PathTraversalIsImpossible) {
   Root r;
   for (const char* target :
-       {"/../secret.txt", "/sub/../../secret.txt", "/%2e%2e/secret.txt", "/%2E%2E/secret.txt", "/sub/%2e%2e/%2e%2e/secret.txt",
-        "/..%2fsecret.txt", "/%2e%2e%2fsecret.txt", "/.%2e/secret.txt", "/./index.html", "/.hidden.txt",
-        "/sub/%2e/index.html", "/escape.txt", "/data.bin", "/missing.html", "/sub"}) {
+       {"/../secret.txt", "/sub/../../secret.txt", "/%2e%2e/secret.txt", "/%2E%2E/secret.txt",
+        "/sub/%2e%2e/%2e%2e/secret.txt", "/..%2fsecret.txt", "/%2e%2e%2fsecret.txt", "/.%2e/secret.txt",
+        "/./index.html", "/.hidden.txt", "/sub/%2e/index.html", "/escape.txt", "/data.bin", "/missing.html", "/sub"}) {
     const auto l = vrLookupStatic(r.web, target);
     EXPECT_NE(l.status, 200) << target << " served " << l.file;
     EXPECT_FALSE(l.reason.empty()) << target;
   }
-  for (const char* target : {"", "index.html", "/..\\secret.txt", "/%5c..%5csecret.txt", "/a%00.html", "/%zz", "/%2",
-                             "/\x01"}) {
+  for (const char* target :
+       {"", "index.html", "/..\\secret.txt", "/%5c..%5csecret.txt", "/a%00.html", "/%zz", "/%2", "/\x01"}) {
     const auto l = vrLookupStatic(r.web, target);
     EXPECT_EQ(l.status, 400) << "'" << target << "': " << l.reason;
   }

@@ -1,14 +1,8 @@
 #include "vr_test_util.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <condition_variable>
-#include <future>
-#include <limits>
-#include <stdexcept>
-
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
@@ -18,7 +12,12 @@
 #include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <boost/beast/websocket/ssl.hpp>
+#include <cmath>
+#include <condition_variable>
+#include <future>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <stdexcept>
 
 namespace pmg::test::vr {
 
@@ -121,7 +120,8 @@ bool WsClient::send(const std::string& payload, bool binary) {
   auto copy = std::make_shared<std::string>(payload);
   net::post(impl_->ioc, [this, done, copy, binary] {
     impl_->ws->binary(binary);
-    impl_->ws->async_write(net::buffer(*copy), [done, copy](beast::error_code ec, std::size_t) { done->set_value(!ec); });
+    impl_->ws->async_write(net::buffer(*copy),
+                           [done, copy](beast::error_code ec, std::size_t) { done->set_value(!ec); });
   });
   if (f.wait_for(std::chrono::seconds(3)) != std::future_status::ready) return false;
   return f.get();
@@ -151,9 +151,7 @@ void WsClient::close() {
     closed_ = true;
     return;
   }
-  net::post(impl_->ioc, [this] {
-    impl_->ws->async_close(websocket::close_code::normal, [](beast::error_code) {});
-  });
+  net::post(impl_->ioc, [this] { impl_->ws->async_close(websocket::close_code::normal, [](beast::error_code) {}); });
   waitClosed(std::chrono::milliseconds(2000));
 }
 

@@ -7,11 +7,10 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <pmg_lcm/vr_pose_t.hpp>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <pmg_lcm/vr_pose_t.hpp>
 
 namespace pmg::test::vr {
 
