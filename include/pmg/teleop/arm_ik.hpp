@@ -89,7 +89,7 @@ struct ArmIkOptions {
   double error_damping = 0.5;        ///< error part: λ² += error_damping·½|e_w|² [1], 0..100
   double position_weight = 1.0;      ///< w_p: weight of the position error [1] (error in m), > 0
   double orientation_weight = 0.3;   ///< w_o: weight of the orientation error [m/rad], ≥ 0
-  double nullspace_gain = 0.1;       ///< k_n: pull toward the nominal pose per iteration [1], 0..1
+  double nullspace_gain = 0.3;       ///< k_n: pull toward the nominal pose per iteration [1], 0..1
   double max_joint_step = 0.06;      ///< continuity: |q_out − q_seed| per joint per solve [rad], > 0
                                      ///< (0.06 = CommandLimits::max_reference_speed 6 rad/s at 100 Hz)
   double max_iteration_step = 0.3;   ///< Δq per iteration, max-norm [rad], > 0 (Newton step cap)

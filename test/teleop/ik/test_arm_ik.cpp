@@ -365,8 +365,8 @@ TEST_F(ArmIkTest, TracksAPoseStreamFromTheRobotsOwnForwardKinematics) {
   EXPECT_EQ(within, 2 * kTicks);
   EXPECT_LE(ep_max, 1e-3);
   EXPECT_LE(eo_max, 0.01);
-  EXPECT_LE(joint_max, 0.05);
-  EXPECT_LE(joint_rms, 0.01);
+  EXPECT_LE(joint_max, 0.02);  // measured 0.011 rad (null-space lag while the swivel moves)
+  EXPECT_LE(joint_rms, 0.004);  // measured 0.0019 rad
 }
 
 TEST_F(ArmIkTest, FarTargetsAreClampedFlaggedAndNeverLeaveTheJointLimits) {
