@@ -9,6 +9,7 @@
 // --csv FILE writes the smooth stream per tick (pose errors, IK joints, the known answer q*, the
 // generating trajectory q_a) for scripts/plot_arm_ik.py.
 // Usage: build/bench/teleop/ik/pmg_arm_ik_bench [--ticks N] [--robot g1.yaml] [--csv out.csv]
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,8 +18,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "arm_ik_streams.hpp"
 #include "pmg/common/data_paths.hpp"
@@ -125,9 +124,10 @@ int main(int argc, char** argv) {
 
     const Q2 start = streams::smoothArmTrajectory(ik, 0.0);
     const Q2 nominal{ik.nominal(0), ik.nominal(1)};
-    std::printf("pmg_arm_ik_bench: %d ticks per scenario, both arms per solve, ArmIkOptions defaults "
-                "(max_iterations %d, max_joint_step %.3f rad)\n",
-                ticks, ik.options().max_iterations, ik.options().max_joint_step);
+    std::printf(
+        "pmg_arm_ik_bench: %d ticks per scenario, both arms per solve, ArmIkOptions defaults "
+        "(max_iterations %d, max_joint_step %.3f rad)\n",
+        ticks, ik.options().max_iterations, ik.options().max_joint_step);
     std::printf("%-9s %7s %7s %7s %7s %8s | %6s %6s %6s %6s | %9s %9s\n", "[us]", "p50", "p90", "p99", "p99.9", "max",
                 "iter", "conv%", "clamp%", "coll%", "ep_max[m]", "eo_max");
     const std::array<const char*, 4> names{"smooth", "jumps", "contact", "far"};
@@ -135,9 +135,9 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 4; ++i) {
       const Stats s = run(ik, *sets[i], i == 0 ? start : nominal);
       std::printf("%-9s %7.2f %7.2f %7.2f %7.2f %8.1f | %6.2f %6.1f %6.1f %6.1f | %9.2g %9.2g\n", names[i],
-                  pct(s.us, 50), pct(s.us, 90), pct(s.us, 99), pct(s.us, 99.9), pct(s.us, 100),
-                  s.iterations / s.arms, 100.0 * s.converged / s.arms, 100.0 * s.clamped / s.arms,
-                  100.0 * s.collision_limited / s.arms, s.ep_max, s.eo_max);
+                  pct(s.us, 50), pct(s.us, 90), pct(s.us, 99), pct(s.us, 99.9), pct(s.us, 100), s.iterations / s.arms,
+                  100.0 * s.converged / s.arms, 100.0 * s.clamped / s.arms, 100.0 * s.collision_limited / s.arms,
+                  s.ep_max, s.eo_max);
     }
 
     if (!csv_path.empty()) {

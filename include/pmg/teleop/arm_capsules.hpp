@@ -14,17 +14,16 @@
 /// The pelvis capsule (pelvis and hip pitch links) is placed for the waist joints at 0; the real
 /// pelvis moves relative to T when the waist rolls or pitches.
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
-
-#include <Eigen/Core>
 
 namespace pmg::teleop {
 
 /// A capsule: points within `radius` of the segment [a, b], a and b in the frame of `link`.
 struct Capsule {
-  std::string name;   ///< e.g. "torso_left", "left_forearm"
-  std::string link;   ///< URDF link the points are fixed in ("torso_link" for body capsules)
+  std::string name;                             ///< e.g. "torso_left", "left_forearm"
+  std::string link;                             ///< URDF link the points are fixed in ("torso_link" for body capsules)
   Eigen::Vector3d a = Eigen::Vector3d::Zero();  ///< segment start in the link frame [m]
   Eigen::Vector3d b = Eigen::Vector3d::Zero();  ///< segment end in the link frame [m]
   double radius = 0.0;                          ///< [m], > 0
@@ -41,8 +40,8 @@ inline constexpr int kNumBodyCapsules = 4;
 /// (except upper arm – head), and every left arm capsule against every right arm capsule (except
 /// upper arm – upper arm); capsules of one arm are never checked against each other.
 struct ArmCapsuleModel {
-  std::array<Capsule, kNumBodyCapsules> body;                 ///< fixed in T (link "torso_link")
-  std::array<std::array<Capsule, kNumArmCapsules>, 2> arm;    ///< [hand][ArmCapsule]
+  std::array<Capsule, kNumBodyCapsules> body;               ///< fixed in T (link "torso_link")
+  std::array<std::array<Capsule, kNumArmCapsules>, 2> arm;  ///< [hand][ArmCapsule]
 
   /// The Unitree G1 29-DoF rev 1.0 model (constants in src/teleop/ik/arm_capsules.cpp).
   static ArmCapsuleModel g1();

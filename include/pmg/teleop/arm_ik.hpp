@@ -54,12 +54,11 @@
 /// setup; fixed-size Eigen matrices; test/teleop/ik/test_arm_ik.cpp proves it with
 /// pmg::test::AllocationGuard). Not thread-safe: one instance per thread.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <memory>
 #include <string>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "pmg/teleop/arm_capsules.hpp"
 
@@ -77,24 +76,24 @@ using ArmJoints = std::array<double, kArmDofs>;
 
 /// A hand pose target: X_TH, the hand frame H in the torso frame T.
 struct ArmPose {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();                 ///< p_TH: palm origin in T [m]
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();    ///< R_TH as a unit quaternion
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();               ///< p_TH: palm origin in T [m]
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< R_TH as a unit quaternion
 };
 
 /// Tuning of ArmIk. Defaults are for the 100 Hz teleop tick with a seed from the previous tick.
 struct ArmIkOptions {
-  int max_iterations = 8;            ///< DLS iterations per solve (both arms together), 1..1000
-  double damping = 0.05;             ///< λ_max: damping at a singularity (σ_min = 0) [m], 0..1
+  int max_iterations = 8;                  ///< DLS iterations per solve (both arms together), 1..1000
+  double damping = 0.05;                   ///< λ_max: damping at a singularity (σ_min = 0) [m], 0..1
   double singular_value_threshold = 0.04;  ///< ε: damping starts when σ_min of J_w < ε [m], > 0
-  double error_damping = 0.5;        ///< error part: λ² += error_damping·½|e_w|² [1], 0..100
-  double position_weight = 1.0;      ///< w_p: weight of the position error [1] (error in m), > 0
-  double orientation_weight = 0.3;   ///< w_o: weight of the orientation error [m/rad], ≥ 0
-  double nullspace_gain = 0.3;       ///< k_n: pull toward the nominal pose per iteration [1], 0..1
-  double max_joint_step = 0.06;      ///< continuity: |q_out − q_seed| per joint per solve [rad], > 0
-                                     ///< (0.06 = CommandLimits::max_reference_speed 6 rad/s at 100 Hz)
-  double max_iteration_step = 0.3;   ///< Δq per iteration, max-norm [rad], > 0 (Newton step cap)
-  double position_tolerance = 2e-4;  ///< converged when |p* − p| ≤ this [m], > 0
-  double orientation_tolerance = 2e-3;  ///< ... and the rotation angle of R* Rᵀ ≤ this [rad], > 0
+  double error_damping = 0.5;              ///< error part: λ² += error_damping·½|e_w|² [1], 0..100
+  double position_weight = 1.0;            ///< w_p: weight of the position error [1] (error in m), > 0
+  double orientation_weight = 0.3;         ///< w_o: weight of the orientation error [m/rad], ≥ 0
+  double nullspace_gain = 0.3;             ///< k_n: pull toward the nominal pose per iteration [1], 0..1
+  double max_joint_step = 0.06;            ///< continuity: |q_out − q_seed| per joint per solve [rad], > 0
+                                           ///< (0.06 = CommandLimits::max_reference_speed 6 rad/s at 100 Hz)
+  double max_iteration_step = 0.3;         ///< Δq per iteration, max-norm [rad], > 0 (Newton step cap)
+  double position_tolerance = 2e-4;        ///< converged when |p* − p| ≤ this [m], > 0
+  double orientation_tolerance = 2e-3;     ///< ... and the rotation angle of R* Rᵀ ≤ this [rad], > 0
   /// Stop an arm's iterations when two in a row each removed less than 1 % of its error (the step
   /// bound, a joint limit or a collision holds it; the next solve goes on). false for off-line
   /// solves from far seeds, where the error may plateau before it falls again.
@@ -102,12 +101,12 @@ struct ArmIkOptions {
   /// Off-line use only (0 in the loop: a restart jumps the joints): when an arm has not converged,
   /// retry it up to this many times from pseudo-random seeds inside its bounds (one arm at a
   /// time, the other frozen), keeping the best result. Each restart costs up to max_iterations.
-  int max_restarts = 0;              ///< 0..1000
-  bool avoid_collisions = true;      ///< false: capsules are only measured (min_capsule_distance_m)
-  double collision_margin = 0.01;    ///< d_s: capsule surfaces are kept this far apart [m], 0..0.1
-                                     ///< (guaranteed: ≥ d_s / 2 from a seed that had it; method step 5)
-  double collision_activation = 0.04;  ///< pairs closer than this constrain the step [m], > margin
-  double workspace_margin = 0.02;    ///< m: targets are clamped to reach·(1 − m) [1], 0..0.5
+  int max_restarts = 0;                     ///< 0..1000
+  bool avoid_collisions = true;             ///< false: capsules are only measured (min_capsule_distance_m)
+  double collision_margin = 0.01;           ///< d_s: capsule surfaces are kept this far apart [m], 0..0.1
+                                            ///< (guaranteed: ≥ d_s / 2 from a seed that had it; method step 5)
+  double collision_activation = 0.04;       ///< pairs closer than this constrain the step [m], > margin
+  double workspace_margin = 0.02;           ///< m: targets are clamped to reach·(1 − m) [1], 0..0.5
   double quaternion_norm_tolerance = 0.05;  ///< | |q| − 1 | above this = kInvalidTarget [1], 0..0.5
 
   /// "" if valid, else "ArmIkOptions.<field> = <value>: expected <range>".
@@ -153,12 +152,12 @@ const char* toString(ArmIkStatus status) noexcept;
 /// Outcome of one arm in one solve.
 struct ArmIkResult {
   ArmIkStatus status = ArmIkStatus::kInactive;
-  double position_error_m = 0.0;       ///< |p* − p(q_out)|, p* after the workspace clamp [m]
-  double orientation_error_rad = 0.0;  ///< rotation angle of R* R(q_out)ᵀ [rad]
-  int iterations = 0;                  ///< DLS iterations used
-  bool workspace_clamped = false;      ///< target moved onto the workspace shell (step 2)
-  double clamp_distance_m = 0.0;       ///< how far the target position was moved by the clamp [m]
-  bool collision_limited = false;      ///< a capsule pair constrained, shortened or rejected a step
+  double position_error_m = 0.0;        ///< |p* − p(q_out)|, p* after the workspace clamp [m]
+  double orientation_error_rad = 0.0;   ///< rotation angle of R* R(q_out)ᵀ [rad]
+  int iterations = 0;                   ///< DLS iterations used
+  bool workspace_clamped = false;       ///< target moved onto the workspace shell (step 2)
+  double clamp_distance_m = 0.0;        ///< how far the target position was moved by the clamp [m]
+  bool collision_limited = false;       ///< a capsule pair constrained, shortened or rejected a step
   double min_capsule_distance_m = 0.0;  ///< smallest surface distance of this arm's capsules to the
                                         ///< body and the other arm at q_out [m] (< 0: penetration)
 };
@@ -185,8 +184,8 @@ class ArmIk {
   ///                   A non-finite seed: status kInvalidTarget and q = nominal.
   /// @param results    per arm outcome.
   /// noexcept, allocation-free.
-  void solve(const std::array<ArmPose, 2>& targets_T, const std::array<bool, 2>& active,
-             std::array<ArmJoints, 2>& q, std::array<ArmIkResult, 2>& results) noexcept;
+  void solve(const std::array<ArmPose, 2>& targets_T, const std::array<bool, 2>& active, std::array<ArmJoints, 2>& q,
+             std::array<ArmIkResult, 2>& results) noexcept;
 
   /// X_TH for hand 0 = left, 1 = right (pmg::teleop::Hand). Non-finite q gives NaN.
   ArmPose forwardKinematics(int hand, const ArmJoints& q) const noexcept;

@@ -42,7 +42,8 @@ ArmCapsuleModel ArmCapsuleModel::g1() {
   m.body[kHead] = make("head", "torso_link", {0.008, 0.0, 0.36}, {0.008, 0.0, 0.42}, 0.07);
   m.body[kPelvis] = make("pelvis", "torso_link", {0.004, -0.085, -0.13}, {0.004, 0.085, -0.13}, 0.07);
 
-  m.arm[0][kUpperArm] = make("left_upper_arm", "left_shoulder_yaw_link", {0.0, 0.0, 0.05}, {0.0158, 0.0, -0.0805}, 0.035);
+  m.arm[0][kUpperArm] =
+      make("left_upper_arm", "left_shoulder_yaw_link", {0.0, 0.0, 0.05}, {0.0158, 0.0, -0.0805}, 0.035);
   m.arm[0][kForearm] = make("left_forearm", "left_elbow_link", {0.0, 0.0, 0.0}, {0.138, 0.0019, -0.010}, 0.032);
   m.arm[0][kHandCapsule] = make("left_hand", "left_rubber_hand", {-0.035, 0.0, 0.0}, {0.09, -0.01, 0.01}, 0.045);
   m.arm[1][kUpperArm] = mirrorY(m.arm[0][kUpperArm], "right_upper_arm", "right_shoulder_yaw_link");

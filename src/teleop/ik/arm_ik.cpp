@@ -1,17 +1,16 @@
 #include "pmg/teleop/arm_ik.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <kdl/chain.hpp>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <kdl/jntarray.hpp>
 #include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
-#include <cstdint>
-
-#include <Eigen/Cholesky>
-#include <kdl/chain.hpp>
-#include <kdl/chainfksolverpos_recursive.hpp>
-#include <kdl/jntarray.hpp>
 
 #include "pmg/common/config_error.hpp"
 #include "pmg/common/kinematics.hpp"
@@ -63,14 +62,14 @@ struct ArmState {
   ArmJoints q{};
   Eigen::Vector3d p_TH = Eigen::Vector3d::Zero();
   Eigen::Matrix3d R_TH = Eigen::Matrix3d::Identity();
-  std::array<Eigen::Vector3d, kArmDofs> axis{};    ///< joint axis (unit) in T
-  std::array<Eigen::Vector3d, kArmDofs> origin{};  ///< a point on the joint axis in T [m]
+  std::array<Eigen::Vector3d, kArmDofs> axis{};                       ///< joint axis (unit) in T
+  std::array<Eigen::Vector3d, kArmDofs> origin{};                     ///< a point on the joint axis in T [m]
   std::array<std::array<Eigen::Vector3d, 2>, kNumArmCapsules> cap{};  ///< capsule ends in T [m]
 };
 
 /// Distance of one pair at one state.
 struct PairState {
-  double d = 0.0;                               ///< surface distance [m]
+  double d = 0.0;                                 ///< surface distance [m]
   Eigen::Vector3d c_a = Eigen::Vector3d::Zero();  ///< closest point on capsule a's segment, T
   Eigen::Vector3d c_b = Eigen::Vector3d::Zero();  ///< ... on capsule b's segment, T
   Eigen::Vector3d n = Eigen::Vector3d::UnitZ();   ///< unit direction b → a, T
@@ -150,8 +149,8 @@ struct ArmIk::Impl {
     KDL::Chain chain;
     std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
     KDL::JntArray jq;
-    std::vector<KDL::Frame> frames;  ///< (segments) link frames in T, sized at setup
-    std::array<int, kArmDofs> joint_segment{};  ///< chain segment holding each joint
+    std::vector<KDL::Frame> frames;                      ///< (segments) link frames in T, sized at setup
+    std::array<int, kArmDofs> joint_segment{};           ///< chain segment holding each joint
     std::array<int, kNumArmCapsules> capsule_segment{};  ///< chain segment each capsule is fixed in
     std::array<int, kArmDofs> joint_index{};
     ArmJoints nominal{}, lower{}, upper{};

@@ -2,11 +2,10 @@
 // Target streams for the arm IK tests and benchmark (test/teleop/ik, bench/teleop/ik): a smooth
 // joint trajectory of both arms whose forward kinematics is the "pose stream generated from the
 // robot's own forward kinematics" of issue 13, and a stream of random reachable jumps.
+#include <Eigen/SVD>
 #include <array>
 #include <cmath>
 #include <random>
-
-#include <Eigen/SVD>
 
 #include "pmg/teleop/arm_ik.hpp"
 
@@ -30,8 +29,8 @@ inline std::array<ArmJoints, 2> smoothArmTrajectory(const ArmIk& ik, double t) {
       const double s = h == 0 ? 1.0 : kMirror[j];
       // The right arm runs with a phase lag so the arms do not move symmetrically.
       const double phase = kPhase[j] + (h == 0 ? 0.0 : 1.3);
-      const double v = ik.nominal(h)[j] +
-                       s * (kOffset[j] + kAmplitude[j] * std::sin(2.0 * kPi * kFrequency[j] * t + phase));
+      const double v =
+          ik.nominal(h)[j] + s * (kOffset[j] + kAmplitude[j] * std::sin(2.0 * kPi * kFrequency[j] * t + phase));
       q[h][j] = std::fmin(std::fmax(v, ik.lower(h)[j]), ik.upper(h)[j]);
     }
   }
