@@ -143,7 +143,8 @@ TEST_F(VrServerTest, StreamedPosesArriveOnLcmInFrameVWithLatency) {
   std::printf(
       "[measure] page send -> LCM receive latency over %zu poses at 100 Hz: p50 %.3f ms, p99 %.3f ms, max %.3f ms\n",
       latency_ms.size(), p50, p99, test::vr::percentile(latency_ms, 100));
-  EXPECT_LT(p99, 50.0) << "a pose must reach LCM well within one control tick or so";
+  EXPECT_LT(p50, 10.0) << "no systematic delay (Nagle + delayed ACK would show ~40 ms)";
+  EXPECT_LT(p99, 100.0) << "well within a few control ticks even on a loaded machine";
   // The page learns the link state from status messages.
   ASSERT_TRUE(waitUntil([&] { return !c->messages().empty(); }));
   const auto st = nlohmann::json::parse(c->messages().back());
