@@ -44,7 +44,7 @@ ax.text(80, 103, "pmg_controller at run time (ControllerApp, one Runner, one clo
         fontsize=15, fontweight="bold")
 
 # Command sources
-box(2, 74, 30, 20, "LCM receive thread\nLcmCommandSource\nPMG_VELOCITY / POSTURE / MODE\nraw bytes checked by\nLcmCommandDecoder: rejects\n& counts, never throws", THREAD)
+box(2, 74, 30, 20, "LCM receive thread\nLcmCommandSource: PMG_VELOCITY,\nPOSTURE, MODE, VR_POSE; MAC,\nreplay, age, then raw bytes\nchecked by LcmCommandDecoder:\nrejects & counts, never throws", THREAD)
 box(2, 53, 30, 16, "Command script\n(lockstep or --script)\none format: name, duration|t,\nvx vy wz pitch roll height, mode", EXT)
 box(40, 80, 26, 11, "LatestValue<CommandSample>\nCommand u = u_d + u_s\n(height: optional)", QUEUE, size=8)
 arrow(32, 84, 40, 85)
@@ -55,9 +55,11 @@ box(72, 58, 44, 36,
     "100 Hz loop thread (Controller::tick)\n"
     "1 read   HAL state (+ supervisor mode), input\n"
     "         mode requests -> supervisor mailbox\n"
+    "  teleop  VR headset -> command (if engaged)\n"
     "2 shape  CommandShaper: NaN/range/stale,\n"
     "         slew (height none <-> value too)\n"
     "3 generate  PMG generator (eqs. 4-12) + GCO\n"
+    "         teleop arm IK replaces the arms\n"
     "         ReferenceRateLimiter <= 6 rad/s\n"
     "4 policy  ONNX actor (legs), limb separation\n"
     "5 write  LowCommand, TelemetryFrame\n"
