@@ -24,6 +24,13 @@ make_config() {  # $1 = shipped config, $2 = output
   printf '\nsecurity:\n  key_file: %s\n' "$tmp/commands.key" >> "$2"
 }
 fail() { echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true; exit 1; }
+wait_listening() {  # until the controller has opened its authenticated LCM input (setup can be slow under load)
+  for _ in $(seq 1 200); do
+    grep -q "LCM commands authenticated" "$tmp/controller.txt" 2>/dev/null && { sleep 1.0; return 0; }
+    sleep 0.1
+  done
+  fail "the controller never opened its LCM input"
+}
 column_max() {  # $1 = csv, $2 = column name -> max value
   python3 - "$1" "$2" <<'PY'
 import csv, sys
@@ -37,9 +44,9 @@ gamepad)
   make_config "$src/config/controller/g1_sil.yaml" "$tmp/ctl.yaml"
   sed -i 's/^  startup: active/  startup: passive/' "$tmp/ctl.yaml"
   grep -q "startup: passive" "$tmp/ctl.yaml" || fail "could not set startup: passive"
-  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 10 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 14 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
-  sleep 0.5
+  wait_listening
   SDL_VIDEODRIVER=dummy "$bin/pmg_gamepad" --key "$tmp/commands.key" --lcm-url "$url" \
       --virtual-script "$src/test/teleop/mode/gamepad_short_script.yaml" > "$tmp/gamepad.txt" 2>&1 || fail "pmg_gamepad: $(cat "$tmp/gamepad.txt")"
   wait "$ctl" || true
@@ -58,9 +65,9 @@ vr)
   # The scripted operator (config/teleop/vr_walk_script.yaml) recorded into an LCM log, replayed
   # re-signed with the key, as a recorded headset session would be.
   "$bin/pmg_vr_script" --script "$src/config/teleop/vr_walk_script.yaml" --log "$tmp/session.lcmlog" > /dev/null
-  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 18 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 20 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
-  sleep 3.0  # the controller loads the policy and stands up first
+  wait_listening  # then the robot has stood up (soft stand 0.2 s) before the session starts
   "$bin/pmg_vr_replay" --log "$tmp/session.lcmlog" --key "$tmp/commands.key" --lcm-url "$url" > "$tmp/replay.txt" 2>&1 || fail "pmg_vr_replay: $(cat "$tmp/replay.txt")"
   wait "$ctl" || true
   cat "$tmp/controller.txt"
