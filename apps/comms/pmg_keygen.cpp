@@ -1,5 +1,5 @@
 // pmg_keygen: writes a fresh MAC key for the authenticated LCM command channels
-// (docs/teleop_security.md): 32 random bytes (libsodium randombytes) as 64 hex characters, in a
+// (docs/teleop.md): 32 random bytes (libsodium randombytes) as 64 hex characters, in a
 // new file with mode 0600. Never overwrites: an existing file (or link) is an error.
 //
 //   pmg_keygen --out ~/.config/pmg/commands.key

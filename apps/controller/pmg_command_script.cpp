@@ -2,7 +2,7 @@
 // bridge would: PMG_VELOCITY_COMMAND, PMG_POSTURE_COMMAND and, at segment starts that name one,
 // PMG_MODE_COMMAND. Reads the one script format (docs/controller.md) that pmg_controller and
 // pmg_policy_sil read. With --key every message carries the authentication trailer
-// (pmg::comms::CommandPublisher; docs/teleop_security.md), as a controller with
+// (pmg::comms::CommandPublisher; docs/teleop.md), as a controller with
 // `security.key_file` requires.
 //
 //   pmg_command_script --script config/commands/demo.yaml [--rate 50] [--lcm-url udpm://...] [--key FILE]

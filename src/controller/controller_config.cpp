@@ -205,7 +205,7 @@ struct ControllerYaml {
     a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
     a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
     a->Visit("teleop", &teleop, "VR teleoperation (docs/teleop.md)");
-    a->Visit("security", &security, "authenticated LCM command channels (docs/teleop_security.md)");
+    a->Visit("security", &security, "authenticated LCM command channels (docs/teleop.md)");
   }
 };
 

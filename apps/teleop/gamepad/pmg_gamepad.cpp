@@ -1,6 +1,6 @@
 // pmg_gamepad: a game controller (SDL2 GameController API) drives the robot over LCM:
 // PMG_VELOCITY_COMMAND and PMG_POSTURE_COMMAND at --rate, PMG_MODE_COMMAND on button presses, through
-// pmg::comms::CommandPublisher (signed when --key is given). Button map: docs/teleop_gamepad.md.
+// pmg::comms::CommandPublisher (signed when --key is given). Button map: docs/teleop.md.
 //
 //   pmg_gamepad [--config config/teleop/gamepad.yaml] [--lcm-url URL] [--key FILE] [--rate 50]
 //               [--duration S] [--virtual-script FILE] [--controller NAME]

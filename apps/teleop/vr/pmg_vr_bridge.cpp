@@ -1,6 +1,6 @@
 // pmg_vr_bridge: serves the WebXR page to a headset (Meta Quest 3) over HTTPS and publishes the
 // poses it streams back over a secure WebSocket as pmg_lcm::vr_pose_t on PMG_VR_POSE (frame V,
-// include/pmg/teleop/vr_sample.hpp), signed when a key is given. docs/teleop_vr.md.
+// include/pmg/teleop/vr_sample.hpp), signed when a key is given. docs/teleop.md.
 //
 //   pmg_vr_bridge [--port 8443] [--bind 0.0.0.0] [--cert-dir DIR] [--web-root DIR]
 //                 [--lcm-url URL] [--key FILE] [--duration S] [--no-token]
@@ -49,7 +49,7 @@ bool isIpv4(const std::string& a) { return a.find_first_not_of("0123456789.") ==
 int main(int argc, char** argv) {
   CLI::App app{
       "pmg_vr_bridge: serve the WebXR teleoperation page over HTTPS and publish the headset's poses on LCM "
-      "(PMG_VR_POSE). Open the printed URL in the Quest browser. docs/teleop_vr.md"};
+      "(PMG_VR_POSE). Open the printed URL in the Quest browser. docs/teleop.md"};
   int port = 8443;
   std::string bind = "0.0.0.0";
   std::string cert_dir, web_root, key_file;

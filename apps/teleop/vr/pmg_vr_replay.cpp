@@ -1,7 +1,7 @@
 // pmg_vr_replay: re-publishes a recorded VR session (an LCM log with PMG_VR_POSE events, e.g.
 // data/vr/sessions/synthetic_walk.lcmlog) with its original timing, through the same
 // CommandPublisher as pmg_vr_bridge: new utime and, with --key, fresh authentication trailers
-// (the controller refuses the recorded ones as replays). docs/teleop_vr.md.
+// (the controller refuses the recorded ones as replays). docs/teleop.md.
 //
 //   pmg_vr_replay --log FILE.lcmlog [--key FILE] [--lcm-url URL] [--speed 1.0] [--loop]
 //

@@ -1,5 +1,5 @@
 // pmg VR teleoperation page: streams the headset and controller poses to pmg_vr_bridge over a
-// secure WebSocket (protocol: include/pmg/teleop/vr_protocol.hpp, docs/teleop_vr.md).
+// secure WebSocket (protocol: include/pmg/teleop/vr_protocol.hpp, docs/teleop.md).
 //
 //  - WebXR: "Enter VR" (immersive-vr) or "Enter AR" (immersive-ar, passthrough) with the
 //    local-floor reference space; every XR frame sends the viewer pose and the two controllers'

@@ -1,7 +1,7 @@
 #pragma once
 /// @file auth.hpp
 /// Authenticated LCM command channels (issue 13, "only authorized commanders";
-/// docs/teleop_security.md has the threat model).
+/// docs/teleop.md has the threat model).
 ///
 /// LCM is unauthenticated UDP multicast. A signed message is the ordinary LCM-encoded message
 /// followed by a fixed 60-byte trailer (integers big-endian):
@@ -140,7 +140,7 @@ const char* toString(VerifyResult r) noexcept;
 /// Options of MessageVerifier (controller config block `security:`).
 struct VerifierOptions {
   /// Largest accepted |receiver wall clock − send_time| [s]. The hosts' clocks must be synchronised
-  /// well below this (chrony/NTP/PTP; docs/teleop_security.md). Range (0, 60].
+  /// well below this (chrony/NTP/PTP; docs/teleop.md). Range (0, 60].
   double max_age_s = 0.5;
   /// Most senders active at once on one channel (a sender stays active for 2·max_age_s after its
   /// last accepted message). Range 1..kMaxSendersLimit.

@@ -12,7 +12,7 @@ inline constexpr const char* kModeChannel = "PMG_MODE_COMMAND";          ///< pm
 inline constexpr const char* kVrPoseChannel = "PMG_VR_POSE";             ///< pmg_lcm::vr_pose_t
 
 /// The default LCM URL of every pmg sender and receiver: multicast with ttl=0, so command traffic
-/// never leaves the host unless a URL with ttl ≥ 1 is configured (docs/teleop_security.md).
+/// never leaves the host unless a URL with ttl ≥ 1 is configured (docs/teleop.md).
 inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 }  // namespace pmg

@@ -4,7 +4,7 @@
 /// pmg_vr_bridge) puts operator commands on LCM. It fills the LCM messages (lcmtypes/*.lcm; `utime`
 /// = sender wall clock [µs since the Unix epoch], `source` = the commander's name), encodes them and,
 /// when a key file is given, appends the 60-byte authentication trailer of pmg::comms::MessageSigner
-/// (include/pmg/comms/auth.hpp, docs/teleop_security.md) before publishing.
+/// (include/pmg/comms/auth.hpp, docs/teleop.md) before publishing.
 ///
 /// Setup (the constructor) may allocate and throw; the publish calls never throw: they return false
 /// and count a failure (bad value such as NaN is NOT filtered here: the controller rejects it and

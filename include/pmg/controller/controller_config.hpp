@@ -27,7 +27,7 @@ enum class StartupMode {
   kPassive,  ///< stay passive until an operator requests a mode (robot hardware default)
 };
 
-/// Authentication of the LCM command channels (`security:`; docs/teleop_security.md).
+/// Authentication of the LCM command channels (`security:`; docs/teleop.md).
 struct SecurityConfig {
   /// Absolute path of the MAC key (pmg_keygen; owner-only file); "" = commands are not
   /// authenticated (plain LCM, anyone who reaches the multicast group can command).

@@ -10,7 +10,7 @@
 /// Source of the constants (ArmCapsuleModel::g1()): the G1's URDF collision geometry of the arm and
 /// torso links is the visual STL meshes (config/robots/g1/meshes), so the capsules are stated
 /// constants fitted by hand to the mesh bounding boxes (per 2 cm slices for torso, head and pelvis),
-/// each covering its mesh to within about 1 cm; docs/teleop_ik.md lists them with the mesh extents.
+/// each covering its mesh to within about 1 cm; docs/teleop.md lists them with the mesh extents.
 /// The pelvis capsule (pelvis and hip pitch links) is placed for the waist joints at 0; the real
 /// pelvis moves relative to T when the waist rolls or pitches.
 

@@ -5,7 +5,7 @@
 /// pmg::teleop::GamepadMapper, which turns states into the project's operator commands (velocity,
 /// posture, mode requests; include/pmg/controller/commands.hpp, include/pmg/hal/modes.hpp).
 /// The SDL2 reader is in gamepad_sdl.hpp, the virtual-controller script in gamepad_script.hpp, the
-/// button map and its sources in docs/teleop_gamepad.md (picture docs/img/gamepad_map.png).
+/// button map and its sources in docs/teleop.md (picture docs/img/gamepad_map.png).
 ///
 /// Sign conventions (robot side: the heading frame H of pmg::Command, x forward, y left, z up):
 ///   left stick up    → +vx (forward)      left stick left  → +vy (left positive)

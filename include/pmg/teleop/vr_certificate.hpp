@@ -3,7 +3,7 @@
 /// The bridge's self-signed TLS certificate (WebXR needs a secure context, so the page is served
 /// over HTTPS). Generated once with OpenSSL's EVP/X509 API, stored in a config folder and reused;
 /// the operator checks its SHA-256 fingerprint on the headset when accepting it
-/// (docs/teleop_vr.md, "Setting up a Quest").
+/// (docs/teleop.md, "Setting up a Quest").
 ///
 /// Files in the folder (default `$XDG_CONFIG_HOME/pmg/vr`, else `~/.config/pmg/vr`):
 ///  - `bridge.key`: P-256 private key, PEM, mode 0600 (a group- or world-accessible key is refused);

@@ -4,7 +4,7 @@
 /// conversion into pmg::teleop::VrSample / `pmg_lcm::vr_pose_t` (channel pmg::kVrPoseChannel,
 /// "PMG_VR_POSE").
 ///
-/// Page → bridge, one message per XR frame (docs/teleop_vr.md, data/vr/web/vr.js):
+/// Page → bridge, one message per XR frame (docs/teleop.md, data/vr/web/vr.js):
 ///
 ///     {"type":"pose","frame":N,"t":xr_time_ms,
 ///      "head":{"p":[x,y,z],"q":[x,y,z,w]},
