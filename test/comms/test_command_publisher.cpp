@@ -16,6 +16,7 @@
 #include <pmg_lcm/velocity_command_t.hpp>
 #include <pmg_lcm/vr_pose_t.hpp>
 
+#include "lcm_loopback.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/comms/command_publisher.hpp"
 #include "pmg/controller/lcm_command_source.hpp"
@@ -66,24 +67,9 @@ struct Received {
   }
 };
 
-bool multicastLoopsBack() {
-  lcm::LCM tx(kUrl), rx(kUrl);
-  if (!tx.good() || !rx.good()) return false;
-  bool heard = false;
-  struct Probe {
-    static void on(const lcm::ReceiveBuffer*, const std::string&, bool* h) { *h = true; }
-  };
-  rx.subscribeFunction("PMG_TEST_PROBE", &Probe::on, &heard);
-  const std::uint8_t byte = 1;
-  for (int i = 0; i < 5 && !heard; ++i) {
-    tx.publish("PMG_TEST_PROBE", &byte, 1);
-    rx.handleTimeout(100);
-  }
-  return heard;
-}
 
 TEST(CommandPublisher, EveryTypeArrivesVerifiedAndDecoded) {
-  if (!multicastLoopsBack()) GTEST_SKIP() << "LCM multicast does not loop back on this machine (" << kUrl << ")";
+  if (const std::string why = test::lcmMulticastUnavailable(kUrl); !why.empty()) GTEST_SKIP() << why;
   test::TempDir dir;
   const std::string key_file = dir.file("k.key");
   const AuthKey key = generateAuthKey();

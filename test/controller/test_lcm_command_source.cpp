@@ -20,6 +20,7 @@
 #include <pmg_lcm/vr_pose_t.hpp>
 
 #include "alloc_counter.hpp"
+#include "lcm_loopback.hpp"
 #include "pmg/comms/command_publisher.hpp"
 #include "pmg/controller/lcm_command_source.hpp"
 #include "temp_dir.hpp"
@@ -184,30 +185,13 @@ TEST(LcmCommandDecoder, ValidPacketsFillTheSample) {
   EXPECT_EQ(decoder.counters().rejected(), 0u);
 }
 
-/// "" when LCM multicast on @p url loops back on this machine, else why not (sandboxes without a
-/// multicast route drop it).
-std::string multicastUnavailable(lcm::LCM& tx, const std::string& url) {
-  if (!tx.good()) return "LCM cannot open " + url + " on this machine";
-  lcm::LCM probe(url);
-  bool heard = false;
-  struct Probe {
-    static void on(const lcm::ReceiveBuffer*, const std::string&, bool* h) { *h = true; }
-  };
-  probe.subscribeFunction("PMG_TEST_PROBE", &Probe::on, &heard);
-  const std::uint8_t byte = 1;
-  for (int i = 0; i < 5 && !heard; ++i) {
-    tx.publish("PMG_TEST_PROBE", &byte, 1);
-    probe.handleTimeout(100);
-  }
-  return heard ? "" : "LCM multicast does not loop back on this machine (no multicast route)";
-}
 
 // The receive thread over loopback LCM: a flood of malformed packets, then a valid command that
 // still arrives; nothing escapes the thread (an escaped exception would terminate the test).
 TEST(LcmCommandSource, ReceiveThreadSurvivesMalformedPacketsAndCountsThem) {
   const std::string url = "udpm://239.255.76.68:7668?ttl=0";
   lcm::LCM tx(url);
-  if (const std::string why = multicastUnavailable(tx, url); !why.empty()) GTEST_SKIP() << why;
+  if (const std::string why = test::lcmMulticastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
   struct Sink {
     std::atomic<int> received{0};
     std::atomic<double> vx{0.0};
@@ -541,7 +525,7 @@ TEST_F(AuthenticatedDecoder, DecodeAllocatesNothing) {
 TEST(LcmCommandSource, SignedStreamGetsThroughAFloodOfBadPackets) {
   const std::string url = "udpm://239.255.76.69:7669?ttl=0";
   lcm::LCM tx(url);
-  if (const std::string why = multicastUnavailable(tx, url); !why.empty()) GTEST_SKIP() << why;
+  if (const std::string why = test::lcmMulticastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
   test::TempDir dir;
   const std::string key_file = dir.file("commands.key");
   const comms::AuthKey key = comms::generateAuthKey();

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "g1_fixture.hpp"
+#include "lcm_loopback.hpp"
 #include "pmg/comms/auth.hpp"
 #include "pmg/comms/channels.hpp"
 #include "pmg/comms/command_publisher.hpp"
@@ -48,22 +49,6 @@ struct Capture {
   void subscribe(lcm::LCM& lcm) { lcm.subscribeFunction("PMG_(VELOCITY|POSTURE|MODE)_COMMAND", &Capture::on, this); }
 };
 
-/// true if multicast loops back on this machine (sandboxes without a multicast route drop it).
-bool loopsBack(const std::string& url) {
-  lcm::LCM tx(url), probe(url);
-  if (!tx.good() || !probe.good()) return false;
-  bool heard = false;
-  struct Probe {
-    static void on(const lcm::ReceiveBuffer*, const std::string&, bool* h) { *h = true; }
-  };
-  probe.subscribeFunction("PMG_TEST_PROBE", &Probe::on, &heard);
-  const std::uint8_t byte = 1;
-  for (int i = 0; i < 5 && !heard; ++i) {
-    tx.publish("PMG_TEST_PROBE", &byte, 1);
-    probe.handleTimeout(100);
-  }
-  return heard;
-}
 
 /// The payload of a signed message after verification (fails the test otherwise).
 template <class T>
@@ -85,7 +70,7 @@ T decodePlain(const Capture::Msg& m) {
 
 TEST(GamepadEndToEnd, VirtualControllerToSignedLcmCommands) {
   const std::string url = "udpm://239.255.76.77:7677?ttl=0";
-  if (!loopsBack(url)) GTEST_SKIP() << "LCM multicast does not loop back on this machine (no multicast route)";
+  if (const std::string why = test::lcmMulticastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
   test::TempDir dir;
   const std::string key_file = dir.file("gamepad.key");
   const comms::AuthKey key = comms::generateAuthKey();
@@ -216,7 +201,7 @@ pid_t spawn(const std::vector<std::string>& args, const std::string& log) {
 
 TEST(GamepadEndToEnd, PmgGamepadPlaysAVirtualScriptOntoLcm) {
   const std::string url = "udpm://239.255.76.78:7678?ttl=0";
-  if (!loopsBack(url)) GTEST_SKIP() << "LCM multicast does not loop back on this machine (no multicast route)";
+  if (const std::string why = test::lcmMulticastUnavailable(url); !why.empty()) GTEST_SKIP() << why;
   test::TempDir dir;
   const std::string script = dir.write("script.yaml",
                                        "duration: 3.4\n"

@@ -1,5 +1,7 @@
 #include "vr_test_util.hpp"
 
+#include "lcm_loopback.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -192,22 +194,7 @@ std::string privateLcmUrl() {
   return "udpm://239.255.76." + std::to_string(100 + pid % 100) + ":" + std::to_string(17000 + pid % 5000) + "?ttl=0";
 }
 
-std::string multicastUnavailable(const std::string& url) {
-  lcm::LCM tx(url);
-  if (!tx.good()) return "LCM cannot open " + url + " on this machine";
-  lcm::LCM probe(url);
-  bool heard = false;
-  struct Probe {
-    static void on(const lcm::ReceiveBuffer*, const std::string&, bool* h) { *h = true; }
-  };
-  probe.subscribeFunction("PMG_VR_TEST_PROBE", &Probe::on, &heard);
-  const std::uint8_t byte = 1;
-  for (int i = 0; i < 5 && !heard; ++i) {
-    tx.publish("PMG_VR_TEST_PROBE", &byte, 1);
-    probe.handleTimeout(100);
-  }
-  return heard ? "" : "LCM multicast does not loop back on this machine (no multicast route)";
-}
+std::string multicastUnavailable(const std::string& url) { return pmg::test::lcmMulticastUnavailable(url); }
 
 struct VrPoseListener::Impl {
   lcm::LCM lcm;
