@@ -21,7 +21,12 @@ url="udpm://239.255.76.67:${port}?ttl=0"
 # A copy of a shipped config with absolute paths, a private LCM port, the key and a telemetry log.
 make_config() {  # $1 = shipped config, $2 = output
   sed -e "s#\.\./#$src/config/#g" -e "s#udpm://239.255.76.67:7667?ttl=0#$url#" "$1" > "$2"
-  printf '\nsecurity:\n  key_file: %s\n' "$tmp/commands.key" >> "$2"
+  if grep -q '^security:' "$2"; then
+    sed -i "s#^  key_file: .*#  key_file: $tmp/commands.key#" "$2"
+  else
+    printf '\nsecurity:\n  key_file: %s\n' "$tmp/commands.key" >> "$2"
+  fi
+  grep -q "key_file: $tmp/commands.key" "$2" || fail "could not set the key in $2"
 }
 fail() { echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true; exit 1; }
 wait_listening() {  # until the controller has opened its authenticated LCM input (setup can be slow under load)
