@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Roll out an exported actor in MJX on the preset command sequence (config/policies/eval_commands.yaml)
-with nominal parameters (no randomisation, no noise, no latency, no arm perturbation).
+with nominal parameters (no randomisation, no noise, no latency, no arm perturbation, no teleop arms).
 
   python3 training/eval_mjx.py RUN/actor.npz --out RUN/mjx_eval.npz
 Records per control tick: command, leg joint positions, PMG references, pelvis height, velocity in
@@ -47,7 +47,8 @@ def main():
     from export_onnx import load_actor
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
-    cfg = EnvConfig(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_delay=0.0, command_resample=10 ** 9,
+    cfg = EnvConfig(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
+                    command_resample=10 ** 9,
                     episode_length=10 ** 9, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
     env = G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")), action_scale=action_scale)
     at, duration = schedule(args.commands)

@@ -108,6 +108,9 @@ def main():
     ap.add_argument("--smoke", action="store_true")
     ap.add_argument("--mode", default="pmg_gco", choices=["pmg_gco", "pmg", "single_gait"],
                     help="Table I configuration: full PMG (GCO), PMG without GCO, single-gait imitation")
+    ap.add_argument("--arms", default="teleop", choices=["teleop", "perturb"],
+                    help="arm targets in training: teleop = VR teleoperation envelope + hand payloads (issue 13, "
+                         "EnvConfig.p_teleop), perturb = only the PMG arm reference +-0.3 rad (the Table I runs)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
 
@@ -124,7 +127,7 @@ def main():
 
     clip_files = sorted(glob.glob("config/clips/g1/*.yaml"))
     log("clips:", clip_files)
-    cfg = EnvConfig(mode=args.mode)
+    cfg = EnvConfig(mode=args.mode) if args.arms == "teleop" else EnvConfig(mode=args.mode, p_teleop=0.0, p_payload=0.0)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:

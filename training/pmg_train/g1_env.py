@@ -9,6 +9,21 @@ the waist and arms follow the PMG reference open-loop (plus smooth random pertur
 arm targets during training). PMG references come from training/pmg_train/pmg_generator.py, the
 port proven equal to the C++ generator (test/policy: pmg_port_*).
 
+Teleoperation of the arms (issue 13; EnvConfig.p_teleop > 0): in teleop segments the arm targets
+are what VR teleoperation sends instead (pmg::teleop::TeleopMode: arm IK, absolute joint targets):
+each arm's target moves in a straight line in joint space (largest joint speed 0.3-2 rad/s)
+between random waypoints held 0.5-3 s, drawn within the joint limits over the teleop envelope
+(TELEOP_LO/HI: shoulder pitch -1.8..0.5 rad, outward shoulder roll, shoulder yaw +-1, elbow
+-0.9..1.9, wrists +-1); half of the waypoints move both arms forward together, mirrored
+("carrying", TELEOP_CARRY_*). An arm passes between the PMG reference and its teleop target with a
+blend weight that moves at 1/s (engage / return, as the controller's teleop stage and rate limiter
+make them continuous). Segments are drawn every `command_resample` steps (with the command): with
+probability p_teleop teleop is on, then each arm follows with probability p_teleop_arm. Hand
+payloads (0-1.5 kg, in a share p_payload of the environments per hand) are added to the masses of
+the wrist_yaw_link bodies (which carry the rubber hands) by the domain randomisation. Brax's
+auto-reset keeps `info`, so draws made in reset() hold per environment slot; the teleop state is
+set back to the default arm pose when an episode ends (the robot restarts in it).
+
 Configurations (EnvConfig.mode; the seed's Table I ablation, trained alike):
   "pmg_gco"     full PMG: generator + GCO (pmg_train/gco.py, equal to the C++ GeneratorWithGco,
                 ctest gco_port_equals_cpp); the actor observes u' (PMG eq. 19) as its command and
@@ -25,7 +40,9 @@ Observation (actor, 62 values, order = policy contract terms):
 Raw values are SI; the contract's per-term scales are applied here exactly as the C++
 ObservationAssembler does (scale, then clip to +-obs_clip).
 Privileged critic observation: the actor's terms without noise, plus base linear velocity in the
-heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay.
+heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay,
+the 14 arm joint targets (relative to the default pose) and the two hand payloads [kg] (90 values).
+The actor's observation does not change (the arms are not in it: the contract stays the same).
 """
 from __future__ import annotations
 
@@ -54,6 +71,17 @@ OBS_TERMS = [  # (name, size, scale) -- the policy contract's observation layout
     ("pmg_phase", 2, 1.0),
 ]
 OBS_CLIP = 100.0
+ARM0 = 15      # first arm joint (robot order): left shoulder pitch .. left wrist yaw, then the right arm
+ARM = 14
+# Teleop envelope of the LEFT arm (shoulder pitch, roll, yaw, elbow, wrist roll, pitch, yaw) [rad];
+# the right arm's is its mirror image (MIRROR_SIGN, the robot config's mirror_sign). Shoulder pitch
+# negative = arm forward/up; left shoulder roll positive = outward.
+TELEOP_LO = (-1.8, -0.1, -1.0, -0.9, -1.0, -1.0, -1.0)
+TELEOP_HI = (0.5, 1.6, 1.0, 1.9, 1.0, 1.0, 1.0)
+# Both arms forward together ("carrying"): left arm in this sub-envelope, right arm its mirror.
+TELEOP_CARRY_LO = (-1.6, -0.1, -0.5, -0.6, -1.0, -1.0, -1.0)
+TELEOP_CARRY_HI = (-0.2, 0.5, 0.5, 1.6, 1.0, 1.0, 1.0)
+MIRROR_SIGN = (1.0, -1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
 
 
 @dataclasses.dataclass
@@ -85,6 +113,17 @@ class EnvConfig:
     kd_scale: tuple = (0.8, 1.2)
     p_delay: float = 0.5           # probability of one control period of action latency
     arm_perturb: float = 0.3       # rad, max amplitude of smooth arm-target perturbations
+    # Teleoperated arms (module docstring): share of the command segments with teleop on, the
+    # share of the arms that follow then, waypoint hold time [s], largest joint speed [rad/s],
+    # share of mirrored two-arm ("carrying") waypoints, blend speed between PMG and teleop [1/s].
+    p_teleop: float = 0.6
+    p_teleop_arm: float = 0.9
+    teleop_hold: tuple = (0.5, 3.0)
+    teleop_speed: tuple = (0.3, 2.0)
+    p_teleop_carry: float = 0.5
+    teleop_blend_rate: float = 1.0
+    hand_payload: tuple = (0.0, 1.5)   # kg added to each hand (wrist_yaw_link)
+    p_payload: float = 0.5             # share of environments with a payload, per hand
     noise: dict = dataclasses.field(default_factory=lambda: {"gyro": 0.1, "gravity": 0.03, "q": 0.01, "qd": 0.5})
     deterministic_reset: bool = False  # evaluation: default pose, phase 0, nominal motors, no latency
     # Reward weights (per control step).
@@ -182,12 +221,17 @@ class G1PmgEnv(Env):
         self.foot_geoms = foot_geoms
         self.floor_geom = mj.geom("floor").id
         self.obs_scale = _scale_vector()
-        self.arm_idx = np.arange(15, 29)
+        self.arm_idx = np.arange(ARM0, ARM0 + ARM)
+        self.hand_bodies = [mj.body(f"{side}_wrist_yaw_link").id for side in ("left", "right")]
+        lower = np.array([j["lower"] for j in joints])[self.arm_idx]
+        upper = np.array([j["upper"] for j in joints])[self.arm_idx]
+        self.arm_lower, self.arm_upper = lower.astype(np.float32), upper.astype(np.float32)
+        self.arm_default = self.q_default[self.arm_idx]
 
     # ---- Brax Env interface ----------------------------------------------------------------
     @property
     def observation_size(self):
-        return {"state": (62,), "privileged_state": (62 + 3 + 1 + 2 + 2 + 2 + 2,)}
+        return {"state": (62,), "privileged_state": (62 + 3 + 1 + 2 + 2 + 2 + 2 + ARM + 2,)}
 
     @property
     def action_size(self):
@@ -230,9 +274,57 @@ class G1PmgEnv(Env):
             return jnp.asarray(ref["base_height"], jnp.float32)  # the template's height
         return tracked[5]  # pmg_gco: h' of u'; single_gait: the commanded height
 
+    # ---- teleoperated arms (module docstring) -----------------------------------------------
+    def _sample_arm_goals(self, rng, goal):
+        """Next waypoints of both arms (14,) [rad], within the joint limits. An arm keeps its
+        current goal @p goal with probability 0.2 (one arm moves alone), except when carrying."""
+        c = self.cfg
+        k = jax.random.split(rng, 6)
+        mirror = jnp.asarray(MIRROR_SIGN, jnp.float32)
+        lo, hi = jnp.asarray(TELEOP_LO, jnp.float32), jnp.asarray(TELEOP_HI, jnp.float32)
+        left = jax.random.uniform(k[0], (7,), minval=lo, maxval=hi)
+        right = mirror * jax.random.uniform(k[1], (7,), minval=lo, maxval=hi)
+        clo, chi = jnp.asarray(TELEOP_CARRY_LO, jnp.float32), jnp.asarray(TELEOP_CARRY_HI, jnp.float32)
+        carry_left = jax.random.uniform(k[2], (7,), minval=clo, maxval=chi)
+        carry_right = mirror * (carry_left + jax.random.uniform(k[3], (7,), minval=-0.1, maxval=0.1))
+        carry = jax.random.uniform(k[4]) < c.p_teleop_carry
+        new = jnp.where(carry, jnp.concatenate([carry_left, carry_right]), jnp.concatenate([left, right]))
+        keep = jnp.logical_and(jax.random.uniform(k[5], (2,)) < 0.2, jnp.logical_not(carry))
+        new = jnp.where(jnp.repeat(keep, 7), goal, new)
+        return jnp.clip(new, jnp.asarray(self.arm_lower), jnp.asarray(self.arm_upper))
+
+    def _teleop_flags(self, rng):
+        """Which arms teleop drives in the next segment (2,) in {0, 1}."""
+        k = jax.random.split(rng, 2)
+        on = jax.random.uniform(k[0]) < self.cfg.p_teleop
+        arms = jnp.logical_and(on, jax.random.uniform(k[1], (2,)) < self.cfg.p_teleop_arm)
+        return arms.astype(jnp.float32)
+
+    def _teleop_advance(self, info, rng):
+        """One control period of the teleop arm targets: waypoint timer, straight-line motion at
+        the waypoint's speed (largest joint speed), PMG/teleop blend weights. Updates info."""
+        c = self.cfg
+        k = jax.random.split(rng, 3)
+        timer = info["tp_timer"] - 1
+        new_wp = timer <= 0
+        goal = jnp.where(new_wp, self._sample_arm_goals(k[0], info["tp_goal"]), info["tp_goal"])
+        speed = jnp.where(new_wp, jax.random.uniform(k[1], (), minval=c.teleop_speed[0], maxval=c.teleop_speed[1]),
+                          info["tp_speed"])
+        hold = jax.random.uniform(k[2], (), minval=c.teleop_hold[0], maxval=c.teleop_hold[1])
+        timer = jnp.where(new_wp, jnp.round(hold / c.control_dt).astype(jnp.int32), timer)
+        delta = (goal - info["tp_tgt"]).reshape(2, 7)
+        largest = jnp.max(jnp.abs(delta), axis=1, keepdims=True)
+        move = delta * jnp.minimum(1.0, speed * c.control_dt / jnp.maximum(largest, 1e-6))
+        info["tp_tgt"] = info["tp_tgt"] + move.reshape(ARM)
+        info["tp_vel"] = move.reshape(ARM) / c.control_dt
+        info["tp_goal"], info["tp_speed"], info["tp_timer"] = goal, speed, timer
+        rate = c.teleop_blend_rate * c.control_dt
+        info["tp_w"] = info["tp_w"] + jnp.clip(info["tp_on"] - info["tp_w"], -rate, rate)
+        return info
+
     def reset(self, rng):
         c = self.cfg
-        k = jax.random.split(rng, 12)
+        k = jax.random.split(rng, 16)
         qpos = jnp.asarray(self.mj_model.qpos0).at[7:].set(self.q_default)
         qpos = qpos.at[2].set(0.79)
         if not c.deterministic_reset:
@@ -254,6 +346,14 @@ class G1PmgEnv(Env):
                        (jax.random.uniform(k[7]) < 0.7),
             "arm_freq": jax.random.uniform(k[8], (14,), minval=0.2, maxval=1.0),
             "arm_off": jax.random.uniform(k[9], (14,), minval=0.0, maxval=2 * math.pi),
+            # Teleop arm targets: start at the default arm pose, first waypoint within 1 s.
+            "tp_tgt": jnp.asarray(self.arm_default),
+            "tp_vel": jnp.zeros(ARM),
+            "tp_goal": jnp.asarray(self.arm_default),
+            "tp_speed": jnp.float32(1.0),
+            "tp_timer": jax.random.randint(k[11], (), 1, int(round(1.0 / c.control_dt)) + 1),
+            "tp_on": self._teleop_flags(k[12]),
+            "tp_w": jnp.zeros(2),
         }
         ref, tracked, info["gco"] = self._reference(info["phase"], info["command"],
                                                     jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32)
@@ -266,6 +366,7 @@ class G1PmgEnv(Env):
         info["ref_height"] = self._height_target(ref, info["tracked"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.zeros(8)
+        info["arm_des_rel"] = info["ref_q"][ARM0:] - jnp.asarray(self.arm_default)
         obs = self._obs(data, info, k[10])
         metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
                                               "ref_q_err", "contact_match", "energy"]}
@@ -274,8 +375,9 @@ class G1PmgEnv(Env):
     def step(self, state: State, action):
         c = self.cfg
         info = dict(state.info)
-        rng, k_noise, k_cmd = jax.random.split(info["rng"], 3)
+        rng, k_noise, k_cmd, k_arm, k_seg = jax.random.split(info["rng"], 5)
         info["rng"] = rng
+        info = self._teleop_advance(info, k_arm)
         a = jnp.clip(action, -1.0, 1.0)
         applied = jnp.where(info["delay"] > 0, info["last_action"], a)  # one period of latency
         q_des = jnp.asarray(self.q_default)
@@ -283,8 +385,13 @@ class G1PmgEnv(Env):
         t = info["step"].astype(jnp.float32) * c.control_dt
         arm_pert = info["arm_amp"] * jnp.sin(2 * math.pi * info["arm_freq"] * t + info["arm_off"])
         q_des = q_des.at[LEG:].set(info["ref_q"][LEG:])
-        q_des = q_des.at[15:].add(arm_pert)
+        q_des = q_des.at[ARM0:].add(arm_pert)
         qd_des = jnp.zeros(29).at[LEG:].set(info["ref_qd"][LEG:])
+        # Teleoperated arms: blend from the PMG target to the teleop target (absolute joint angles).
+        w = jnp.repeat(info["tp_w"], 7)
+        q_des = q_des.at[ARM0:].set((1 - w) * q_des[ARM0:] + w * info["tp_tgt"])
+        qd_des = qd_des.at[ARM0:].set((1 - w) * qd_des[ARM0:] + w * info["tp_vel"])
+        arm_des_rel = q_des[ARM0:] - jnp.asarray(self.arm_default)
         kp = jnp.asarray(self.kp) * info["kp_scale"]
         kd = jnp.asarray(self.kd)
 
@@ -304,6 +411,7 @@ class G1PmgEnv(Env):
         info["step"] = info["step"] + 1
         resample = (info["step"] % c.command_resample) == 0
         info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
+        info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         ref_prev_contact = info["ref_contact"]
         tracked_prev = info["tracked"]
         ref, tracked, info["gco"] = self._reference(phase, info["command"], info["gco"])
@@ -353,6 +461,11 @@ class G1PmgEnv(Env):
         info["ref_height"] = self._height_target(ref, info["tracked"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.concatenate([v_H, jnp.array([height]), contact, jnp.array([pitch, roll])])
+        info["arm_des_rel"] = arm_des_rel
+        # An ended episode restarts in the default pose (Brax auto-reset keeps info): so do the teleop targets.
+        info["tp_tgt"] = jnp.where(done, jnp.asarray(self.arm_default), info["tp_tgt"])
+        info["tp_vel"] = jnp.where(done, 0.0, info["tp_vel"])
+        info["tp_w"] = jnp.where(done, 0.0, info["tp_w"])
         obs = self._obs(data, info, k_noise)
         metrics = dict(state.metrics)  # wrappers add their own entries (e.g. "reward")
         metrics.update({"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
@@ -401,8 +514,10 @@ class G1PmgEnv(Env):
         scale = jnp.asarray(self.obs_scale)
         actor = jnp.clip(jnp.concatenate(noisy) * scale, -OBS_CLIP, OBS_CLIP)
         measured = info["measured"]
+        hands = jnp.asarray(self.hand_bodies)
+        hand_mass = self.sys.body_mass[hands] - jnp.asarray(self.mj_model.body_mass[self.hand_bodies])
         priv = jnp.concatenate([jnp.clip(clean * scale, -OBS_CLIP, OBS_CLIP), measured, info["ref_contact"],
-                                jnp.array([info["kp_scale"], info["delay"]])])
+                                jnp.array([info["kp_scale"], info["delay"]]), info["arm_des_rel"], hand_mass])
         return {"state": actor, "privileged_state": priv}
 
 
@@ -413,11 +528,14 @@ def make_randomization_fn(env: G1PmgEnv):
     def randomize(sys, rng):
         @jax.vmap
         def one(key):
-            k = jax.random.split(key, 6)
+            k = jax.random.split(key, 8)
             friction = sys.geom_friction.at[:, 0].set(jax.random.uniform(k[0], (), minval=c.friction[0],
                                                                          maxval=c.friction[1]))
             mass = sys.body_mass * jax.random.uniform(k[1], (mj.nbody,), minval=c.mass_scale[0], maxval=c.mass_scale[1])
             mass = mass.at[env.torso_body].add(jax.random.uniform(k[2], (), minval=c.payload[0], maxval=c.payload[1]))
+            hand = jax.random.uniform(k[6], (2,), minval=c.hand_payload[0], maxval=c.hand_payload[1])
+            hand = jnp.where(jax.random.uniform(k[7], (2,)) < c.p_payload, hand, 0.0)
+            mass = mass.at[jnp.asarray(env.hand_bodies)].add(hand)
             arm = sys.dof_armature.at[6:].set(jax.random.uniform(k[3], (29,), minval=c.armature[0], maxval=c.armature[1]))
             fl = sys.dof_frictionloss.at[6:].set(jax.random.uniform(k[4], (29,), minval=c.frictionloss[0],
                                                                     maxval=c.frictionloss[1]))
