@@ -7,12 +7,14 @@
 #   vr:      pmg_controller (g1_sil_teleop.yaml: the policy on the ground, a key) + pmg_vr_replay of
 #            a session recorded by pmg_vr_script (config/teleop/vr_walk_script.yaml), re-signed: teleop
 #            engages, the robot walks the way the headset went, the stream drops, the robot stays up.
-# Usage: commanders_sil.sh BIN_DIR SOURCE_DIR gamepad|vr
+#   bridge:  pmg_controller (g1_sil_teleop.yaml, a key) + pmg_vr_bridge + headless Chromium running the
+#            page's synthetic source: the whole VR path in real time.
+# Usage: commanders_sil.sh BIN_DIR SOURCE_DIR gamepad|vr|bridge
 set -euo pipefail
 bin="$(cd "$1" && pwd)"; src="$(cd "$2" && pwd)"; which="$3"
 tmp="$(mktemp -d)"
 pids=()
-cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$tmp"; }
+cleanup() { for p in "${pids[@]}"; do kill -- "$p" 2>/dev/null || true; done; rm -rf "$tmp"; }
 trap cleanup EXIT
 port=$((7700 + RANDOM % 200))
 url="udpm://239.255.76.67:${port}?ttl=0"
@@ -84,5 +86,41 @@ vr)
   python3 -c "import sys; sys.exit(0 if $x > 0.3 else 1)" || fail "the robot did not walk forward (max pelvis x $x m)"
   echo "PASS vr: teleop engaged from the replayed session; pelvis reached x = $x m; stream drop seen; still active"
   ;;
-*) echo "usage: $0 BIN_DIR SOURCE_DIR gamepad|vr"; exit 2 ;;
+bridge)
+  # The whole VR path in real time: headless Chromium runs the page's synthetic pose source (head
+  # walking forward at 0.3 m/s, A pressed in odd seconds, grips held, hands circling at chest height)
+  # -> pmg_vr_bridge (HTTPS/WSS, signs) -> LCM -> pmg_controller (teleop).
+  chromium="${PMG_CHROMIUM:-/usr/bin/chromium}"
+  [ -x "$chromium" ] || { echo "SKIP: chromium not found ($chromium)"; exit 0; }
+  make_config "$src/config/controller/g1_sil_teleop.yaml" "$tmp/ctl.yaml"
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 16 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  pids+=($!); ctl=$!
+  wait_listening
+  "$bin/pmg_vr_bridge" --port 0 --bind 127.0.0.1 --cert-dir "$tmp/vr" --key "$tmp/commands.key" --lcm-url "$url" \
+      --duration 11 > "$tmp/bridge.txt" 2>&1 &
+  pids+=($!); bridge=$!
+  for _ in $(seq 1 100); do grep -q "synthetic=1" "$tmp/bridge.txt" && break; sleep 0.1; done
+  page=$(grep -o "https://127.0.0.1:[0-9]*/?token=[a-z0-9]*&synthetic=1" "$tmp/bridge.txt" | head -1)
+  [ -n "$page" ] || fail "the bridge printed no synthetic URL: $(cat "$tmp/bridge.txt")"
+  setsid "$chromium" --headless=new --no-sandbox --ignore-certificate-errors --disable-gpu --disable-dev-shm-usage \
+      --no-first-run --no-default-browser-check --disable-extensions --disable-background-networking \
+      --disable-component-update --disable-sync --mute-audio --user-data-dir="$tmp/profile" "$page" > "$tmp/chromium.txt" 2>&1 &
+  browser=$!
+  pids+=(-$browser)
+  wait "$bridge" || true
+  kill -- -"$browser" 2>/dev/null || true
+  wait "$ctl" || true
+  cat "$tmp/bridge.txt" | tail -2
+  cat "$tmp/controller.txt"
+  grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
+  accepted=$(sed -n 's/.*LCM command packets: accepted \([0-9]*\).*/\1/p' "$tmp/controller.txt")
+  [ "${accepted:-0}" -gt 300 ] || fail "only ${accepted:-0} VR poses accepted"
+  grep -q "VR teleop: engaged [1-9]" "$tmp/controller.txt" || fail "teleop never engaged"
+  grep -q "final mode: active" "$tmp/controller.txt" || fail "the robot did not stay active"
+  "$bin/pmg_log_export" --log "$tmp/run.lcmlog" --csv "$tmp/run.csv" >/dev/null
+  x=$(column_max "$tmp/run.csv" base_x)
+  python3 -c "import sys; sys.exit(0 if $x > 0.2 else 1)" || fail "the robot did not walk forward (max pelvis x $x m)"
+  echo "PASS bridge: Chromium page -> pmg_vr_bridge -> pmg_controller: $accepted signed poses accepted; teleop engaged; pelvis reached x = $x m; still active"
+  ;;
+*) echo "usage: $0 BIN_DIR SOURCE_DIR gamepad|vr|bridge"; exit 2 ;;
 esac
