@@ -54,7 +54,7 @@ gamepad)
   "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 14 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
   wait_listening
-  SDL_VIDEODRIVER=dummy "$bin/pmg_gamepad" --key "$tmp/commands.key" --lcm-url "$url" \
+  "$bin/pmg_gamepad" --key "$tmp/commands.key" --lcm-url "$url" \
       --virtual-script "$src/test/teleop/mode/gamepad_short_script.yaml" > "$tmp/gamepad.txt" 2>&1 || fail "pmg_gamepad: $(cat "$tmp/gamepad.txt")"
   wait "$ctl" || true
   cat "$tmp/controller.txt"
