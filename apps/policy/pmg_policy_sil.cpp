@@ -93,9 +93,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadControllerConfig(controller_path);
-    base.lcm_enabled = false;
-    base.log_file.clear();
-    base.timing = pmg::TimingMode::kLockstep;
+    base.makeOffline();
     base.mujoco.gantry.enabled = false;
     if (!robot_path.empty()) {
       base.robot_file = robot_path;

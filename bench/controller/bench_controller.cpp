@@ -64,8 +64,7 @@ int main(int argc, char** argv) {
   }
   // 2. Loop tick and HAL cycle inside a lockstep SIL run, through the product path: the same
   // ControllerApp (HAL stack with the supervisor, shaper, runner, telemetry) pmg_controller runs.
-  config.lcm_enabled = false;
-  config.timing = pmg::TimingMode::kLockstep;
+  config.makeOffline();
   pmg::ControllerApp controller(config);
   pmg::CommandScript looped = script;
   while (looped.duration() < seconds) {  // repeat the script to cover the benchmark time

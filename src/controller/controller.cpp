@@ -129,7 +129,6 @@ TickStatus Controller::tick(double now) noexcept {
     shaper_.reset();
     pmg_->reset(0.0);
     if (policy_) policy_->reset();
-    if (teleop_) teleop_->reset();
     limiter_.reset(q_ref_.data(), n);
   }
   if (!active) shaper_.reset();  // the command takes effect only while the loop drives the motors

@@ -26,9 +26,7 @@ namespace {
 
 ControllerConfig silConfig() {
   ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
-  c.lcm_enabled = false;
-  c.log_file.clear();
-  c.timing = TimingMode::kLockstep;
+  c.makeOffline();
   return c;
 }
 
@@ -244,8 +242,9 @@ TEST(Controller, GcoAblationIsSwitchableFromConfig) {
     }
     ASSERT_EQ(app.controller().mode(), Mode::kActive);
     EXPECT_EQ(app.controller().gcoResult().status, enabled ? gco::GcoStatus::kOk : gco::GcoStatus::kDisabled);
-    if (!enabled)
+    if (!enabled) {
       EXPECT_NEAR(app.controller().gcoResult().u_opt.v_x, app.controller().generator().output().v_base.x(), 1e-12);
+    }
   }
 }
 

@@ -21,9 +21,7 @@ namespace {
 
 ControllerConfig silConfig(const std::string& file = test::g1SilControllerConfigPath()) {
   ControllerConfig c = loadControllerConfig(file);
-  c.lcm_enabled = false;
-  c.log_file.clear();
-  c.timing = TimingMode::kLockstep;
+  c.makeOffline();
   return c;
 }
 

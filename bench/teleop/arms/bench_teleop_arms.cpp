@@ -230,9 +230,7 @@ int main(int argc, char** argv) {
 
   try {
     pmg::ControllerConfig base = pmg::loadControllerConfig(controller_path);
-    base.lcm_enabled = false;
-    base.log_file.clear();
-    base.timing = pmg::TimingMode::kLockstep;
+    base.makeOffline();
     base.mujoco.gantry.enabled = false;
     base.teleop.enabled = true;  // TeleopConfig defaults = config/controller/g1_sil_teleop.yaml's values
     if (const std::string e = base.teleop.validate(); !e.empty()) throw pmg::ConfigError(e);

@@ -47,9 +47,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_teleop: %s: teleop.enabled is false\n", config_path.c_str());
     return 2;
   }
-  config.lcm_enabled = false;
-  config.log_file.clear();
-  config.timing = pmg::TimingMode::kLockstep;
+  config.makeOffline();
   pmg::ControllerApp controller(config);
   const pmg::teleop::TeleopMode& tm = *controller.controller().teleop();
 

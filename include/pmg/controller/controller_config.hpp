@@ -70,6 +70,12 @@ struct ControllerConfig {
   teleop::TeleopConfig teleop;
   SecurityConfig security;       ///< authenticated command channels (`security:`)
 
+  /// Offline evaluation (tests, benchmarks, pmg_policy_sil): lockstep timing, no LCM, no event log.
+  void makeOffline() noexcept {
+    lcm_enabled = false;
+    log_file.clear();
+    timing = TimingMode::kLockstep;
+  }
   int cyclesPerTick() const { return static_cast<int>(hal_rate_hz / loop_rate_hz + 0.5); }
   /// The HAL stack this config asks for (makeHalStack()).
   HalStackConfig halStack() const;

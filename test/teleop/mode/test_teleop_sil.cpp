@@ -21,9 +21,7 @@ using teleop::kRightHand;
 
 ControllerConfig teleopConfig() {
   ControllerConfig c = loadControllerConfig(test::sourcePath("config/controller/g1_sil_teleop.yaml"));
-  c.lcm_enabled = false;
-  c.log_file.clear();
-  c.timing = TimingMode::kLockstep;
+  c.makeOffline();
   return c;
 }
 
