@@ -148,7 +148,8 @@ class TeleopMode {
 
   /// Step 2, after the generator: overrides the arm joints of @p q_ref / @p qd_ref (robot joint
   /// order, n entries; the PMG reference in, the reference to send out) for every arm that teleop
-  /// controls, solving the IK for the arms that follow. @p dt [s] is the tick period.
+  /// controls, solving the IK for the arms that follow. @p dt [s] is the tick period. @p n must be
+  /// the robot's joint count (else nothing is changed).
   void applyArms(double* q_ref, double* qd_ref, int n, double dt) noexcept;
 
   const TeleopStatus& status() const noexcept { return status_; }
@@ -177,6 +178,7 @@ class TeleopMode {
   std::array<Eigen::Matrix3d, 2> r_ctrl0_H_;   // relative orientation: controller in H at grip press
   std::array<Eigen::Matrix3d, 2> r_hand0_T_;   // ... and the robot hand in T then
   Eigen::Vector3d robot_shoulder_center_T_ = Eigen::Vector3d::Zero();
+  int n_joints_ = 0;
 };
 
 }  // namespace pmg::teleop

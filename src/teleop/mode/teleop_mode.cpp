@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "pmg/common/config_error.hpp"
+
 namespace pmg::teleop {
 namespace {
 
@@ -86,6 +88,12 @@ TeleopMode::TeleopMode(const RobotConfig& robot, const TeleopConfig& config)
     r_fwd_[static_cast<std::size_t>(h)] = ik_->forwardKinematics(h, q).orientation.toRotationMatrix();
   }
   robot_shoulder_center_T_ = 0.5 * (ik_->shoulderPosition(0) + ik_->shoulderPosition(1));
+  n_joints_ = static_cast<int>(robot.numJoints());
+  for (int h = 0; h < 2; ++h)
+    for (int j : ik_->jointIndices(h))
+      if (j < 0 || j >= n_joints_)
+        throw ConfigError(robot.source_file + ": arm joint index " + std::to_string(j) + " outside the robot's " +
+                          std::to_string(n_joints_) + " joints");
   for (int h = 0; h < 2; ++h) {
     r_ctrl0_H_[static_cast<std::size_t>(h)].setIdentity();
     r_hand0_T_[static_cast<std::size_t>(h)] = ik_->forwardKinematics(h, ik_->nominal(h)).orientation.toRotationMatrix();
@@ -181,14 +189,12 @@ const TeleopStatus& TeleopMode::updateCommand(const CommandSample& input, double
 }
 
 void TeleopMode::applyArms(double* q_ref, double* qd_ref, int n, double dt) noexcept {
+  if (n != n_joints_) return;  // not this robot's reference (never from the controller)
   const bool fresh = status_.stream_fresh && have_sample_;
   std::array<bool, 2> follow{};
   for (int h = 0; h < 2; ++h) {
     const auto hh = static_cast<std::size_t>(h);
-    const auto& idx = ik_->jointIndices(h);
-    bool indices_ok = true;
-    for (int j : idx) indices_ok = indices_ok && j >= 0 && j < n;
-    if (!indices_ok) return;  // the robot has no such arm (never for the G1)
+    const auto& idx = ik_->jointIndices(h);  // within the robot's joints (checked at setup)
     // Deadman with hysteresis (only a fresh sample changes it).
     if (fresh) {
       const double g = last_.grip[hh];

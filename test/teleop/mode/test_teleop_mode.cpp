@@ -179,7 +179,6 @@ VrSample sampleForTarget(const TeleopMode& mode, int hand, const ArmPose& target
   const TeleopConfig& c = mode.config();
   // Probe the mapping's affine parts with two samples: p_T = a + scale * p_rel, R_T = R_hand R_fwd.
   const ArmPose at0 = mode.armTarget(s, hand);  // hand at s.hand_position, identity orientation
-  const Eigen::Vector3d head(s.head_position[0], s.head_position[1], s.head_position[2]);
   const auto hh = static_cast<std::size_t>(hand);
   const Eigen::Vector3d p0(s.hand_position[hh][0], s.hand_position[hh][1], s.hand_position[hh][2]);
   const Eigen::Vector3d p = p0 + (target.position - at0.position) / c.arm_scale;
@@ -187,7 +186,6 @@ VrSample sampleForTarget(const TeleopMode& mode, int hand, const ArmPose& target
   const Eigen::Quaterniond r_hand = (target.orientation * r_fwd.conjugate()).normalized();
   s.hand_position[hh] = {p.x(), p.y(), p.z()};
   s.hand_quat[hh] = {r_hand.w(), r_hand.x(), r_hand.y(), r_hand.z()};
-  (void)head;
   return s;
 }
 
