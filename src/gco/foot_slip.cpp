@@ -10,12 +10,45 @@ FootSlipMeter::FootSlipMeter(std::shared_ptr<const LegModel> model, double dt, d
   if (!(dt > 0.0)) throw std::invalid_argument("FootSlipMeter: dt must be > 0");
 }
 
+namespace {
+Eigen::Matrix3d rotationHB(double roll, double pitch) {
+  const double cr = std::cos(roll), sr = std::sin(roll), cp = std::cos(pitch), sp = std::sin(pitch);
+  Eigen::Matrix3d R_HB;
+  R_HB << cp, sp * sr, sp * cr, 0.0, cr, -sr, -sp, cp * sr, cp * cr;
+  return R_HB;
+}
+}  // namespace
+
+ImpliedBaseVelocity stanceImpliedVelocity(LegKinematics& kin, const GcoInput& in) noexcept {
+  ImpliedBaseVelocity out;
+  const Eigen::Matrix3d R_HB = rotationHB(in.base_roll, in.base_pitch);
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    if (!in.contact[f]) continue;
+    FootKinematics k;
+    if (!kin.compute(static_cast<Foot>(f), in.q_leg[f], in.qd_leg[f], &k)) return ImpliedBaseVelocity{};
+    const Eigen::Vector3d r = R_HB * k.p_BS_B;
+    const double w = -(R_HB * k.w_BF_B).z();
+    const Eigen::Vector3d v_rel = Eigen::Vector3d(0.0, 0.0, w).cross(r) + R_HB * k.v_BS_B;
+    out.v_x -= v_rel.x();
+    out.v_y -= v_rel.y();
+    out.yaw_rate += w;
+    ++out.stance_feet;
+  }
+  if (out.stance_feet == 0) return out;
+  out.v_x /= out.stance_feet;
+  out.v_y /= out.stance_feet;
+  out.yaw_rate /= out.stance_feet;
+  out.valid = true;
+  return out;
+}
+
 void FootSlipMeter::reset() {
   p_WB_.setZero();
   yaw_ = 0.0;
   trace_.clear();
   implied_v_.clear();
   commanded_v_.clear();
+  implied_w_.clear();
 }
 
 void FootSlipMeter::add(const GcoInput& in, const BaseCommand& base) {
@@ -24,10 +57,7 @@ void FootSlipMeter::add(const GcoInput& in, const BaseCommand& base) {
   p_WB_.z() = base.height;
   s.p_WB = p_WB_;
   s.yaw = yaw_;
-  const double cr = std::cos(in.base_roll), sr = std::sin(in.base_roll);
-  const double cp = std::cos(in.base_pitch), sp = std::sin(in.base_pitch);
-  Eigen::Matrix3d R_HB;
-  R_HB << cp, sp * sr, sp * cr, 0.0, cr, -sr, -sp, cp * sr, cp * cr;
+  const Eigen::Matrix3d R_HB = rotationHB(in.base_roll, in.base_pitch);
   const Eigen::Matrix3d R_WH = Eigen::AngleAxisd(yaw_, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d v_base(base.v_x, base.v_y, 0.0);
   const Eigen::Vector3d w_base(in.w_HB_H.x(), in.w_HB_H.y(), base.yaw_rate);
@@ -51,6 +81,8 @@ void FootSlipMeter::add(const GcoInput& in, const BaseCommand& base) {
   if (implied_n > 0) {
     implied_v_.push_back(implied_sum / implied_n);
     commanded_v_.emplace_back(in.command.v_x, in.command.v_y);
+    const ImpliedBaseVelocity iv = stanceImpliedVelocity(kin_, in);
+    implied_w_.push_back(iv.valid ? iv.yaw_rate : 0.0);
   }
   trace_.push_back(s);
   // Midpoint-rule integration of the pelvis pose in W.
@@ -119,6 +151,9 @@ FootSlipStats FootSlipMeter::stats() const {
     st.mean_implied_v_x = sum.x() / implied_v_.size();
     st.mean_implied_v_y = sum.y() / implied_v_.size();
     st.mean_implied_velocity_error = err / implied_v_.size();
+    double w_sum = 0.0;
+    for (double w : implied_w_) w_sum += w;
+    st.mean_implied_yaw_rate = w_sum / static_cast<double>(implied_w_.size());
   }
   return st;
 }

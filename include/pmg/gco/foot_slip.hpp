@@ -20,6 +20,24 @@
 
 namespace pmg::gco {
 
+/// Base motion implied by the stance feet: the base velocity (v_x, v_y) and yaw rate ω, in the
+/// heading frame H, that hold every stance sole still on the ground (eq. 14 with v_WS = 0 and the
+/// foot yaw rate ω_WF,z = 0, solved for the base terms; averaged over the feet in stance).
+struct ImpliedBaseVelocity {
+  bool valid = false;   ///< false when no foot is in stance (or a leg state is non-finite)
+  int stance_feet = 0;  ///< feet in stance this sample (0, 1 or 2)
+  double v_x = 0.0;     ///< [m/s], heading frame x (forward)
+  double v_y = 0.0;     ///< [m/s], heading frame y (left)
+  double yaw_rate = 0.0;  ///< [rad/s], about z, counter-clockwise positive
+};
+
+/// Stance-implied base velocity of one reference sample: joints `in.q_leg`, rates `in.qd_leg`,
+/// contacts `in.contact`, pelvis attitude `in.base_roll`/`in.base_pitch` (the base command and
+/// template velocity in `in` are not used). Per stance foot f (vectors in H, R_HB from roll/pitch):
+///   ω_f = −(R_HB ω_BF,f)_z,   v_f = −(ω_f e_z × R_HB p_BS,f + R_HB v_BS,f)_xy,
+/// then the mean over the stance feet. noexcept; no allocation (uses `kin`'s workspace).
+ImpliedBaseVelocity stanceImpliedVelocity(LegKinematics& kin, const GcoInput& in) noexcept;
+
 struct FootSlipStats {
   int stances = 0;                   ///< complete stances evaluated
   int stance_ticks = 0;              ///< stance samples evaluated
@@ -34,6 +52,7 @@ struct FootSlipStats {
   double mean_implied_v_x = 0.0;     ///< base v_x implied by the stance feet [m/s]
   double mean_implied_v_y = 0.0;     ///< base v_y implied by the stance feet [m/s]
   double mean_implied_velocity_error = 0.0;  ///< mean |v_implied,xy − u_cmd,xy| [m/s]
+  double mean_implied_yaw_rate = 0.0;  ///< base yaw rate implied by the stance feet [rad/s] (stanceImpliedVelocity)
 };
 
 /// One recorded tick.
@@ -70,6 +89,7 @@ class FootSlipMeter {
   std::vector<FootSlipSample> trace_;
   std::vector<Eigen::Vector2d> implied_v_;        ///< per tick, per stance foot (flattened)
   std::vector<Eigen::Vector2d> commanded_v_;
+  std::vector<double> implied_w_;                 ///< per tick with a stance foot [rad/s]
 };
 
 }  // namespace pmg::gco
