@@ -16,6 +16,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
+#include "pmg/gco/implied_motion.hpp"
 #include "pmg/clips/clip_io.hpp"
 
 namespace {
@@ -101,6 +102,8 @@ int main(int argc, char** argv) {
   std::vector<double> vx{-0.6, -0.3, 0.0, 0.3, 0.6, 0.9}, vy{0.0, 0.3}, wz{-0.6, 0.0, 0.6};
   std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
   std::vector<double> trace{0.6, 0.0, 0.0}, trace_posture{0.0, 0.0, 0.0};
+  std::string blending = "consistent";
+  bool envelope = false;
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory)->capture_default_str();
   app.add_option("--gco-config", gco_config, "GcoOptions YAML (defaults if omitted)")->check(CLI::ExistingFile);
@@ -115,12 +118,35 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "grid values of the height command [m] (0 = standing height)");
   app.add_option("--trace", trace, "command (v_x v_y ω) whose foot trajectories go to gco_trace.csv")->expected(3);
   app.add_option("--trace-posture", trace_posture, "posture (pitch roll height) of the traced command")->expected(3);
+  app.add_option("--blending", blending, "generator blending: consistent | paper (PMG eqs. 4-7)")
+      ->check(CLI::IsMember({"consistent", "paper"}))
+      ->capture_default_str();
+  app.add_flag("--envelope", envelope,
+               "the command envelope of issue 12 instead of the grid options: v_x -0.5..1.0, v_y -0.4..0.4, w -0.8..0.8 "
+               "and their combinations, posture pitch {0, 0.4}, roll {0, 0.2}, height {standing, 0.62}");
   CLI11_PARSE(app, argc, argv);
+  if (envelope) {
+    vx = {-0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0};
+    vy = {-0.4, -0.2, 0.0, 0.2, 0.4};
+    wz = {-0.8, -0.4, 0.0, 0.4, 0.8};
+    pitch = {0.0, 0.4};
+    roll = {0.0, 0.2};
+    height = {0.0, 0.62};
+  }
 
   try {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
-    const pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
-    auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot));
+    pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
+    for (const auto& c : clips.dynamic_clips) {
+      if (!c.implied.empty()) continue;
+      std::printf("clip %s has no implied_motion table: computing the tables of all clips (pmg_clip_implied)\n", c.name.c_str());
+      addImpliedMotion(&clips, robot);
+      break;
+    }
+    pmg::GeneratorParams gen_params;
+    gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
+    auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot), gen_params);
+    std::printf("blending: %s\n", blending.c_str());
     auto legs = LegModel::fromRobotConfig(robot);
     GcoOptions on = gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config);
     on.enabled = true;
@@ -135,10 +161,10 @@ int main(int argc, char** argv) {
                 clips_dir.c_str());
     for (const auto& c : clips.dynamic_clips) std::printf("  dynamic %s\n", c.name.c_str());
     for (const auto& c : clips.static_clips) std::printf("  static  %s\n", c.name.c_str());
-    std::printf("\n%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s\n", "vx", "vy", "wz", "pitch",
-                "roll", "h", "st", "spd0", "spdG", "slip0", "slipG", "herr0", "herrG", "vimpl", "vcmd");
-    std::printf("%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s\n", "m/s", "m/s", "rad/s",
-                "rad", "rad", "m", "", "mm/s", "mm/s", "mm", "mm", "mm", "mm", "m/s", "m/s");
+    std::printf("\n%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s %7s\n", "vx", "vy", "wz", "pitch",
+                "roll", "h", "st", "spd0", "spdG", "slip0", "slipG", "herr0", "herrG", "vx_im", "vy_im", "w_im");
+    std::printf("%6s %5s %5s %5s %5s %5s | %4s | %8s %8s | %8s %8s | %7s %7s | %7s %7s %7s\n", "m/s", "m/s", "rad/s",
+                "rad", "rad", "m", "", "mm/s", "mm/s", "mm", "mm", "mm", "mm", "m/s", "m/s", "rad/s");
 
     std::ofstream grid_csv;
     if (!out_dir.empty()) {
@@ -146,14 +172,18 @@ int main(int argc, char** argv) {
       if (!grid_csv) throw std::runtime_error(out_dir + "/gco_grid.csv: cannot write");
       grid_csv << "vx,vy,wz,pitch,roll,height,stances,speed_without,speed_with,slip_without,slip_with,"
                   "height_err_without,height_err_with,max_height_err_with,implied_vx_with,implied_vx_without,"
-                  "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with\n";
+                  "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with,implied_vy,implied_wz,within_target\n";
     }
     std::vector<double> tick_us, gco_us;
     tick_us.reserve(2000000);
     gco_us.reserve(2000000);
     double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
     double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
-    int n_walk = 0, n_all = 0;
+    int n_walk = 0, n_all = 0, n_within = 0;
+    double axis_err[3] = {0, 0, 0};
+    int axis_ok[3] = {0, 0, 0};
+    struct Miss { double vx, vy, wz, pitch, roll, h, ix, iy, iw; };
+    std::vector<Miss> worst;
     std::vector<double> h_sum0(height.size(), 0.0), h_sumG(height.size(), 0.0);
     std::vector<int> h_n(height.size(), 0);
     std::uint64_t failures = 0, jump_limited = 0, ticks = 0;
@@ -166,6 +196,22 @@ int main(int argc, char** argv) {
                 Command c{{a, b, w}, {p, r, h}};
                 const FootSlipStats s0 = run(pipe_off, meter_off, c, dt, warm, meas, nullptr, nullptr);
                 const FootSlipStats sG = run(pipe_on, meter_on, c, dt, warm, meas, &tick_us, &gco_us);
+                // Issue 12 target: the stance-implied velocity within ±10 % of the command, or within
+                // 0.03 m/s / 0.05 rad/s when that is larger (only commands with complete stances).
+                const double implied[3] = {sG.mean_implied_v_x, sG.mean_implied_v_y, sG.mean_implied_yaw_rate};
+                const double cmd[3] = {a, b, w};
+                const double abs_tol[3] = {0.03, 0.03, 0.05};
+                bool within = true;
+                for (int ax = 0; ax < 3; ++ax) {
+                  const double err = std::fabs(implied[ax] - cmd[ax]);
+                  const bool ok = err <= std::max(0.1 * std::fabs(cmd[ax]), abs_tol[ax]);
+                  axis_err[ax] += err;
+                  axis_ok[ax] += ok ? 1 : 0;
+                  within = within && ok;
+                }
+                n_within += within ? 1 : 0;
+                if (!within && worst.size() < 400)
+                  worst.push_back({a, b, w, p, r, h, implied[0], implied[1], implied[2]});
                 failures += pipe_on.gco.counters().solver_failures;
                 if (pipe_on.gco.counters().solver_failures > 0) {
                   std::printf("  (GCO solver failures for this command: %llu)\n",
@@ -173,10 +219,11 @@ int main(int argc, char** argv) {
                 }
                 jump_limited += pipe_on.gco.counters().jump_limited;
                 ticks += pipe_on.gco.counters().ticks;
-                std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f\n",
+                std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f %7.3f %s\n",
                             a, b, w, p, r, h, sG.stances, 1e3 * s0.mean_stance_speed, 1e3 * sG.mean_stance_speed,
                             1e3 * s0.mean_slip_per_stance, 1e3 * sG.mean_slip_per_stance, 1e3 * s0.mean_height_error,
-                            1e3 * sG.mean_height_error, sG.mean_implied_v_x, a);
+                            1e3 * sG.mean_height_error, sG.mean_implied_v_x, sG.mean_implied_v_y, sG.mean_implied_yaw_rate,
+                            within ? "" : "*");
                 if (grid_csv) {
                   grid_csv << a << ',' << b << ',' << w << ',' << p << ',' << r << ',' << h << ',' << sG.stances << ','
                            << s0.mean_stance_speed << ',' << sG.mean_stance_speed << ',' << s0.mean_slip_per_stance
@@ -184,7 +231,8 @@ int main(int argc, char** argv) {
                            << sG.mean_height_error << ',' << sG.max_height_error << ',' << sG.mean_implied_v_x << ','
                            << s0.mean_implied_v_x << ',' << s0.mean_single_support_speed << ','
                            << sG.mean_single_support_speed << ',' << s0.mean_double_support_speed << ','
-                           << sG.mean_double_support_speed << '\n';
+                           << sG.mean_double_support_speed << ',' << sG.mean_implied_v_y << ','
+                           << sG.mean_implied_yaw_rate << ',' << (within ? 1 : 0) << '\n';
                 }
                 ++n_all;
                 const auto hi = static_cast<std::size_t>(std::find(height.begin(), height.end(), h) - height.begin());
@@ -231,6 +279,13 @@ int main(int argc, char** argv) {
                     1e3 * h_sum0[i] / h_n[i], 1e3 * h_sumG[i] / h_n[i], h_n[i]);
     std::printf("  kinematic consistency: mean |v implied by stance feet - commanded v|: without %.3f m/s, with %.3f m/s\n",
                 sum_cons0 / n_all, sum_consG / n_all);
+    std::printf("  implied velocity vs command, per axis (mean |implied - command|; within ±10 %% or 0.03 m/s / 0.05 rad/s):\n"
+                "    v_x %.3f m/s (%d/%d within)   v_y %.3f m/s (%d/%d)   w %.3f rad/s (%d/%d)   all axes within: %d/%d commands\n",
+                axis_err[0] / n_all, axis_ok[0], n_all, axis_err[1] / n_all, axis_ok[1], n_all, axis_err[2] / n_all, axis_ok[2],
+                n_all, n_within, n_all);
+    for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)
+      std::printf("    outside: cmd (%.2f, %.2f, %.2f | %.2f %.2f %.2f) implied (%.3f, %.3f, %.3f)\n", worst[i].vx, worst[i].vy,
+                  worst[i].wz, worst[i].pitch, worst[i].roll, worst[i].h, worst[i].ix, worst[i].iy, worst[i].iw);
     std::printf("  GCO solver failures %llu, jump-limited ticks %llu of %llu\n",
                 static_cast<unsigned long long>(failures), static_cast<unsigned long long>(jump_limited),
                 static_cast<unsigned long long>(ticks));

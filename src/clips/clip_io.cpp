@@ -133,6 +133,16 @@ struct MetadataFields {
   }
 };
 
+/// `implied_motion:` (optional, dynamic clips).
+struct ImpliedMotionFields {
+  YAML::Node amplitude, velocity;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("amplitude", &amplitude, "K amplitudes a, strictly increasing from 0", yaml::kRequired);
+    a->Visit("velocity", &velocity, "K x 3 stance-implied (v_x [m/s], v_y [m/s], w [rad/s]) at each amplitude", yaml::kRequired);
+  }
+};
+
 /// Every key of a clip file (docs/clip_format.md). The kind decides which keys exist: keys of the
 /// other kind are unknown keys. Matrices are kept as nodes and read with their shapes checked.
 struct ClipFields {
@@ -144,6 +154,7 @@ struct ClipFields {
   double nominal_scale = 0.0, period = 0.0, neutral = 0.0;
   int num_samples = 0, num_joints = 0;
   ContactFields contact;
+  ImpliedMotionFields implied_motion;
   MetadataFields metadata;
   std::vector<std::string> joint_names;
   YAML::Node q, qd, v_base, omega_base, base_height, values;
@@ -163,6 +174,8 @@ struct ClipFields {
     a->Visit("num_samples", &num_samples, "N (dynamic) or K (static), >= 2", yaml::kRequired);
     a->Visit("num_joints", &num_joints, "n: joints of the robot", yaml::kRequired);
     if (is_dynamic) a->Visit("contact", &contact, "contact model of each foot", yaml::kRequired);
+    if (is_dynamic)
+      a->Visit("implied_motion", &implied_motion, "stance-implied base velocity against amplitude (optional)");
     a->Visit("metadata", &metadata, "provenance of the clip", yaml::kRequired);
     a->Visit("joint_names", &joint_names, "joint order of every q row", yaml::kRequired);
     if (is_dynamic) {
@@ -334,6 +347,16 @@ std::string clipToYaml(const DynamicClip& clip) {
   out += "contact:\n";
   out += "  left: {mu: " + num(clip.contact[0].mu) + ", sigma: " + num(clip.contact[0].sigma) + "}\n";
   out += "  right: {mu: " + num(clip.contact[1].mu) + ", sigma: " + num(clip.contact[1].sigma) + "}\n";
+  if (!clip.implied.empty()) {
+    out += "implied_motion:  # stance-implied base velocity (v_x, v_y, w) of the clip played alone at amplitude a\n";
+    out += "  amplitude: [";
+    for (Eigen::Index i = 0; i < clip.implied.amplitude.size(); ++i) out += (i > 0 ? ", " : "") + num(clip.implied.amplitude(i));
+    out += "]\n  velocity:\n";
+    for (Eigen::Index i = 0; i < clip.implied.velocity.rows(); ++i) {
+      out += "  ";
+      writeRow(out, clip.implied.velocity.row(i));
+    }
+  }
   writeMetadata(out, clip.meta);
   writeMatrix(out, "q", clip.q);
   writeMatrix(out, "qd", clip.qd);
@@ -411,6 +434,13 @@ DynamicClip readDynamicClip(const std::string& path, const RobotConfig& robot, c
     d.v_base = r.matrix("v_base", f.v_base, N, 3, "num_samples");
     d.omega_base = r.matrix("omega_base", f.omega_base, N, 3, "num_samples");
     d.base_height = r.matrix("base_height", f.base_height, N, 0, "num_samples");
+    if (f.implied_motion.amplitude) {
+      std::vector<double> a;
+      yaml::readYaml(f.implied_motion.amplitude, r.at("implied_motion.amplitude"), &a);
+      const auto K = static_cast<Eigen::Index>(a.size());
+      d.implied.amplitude = Eigen::Map<const Eigen::VectorXd>(a.data(), K);
+      d.implied.velocity = r.matrix("implied_motion.velocity", f.implied_motion.velocity, K, 3, "implied_motion.amplitude");
+    }
     return d;
   });
   validateClip(c, robot, path, options);
@@ -451,10 +481,96 @@ ClipLibrary loadClipLibrary(const std::vector<std::string>& files, const RobotCo
 ClipLibrary loadClipLibrary(const std::string& directory, const RobotConfig& robot, const ClipValidationOptions& options) {
   if (!fs::is_directory(directory)) throw ClipFormatError(directory + ": clip library directory does not exist");
   std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(directory))
-    if (entry.is_regular_file() && entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+  std::string map_file;
+  for (const auto& entry : fs::directory_iterator(directory)) {
+    if (!entry.is_regular_file() || entry.path().extension() != ".yaml") continue;
+    if (entry.path().filename() == kConsistencyMapFile)
+      map_file = entry.path().string();
+    else
+      files.push_back(entry.path().string());
+  }
   std::sort(files.begin(), files.end());
-  return loadClipLibrary(files, robot, options);
+  ClipLibrary lib = loadClipLibrary(files, robot, options);
+  if (!map_file.empty()) lib.consistency = readConsistencyMap(map_file);
+  return lib;
+}
+
+namespace {
+struct ConsistencyMapFields {
+  int format_version = 0;
+  std::string kind;
+  std::vector<double> vx, vy, wz, height;
+  YAML::Node delta;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("format_version", &format_version, "clip format version (1)", yaml::kRequired);
+    a->Visit("kind", &kind, "consistency_map", yaml::kRequired);
+    a->Visit("vx", &vx, "grid of v_x [m/s], strictly increasing", yaml::kRequired);
+    a->Visit("vy", &vy, "grid of v_y [m/s], strictly increasing", yaml::kRequired);
+    a->Visit("wz", &wz, "grid of the yaw rate [rad/s], strictly increasing", yaml::kRequired);
+    a->Visit("height", &height, "grid of the pelvis height [m], strictly increasing", yaml::kRequired);
+    a->Visit("delta", &delta, "n_vx*n_vy*n_wz*n_height rows of (dv_x, dv_y, dw)", yaml::kRequired);
+  }
+};
+}  // namespace
+
+std::string consistencyMapToYaml(const ConsistencyMap& map, const std::string& comment) {
+  std::string out = "# PMG consistency map (command-consistent blending). Format: docs/clip_format.md\n";
+  if (!comment.empty()) out += "# " + comment + "\n";
+  out += "format_version: " + std::to_string(kClipFormatVersion) + "\nkind: consistency_map\n";
+  const char* keys[4] = {"vx", "vy", "wz", "height"};
+  for (int d = 0; d < 4; ++d) writeVector(out, keys[d], map.grid[static_cast<std::size_t>(d)]);
+  writeMatrix(out, "delta", map.delta);
+  return out;
+}
+
+void writeConsistencyMap(const ConsistencyMap& map, const std::string& comment, const std::string& path) {
+  writeText(consistencyMapToYaml(map, comment), path);
+}
+
+ConsistencyMap readConsistencyMap(const std::string& path) {
+  return asClipError([&] {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) throw ClipFormatError(path + ": cannot open consistency map (no such file)");
+    yaml::YamlDocument doc = yaml::loadYamlDocument(path);
+    ConsistencyMapFields f;
+    yaml::readYaml(doc.root, doc.source, &f);
+    const yaml::YamlSource src = doc.source;
+    if (f.format_version != kClipFormatVersion)
+      yaml::fail(yaml::childSource(src, "format_version"), doc.root["format_version"],
+                 fmt::format("= {}: expected {}", f.format_version, kClipFormatVersion));
+    if (f.kind != "consistency_map")
+      yaml::fail(yaml::childSource(src, "kind"), doc.root["kind"], "= '" + f.kind + "': expected 'consistency_map'");
+    ConsistencyMap m;
+    const std::vector<double>* g[4] = {&f.vx, &f.vy, &f.wz, &f.height};
+    const char* keys[4] = {"vx", "vy", "wz", "height"};
+    Eigen::Index rows = 1;
+    for (std::size_t d = 0; d < 4; ++d) {
+      if (g[d]->empty()) yaml::fail(yaml::childSource(src, keys[d]), doc.root[keys[d]], "is empty: expected >= 1 value");
+      for (std::size_t i = 1; i < g[d]->size(); ++i)
+        if (!((*g[d])[i] > (*g[d])[i - 1]))
+          yaml::fail(yaml::childSource(src, keys[d]), doc.root[keys[d]], fmt::format("[{}]: expected strictly increasing", i));
+      m.grid[d] = Eigen::Map<const Eigen::VectorXd>(g[d]->data(), static_cast<Eigen::Index>(g[d]->size()));
+      rows *= static_cast<Eigen::Index>(g[d]->size());
+    }
+    std::vector<std::vector<double>> delta;
+    yaml::readYaml(f.delta, yaml::childSource(src, "delta"), &delta);
+    if (static_cast<Eigen::Index>(delta.size()) != rows)
+      yaml::fail(yaml::childSource(src, "delta"), f.delta, fmt::format("has {} rows: expected {} (the grid sizes' product)", delta.size(), rows));
+    m.delta.resize(rows, 3);
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const auto& row = delta[static_cast<std::size_t>(i)];
+      if (row.size() != 3)
+        yaml::fail(yaml::childSource(src, fmt::format("delta[{}]", i)), f.delta, fmt::format("has {} columns: expected 3", row.size()));
+      for (Eigen::Index c = 0; c < 3; ++c) {
+        const double v = row[static_cast<std::size_t>(c)];
+        if (!(std::fabs(v) <= 2.0))
+          yaml::fail(yaml::childSource(src, fmt::format("delta[{}]", i)), f.delta, fmt::format("= {}: expected |value| <= 2", v));
+        m.delta(i, c) = v;
+      }
+    }
+    return m;
+  });
 }
 
 }  // namespace pmg

@@ -71,6 +71,10 @@ DynamicClip mirrorClip(const DynamicClip& clip, const GeneratorJointSpace& joint
   m.v_base.col(1) *= -1.0;
   m.omega_base.col(0) *= -1.0;
   m.omega_base.col(2) *= -1.0;
+  if (!m.implied.empty()) {
+    m.implied.velocity.col(1) *= -1.0;  // v_y and ω change sign under the left/right mirror
+    m.implied.velocity.col(2) *= -1.0;
+  }
   if (clip.axis != CommandAxis::kForward) m.direction = -clip.direction;
   m.contact = {clip.contact[1], clip.contact[0]};
   const Eigen::Index shift = alignPhaseOnLeftTouchdown(m);
@@ -102,6 +106,7 @@ DynamicClip timeReverseClip(const DynamicClip& clip, const std::string& new_name
     if (fc.mu >= 1.0) fc.mu = 0.0;
   }
   r.direction = -clip.direction;
+  r.implied.velocity *= -1.0;  // the same stance-foot paths, travelled backwards
   const Eigen::Index shift = alignPhaseOnLeftTouchdown(r);
   if (r.meta.provenance == "mocap") r.meta.provenance = "mocap_time_reversed";
   r.meta.notes = fmt::format("time reversal of clip '{}', phase rotated by {} samples; {}", clip.name, shift, clip.meta.notes);

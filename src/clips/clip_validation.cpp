@@ -14,6 +14,7 @@ namespace {
 
 /// Longest period accepted [s]: a gait cycle of 10 s is not a walk (the shipped ones are ~1.3 s).
 constexpr double kMaxPeriod = 10.0;
+constexpr double kMaxImpliedAmplitude = 3.0;  // implied_motion.amplitude: the generator extrapolates a clip at most 3x
 
 [[noreturn]] void invalid(const std::string& where, const std::string& field, const std::string& what) {
   throw ClipFormatError(where + ": " + field + ": " + what);
@@ -157,6 +158,32 @@ void validateClip(const DynamicClip& clip, const GeneratorJointSpace& joints, co
     invalid(where, "nominal_scale", fmt::format("= {}: expected x̄ > 0 [m/s or rad/s]", clip.nominal_scale));
   if (clip.direction != 1 && clip.direction != -1)
     invalid(where, "direction", fmt::format("= {}: expected +1 or -1", clip.direction));
+  if (!clip.implied.empty()) {
+    const ImpliedMotionTable& t = clip.implied;
+    const Eigen::Index K = t.amplitude.size();
+    if (K < 2) invalid(where, "implied_motion.amplitude", fmt::format("has {} entries: expected >= 2", K));
+    if (t.velocity.rows() != K || t.velocity.cols() != 3)
+      invalid(where, "implied_motion.velocity", fmt::format("is {}x{}: expected {}x3", t.velocity.rows(), t.velocity.cols(), K));
+    checkFinite(t.amplitude, where, "implied_motion.amplitude");
+    checkFinite(t.velocity, where, "implied_motion.velocity");
+    if (t.amplitude(0) != 0.0)
+      invalid(where, "implied_motion.amplitude[0]", fmt::format("= {}: expected 0 (the standing pose)", t.amplitude(0)));
+    for (Eigen::Index i = 1; i < K; ++i) {
+      if (!(t.amplitude(i) > t.amplitude(i - 1)) || t.amplitude(i) > kMaxImpliedAmplitude)
+        invalid(where, fmt::format("implied_motion.amplitude[{}]", i),
+                fmt::format("= {}: expected strictly increasing, <= {}", t.amplitude(i), kMaxImpliedAmplitude));
+      // The generator inverts the clip's own axis: it must grow with the amplitude in the clip's direction.
+      const double own = clip.direction * t.velocity(i, static_cast<Eigen::Index>(clip.axis));
+      const double prev = clip.direction * t.velocity(i - 1, static_cast<Eigen::Index>(clip.axis));
+      if (!(own > prev))
+        invalid(where, fmt::format("implied_motion.velocity[{}][{}]", i, static_cast<int>(clip.axis)),
+                fmt::format("= {}: expected the clip's own axis (direction {:+d}) to grow strictly with the amplitude "
+                            "(previous {})", t.velocity(i, static_cast<Eigen::Index>(clip.axis)), clip.direction,
+                            t.velocity(i - 1, static_cast<Eigen::Index>(clip.axis))));
+    }
+    if (t.velocity.row(0).cwiseAbs().maxCoeff() > 1e-6)
+      invalid(where, "implied_motion.velocity[0]", "expected (0, 0, 0): the standing pose implies no motion");
+  }
   const char* feet[kNumFeet] = {"contact.left", "contact.right"};
   for (std::size_t f = 0; f < kNumFeet; ++f) {
     const FootContact& c = clip.contact[f];

@@ -13,6 +13,9 @@ std::vector<std::pair<std::string, BackendKind>> yamlEnumNames(BackendKind) {
 std::vector<std::pair<std::string, TimingMode>> yamlEnumNames(TimingMode) {
   return {{"lockstep", TimingMode::kLockstep}, {"realtime", TimingMode::kRealtime}};
 }
+std::vector<std::pair<std::string, Blending>> yamlEnumNames(Blending) {
+  return {{"consistent", Blending::kConsistent}, {"paper", Blending::kPaper}};
+}
 std::vector<std::pair<std::string, StartupMode>> yamlEnumNames(StartupMode) {
   return {{"active", StartupMode::kActive}, {"passive", StartupMode::kPassive}};
 }
@@ -96,6 +99,7 @@ struct GeneratorYaml {
   GeneratorParams p;
   template <class A>
   void Serialize(A* a) {
+    a->Visit("blending", &p.blending, "consistent (amplitudes from the clips' implied motion) | paper (PMG eqs. 4-7)");
     a->Visit("epsilon", &p.epsilon, "PMG eq. 6 epsilon");
     a->Visit("max_command", &p.max_command, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] the generator accepts");
   }

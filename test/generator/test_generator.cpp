@@ -68,7 +68,15 @@ ClipLibrary library() {
   return lib;
 }
 
-std::shared_ptr<const GeneratorModel> model(GeneratorParams p = {}) {
+// These tests check the paper's equations (eqs. 4–12): Blending::kPaper. The command-consistent
+// blending (the default) is tested in test_consistent_blending.cpp.
+GeneratorParams paper() {
+  GeneratorParams p;
+  p.blending = Blending::kPaper;
+  return p;
+}
+
+std::shared_ptr<const GeneratorModel> model(GeneratorParams p = paper()) {
   return std::make_shared<const GeneratorModel>(library(), jointSpace(), p);
 }
 
@@ -85,7 +93,7 @@ TEST(Generator, ZeroCommandIsExactlyTheStandingPose) {
 }
 
 TEST(Generator, Eq4AlphaAndEq6WeightsHandComputed) {
-  GeneratorParams p;
+  GeneratorParams p = paper();
   p.epsilon = 0.1;
   MotionGenerator gen(model(p));
   gen.step({0.5, 0.2, 0.0}, {}, 0.01);
@@ -102,7 +110,7 @@ TEST(Generator, Eq4AlphaAndEq6WeightsHandComputed) {
 }
 
 TEST(Generator, Eq5Eq7BlendAtASampleHandComputed) {
-  GeneratorParams p;
+  GeneratorParams p = paper();
   p.epsilon = 0.1;
   MotionGenerator gen(model(p));
   gen.reset(2.0 / kSamples);  // exactly sample k = 2: q_D(k=2, j) = offset + 0.03 (j + 1)
@@ -130,7 +138,7 @@ TEST(Generator, PhaseInterpolatesLinearlyBetweenSamples) {
 }
 
 TEST(Generator, Eq8Eq9ContactBlendHandComputed) {
-  GeneratorParams p;
+  GeneratorParams p = paper();
   p.epsilon = 0.1;
   MotionGenerator gen(model(p));
   gen.step({0.5, 0.2, 0.0}, {}, 0.01);
@@ -150,7 +158,7 @@ TEST(Generator, Eq8Eq9ContactBlendHandComputed) {
 }
 
 TEST(Generator, Eq11Eq12PhaseAdvanceAndWrap) {
-  GeneratorParams p;
+  GeneratorParams p = paper();
   p.epsilon = 0.1;
   MotionGenerator gen(model(p));
   gen.reset(0.995);

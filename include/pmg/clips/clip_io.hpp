@@ -45,7 +45,17 @@ DynamicClip readDynamicClip(const std::string& path, const RobotConfig& robot,
 StaticClip readStaticClip(const std::string& path, const RobotConfig& robot,
                           const ClipValidationOptions& options = {});
 
-/// Loads every `*.yaml` clip file of a directory (sorted by file name) into a library.
+/// File name of the consistency map inside a clip folder (not a clip).
+inline constexpr const char* kConsistencyMapFile = "consistency_map.yaml";
+
+/// Serialises / writes / reads a ConsistencyMap (docs/clip_format.md). Reading validates shapes,
+/// strictly increasing grids and finite values. @throws ClipFormatError naming file, line and field.
+std::string consistencyMapToYaml(const ConsistencyMap& map, const std::string& comment);
+void writeConsistencyMap(const ConsistencyMap& map, const std::string& comment, const std::string& path);
+ConsistencyMap readConsistencyMap(const std::string& path);
+
+/// Loads every `*.yaml` clip file of a directory (sorted by file name) into a library, and
+/// `consistency_map.yaml` (kConsistencyMapFile) into ClipLibrary::consistency when present.
 /// @throws ClipFormatError on any invalid file, on two dynamic clips with the same
 /// (axis, direction) or two static clips with the same axis, or if the directory does not exist.
 ClipLibrary loadClipLibrary(const std::string& directory, const RobotConfig& robot,

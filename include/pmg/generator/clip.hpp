@@ -68,6 +68,20 @@ struct ClipMetadata {
   std::string notes;         ///< free text (what was done to the data)
 };
 
+/// Stance-implied motion of a dynamic clip played alone at amplitude a (beyond the paper; used by
+/// the generator's command-consistent blending, docs/generator.md): the clip's joints are scaled
+/// about the standing pose, q(φ) = q_stand + a (q_D(φ) − q_stand), and played at the clip's period
+/// T; the table holds the cycle mean of the base velocity that holds the stance soles still
+/// (pmg::gco::stanceImpliedVelocity over the clip's contact schedule). Computed with the robot's
+/// leg kinematics by pmg::gco::computeImpliedMotion (include/pmg/gco/implied_motion.hpp) and stored
+/// in the clip file (`implied_motion:`, docs/clip_format.md). Empty when a clip has none.
+/// Shapes: K amplitudes (K ≥ 2, strictly increasing, amplitude(0) = 0) × 3.
+struct ImpliedMotionTable {
+  Eigen::VectorXd amplitude;  ///< (K) a_k [-], a_0 = 0
+  Eigen::MatrixXd velocity;   ///< (K × 3) (v_x [m/s], v_y [m/s], ω [rad/s]) in the heading frame H at period T
+  bool empty() const { return amplitude.size() == 0; }
+};
+
 /// One gait cycle (PMG dynamic clip {q, q̇, v, ω, c, T}).
 /// Shapes: N samples (rows) × n joints (columns). N ≥ 2.
 struct DynamicClip {
@@ -82,6 +96,7 @@ struct DynamicClip {
   Eigen::MatrixXd omega_base;         ///< (N × 3) pelvis angular velocity in the heading frame [rad/s]
   Eigen::VectorXd base_height;        ///< (N) pelvis height above the ground [m]
   std::array<FootContact, kNumFeet> contact{};  ///< per foot, order Foot::kLeft, Foot::kRight
+  ImpliedMotionTable implied;         ///< optional (empty: the generator derives a linear table from v_base/omega_base)
   ClipMetadata meta;
 
   std::size_t numSamples() const { return static_cast<std::size_t>(q.rows()); }
@@ -102,10 +117,26 @@ struct StaticClip {
   std::size_t numJoints() const { return static_cast<std::size_t>(q.cols()); }
 };
 
+/// Residual command correction of the command-consistent blending (docs/generator.md): on a grid
+/// over (v_x, v_y, ω, height) the correction Δu such that the blended gait generated for u + Δu
+/// implies, by its stance feet, the base motion u (found offline by fixed-point iteration with the
+/// robot's leg kinematics, pmg::gco::computeConsistencyMap). Covers what the per-clip tables cannot:
+/// channel interactions (e.g. side-stepping while turning) and the leg geometry of a squat.
+/// Read from `consistency_map.yaml` beside the clips (docs/clip_format.md); empty = no correction.
+/// Shapes: grid[d] strictly increasing (size ≥ 1 each, d = v_x [m/s], v_y [m/s], ω [rad/s],
+/// height [m]); delta (n_vx·n_vy·n_ω·n_h × 3), row ((i·n_vy + j)·n_ω + k)·n_h + l, columns
+/// (Δv_x [m/s], Δv_y [m/s], Δω [rad/s]).
+struct ConsistencyMap {
+  std::array<Eigen::VectorXd, 4> grid;
+  Eigen::MatrixXd delta;
+  bool empty() const { return delta.rows() == 0; }
+};
+
 /// The clip library a generator is built from.
 struct ClipLibrary {
   std::vector<DynamicClip> dynamic_clips;  ///< at most one per (axis, direction sign)
   std::vector<StaticClip> static_clips;    ///< at most one per posture axis
+  ConsistencyMap consistency;              ///< optional (kConsistent blending only)
 };
 
 }  // namespace pmg

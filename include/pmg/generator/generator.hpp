@@ -18,6 +18,25 @@
 ///   eq. 11  φ ← (φ + Δt / T_u) mod 1
 ///   eq. 12  T_u = Σ_i w_i T_i                  [+ (1 − Σ_i w_i) T_stand]
 ///
+/// Command-consistent blending (beyond the paper; GeneratorParams::blending, default kConsistent;
+/// kPaper is eqs. 4–7 exactly, kept for the ablation). Eqs. 5 and 7 make q_d = q_stand +
+/// Σ_i e_i (q_Di(φ) − q_stand) with the effective amplitude e_i = w_i α_i, so every channel of a
+/// combined command is diluted by its weight, and a clip's nominal scale x̄_i (its mocap pelvis
+/// speed) is not the speed its stance feet imply. kConsistent keeps eqs. 6, 8, 9, 11, 12 (weights
+/// for the period and the contacts) but chooses the amplitudes e_i so that the stance-implied base
+/// motion of the blended gait equals the command:
+///   D_i,s(e) = T_i,s · V_i,s(e)   per-cycle displacement of the clip of axis i, sign s, played
+///                                 alone at amplitude e (V: ImpliedMotionTable, piecewise linear)
+///   Σ_i D_i,s_i(e_i) = u T_u      (3 equations: v_x, v_y, ω; T_u of eq. 12)
+/// solved by kConsistentSweeps Gauss–Seidel sweeps: for axis i, r_i = u_i T_u − Σ_{j≠i}
+/// D_j,s_j(e_j)[i], s_i = sign(r_i) (so a channel may use its opposite clip to cancel another
+/// clip's drift, and e_i → 0 continuously as r_i → 0), e_i = D_i,s_i^{-1}(|r_i|) on the clip's own
+/// axis, clamped to the table's largest amplitude (reported as amplitude_saturated). α_i then
+/// reports e_i. A clip without a table gets the linear one D(e) = e T x̄ on its own axis, e ≤ 1.
+/// What the per-clip tables cannot capture (channel interactions, the leg geometry of a squat) is
+/// corrected first by the library's ConsistencyMap, when it has one: u ← u + Δu(u, height),
+/// multilinear on its grid (inputs clamped to the grid), reported in GeneratorOutput::command_correction.
+///
 /// Conventions and decisions (docs/generator.md):
 /// - **Standing / zero command.** Eq. 7 alone gives q_d = 0 at u_d = 0 (all w_i = 0). pmg gives the
 ///   remaining weight w_stand = 1 − Σ w_i to the standing pose, so q_d = q_stand exactly at zero
@@ -82,14 +101,26 @@ struct PostureCommand {
   double operator[](std::size_t i) const { return i == 0 ? pitch : (i == 1 ? roll : height); }
 };
 
+/// How the velocity channels are blended (see the file comment).
+enum class Blending : int {
+  kPaper = 0,       ///< PMG eqs. 4–7: α_i = |u_i| / x̄_i, convex weights w_i
+  kConsistent = 1,  ///< amplitudes chosen so that the stance-implied base motion equals the command
+};
+
+/// Gauss–Seidel sweeps of the command-consistent amplitude solve (fixed: deterministic cost).
+inline constexpr int kConsistentSweeps = 4;
+
 /// Tunables of the generator.
 struct GeneratorParams {
+  Blending blending = Blending::kConsistent;  ///< kPaper reproduces the paper's eqs. 4–7 (ablation)
   double epsilon = 0.05;  ///< ε of eq. 6 [command units]; keeps w finite at zero command
   /// |command| accepted per axis (v_x, v_y, ω) [m/s, m/s, rad/s]; larger values are clamped.
   std::array<double, kNumCommandAxes> max_command{1.5, 0.8, 1.5};
 
   /// Returns an empty string when valid, else what is wrong (field and expected range).
   std::string validate() const {
+    if (blending != Blending::kPaper && blending != Blending::kConsistent)
+      return "GeneratorParams.blending: expected paper or consistent";
     if (!(epsilon > 0 && epsilon < 1)) return "GeneratorParams.epsilon: expected in (0, 1)";
     for (double m : max_command)
       if (!(m > 0 && m < 10)) return "GeneratorParams.max_command: expected each in (0, 10)";
@@ -114,8 +145,12 @@ struct GeneratorOutput {
   Eigen::VectorXd qd_ref;             ///< (n) reference joint velocity [rad/s]
   Eigen::VectorXd q_dynamic;          ///< (n) q_d of eq. 7 [rad]
   Eigen::VectorXd q_posture;          ///< (n) q_s [rad]
-  std::array<double, kNumCommandAxes> alpha{};    ///< α_i (eq. 4)
-  std::array<double, kNumCommandAxes> weight{};   ///< w_i (eq. 6)
+  std::array<double, kNumCommandAxes> alpha{};    ///< kPaper: α_i (eq. 4); kConsistent: the amplitude e_i
+  std::array<double, kNumCommandAxes> weight{};   ///< w_i (eq. 6): period and contact blend
+  std::array<double, kNumCommandAxes> amplitude{};  ///< e_i: q_d = q_stand + Σ e_i (q_Di − q_stand) (= w_i α_i for kPaper)
+  std::array<int, kNumCommandAxes> clip_direction{1, 1, 1};  ///< sign of the clip played on each axis
+  int amplitude_saturated = 0;        ///< axes whose amplitude hit its table's end (kConsistent: command not carried)
+  std::array<double, kNumCommandAxes> command_correction{};  ///< Δu of the ConsistencyMap applied (kConsistent) [m/s, m/s, rad/s]
   double standing_weight = 1.0;       ///< 1 − Σ w_i
   std::array<double, kNumPostureAxes> beta{};     ///< β per posture axis in [−1, 1]
   std::array<FootContact, kNumFeet> contact{};    ///< blended μ_f, σ_f (eqs. 8–9)
@@ -187,6 +222,20 @@ class GeneratorModel {
       if (neg && !pos) pos = std::make_unique<DynamicClip>(derive(*neg));
     }
     for (const auto& s : library.static_clips) static_[static_cast<std::size_t>(s.axis)] = std::make_unique<StaticClip>(s);
+    for (std::size_t k = 0; k < dynamic_.size(); ++k)
+      if (dynamic_[k]) displacement_[k] = makeDisplacementTable(*dynamic_[k]);
+    consistency_ = library.consistency;
+    if (!consistency_.empty()) {
+      Eigen::Index rows = 1;
+      for (const auto& g : consistency_.grid) {
+        if (g.size() < 1) throw std::invalid_argument("ClipLibrary.consistency.grid: an axis is empty");
+        for (Eigen::Index i = 1; i < g.size(); ++i)
+          if (!(g[i] > g[i - 1])) throw std::invalid_argument("ClipLibrary.consistency.grid: expected strictly increasing");
+        rows *= g.size();
+      }
+      if (consistency_.delta.rows() != rows || consistency_.delta.cols() != 3 || !consistency_.delta.allFinite())
+        throw std::invalid_argument("ClipLibrary.consistency.delta: expected " + std::to_string(rows) + " x 3 finite values");
+    }
     t_stand_ = dynamic_[0] ? dynamic_[0]->period : 1.0;
     for (const auto& d : dynamic_)
       if (d) max_samples_ = std::max(max_samples_, d->numSamples());
@@ -201,7 +250,39 @@ class GeneratorModel {
   double standingPeriod() const { return t_stand_; }
   std::size_t maxSamples() const { return max_samples_; }
 
+  /// Per-cycle displacement table of a clip slot (kConsistent): amplitudes (K) and
+  /// D = T · ImpliedMotionTable::velocity (K × 3: [m, m, rad] per cycle). Derived clips carry
+  /// their source's table transformed (pmg::timeReverseClip, pmg::mirrorClip).
+  struct DisplacementTable {
+    Eigen::VectorXd amplitude;
+    Eigen::MatrixXd displacement;
+  };
+  const ConsistencyMap& consistencyMap() const { return consistency_; }
+  const DisplacementTable* displacementTable(CommandAxis axis, int direction) const {
+    const auto& t = displacement_[slotOf(axis, direction)];
+    return t.amplitude.size() > 0 ? &t : nullptr;
+  }
+
  private:
+  static DisplacementTable makeDisplacementTable(const DynamicClip& c) {
+    DisplacementTable t;
+    if (!c.implied.empty()) {
+      t.amplitude = c.implied.amplitude;
+      t.displacement = c.implied.velocity * c.period;
+      return t;
+    }
+    // No table: linear in the amplitude, the clip's nominal scale on its own axis, its mean
+    // template velocity on the others, at most the clip itself (e = 1).
+    t.amplitude.resize(2);
+    t.amplitude << 0.0, 1.0;
+    t.displacement.setZero(2, 3);
+    t.displacement(1, 0) = c.v_base.col(0).mean() * c.period;
+    t.displacement(1, 1) = c.v_base.col(1).mean() * c.period;
+    t.displacement(1, 2) = c.omega_base.col(2).mean() * c.period;
+    t.displacement(1, static_cast<Eigen::Index>(c.axis)) = c.direction * c.nominal_scale * c.period;
+    return t;
+  }
+
   static std::size_t slotOf(CommandAxis axis, int direction) {
     return 2 * static_cast<std::size_t>(axis) + (direction < 0 ? 1 : 0);
   }
@@ -209,6 +290,8 @@ class GeneratorModel {
   GeneratorParams params_;
   std::array<std::unique_ptr<DynamicClip>, 2 * kNumCommandAxes> dynamic_{};
   std::array<std::unique_ptr<StaticClip>, kNumPostureAxes> static_{};
+  std::array<DisplacementTable, 2 * kNumCommandAxes> displacement_{};
+  ConsistencyMap consistency_;
   double t_stand_ = 1.0;
   std::size_t max_samples_ = 2;
 };
@@ -263,30 +346,49 @@ class MotionGenerator {
     const bool clamped_posture = evalPosture(u_s);
     if (clamped_posture && status == GeneratorStatus::kOk) status = GeneratorStatus::kCommandClamped;
 
+    // kConsistent: the residual correction of the consistency map (file comment).
+    out_.command_correction = {0.0, 0.0, 0.0};
+    if (p.blending == Blending::kConsistent && !model_->consistencyMap().empty()) {
+      lookupCorrection(u, postureHeight(u_s));
+      for (std::size_t i = 0; i < kNumCommandAxes; ++i) u[i] += out_.command_correction[i];
+    }
+
     // Weights (eqs. 4, 6). Axes without a clip get no weight.
     const DynamicClip* clip[kNumCommandAxes] = {};
     double sum_abs = 0.0;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
       clip[i] = model_->dynamicClip(static_cast<CommandAxis>(i), u[i] < 0 ? -1 : 1);
+      out_.clip_direction[i] = u[i] < 0 ? -1 : 1;
       if (clip[i]) sum_abs += std::fabs(u[i]);
     }
     double sum_w = 0.0;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
       out_.alpha[i] = clip[i] ? std::clamp(std::fabs(u[i]) / clip[i]->nominal_scale, 0.0, 1.0) : 0.0;
       out_.weight[i] = clip[i] ? std::fabs(u[i]) / (sum_abs + p.epsilon) : 0.0;
+      out_.amplitude[i] = out_.weight[i] * out_.alpha[i];
       sum_w += out_.weight[i];
     }
     out_.standing_weight = 1.0 - sum_w;
 
-    // Period (eq. 12) and the dynamic reference at φ and φ ± h (eq. 7, reference velocity).
+    // Period (eq. 12).
     double period = out_.standing_weight * model_->standingPeriod();
     for (std::size_t i = 0; i < kNumCommandAxes; ++i)
       if (clip[i]) period += out_.weight[i] * clip[i]->period;
     out_.period = period;
+
+    // Command-consistent amplitudes (see the file comment); the weights above stay for the
+    // period and the contact schedule.
+    out_.amplitude_saturated = 0;
+    if (p.blending == Blending::kConsistent) solveConsistentAmplitudes(u, period);
+
+    // The dynamic reference at φ and φ ± h (eqs. 5, 7; reference velocity).
     const double h = 0.5 / static_cast<double>(model_->maxSamples());
-    blendJoints(clip, phase_ - h, q_minus_);
-    blendJoints(clip, phase_ + h, q_plus_);
-    blendJoints(clip, phase_, out_.q_dynamic);
+    const DynamicClip* play[kNumCommandAxes] = {};  // the clip each axis plays (its sign may differ from u's)
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i)
+      play[i] = model_->dynamicClip(static_cast<CommandAxis>(i), out_.clip_direction[i]);
+    blendJoints(play, phase_ - h, q_minus_);
+    blendJoints(play, phase_ + h, q_plus_);
+    blendJoints(play, phase_, out_.q_dynamic);
 
     // Contacts (eqs. 8–9) and template base motion.
     const auto& js = model_->jointSpace();
@@ -304,19 +406,21 @@ class MotionGenerator {
     }
     out_.v_base.setZero();
     out_.omega_base.setZero();
-    double height = out_.standing_weight * js.standing_base_height;
+    // Template base motion: h = h_stand + Σ e_i (h_i(φ) − h_stand), v = Σ e_i v_i(φ) (eqs. 5, 7
+    // applied to the clips' base channels).
+    double height = js.standing_base_height;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
-      if (!clip[i]) continue;
+      if (!play[i] || out_.amplitude[i] == 0.0) continue;
       std::size_t k0, k1;
       double t;
-      detail::phaseSample(phase_, clip[i]->numSamples(), k0, k1, t);
+      detail::phaseSample(phase_, play[i]->numSamples(), k0, k1, t);
       const auto K0 = static_cast<Eigen::Index>(k0), K1 = static_cast<Eigen::Index>(k1);
-      const double wa = out_.weight[i] * out_.alpha[i];
-      for (int a = 0; a < 3; ++a) out_.v_base[a] += wa * ((1 - t) * clip[i]->v_base(K0, a) + t * clip[i]->v_base(K1, a));
+      const double e = out_.amplitude[i];
+      for (int a = 0; a < 3; ++a) out_.v_base[a] += e * ((1 - t) * play[i]->v_base(K0, a) + t * play[i]->v_base(K1, a));
       for (int a = 0; a < 3; ++a)
-        out_.omega_base[a] += wa * ((1 - t) * clip[i]->omega_base(K0, a) + t * clip[i]->omega_base(K1, a));
-      const double h_clip = (1 - t) * clip[i]->base_height[K0] + t * clip[i]->base_height[K1];
-      height += out_.weight[i] * (out_.alpha[i] * h_clip + (1 - out_.alpha[i]) * js.standing_base_height);
+        out_.omega_base[a] += e * ((1 - t) * play[i]->omega_base(K0, a) + t * play[i]->omega_base(K1, a));
+      const double h_clip = (1 - t) * play[i]->base_height[K0] + t * play[i]->base_height[K1];
+      height += e * (h_clip - js.standing_base_height);
     }
     out_.yaw_rate = out_.omega_base.z();
     out_.base_height = height + posture_height_offset_;
@@ -346,22 +450,132 @@ class MotionGenerator {
   }
 
  private:
-  // q_out = Σ w_i (α_i q_Di(φ) + (1 − α_i) q_stand) + w_stand q_stand  (eqs. 5, 7).
+  // q_out = q_stand + Σ e_i (q_Di(φ) − q_stand), e_i = amplitude[i]. With kPaper, e_i = w_i α_i and
+  // this equals Σ w_i (α_i q_Di(φ) + (1 − α_i) q_stand) + w_stand q_stand (eqs. 5, 7).
   void blendJoints(const DynamicClip* const* clip, double phi, Eigen::VectorXd& q_out) const noexcept {
     const auto& q_stand = model_->jointSpace().q_stand;
-    double w_stand = out_.standing_weight;
+    double e_sum = 0.0;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i)
-      if (clip[i]) w_stand += out_.weight[i] * (1.0 - out_.alpha[i]);
-    for (Eigen::Index j = 0; j < q_out.size(); ++j) q_out[j] = w_stand * q_stand[j];
+      if (clip[i]) e_sum += out_.amplitude[i];
+    for (Eigen::Index j = 0; j < q_out.size(); ++j) q_out[j] = (1.0 - e_sum) * q_stand[j];
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
-      if (!clip[i] || out_.weight[i] == 0.0) continue;
+      if (!clip[i] || out_.amplitude[i] == 0.0) continue;
       std::size_t k0, k1;
       double t;
       detail::phaseSample(phi, clip[i]->numSamples(), k0, k1, t);
-      const double wa = out_.weight[i] * out_.alpha[i];
+      const double e = out_.amplitude[i];
       const auto K0 = static_cast<Eigen::Index>(k0), K1 = static_cast<Eigen::Index>(k1);
       for (Eigen::Index j = 0; j < q_out.size(); ++j)
-        q_out[j] += wa * ((1.0 - t) * clip[i]->q(K0, j) + t * clip[i]->q(K1, j));
+        q_out[j] += e * ((1.0 - t) * clip[i]->q(K0, j) + t * clip[i]->q(K1, j));
+    }
+  }
+
+  // The height the posture command asks for (the squat clip's neutral when none) [m].
+  double postureHeight(const PostureCommand& u_s) const noexcept {
+    const StaticClip* s = model_->staticClip(PostureAxis::kHeight);
+    if (!s) return model_->jointSpace().standing_base_height;
+    return u_s.height <= 0.0 ? s->neutral : std::clamp(u_s.height, s->values[0], s->values[s->values.size() - 1]);
+  }
+
+  // Multilinear interpolation of the consistency map at (u, height), inputs clamped to the grid.
+  void lookupCorrection(const std::array<double, kNumCommandAxes>& u, double height) noexcept {
+    const ConsistencyMap& m = model_->consistencyMap();
+    const double x[4] = {u[0], u[1], u[2], height};
+    Eigen::Index lo[4];
+    double f[4];
+    Eigen::Index stride[4];
+    for (int d = 0; d < 4; ++d) {
+      const Eigen::VectorXd& g = m.grid[static_cast<std::size_t>(d)];
+      const Eigen::Index n = g.size();
+      if (n == 1) {
+        lo[d] = 0;
+        f[d] = 0.0;
+        continue;
+      }
+      const double v = std::clamp(x[d], g[0], g[n - 1]);
+      Eigen::Index k = 0;
+      while (k + 2 < n && v > g[k + 1]) ++k;
+      lo[d] = k;
+      f[d] = (v - g[k]) / (g[k + 1] - g[k]);
+    }
+    stride[3] = 1;
+    for (int d = 2; d >= 0; --d) stride[d] = stride[d + 1] * m.grid[static_cast<std::size_t>(d + 1)].size();
+    for (int corner = 0; corner < 16; ++corner) {
+      double w = 1.0;
+      Eigen::Index row = 0;
+      for (int d = 0; d < 4; ++d) {
+        const int bit = (corner >> d) & 1;
+        if (bit && m.grid[static_cast<std::size_t>(d)].size() == 1) {
+          w = 0.0;
+          break;
+        }
+        w *= bit ? f[d] : 1.0 - f[d];
+        row += (lo[d] + bit) * stride[d];
+      }
+      if (w == 0.0) continue;
+      for (std::size_t i = 0; i < kNumCommandAxes; ++i) out_.command_correction[i] += w * m.delta(row, static_cast<Eigen::Index>(i));
+    }
+  }
+
+  // Displacement of table `t` at amplitude e (piecewise linear; e within the table).
+  static double tableAt(const GeneratorModel::DisplacementTable& t, double e, Eigen::Index column) noexcept {
+    const Eigen::Index K = t.amplitude.size();
+    Eigen::Index k = 0;
+    while (k + 2 < K && e > t.amplitude[k + 1]) ++k;
+    const double f = std::clamp((e - t.amplitude[k]) / (t.amplitude[k + 1] - t.amplitude[k]), 0.0, 1.0);
+    return (1 - f) * t.displacement(k, column) + f * t.displacement(k + 1, column);
+  }
+
+  // Amplitude at which table `t` reaches |displacement| `target` on its own axis `column` (the
+  // table grows strictly along `direction`, validated at load). Sets *saturated at the table's end.
+  static double tableInverse(const GeneratorModel::DisplacementTable& t, double target, Eigen::Index column, int direction,
+                             bool* saturated) noexcept {
+    const Eigen::Index K = t.amplitude.size();
+    const double last = direction * t.displacement(K - 1, column);
+    if (target >= last) {
+      *saturated = target > last;
+      return t.amplitude[K - 1];
+    }
+    Eigen::Index k = 0;
+    while (k + 2 < K && target > direction * t.displacement(k + 1, column)) ++k;
+    const double d0 = direction * t.displacement(k, column), d1 = direction * t.displacement(k + 1, column);
+    const double f = std::clamp((target - d0) / (d1 - d0), 0.0, 1.0);
+    return (1 - f) * t.amplitude[k] + f * t.amplitude[k + 1];
+  }
+
+  // kConsistent: Gauss–Seidel sweeps for e with Σ_i D_i,s_i(e_i) = u T_u (file comment). Sets
+  // amplitude, clip_direction, alpha (= e) and amplitude_saturated. noexcept, no allocation.
+  void solveConsistentAmplitudes(const std::array<double, kNumCommandAxes>& u, double period) noexcept {
+    const GeneratorModel& m = *model_;
+    std::array<const GeneratorModel::DisplacementTable*, kNumCommandAxes> table{};
+    std::array<bool, kNumCommandAxes> saturated{};
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      out_.amplitude[i] = 0.0;
+      table[i] = nullptr;
+    }
+    for (int sweep = 0; sweep < kConsistentSweeps; ++sweep) {
+      for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+        const auto col = static_cast<Eigen::Index>(i);
+        double r = u[i] * period;
+        for (std::size_t j = 0; j < kNumCommandAxes; ++j)
+          if (j != i && table[j] && out_.amplitude[j] > 0.0) r -= tableAt(*table[j], out_.amplitude[j], col);
+        const int dir = r < 0 ? -1 : 1;
+        const auto* t = m.displacementTable(static_cast<CommandAxis>(i), dir);
+        if (!t) {  // the axis has no clip
+          out_.amplitude[i] = 0.0;
+          table[i] = nullptr;
+          continue;
+        }
+        bool sat = false;
+        out_.amplitude[i] = tableInverse(*t, std::fabs(r), col, dir, &sat);
+        saturated[i] = sat;
+        table[i] = t;
+        out_.clip_direction[i] = dir;
+      }
+    }
+    for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+      out_.alpha[i] = out_.amplitude[i];
+      if (saturated[i]) ++out_.amplitude_saturated;
     }
   }
 
