@@ -67,6 +67,21 @@ int main(int argc, char** argv) {
         pmg::writeClip(clip, f);
       }
     }
+    if (map && check && bad == 0) {
+      const pmg::ClipLibrary lib = pmg::loadClipLibrary(clips_dir, robot);
+      const pmg::ConsistencyMap m = pmg::gco::computeConsistencyMap(lib, robot);
+      const bool same = !lib.consistency.empty() && lib.consistency.delta.rows() == m.delta.rows() &&
+                        (lib.consistency.delta - m.delta).cwiseAbs().maxCoeff() <= 1e-5;
+      for (std::size_t d = 0; same && d < 4; ++d)
+        if (lib.consistency.grid[d].size() != m.grid[d].size() || (lib.consistency.grid[d] - m.grid[d]).cwiseAbs().maxCoeff() > 1e-6)
+          ++bad;
+      if (!same) ++bad;
+      if (bad > 0)
+        std::fprintf(stderr, "%s/%s is %s: run pmg_clip_implied --clips %s\n", clips_dir.c_str(), pmg::kConsistencyMapFile,
+                     lib.consistency.empty() ? "missing" : "stale", clips_dir.c_str());
+      else
+        std::printf("%s: %ld grid points current\n", pmg::kConsistencyMapFile, static_cast<long>(m.delta.rows()));
+    }
     if (map && !check) {
       const pmg::ClipLibrary lib = pmg::loadClipLibrary(clips_dir, robot);  // with the tables just written
       double worst = 0.0;
