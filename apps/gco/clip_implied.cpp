@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
     const std::vector<double> amplitudes = pmg::gco::defaultImpliedAmplitudes();
     std::vector<std::string> files;
     for (const auto& e : fs::directory_iterator(clips_dir))
-      if (e.is_regular_file() && e.path().extension() == ".yaml") files.push_back(e.path().string());
+      if (e.is_regular_file() && e.path().extension() == ".yaml" && e.path().filename() != pmg::kConsistencyMapFile)
+        files.push_back(e.path().string());
     std::sort(files.begin(), files.end());
     int bad = 0;
     std::printf("%-22s %5s %8s | %28s | %28s\n", "clip", "K", "a_max", "v(a=1) vx vy w", "v(a_max) vx vy w");
