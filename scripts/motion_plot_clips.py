@@ -65,13 +65,13 @@ def main():
             q = np.array(c["q"])
             v = np.array(c["values"])
             names = c["joint_names"]
-            for j in JOINTS + ["waist_pitch_joint"]:
+            for j in JOINTS + ["waist_pitch_joint", "waist_roll_joint", "left_ankle_roll_joint"]:
                 ax.plot(v, q[:, names.index(j)], label=j.replace("_joint", ""))
             ax.axvline(c["neutral"], color="k", ls=":", lw=1)
             unit = "m" if c["axis"] == "height" else "rad"
             ax.set_xlabel(f'{c["axis"]} command [{unit}] (dotted: neutral)')
             ax.set_ylabel("q [rad]")
-            ax.set_title(f'{c["name"]} ({os.path.basename(c["metadata"]["source_file"])})', fontsize=9)
+            ax.set_title(f'{c["name"]} ({os.path.basename(c["metadata"]["source_file"]) or c["metadata"]["provenance"]})', fontsize=9)
         axes[0, 0].legend(fontsize=7)
         fig.tight_layout()
         fig.savefig(os.path.join(out_dir, "static_clips.png"), dpi=80)

@@ -9,7 +9,9 @@
 ///
 /// Every clip: import (DeepMimic .txt / CMU .bvh) → optimisation-based retargeting
 /// (ceres_keypoints_v1) → contact segmentation and one gait cycle (dynamic) or a monotone posture
-/// sweep (static) → clip file. Mirrored clips use the robot's mirror map (pmg::mirrorClip). Writes
+/// sweep (static) → clip file. Mirrored clips use the robot's mirror map (pmg::mirrorClip). The lean
+/// (roll) template has no capture: it is synthesized on the robot model (posture_ik_v1,
+/// pmg::motion::synthesizeLean). Writes
 /// <out>/report.md (per-clip retargeting quality) and, with --csv-dir, per-clip keypoint CSVs for
 /// scripts/motion_plot_retarget.py.
 ///
@@ -25,6 +27,7 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -41,6 +44,7 @@
 #include "pmg/motion/clip_builder.hpp"
 #include "pmg/motion/deepmimic.hpp"
 #include "pmg/motion/keypoint_retarget.hpp"
+#include "pmg/motion/posture_synthesis.hpp"
 
 namespace {
 
@@ -70,6 +74,10 @@ struct DynamicSpec {
   Foot anchor = Foot::kLeft;
   ContactEvent event = ContactEvent::kTouchdown;
   std::string notes;
+  /// Hand-set contact spans, frames of the source FILE (converted to the retargeted range).
+  std::vector<ContactOverride> file_overrides;
+  double swing_blend_s = 0.0;                          ///< KeypointRetargetOptions::swing_blend
+  CycleClosing closing = CycleClosing::kLinearRamp;   ///< DynamicClipOptions::closing
 };
 
 struct MirrorSpec {
@@ -83,6 +91,45 @@ struct StaticSpec {
   PostureAxis axis = PostureAxis::kHeight;
   std::string notes;
 };
+
+/// Posture of every row of a static clip with the feet flat (PostureProbe), relative to the neutral
+/// row: the coupling the template adds to the other posture axes, and its balance.
+struct PostureCheck {
+  double torso_pitch = 0.0;    ///< max |torso pitch − neutral| [rad]
+  double torso_roll = 0.0;     ///< max |torso roll − neutral| [rad]
+  double pelvis_pitch = 0.0;   ///< max |pelvis pitch − neutral| [rad]
+  double height = 0.0;         ///< max |pelvis height − neutral| [m]
+  double com_margin = 0.0;     ///< min centre-of-mass margin in the support polygon [m]
+};
+
+PostureCheck checkPosture(const StaticClip& clip, PostureProbe& probe) {
+  Eigen::Index neutral_row = 0;
+  (clip.values.array() - clip.neutral).abs().minCoeff(&neutral_row);
+  const FlatFootPosture n = probe.measure(clip.q.row(neutral_row).transpose());
+  PostureCheck c;
+  c.com_margin = n.com_margin;
+  for (Eigen::Index i = 0; i < clip.q.rows(); ++i) {
+    const FlatFootPosture m = probe.measure(clip.q.row(i).transpose());
+    c.torso_pitch = std::max(c.torso_pitch, std::abs(m.torso_pitch - n.torso_pitch));
+    c.torso_roll = std::max(c.torso_roll, std::abs(m.torso_roll - n.torso_roll));
+    c.pelvis_pitch = std::max(c.pelvis_pitch, std::abs(m.pelvis_pitch - n.pelvis_pitch));
+    c.height = std::max(c.height, std::abs(m.pelvis_height - n.pelvis_height));
+    c.com_margin = std::min(c.com_margin, m.com_margin);
+  }
+  return c;
+}
+
+std::string postureLine(const StaticClip& clip, const PostureCheck& c) {
+  return fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.1f} | {:.1f} |\n", clip.name, toString(clip.axis), c.torso_pitch,
+                     c.torso_roll, c.pelvis_pitch, 1000.0 * c.height, 1000.0 * c.com_margin);
+}
+
+/// The one place where a clip becomes file text. (The lead's implied-motion block, pmg::gco, is
+/// to be computed and attached to the clip here, before clipToYaml, for every clip written.)
+template <typename Clip>
+std::string clipText(const Clip& clip) {
+  return clipToYaml(clip);
+}
 
 std::string license(const std::string& file) { return file.rfind("cmu_bvh/", 0) == 0 ? kCmuLicense : kDeepMimicLicense; }
 
@@ -211,8 +258,27 @@ int main(int argc, char** argv) {
   };
   dynamic("walk_forward", "deepmimic/humanoid3d_walk.txt", 0.0, -1.0, CommandAxis::kForward, true, 0, 0, ContactEvent::kTouchdown,
           "DeepMimic walk: the file is one closed gait cycle (Loop: wrap)");
-  dynamic("turn_left", "deepmimic/humanoid3d_long_walk3.txt", 1.5, 3.8, CommandAxis::kYaw, false, 0.2, 2.0, ContactEvent::kLiftoff,
-          "pivot turn to the left (t = 1.8-3.4 s of the file), cycle between two left-foot liftoffs");
+  dynamic("turn_left", "cmu_bvh/cmu_69_17_turn_in_place_left_excerpt_30fps.bvh", 0.1, 1.6, CommandAxis::kYaw, true, 0, 0,
+          ContactEvent::kTouchdown,
+          "CMU 69_17 turn in place to the left (one-shot, 93 deg), one cycle from standing (t = 0.1 s) to standing (t = 1.6 s) "
+          "with one step of each foot; the left foot's pivot on the ground (ankle up 2 cm, turning 83 deg) is retargeted as a step "
+          "(swing forced over file frames 9-23, targets raised by up to 0.03 m), the right step (frames 30-43) likewise raised "
+          "0.03 m (its toe dragged); swing ends blended onto the stances over 0.15 s; cycle closed in swing (the last stance is "
+          "3 cm wider and toed in 10 deg: the difference moves the landing instead of sliding the feet in double support)");
+  {
+    DynamicSpec& turn = dynamic_specs.back();
+    for (const auto& [foot, begin, end] : {std::tuple{Foot::kLeft, 9, 24}, std::tuple{Foot::kRight, 30, 44}}) {
+      ContactOverride o;
+      o.foot = foot;
+      o.begin = begin;
+      o.end = end;
+      o.contact = false;
+      o.clearance = 0.03;
+      turn.file_overrides.push_back(o);
+    }
+    turn.swing_blend_s = 0.15;
+    turn.closing = CycleClosing::kInSwing;
+  }
   dynamic("walk_lateral_left", "cmu_bvh/cmu_143_40_sidestep_left_excerpt.bvh", 0.0, -1.0, CommandAxis::kLateral, false, 0.0, 2.2,
           ContactEvent::kTouchdown, "CMU 143_40 crossover side-step to the left, cycle between two left-foot touchdowns");
   dynamic("walk_backward", "cmu_bvh/cmu_143_39_walk_backward_excerpt.bvh", 0.0, -1.0, CommandAxis::kForward, false, 0.0, 1.8,
@@ -243,6 +309,22 @@ int main(int argc, char** argv) {
     checkOutputFolder(out_dir);  // before minutes of work, not after
     const RobotConfig robot = loadRobotConfig(robot_yaml);
     const KinematicModel model(robot);
+    PostureProbe probe(model);  // static templates measured with the feet flat (posture_synthesis.hpp)
+    // Arm joints: neither on a leg nor on the pelvis → torso_link chain (the waist).
+    std::vector<int> arm_joints;
+    {
+      std::vector<int> body;
+      for (const LimbChain& c : {model.leftLeg(), model.rightLeg(), model.chain(robot.base_link, "torso_link")})
+        body.insert(body.end(), c.joint_index.begin(), c.joint_index.end());
+      for (int j = 0; j < static_cast<int>(robot.numJoints()); ++j)
+        if (std::find(body.begin(), body.end(), j) == body.end()) arm_joints.push_back(j);
+    }
+    std::string posture_report =
+        "\nPosture templates measured on the robot with both feet flat (pmg::motion::PostureProbe: the pelvis tilt the legs\n"
+        "imply, torso_link angles, MuJoCo centre of mass): largest change from the neutral row over the clip's range, and the\n"
+        "smallest centre-of-mass margin inside the support polygon of the two soles (> 0: statically balanced).\n\n"
+        "| clip | axis | torso pitch [rad] | torso roll [rad] | pelvis pitch [rad] | pelvis height [mm] | CoM margin [mm] |\n"
+        "|---|---|---|---|---|---|---|\n";
     std::string report =
         "# G1 clip set: retargeting report\n\n"
         "Generated by `build/bin/pmg_make_clips` (do not edit). Retargeting: ceres_keypoints_v1 (docs/motion.md).\n"
@@ -260,6 +342,13 @@ int main(int argc, char** argv) {
       const HumanMotion human = load(imported.at(spec.source.file), spec.source);
       KeypointRetargetOptions rt_opt;
       rt_opt.level_pelvis = true;  // played with a level pelvis (clip format: no pelvis orientation)
+      rt_opt.swing_blend = spec.swing_blend_s;
+      const int first_frame = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
+      for (ContactOverride o : spec.file_overrides) {
+        o.begin -= first_frame;
+        o.end -= first_frame;
+        rt_opt.contact_overrides.push_back(o);
+      }
       const RetargetResult res = retargetKeypoints(human, model, rt_opt);
       RobotMotion rm = res.motion;
       rm.source_file = spec.source.file;
@@ -273,6 +362,8 @@ int main(int argc, char** argv) {
       DynamicClipOptions opt;
       opt.name = spec.name;
       opt.axis = spec.axis;
+      opt.closing = spec.closing;
+      opt.leg_joints = {model.leftLeg().joint_index, model.rightLeg().joint_index};
       DynamicClip clip = buildDynamicClip(rm, res.contacts, window, robot, opt);
       // Stance = the robot sole low and still as the generator plays the clip (the human labels
       // of the retargeting start stance while the robot sole is still up and moving).
@@ -291,7 +382,7 @@ int main(int argc, char** argv) {
                                     spec.notes, res.scale, robot_contacts.enter_height, robot_contacts.exit_height,
                                     robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st));
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);
       report += fmt::format("| {} | dynamic {} {:+d} | `{}` | [{}, {}) @ {:.0f} Hz | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source.file, clip.meta.frame_begin,
@@ -304,7 +395,7 @@ int main(int argc, char** argv) {
     for (const MirrorSpec& spec : mirror_specs) {
       const DynamicClip clip = mirrorClip(built.at(spec.source_clip), robot, spec.name);
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
       report += fmt::format("| {} | dynamic {} {:+d} | mirror of `{}` | - | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | as {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source_clip, clip.period, clip.nominal_scale,
                             clip.contact[0].mu, clip.contact[0].sigma, clip.contact[1].mu, clip.contact[1].sigma, spec.source_clip);
@@ -332,8 +423,22 @@ int main(int argc, char** argv) {
       StaticClip clip = buildStaticClip(rm, values, 0, static_cast<int>(extreme), robot, opt);
       // A posture template moves both legs alike: average with its left/right mirror.
       symmetrizeStaticClip(clip, robot);
-      // The height template shortens the legs without turning them about the hips.
-      if (spec.axis == PostureAxis::kHeight) keepLegDirections(clip, model);
+      // The height template shortens the legs without turning them about the hips; it keeps the
+      // arms where they are (the capture reaches for a box) and the torso at the neutral pitch.
+      std::string decoupling;
+      if (spec.axis == PostureAxis::kHeight) {
+        keepLegDirections(clip, model);
+        const PostureCheck before = checkPosture(clip, probe);
+        holdJointsAtNeutral(clip, arm_joints);
+        const double residual = holdTorsoPitch(clip, probe);
+        const PostureCheck after = checkPosture(clip, probe);
+        decoupling = fmt::format(
+            "; arms held at the neutral row and waist pitch set per row so that torso_link pitch with the feet flat stays at the "
+            "neutral row's (max change {:.3f} -> {:.3f} rad, residual {:.1e}; centre-of-mass margin {:.0f} -> {:.0f} mm)",
+            before.torso_pitch, after.torso_pitch, residual, 1000.0 * before.com_margin, 1000.0 * after.com_margin);
+        std::printf("%-20s torso pitch coupling %.3f -> %.3f rad, CoM margin %.0f -> %.0f mm\n", spec.name.c_str(), before.torso_pitch,
+                    after.torso_pitch, 1000.0 * before.com_margin, 1000.0 * after.com_margin);
+      }
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin += offset;
       clip.meta.frame_end += offset;
@@ -341,20 +446,51 @@ int main(int argc, char** argv) {
       clip.meta.provenance = "mocap";
       clip.meta.retargeting = "ceres_keypoints_v1";
       const RetargetStats st = retargetStats(res, robot, 0, static_cast<int>(extreme) + 1);
-      clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; joints averaged with their left/right mirror (symmetric posture); {}", spec.notes, res.scale,
-                                    spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", statsLine(st));
+      clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; joints averaged with their left/right mirror (symmetric posture){}; {}", spec.notes, res.scale,
+                                    spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", decoupling, statsLine(st));
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipToYaml(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", 0, static_cast<int>(extreme) + 1);
       report += fmt::format("| {} | static {} | `{}` | [{}, {}) @ {:.0f} Hz | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | {} |\n",
                             clip.name, toString(clip.axis), spec.source.file, clip.meta.frame_begin, clip.meta.frame_end, rm.fps,
                             clip.values(0), clip.values(clip.values.size() - 1), clip.neutral, statsLine(st));
       std::printf("%-20s %s -> %s %.3f .. %.3f (neutral %.3f)\n", clip.name.c_str(), spec.source.file.c_str(),
                   toString(clip.axis).c_str(), clip.values(0), clip.values(clip.values.size() - 1), clip.neutral);
+      posture_report += postureLine(clip, checkPosture(clip, probe));
     }
+    {
+      // The lean (roll) template: no side-bend capture is shipped, so it is synthesized on the robot.
+      const LeanOptions lean_opt;
+      LeanSynthesis lean = synthesizeLean(probe, lean_opt);
+      StaticClip& clip = lean.clip;
+      clip.meta.license = "none needed (synthesized from the robot model, no capture data)";
+      clip.meta.notes = fmt::format(
+          "synthesized (no side-bend capture is shipped): per torso roll target in (0, {:.2f}] rad, Ceres over KDL and MuJoCo "
+          "kinematics solves the pelvis position (pelvis level) and the leg and waist joints (arms at the default pose) with both "
+          "soles held at the default pose's (planted, flat), torso pitch and heading held, the centre of mass held over the same "
+          "point of the feet, and the smallest change from the default pose (pmg::motion::synthesizeLean); the waist rolls the "
+          "torso and the legs shift the pelvis against the lean as a parallelogram (hip roll / ankle roll, equal leg lengths); "
+          "negative rows are the left/right mirror; values = torso_link roll [rad] measured with the feet flat; sole error "
+          "{:.1e} m, sole tilt {:.1e} rad, centre-of-mass shift {:.1e} m, roll error {:.1e} rad, pelvis height change {:.1f} mm",
+          lean_opt.max_roll, lean.max_foot_error, lean.max_foot_tilt, lean.max_com_shift, lean.max_roll_error,
+          1000.0 * lean.max_height_change);
+      validateClip(clip, robot, clip.name);
+      outputs.emplace_back(fs::path(out_dir) / (clip.name + ".yaml"), clipText(clip));
+      report += fmt::format("| {} | static {} | synthesized on the robot (posture_ik_v1) | - | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | "
+                            "soles planted: position error {:.2f} mm, tilt {:.1e} rad; centre of mass held within {:.2f} mm; "
+                            "roll error {:.1e} rad; joint-limit violations 0 (bounded solve) |\n",
+                            clip.name, toString(clip.axis), clip.values(0), clip.values(clip.values.size() - 1), clip.neutral,
+                            1000.0 * lean.max_foot_error, lean.max_foot_tilt, 1000.0 * lean.max_com_shift, lean.max_roll_error);
+      std::printf("%-20s synthesized -> %s %.3f .. %.3f (neutral %.3f)\n", clip.name.c_str(), toString(clip.axis).c_str(),
+                  clip.values(0), clip.values(clip.values.size() - 1), clip.neutral);
+      posture_report += postureLine(clip, checkPosture(clip, probe));
+    }
+    report += posture_report;
     report +=
-        "\nNot in the set: a side-lean (roll) static clip: the shared mocap has no side-lean capture (CMU 132_35/36\n"
-        "were located but not transcribed), so no roll template is shipped and none is synthesized.\n";
+        "\nNot in the set: a captured side lean. The shared mocap has no side-bend capture (CMU 132_35/36 \"walk leaning\"\n"
+        "were located but not transcribed), so `lean` is synthesized on the robot model (provenance `synthesized`,\n"
+        "docs/motion.md). The pitch template `bend` starts at the capture's upright 0.065 rad: leaning back (pitch < 0.065)\n"
+        "has no template.\n";
     outputs.emplace_back(fs::path(out_dir) / "report.md", report);
     writeAllOrNothing(outputs);
   } catch (const std::exception& e) {

@@ -72,6 +72,15 @@ void DynamicClipOptions::validate() const {
   if (num_samples < 8) throw std::invalid_argument(fmt::format("DynamicClipOptions.num_samples = {}: expected >= 8", num_samples));
   if (!(smoothing_sigma >= 0.0) || !std::isfinite(smoothing_sigma))
     throw std::invalid_argument(fmt::format("DynamicClipOptions.smoothing_sigma = {}: expected finite >= 0 [s]", smoothing_sigma));
+  if (closing == CycleClosing::kInSwing) {
+    for (std::size_t f = 0; f < kNumFeet; ++f)
+      if (leg_joints[f].empty())
+        throw std::invalid_argument(fmt::format("DynamicClipOptions.leg_joints[{}]: empty; closing kInSwing needs the {} leg's joints",
+                                                f, footName(static_cast<Foot>(f))));
+    for (int j : leg_joints[0])
+      if (std::find(leg_joints[1].begin(), leg_joints[1].end(), j) != leg_joints[1].end())
+        throw std::invalid_argument(fmt::format("DynamicClipOptions.leg_joints: joint {} is in both legs", j));
+  }
 }
 
 ContactSequence detectContacts(const RobotMotion& motion, const ContactOptions& options) {
@@ -222,11 +231,43 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
     throw std::runtime_error(fmt::format("buildDynamicClip({}): mean {} command over the cycle is {:.2e}: expected |x̄| >= 1e-3",
                                          options.name, toString(options.axis), mean_cmd));
 
-  // Close the cycle: remove the linear drift with a zero-mean ramp, so row M equals row 0 and the
-  // cycle mean (x̄, mean posture) is unchanged; then drop row M.
+  // Close the cycle: remove the drift with a zero-mean ramp g(r) − mean(g), g(0) = 0, g(M) = 1, so
+  // row M equals row 0 and the cycle mean (x̄, mean posture) is unchanged; then drop row M.
+  // Column ramps: linear, or (kInSwing) for a leg's joints the raised-cosine swing ramp of its foot.
+  // (The linear ramp keeps its closed-form mean, (M − 1) / 2M, so the kLinearRamp clips are
+  // bit-identical to those built before kInSwing existed.)
+  Eigen::MatrixXd ramp(M, d);
+  for (int r = 0; r < M; ++r) ramp.row(r).setConstant(static_cast<double>(r) / M - 0.5 * (M - 1) / M);
+  if (options.closing == CycleClosing::kInSwing) {
+    for (std::size_t f = 0; f < kNumFeet; ++f) {
+      // Rate sin²(π (r − s + ½) / L) over each swing run [s, s + L) of the window (not wrapped).
+      Eigen::VectorXd rate = Eigen::VectorXd::Zero(M);
+      int r = 0;
+      while (r < M) {
+        if (contacts[static_cast<std::size_t>(window.begin + r)][f]) {
+          ++r;
+          continue;
+        }
+        int e = r;
+        while (e < M && !contacts[static_cast<std::size_t>(window.begin + e)][f]) ++e;
+        for (int k = r; k < e; ++k) rate(k) = std::pow(std::sin(M_PI * (k - r + 0.5) / (e - r)), 2);
+        r = e;
+      }
+      if (rate.sum() <= 0.0) continue;  // no swing: linear ramp
+      Eigen::VectorXd g(M + 1);
+      g(0) = 0.0;
+      for (int k = 0; k < M; ++k) g(k + 1) = g(k) + rate(k) / rate.sum();
+      const double g_mean = g.head(M).mean();
+      for (int j : options.leg_joints[f]) {
+        if (j < 0 || j >= n)
+          throw std::invalid_argument(fmt::format("buildDynamicClip({}): leg_joints[{}] holds joint {}: expected [0, {})", options.name, f, j, n));
+        ramp.col(j) = g.head(M).array() - g_mean;
+      }
+    }
+  }
   Eigen::MatrixXd P(M, d);
   const Eigen::RowVectorXd drift = X.row(M) - X.row(0);
-  for (int r = 0; r < M; ++r) P.row(r) = X.row(r) - (static_cast<double>(r) / M - 0.5 * (M - 1) / M) * drift;
+  for (int r = 0; r < M; ++r) P.row(r) = X.row(r) - ramp.row(r).cwiseProduct(drift);
   // Clamp to the joint limits before smoothing (the ramp can push a joint that rests on its limit
   // past it); the convex Gaussian then rounds the approach to the limit instead of a clamp kink.
   {

@@ -276,6 +276,7 @@ void KeypointRetargetOptions::validate() const {
   nonneg(w_ground, "w_ground");
   nonneg(w_smooth, "w_smooth");
   nonneg(w_posture, "w_posture");
+  nonneg(swing_blend, "swing_blend");
   if (max_iterations < 1) throw std::invalid_argument(fmt::format("KeypointRetargetOptions.max_iterations = {}: expected >= 1", max_iterations));
   if (!(contact_height > 0.0)) throw std::invalid_argument(fmt::format("KeypointRetargetOptions.contact_height = {}: expected > 0 [m]", contact_height));
   if (!(contact_speed > 0.0)) throw std::invalid_argument(fmt::format("KeypointRetargetOptions.contact_speed = {}: expected > 0 [m/s]", contact_speed));
@@ -317,6 +318,18 @@ ContactSequence detectHumanContacts(const HumanMotion& human, const KeypointReta
         start = end;
       }
     }
+  }
+  for (std::size_t i = 0; i < options.contact_overrides.size(); ++i) {
+    const ContactOverride& o = options.contact_overrides[i];
+    if (o.begin < 0 || o.end > F || o.begin >= o.end)
+      throw std::invalid_argument(fmt::format("KeypointRetargetOptions.contact_overrides[{}]: frames [{}, {}) invalid for a motion "
+                                              "of {} frames (need 0 <= begin < end <= frames; {})",
+                                              i, o.begin, o.end, F, human.source_file));
+    if (!(o.clearance >= 0.0) || !std::isfinite(o.clearance) || (o.contact && o.clearance > 0.0))
+      throw std::invalid_argument(fmt::format("KeypointRetargetOptions.contact_overrides[{}].clearance = {}: expected finite >= 0 "
+                                              "[m], and 0 on a contact span",
+                                              i, o.clearance));
+    for (int k = o.begin; k < o.end; ++k) out[static_cast<std::size_t>(k)][static_cast<std::size_t>(o.foot)] = o.contact;
   }
   return out;
 }
@@ -369,6 +382,17 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
     }
   }
 
+  // Forced swings: raise the foot targets (after the vertical alignment, which uses stance frames).
+  for (const ContactOverride& o : options.contact_overrides) {
+    if (o.contact || o.clearance <= 0.0) continue;
+    const Keypoint foot_kps[2][2] = {{Keypoint::kLeftAnkle, Keypoint::kLeftToe}, {Keypoint::kRightAnkle, Keypoint::kRightToe}};
+    for (int k = o.begin; k < o.end; ++k) {
+      const double s_span = (k - o.begin + 0.5) / static_cast<double>(o.end - o.begin);
+      for (Keypoint kp : foot_kps[static_cast<int>(o.foot)])
+        res.targets[static_cast<std::size_t>(k)][static_cast<std::size_t>(kp)].z() += o.clearance * std::sin(M_PI * s_span);
+    }
+  }
+
   // Stance anchors: mean target ankle position over each contact run.
   std::array<std::vector<Eigen::Vector2d>, 2> anchors;
   const Keypoint ankle[2] = {Keypoint::kLeftAnkle, Keypoint::kRightAnkle};
@@ -387,6 +411,44 @@ RetargetResult retargetKeypoints(const HumanMotion& human, const KinematicModel&
         for (int k = start; k < end; ++k) a[static_cast<std::size_t>(k)] = mean;
       }
       start = end;
+    }
+  }
+
+  // Swing ends blended onto the neighbouring stance anchors (xy of ankle and toe together).
+  if (options.swing_blend > 0.0) {
+    const double width = options.swing_blend * human.fps;  // [frames]
+    const Keypoint toe[2] = {Keypoint::kLeftToe, Keypoint::kRightToe};
+    for (int side = 0; side < 2; ++side) {
+      const auto sd = static_cast<std::size_t>(side);
+      int start = 0;
+      while (start < F) {
+        int end = start;
+        const bool c = res.contacts[static_cast<std::size_t>(start)][sd];
+        while (end < F && res.contacts[static_cast<std::size_t>(end)][sd] == c) ++end;
+        if (!c) {
+          for (int k = start; k < end; ++k) {
+            KeypointTargets& t = res.targets[static_cast<std::size_t>(k)];
+            const Eigen::Vector2d p = t[static_cast<std::size_t>(ankle[side])].head<2>();
+            Eigen::Vector2d delta = Eigen::Vector2d::Zero();
+            double w_sum = 0.0;
+            const auto weight = [&](int d) { return d < width ? 0.5 * (1.0 + std::cos(M_PI * d / width)) : 0.0; };
+            if (start > 0) {  // stance before: lift-off at `start`
+              const double w = weight(k - start + 1);
+              delta += w * (anchors[sd][static_cast<std::size_t>(start - 1)] - p);
+              w_sum += w;
+            }
+            if (end < F) {  // stance after: touchdown at `end`
+              const double w = weight(end - k);
+              delta += w * (anchors[sd][static_cast<std::size_t>(end)] - p);
+              w_sum += w;
+            }
+            if (w_sum > 1.0) delta /= w_sum;
+            t[static_cast<std::size_t>(ankle[side])].head<2>() += delta;
+            t[static_cast<std::size_t>(toe[side])].head<2>() += delta;
+          }
+        }
+        start = end;
+      }
     }
   }
 

@@ -236,3 +236,55 @@ TEST(ClipBuilder, KeepLegDirectionsShortensWithoutTurningTheLegs) {
   wrong.q.resize(2, 3);
   EXPECT_THROW(keepLegDirections(wrong, model), std::invalid_argument);
 }
+
+// Cycle closing in swing (CycleClosing::kInSwing): a one-shot motion whose last stance differs from
+// its first. A leg joint that drifts is corrected only while its foot is in swing, so the closed
+// clip moves that joint exactly as the capture did during the foot's stances (no sliding added in
+// double support); other joints keep the linear ramp; both close (row M ≡ row 0).
+TEST(ClipBuilder, ClosingInSwingCorrectsALegOnlyWhileItsFootIsUp) {
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const KinematicModel model(robot);
+  const int M = 40;
+  RobotMotion m;
+  m.fps = 40.0;
+  m.q = robot.defaultPose().transpose().replicate(M + 1, 1);
+  m.p_WB.setZero(M + 1, 3);
+  m.p_WB.col(2).setConstant(0.75);
+  m.R_WB.resize(M + 1);
+  ContactSequence c(static_cast<std::size_t>(M + 1), {true, true});
+  const Eigen::Index hip_yaw = robot.jointIndex("left_hip_yaw_joint"), waist = robot.jointIndex("waist_yaw_joint");
+  for (int k = 0; k <= M; ++k) {
+    m.R_WB[static_cast<std::size_t>(k)] = Eigen::Quaterniond(Eigen::AngleAxisd(0.04 * k, Eigen::Vector3d::UnitZ()));  // turning left
+    m.q(k, hip_yaw) = 0.002 * k;  // drifts 0.08 rad over the cycle, in stance and in swing
+    m.q(k, waist) = 0.001 * k;
+    c[static_cast<std::size_t>(k)][0] = !(k >= 10 && k < 20);  // left swing [10, 20)
+    c[static_cast<std::size_t>(k)][1] = !(k >= 25 && k < 35);  // right swing [25, 35)
+  }
+  DynamicClipOptions o;
+  o.name = "turn_like";
+  o.axis = CommandAxis::kYaw;
+  o.num_samples = M;  // resampling at the source samples: the identity
+  o.smoothing_sigma = 0.0;
+  o.align_on_left_touchdown = false;
+  o.closing = CycleClosing::kInSwing;
+  o.leg_joints = {model.leftLeg().joint_index, model.rightLeg().joint_index};
+  const DynamicClip clip = buildDynamicClip(m, c, CycleWindow{0, M}, robot, o);
+  for (int k = 0; k + 1 < M; ++k) {
+    const double step = clip.q(k + 1, hip_yaw) - clip.q(k, hip_yaw);
+    if (k + 1 < 10 || k >= 20) EXPECT_NEAR(step, 0.002, 1e-12) << "left stance, sample " << k;  // as captured
+    EXPECT_NEAR(clip.q(k + 1, waist) - clip.q(k, waist), 0.001 - 0.04 / M, 1e-12);               // linear ramp
+  }
+  // Closed: the step across the seam (row M−1 → row 0) continues the motion.
+  EXPECT_NEAR(clip.q(0, hip_yaw) - clip.q(M - 1, hip_yaw), 0.002, 1e-12);  // the seam lies in the left stance
+  EXPECT_NEAR(clip.q(0, waist) - clip.q(M - 1, waist), 0.001 - 0.04 / M, 1e-12);
+  // The linear ramp would have moved the hip yaw in stance too.
+  o.closing = CycleClosing::kLinearRamp;
+  const DynamicClip linear = buildDynamicClip(m, c, CycleWindow{0, M}, robot, o);
+  EXPECT_NEAR(linear.q(5, hip_yaw) - linear.q(4, hip_yaw), 0.0, 1e-12);
+  // Options: both legs named, no joint in both.
+  o.closing = CycleClosing::kInSwing;
+  o.leg_joints[1].clear();
+  EXPECT_THROW(buildDynamicClip(m, c, CycleWindow{0, M}, robot, o), std::invalid_argument);
+  o.leg_joints[1] = o.leg_joints[0];
+  EXPECT_THROW(buildDynamicClip(m, c, CycleWindow{0, M}, robot, o), std::invalid_argument);
+}

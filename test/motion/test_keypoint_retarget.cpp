@@ -73,4 +73,94 @@ TEST(KeypointRetarget, RecoversJointAnglesOfASyntheticRobotMotion) {
   EXPECT_EQ(st.joint_limit_violations, 0);
 }
 
+
+/// A G1 standing still in its default pose, as a "human" motion of @p frames at 30 fps (robot
+/// keypoints, feet flat on the ground).
+HumanMotion standingRobot(const KinematicModel& model, int frames) {
+  HumanMotion human;
+  human.format = "synthetic";
+  human.fps = 30.0;
+  human.ankle_height = 0.0174;  // ankle roll link origin above the sole
+  Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+  X_WB.translation() = Eigen::Vector3d(0, 0, 0.7666);  // soles on z = 0
+  for (int k = 0; k < frames; ++k) human.frames.push_back(robotKeypoints(model, X_WB, model.config().defaultPose()));
+  return human;
+}
+
+// Hand-set contact spans replace the detected labels over their frames; a span outside the motion,
+// empty, or with clearance on a contact span is refused with the span named.
+TEST(KeypointRetarget, ContactOverridesReplaceTheDetectedLabels) {
+  const KinematicModel model(pmg::test::g1Robot());
+  const HumanMotion human = standingRobot(model, 10);
+  KeypointRetargetOptions opt;
+  const ContactSequence detected = detectHumanContacts(human, opt);
+  for (const auto& c : detected) ASSERT_TRUE(c[0] && c[1]);  // standing: both feet down
+  ContactOverride o;
+  o.foot = Foot::kLeft;
+  o.begin = 2;
+  o.end = 5;
+  o.contact = false;
+  o.clearance = 0.03;
+  opt.contact_overrides.push_back(o);
+  const ContactSequence c = detectHumanContacts(human, opt);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(c[static_cast<std::size_t>(k)][0], k < 2 || k >= 5) << k;
+    EXPECT_TRUE(c[static_cast<std::size_t>(k)][1]) << k;
+  }
+  auto refused = [&](const ContactOverride& bad, const char* what) {
+    KeypointRetargetOptions b;
+    b.contact_overrides = {o, bad};
+    try {
+      detectHumanContacts(human, b);
+      ADD_FAILURE() << "expected std::invalid_argument for " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("contact_overrides[1]"), std::string::npos) << e.what();
+    }
+  };
+  ContactOverride bad = o;
+  bad.end = 11;
+  refused(bad, "a span past the end");
+  bad = o;
+  bad.begin = bad.end;
+  refused(bad, "an empty span");
+  bad = o;
+  bad.contact = true;
+  refused(bad, "clearance on a contact span");
+}
+
+// A forced swing raises the foot by the clearance, and swing_blend makes the swing start at the
+// stance it leaves and end at the one it reaches, instead of the foot snapping to the first swing
+// target (here the foot is moved 5 cm forward for the swing and the stance after it).
+TEST(KeypointRetarget, ForcedSwingWithClearanceAndBlendedEnds) {
+  const KinematicModel model(pmg::test::g1Robot());
+  HumanMotion human = standingRobot(model, 12);
+  for (int k = 4; k < 12; ++k)
+    for (Keypoint kp : {Keypoint::kLeftAnkle, Keypoint::kLeftToe}) human.frames[static_cast<std::size_t>(k)].p_WK[static_cast<std::size_t>(kp)].x() += 0.05;
+  KeypointRetargetOptions opt;
+  opt.scale = 1.0;
+  opt.segment_directions = false;
+  opt.level_pelvis = true;
+  ContactOverride o;
+  o.foot = Foot::kLeft;
+  o.begin = 4;
+  o.end = 7;
+  o.contact = false;
+  o.clearance = 0.04;
+  opt.contact_overrides.push_back(o);
+  const auto ankleTarget = [](const RetargetResult& r, int k) { return r.targets[static_cast<std::size_t>(k)][static_cast<std::size_t>(Keypoint::kLeftAnkle)]; };
+  const RetargetResult sharp = retargetKeypoints(human, model, opt);
+  opt.swing_blend = 0.1;  // 3 frames at 30 fps
+  const RetargetResult blended = retargetKeypoints(human, model, opt);
+  const double x_before = ankleTarget(sharp, 0).x(), x_after = ankleTarget(sharp, 11).x();
+  ASSERT_NEAR(x_after - x_before, 0.05, 1e-9);
+  EXPECT_NEAR(ankleTarget(sharp, 4).x(), x_after, 1e-9);               // snaps forward at lift-off
+  EXPECT_LT(ankleTarget(blended, 4).x() - x_before, 0.5 * 0.05);        // leaves from the stance
+  EXPECT_NEAR(ankleTarget(blended, 6).x(), x_after, 0.3 * 0.05);        // arrives at the next one
+  // Clearance: sin(π (k − begin + ½) / 3) · 0.04 above the standing ankle target, at mid swing 0.04.
+  EXPECT_NEAR(ankleTarget(sharp, 5).z() - ankleTarget(sharp, 0).z(), 0.04, 1e-9);
+  // The robot foot follows: its sole leaves the ground in the swing and is back on it after.
+  EXPECT_GT(blended.motion.p_WS[0](5, 2), 0.02);
+  EXPECT_LT(std::abs(blended.motion.p_WS[0](10, 2)), 0.003);
+}
+
 }  // namespace

@@ -16,6 +16,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/motion/clip_builder.hpp"
+#include "pmg/motion/posture_synthesis.hpp"
 #include "pmg/clips/clip_io.hpp"
 
 namespace {
@@ -163,16 +164,103 @@ TEST_F(ShippedClips, ContactScheduleMatchesTheRobotSoles) {
   }
 }
 
+// Pitch and height templates move both sides alike (each row is its own mirror image); the roll
+// template leans the other way under the mirror (row of −ρ = mirror of row of +ρ).
 TEST_F(ShippedClips, PostureTemplatesAreLeftRightSymmetric) {
   const pmg::ClipLibrary lib = pmg::loadClipLibrary(std::string(kClipDir), robot_);
   const std::vector<int> mirror = robot_.mirrorIndex();
   ASSERT_FALSE(lib.static_clips.empty());
   for (const auto& s : lib.static_clips) {
     SCOPED_TRACE(s.name);
-    for (Eigen::Index i = 0; i < s.q.rows(); ++i)
+    const Eigen::Index K = s.q.rows();
+    for (Eigen::Index i = 0; i < K; ++i) {
+      const Eigen::Index m = s.axis == pmg::PostureAxis::kRoll ? K - 1 - i : i;  // the mirrored row
+      if (s.axis == pmg::PostureAxis::kRoll) {
+        ASSERT_NEAR(s.values(m), -s.values(i), 1e-5) << "roll values are not symmetric about 0";
+      }
       for (std::size_t j = 0; j < robot_.numJoints(); ++j) {
-        const double mirrored = robot_.joints[j].mirror_sign * s.q(i, mirror[j]);
+        const double mirrored = robot_.joints[j].mirror_sign * s.q(m, mirror[j]);
         EXPECT_NEAR(s.q(i, static_cast<Eigen::Index>(j)), mirrored, 2e-6) << robot_.joints[j].name << " row " << i;
       }
+    }
+  }
+}
+
+// The lean (roll) template, measured on the robot with both feet flat: torso_link roll rises
+// monotonically through the values, equals them, and covers the envelope (±0.2 rad); the soles stay
+// planted (sole-to-sole vector constant, both flat) and the centre of mass stays over the same point
+// of the feet; torso pitch and pelvis height do not change.
+TEST_F(ShippedClips, LeanRollsTheTorsoWithTheFeetPlanted) {
+  const pmg::StaticClip lean = pmg::readStaticClip(pmg::test::g1ClipPath("lean"), robot_);
+  ASSERT_EQ(lean.axis, pmg::PostureAxis::kRoll);
+  EXPECT_LE(lean.values(0), -0.2);
+  EXPECT_GE(lean.values(lean.values.size() - 1), 0.2);
+  EXPECT_DOUBLE_EQ(lean.neutral, 0.0);
+  const pmg::KinematicModel model(robot_);
+  pmg::motion::PostureProbe probe(model);
+  Eigen::Index neutral_row = 0;
+  lean.values.cwiseAbs().minCoeff(&neutral_row);
+  const pmg::motion::FlatFootPosture n = probe.measure(lean.q.row(neutral_row).transpose());
+  const Eigen::Vector3d feet0 = n.p_WS[0] - n.p_WS[1];
+  const Eigen::Vector2d com0 = (n.p_WC - 0.5 * (n.p_WS[0] + n.p_WS[1])).head<2>();
+  double previous = -1e9;
+  for (Eigen::Index i = 0; i < lean.q.rows(); ++i) {
+    SCOPED_TRACE("row " + std::to_string(i));
+    const pmg::motion::FlatFootPosture m = probe.measure(lean.q.row(i).transpose());
+    EXPECT_GT(m.torso_roll, previous + 0.01);
+    previous = m.torso_roll;
+    EXPECT_NEAR(m.torso_roll, lean.values(i), 1e-3);
+    EXPECT_LT(m.foot_tilt, 1e-3);
+    EXPECT_LT((m.p_WS[0] - m.p_WS[1] - feet0).norm(), 0.003) << "the soles moved against each other";
+    EXPECT_LT(((m.p_WC - 0.5 * (m.p_WS[0] + m.p_WS[1])).head<2>() - com0).norm(), 0.003) << "centre of mass moved over the feet";
+    EXPECT_NEAR(m.torso_pitch, n.torso_pitch, 0.01);
+    EXPECT_NEAR(m.pelvis_height, n.pelvis_height, 0.005);
+    EXPECT_GT(m.com_margin, 0.02);
+  }
+}
+
+// The height template does not couple pitch: with the feet flat, torso_link pitch stays within
+// 0.03 rad of the neutral row's over the whole range (was up to 0.44 rad: the captured squat leans
+// the trunk forward), and the robot stays statically balanced.
+TEST_F(ShippedClips, SquatKeepsTheTorsoPitch) {
+  const pmg::StaticClip squat = pmg::readStaticClip(pmg::test::g1ClipPath("squat"), robot_);
+  ASSERT_EQ(squat.axis, pmg::PostureAxis::kHeight);
+  const pmg::KinematicModel model(robot_);
+  pmg::motion::PostureProbe probe(model);
+  Eigen::Index neutral_row = 0;
+  (squat.values.array() - squat.neutral).abs().minCoeff(&neutral_row);
+  const double pitch0 = probe.measure(squat.q.row(neutral_row).transpose()).torso_pitch;
+  EXPECT_LE(squat.values(0), 0.62) << "the squat must reach the envelope's lowest height";
+  for (Eigen::Index i = 0; i < squat.q.rows(); ++i) {
+    SCOPED_TRACE("value " + std::to_string(squat.values(i)));
+    const pmg::motion::FlatFootPosture m = probe.measure(squat.q.row(i).transpose());
+    EXPECT_NEAR(m.torso_pitch, pitch0, 0.03);
+    EXPECT_NEAR(m.torso_roll, 0.0, 1e-6);
+    EXPECT_GT(m.com_margin, 0.0) << "centre of mass outside the support polygon";
+    EXPECT_NEAR(m.pelvis_height, squat.values(i), 0.015);
+  }
+}
+
+// The turn template is a slow turn in place to the left: one closed cycle (sample N ≡ sample 0, the
+// seam test above checks every clip), a real left turn of about a quarter turn per cycle at about
+// 1 rad/s, little translation, and each foot takes exactly one step.
+TEST_F(ShippedClips, TurnLeftIsAClosedTurnInPlace) {
+  const pmg::DynamicClip turn = pmg::readDynamicClip(pmg::test::g1ClipPath("turn_left"), robot_);
+  ASSERT_EQ(turn.axis, pmg::CommandAxis::kYaw);
+  EXPECT_EQ(turn.direction, 1);
+  EXPECT_GT(turn.omega_base.col(2).mean(), 0.0) << "turns left (counter-clockwise)";
+  EXPECT_NEAR(turn.nominal_scale, 1.0, 0.2);                          // [rad/s]
+  EXPECT_NEAR(turn.nominal_scale * turn.period, 1.6, 0.3);            // yaw per cycle [rad] (CMU 69_17: 93 deg)
+  EXPECT_LT(turn.v_base.leftCols(2).colwise().mean().norm(), 0.1);   // in place [m/s]
+  EXPECT_LE(seamResidual(turn.q, 0), 1e-3);
+  EXPECT_LE(seamResidual(turn.v_base, 0), maxInteriorResidual(turn.v_base) + 1e-6);
+  // One step per foot: one contact run each that is not the whole cycle.
+  const pmg::KinematicModel model(robot_);
+  const auto labels = pmg::motion::robotContactLabels(pmg::motion::clipSoleTracks(turn, model), pmg::motion::RobotContactOptions{});
+  for (std::size_t f = 0; f < 2; ++f) {
+    int liftoffs = 0;
+    const std::size_t N = labels[f].size();
+    for (std::size_t k = 0; k < N; ++k) liftoffs += labels[f][k] && !labels[f][(k + 1) % N];
+    EXPECT_EQ(liftoffs, 1) << "foot " << f;
   }
 }

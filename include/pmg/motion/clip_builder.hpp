@@ -59,6 +59,23 @@ CycleWindow findGaitCycle(const ContactSequence& contacts, Foot foot, ContactEve
 /// circular run of contact, σ = half its length. Always in contact → {0.5, 0.5}; never → {0, 0}.
 FootContact contactModel(const std::vector<bool>& in_contact);
 
+/// How buildDynamicClip closes the cycle (makes row M equal row 0).
+enum class CycleClosing {
+  /// The drift x(end) − x(begin) of every column is removed with one zero-mean linear ramp over the
+  /// cycle. Right for a steady gait cut between two like events: the drift is small (capture noise)
+  /// and spreading it costs nothing.
+  kLinearRamp,
+  /// The leg joints of foot f (DynamicClipOptions::leg_joints[f]) take their drift only while foot f
+  /// is in swing (contact labels of the window), with a raised-cosine rate that is zero at lift-off
+  /// and touchdown; every other column (waist, arms, base velocities, height) keeps the linear ramp.
+  /// For a one-shot motion cut from standing to standing (turn in place), whose last stance differs
+  /// from the first (CMU 69_17 ends 3 cm wider and with the left foot toed in 10°): corrected while a
+  /// foot is in the air, the difference moves where that foot lands instead of sliding the feet
+  /// against each other in double support. A leg that has no swing frame in the window falls back
+  /// to the linear ramp.
+  kInSwing,
+};
+
 /// Options of clip building.
 struct DynamicClipOptions {
   std::string name;                              ///< clip name, e.g. "walk_forward"
@@ -66,13 +83,17 @@ struct DynamicClipOptions {
   int num_samples = 96;                          ///< N phase samples, ≥ 8
   double smoothing_sigma = 0.05;                 ///< Gaussian smoothing σ across the cycle [s], ≥ 0
   bool align_on_left_touchdown = true;           ///< φ = 0 at the left foot's touchdown (if it has one)
+  CycleClosing closing = CycleClosing::kLinearRamp;  ///< how the cycle is closed
+  /// kInSwing only: joint indices (robot config order) of the left and right leg, index Foot, e.g.
+  /// KinematicModel::leftLeg().joint_index. Each index in [0, n), no joint in both legs.
+  std::array<std::vector<int>, kNumFeet> leg_joints;
   /// @throws std::invalid_argument naming the field and range.
   void validate() const;
 };
 
 /// Builds one dynamic clip from frames [window.begin, window.end] of @p motion. Joint angles,
 /// base velocities (heading frame H: yaw of the pelvis, z up) and base height are made periodic
-/// by removing the linear drift x(end) − x(begin) over the cycle and smoothing with a circular
+/// by removing the drift x(end) − x(begin) over the cycle (options.closing) and smoothing with a circular
 /// Gaussian; they are then resampled to N phases with periodic cubic (Catmull-Rom) interpolation
 /// and clamped to the joint limits. v_z, ω_x, ω_y get zero cycle mean (height, roll and pitch
 /// close). q̇ = central difference in phase / T. direction = sign of the

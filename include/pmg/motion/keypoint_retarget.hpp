@@ -16,8 +16,8 @@
 /// (robot/human leg length), and each limb keypoint is placed from its parent target along the
 /// human segment direction with the robot's segment length (hip → knee → ankle, shoulder → elbow
 /// → wrist); toes = ankle + R̂_foot·(kToeOffset, 0, 0). Contacts are detected on the human
-/// (foot height and speed thresholds); during a contact run the robot foot is held at the run's
-/// mean target position (unsliding), flat, on the ground.
+/// (foot height and speed thresholds), or set by hand over spans of frames (ContactOverride); during
+/// a contact run the robot foot is held at the run's mean target position (unsliding), flat, on the ground.
 /// Setup-time/offline code (allocates, throws).
 
 #include <array>
@@ -30,6 +30,21 @@
 #include "pmg/motion/robot_motion.hpp"
 
 namespace pmg::motion {
+
+/// A span of frames in which the contact label of one foot is set by hand instead of detected on
+/// the human. Used where the human's foot does something the robot's flat, rigid sole cannot: in
+/// CMU 69_17 (turn in place) the left foot pivots 83° on the ground while barely unloaded (ankle up
+/// 2 cm, still "in contact" by the thresholds); a stance foot that turns under load is not a stance
+/// that GCO can hold still, so the robot steps instead (a forced swing with clearance).
+struct ContactOverride {
+  Foot foot = Foot::kLeft;
+  int begin = 0;            ///< first frame (inclusive), index into the motion passed to retargetKeypoints
+  int end = 0;              ///< last frame (exclusive), begin < end <= frames
+  bool contact = false;     ///< label forced over [begin, end)
+  /// Swing only (contact = false): the foot's ankle and toe targets are raised by
+  /// clearance · sin(π s), s = (k − begin + ½) / (end − begin), on top of the human's own lift [m], ≥ 0.
+  double clearance = 0.0;
+};
 
 struct KeypointRetargetOptions {
   double scale = 0.0;              ///< human → robot length scale; ≤ 0: robot leg / human leg length
@@ -56,6 +71,17 @@ struct KeypointRetargetOptions {
   bool level_pelvis = false;
   double contact_height = 0.03;    ///< human foot (min of ankle, toe) above its flat height [m]
   double contact_speed = 0.5;      ///< human ankle horizontal speed [m/s]
+  /// Swing ends blended onto the stances [s], ≥ 0 (0 = off). A stance foot is held at its run's
+  /// anchor (the mean of the run's target ankle positions), but the targets themselves move during
+  /// the stance as the pelvis turns over the foot (robot and human hips differ); when the contact
+  /// term releases, the foot snaps to the first swing target (3 cm in one frame at lift-off of the
+  /// long right stance of the turn in place). With swing_blend > 0 the ankle and toe targets of the
+  /// swing frames within swing_blend of a stance run of the same foot are moved horizontally towards
+  /// that run's anchor with weight ½ (1 + cos(π d / (swing_blend · fps))), d = frames from the run.
+  double swing_blend = 0.0;
+  /// Hand-set contact labels applied after detection, in order (later spans win). Checked by
+  /// retargetKeypoints against the motion's frame count (std::invalid_argument naming the span).
+  std::vector<ContactOverride> contact_overrides;
   /// @throws std::invalid_argument naming the field and range.
   void validate() const;
 };
@@ -85,7 +111,9 @@ struct RetargetResult {
   double solve_ms_per_frame = 0.0;
 };
 
-/// Human contact detection (see KeypointRetargetOptions::contact_height/contact_speed).
+/// Human contact detection (see KeypointRetargetOptions::contact_height/contact_speed), then the
+/// contact_overrides. @throws std::invalid_argument if an override lies outside the motion's frames,
+/// is empty or has a negative / non-finite clearance or a clearance on a contact span.
 ContactSequence detectHumanContacts(const HumanMotion& human, const KeypointRetargetOptions& options);
 
 /// Retargets @p human onto the robot of @p model. @throws std::invalid_argument / std::runtime_error.
