@@ -27,12 +27,40 @@
 //   falls        runs in which the pelvis dropped below 0.4 m or tilted more than 60 deg, or the
 //                supervisor latched a fall
 //   foot slip [m/s] mean horizontal speed of a foot (ankle_roll_link origin) while it touches the floor
-// Writes <out>/seed<k>.csv (per tick), <out>/frames<k>.csv and <out>/summary.json.
+//
+// Per segment of the script (issue 12, "as users feel it"): means over the last 60 % of each
+// segment (its steady state), per seed, then the mean over the seeds that ran through that window
+// without falling (a seed that fell is left out of the segment it fell in and of all later ones;
+// "fallen" counts them). Axes vx, vy [m/s], wz [rad/s], pitch, roll [rad], height [m]:
+//   command    the script's command for the segment (height: the standing height when none)
+//   achieved   as the Table I metrics above: pelvis velocity in the heading frame, pelvis yaw rate,
+//              torso_link pitch/roll, pelvis height
+//   reference  what the reference the actor is given implies (Controller::referenceOutput()):
+//              vx, vy, wz the base motion that holds its stance feet still
+//              (pmg::gco::stanceImpliedVelocity on q_ref/qd_ref of the legs and the contact
+//              schedule; mean over ticks with a stance foot), pitch/roll of torso_link in the
+//              reference pose with a level pelvis (KDL, pelvis -> torso_link), height the
+//              template's GeneratorOutput::base_height
+//   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
+//   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
+//              |command| >= 0.05 (m/s or rad/s), else null
+// printed as a table and written to summary.json "segments" (per seed under runs[k].segments).
+// scripts/plot_segments.py <out> plots them (time series per axis, the tracking envelope).
+// A fall ends a seed's run; with --restart-after-fall a fresh robot stands 2 s and goes on from the
+// segment after the one it fell in (per-segment results for the rest of a grid such as
+// config/policies/eval_envelope.yaml; runs[k].falls_s lists every fall, the Table I metrics stop at
+// the first).
+// Writes <out>/seed<k>.csv (per tick; *_ref: the reference's implied motion as above, vx/vy/wz nan
+// without a stance foot; *_uopt: u'; episode: 0, then 1, 2, ... after each restart, whose first
+// 2 s overlap the fallen episode's times), <out>/frames<k>.csv and <out>/summary.json.
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -43,7 +71,10 @@
 
 #include "pmg/common/cli_checks.hpp"
 #include "pmg/common/data_paths.hpp"
+#include "pmg/common/kinematics.hpp"
 #include "pmg/controller/controller_app.hpp"
+#include "pmg/gco/foot_slip.hpp"
+#include "pmg/gco/generator_bridge.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/policy/policy_stage.hpp"
 
@@ -56,12 +87,98 @@ void quatToRot(const double* q, double R[9]) {
   R[6] = 2 * (x * z - y * w); R[7] = 2 * (y * z + x * w); R[8] = 1 - 2 * (x * x + y * y);
 }
 
+constexpr int kAxes = 6;  // vx, vy, wz, pitch, roll, height
+constexpr const char* kAxisNames[kAxes] = {"vx", "vy", "wz", "pitch", "roll", "height"};
+constexpr double kRatioMinCommand = 0.05;  // |command| below which a velocity ratio is null [m/s, rad/s]
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kRestartStand = 2.0;  // --restart-after-fall: standing before the next segment [s]
+constexpr std::size_t kNoSegment = static_cast<std::size_t>(-1);
+using Axes = std::array<double, kAxes>;
+
+/// Running means per axis (non-finite samples skipped).
+struct AxisMeans {
+  Axes sum{};
+  std::array<long, kAxes> n{};
+  void add(int i, double x) {
+    if (!std::isfinite(x)) return;
+    sum[static_cast<std::size_t>(i)] += x;
+    ++n[static_cast<std::size_t>(i)];
+  }
+  Axes mean() const {
+    Axes m;
+    for (std::size_t i = 0; i < kAxes; ++i) m[i] = n[i] > 0 ? sum[i] / static_cast<double>(n[i]) : kNaN;
+    return m;
+  }
+};
+
+/// One seed's samples in one segment's window (the last 60 % of the segment).
+struct SegmentSeed {
+  AxisMeans achieved, reference, u_prime;
+  long ticks = 0;         // ticks in the window
+  long stance_ticks = 0;  // of which the reference had a stance foot
+  double first_t = kNaN, last_t = kNaN;  // first and last tick in the window [s]
+  bool fell = false;      // the robot fell during this segment
+};
+
+struct SegmentWindow {
+  std::string name;
+  double t_begin = 0, t_end = 0;    // the segment [s]
+  double w_begin = 0, w_end = 0;    // the averaging window [s]
+  Axes command{};
+};
+
+/// JSON text of a number (null when not finite).
+std::string jnum(double x) {
+  if (!std::isfinite(x)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
+/// JSON string literal (quotes, backslashes and control characters escaped).
+std::string jstr(const std::string& s) {
+  std::string o = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", c);
+      o += b;
+    } else {
+      o += c;
+    }
+  }
+  return o + '"';
+}
+
+/// {"vx": .., ...} over the first @p count axes.
+std::string jaxes(const Axes& a, int count = kAxes) {
+  std::string o = "{";
+  for (int i = 0; i < count; ++i)
+    o += std::string(i ? ", " : "") + jstr(kAxisNames[i]) + ": " + jnum(a[static_cast<std::size_t>(i)]);
+  return o + "}";
+}
+
+/// Velocity ratios x/command (vx, vy, wz; NaN where |command| < kRatioMinCommand).
+Axes ratios(const Axes& x, const Axes& command) {
+  Axes r;
+  r.fill(kNaN);
+  for (std::size_t i = 0; i < 3; ++i)
+    if (std::abs(command[i]) >= kRatioMinCommand) r[i] = x[i] / command[i];
+  return r;
+}
+
 struct Totals {
   double lin = 0, yaw = 0, roll = 0, pitch = 0, height = 0, slip = 0;
   long n = 0, slip_n = 0;
   bool fell = false;
   double fall_time = -1;
-  double survived = 0;
+  double survived = 0;                // [s] until the first fall (or the end)
+  std::vector<double> falls;          // [s] script time of every fall (more than one with restarts)
+  int restarts = 0;
+  std::vector<SegmentSeed> segments;  // (script segments)
 };
 
 }  // namespace
@@ -73,7 +190,7 @@ int main(int argc, char** argv) {
   std::string commands = pmg::resolveData("config/policies/eval_commands.yaml").string(), out = "out/policy_sil";
   std::string config = "pmg_gco";
   int seeds = 3;
-  bool noise = true, native = true;
+  bool noise = true, native = true, restart_after_fall = false;
   double duration = -1, frame_period = 0.1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -88,6 +205,9 @@ int main(int argc, char** argv) {
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
+  app.add_flag("--restart-after-fall", restart_after_fall,
+               "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
+               "results for the rest of the script; the Table I metrics stop at the first fall)");
   app.add_option("--frame-period", frame_period, "period of the body-position log <out>/frames<k>.csv [s] (frame strips)")
       ->check(pmg::cli::finiteIn(0.01, 10.0));
   CLI11_PARSE(app, argc, argv);
@@ -112,131 +232,308 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(out);
     const int nj = static_cast<int>(robot.numJoints());
     std::vector<Totals> totals;
-    const char* axes[6] = {"vx", "vy", "wz", "pitch", "roll", "height"};
+
+    // Per-segment windows: the last 60 % of each segment (the last segment holds until T).
+    std::vector<SegmentWindow> windows;
+    for (std::size_t k = 0; k < script.segments.size(); ++k) {
+      const pmg::CommandSegment& sg = script.segments[k];
+      SegmentWindow w;
+      w.name = sg.name;
+      w.t_begin = sg.start;
+      w.t_end = k + 1 == script.segments.size() ? std::max(sg.start + sg.duration, T) : sg.start + sg.duration;
+      w.w_begin = w.t_begin + 0.4 * (w.t_end - w.t_begin);
+      w.w_end = w.t_end;
+      const pmg::Command& c = sg.command;
+      w.command = {c.vx, c.vy, c.wz, c.pitch, c.roll, kNaN};
+      if (c.height) w.command[5] = *c.height;
+      windows.push_back(w);
+    }
+    // The reference's implied motion: leg chains (as GCO's), torso_link through KDL.
+    const auto legs = pmg::gco::LegModel::fromRobotConfig(robot);
+    pmg::gco::LegKinematics leg_kin(legs);
+    const pmg::KinematicModel kinematics(robot);
+    const pmg::LimbChain torso_chain = kinematics.chain(robot.base_link, "torso_link");
+    pmg::ChainFkWorkspace torso_fk(torso_chain);
+    pmg::gco::GcoInput ref_in;
+    Eigen::Isometry3d X_BT = Eigen::Isometry3d::Identity();
 
     for (int seed = 0; seed < seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
       std::uniform_real_distribution<double> uni(-1.0, 1.0);
-      pmg::MujocoBackendOptions bo = base.mujoco;
-      auto sim_owned = std::make_unique<pmg::MujocoBackend>(robot, bo);
-      pmg::MujocoBackend* sim = sim_owned.get();
-      const mjModel* m = sim->model();
-      mjData* d = sim->data();
-      for (int j = 0; j < nj; ++j) d->qpos[7 + j] += 0.02 * uni(rng) * (seed > 0 ? 1.0 : 0.0);
-      mj_forward(m, d);
-      const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
-      const int feet[2] = {mj_name2id(m, mjOBJ_BODY, robot.left_foot_link.c_str()),
-                           mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
-      const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
-
-      pmg::ControllerAppOptions opt;
-      opt.backend = std::move(sim_owned);
-      opt.telemetry = true;
-      if (single_gait) opt.clip_files = {base.clips_dir + "/walk_forward.yaml"};
-      opt.policy.noise_gyro = noise ? 0.1 : 0.0;
-      opt.policy.noise_gravity = noise ? 0.03 : 0.0;
-      opt.policy.noise_q = noise ? 0.01 : 0.0;
-      opt.policy.noise_qd = noise ? 0.5 : 0.0;
-      opt.policy.noise_seed = static_cast<unsigned>(2000 + seed);
-      opt.policy.mode = single_gait ? "single_gait" : "pmg";
-      pmg::ControllerApp loop(base, std::move(opt));
-      pmg::Controller& controller = loop.controller();
-      if (single_gait)  // the forward clip at its nominal speed, neutral posture, whatever the command
-        controller.setFixedGeneratorCommand(
-            {controller.generator().model().dynamicClip(pmg::CommandAxis::kForward, 1)->nominal_scale, 0.0, 0.0});
-      const int na = controller.policy()->runner().actionSize();
-      const double standing = loop.config().commands.standing_height;
-
-      std::ofstream csv(out + "/seed" + std::to_string(seed) + ".csv");
-      csv << "t,segment";
-      for (const char* a : axes) csv << ',' << a << "_cmd";
-      for (const char* a : axes) csv << ',' << a;
-      csv << ",height_ref,phase,contact_l,contact_r,ref_contact_l,ref_contact_r,mode";
-      for (int j = 0; j < na; ++j) csv << ",q" << j;
-      for (int j = 0; j < na; ++j) csv << ",qref" << j;
-      csv << "\n";
-      std::ofstream frames(out + "/frames" + std::to_string(seed) + ".csv");
-      frames << "t";
-      for (int b = 1; b < m->nbody; ++b) frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
-      frames << "\n";
-      const int frame_every = std::max(1, static_cast<int>(std::lround(frame_period / 0.01)));
       Totals tot;
-      std::atomic<bool> stop{false};
+      tot.segments.resize(windows.size());
+      std::ofstream csv(out + "/seed" + std::to_string(seed) + ".csv");
+      std::ofstream frames(out + "/frames" + std::to_string(seed) + ".csv");
+      const int frame_every = std::max(1, static_cast<int>(std::lround(frame_period / 0.01)));
       long k = 0;
-      const auto observe = [&](double t, const pmg::TickStatus& status, std::size_t segment) {
-        const pmg::LowState& state = controller.lastState();
-        const pmg::GeneratorOutput& g = controller.generator().output();
-        const pmg::Command c = script.at(t);
-        const double u[6] = {c.vx, c.vy, c.wz, c.pitch, c.roll, c.height.value_or(standing)};
-        double Rb[9], Rt[9];
-        quatToRot(state.base_quat_wxyz.data(), Rb);
-        for (int i = 0; i < 9; ++i) Rt[i] = d->xmat[9 * torso + i];
-        const double yaw = std::atan2(Rb[3], Rb[0]);
-        const double* v = state.base_linear_velocity.data();
-        const double vx = std::cos(yaw) * v[0] + std::sin(yaw) * v[1], vy = -std::sin(yaw) * v[0] + std::cos(yaw) * v[1];
-        const double* w_B = state.imu.gyro.data();
-        const double wz = Rb[6] * w_B[0] + Rb[7] * w_B[1] + Rb[8] * w_B[2];
-        const double pitch = std::asin(std::clamp(-Rt[6], -1.0, 1.0)), roll = std::atan2(Rt[7], Rt[8]);
-        const double height = state.base_position[2];
-        bool contact[2] = {false, false};
-        for (int ci = 0; ci < d->ncon; ++ci) {
-          const mjContact& con = d->contact[ci];
-          for (int f = 0; f < 2; ++f) {
-            const int other = con.geom1 == floor ? con.geom2 : (con.geom2 == floor ? con.geom1 : -1);
-            if (other >= 0 && m->geom_bodyid[other] == feet[f] && con.dist < 2e-3) contact[f] = true;
+      unsigned long long held = 0;
+      pmg::RunSummary rs;
+      // Episode 0 plays the script from its start; with --restart-after-fall, each later episode
+      // is a fresh robot standing kRestartStand seconds and then playing the script from the
+      // segment after the one it fell in (times stay the script's: t = local time + offset).
+      std::size_t first_seg = 0;
+      for (int episode = 0;; ++episode) {
+        pmg::CommandScript sub;
+        double offset = 0.0;
+        if (episode > 0) {
+          sub.source_file = script.source_file;
+          sub.ramp = script.ramp;
+          offset = script.segments[first_seg].start - kRestartStand;
+          pmg::CommandSegment stand;
+          stand.name = "restart_stand";
+          stand.duration = kRestartStand;
+          sub.segments.push_back(stand);
+          for (std::size_t s = first_seg; s < script.segments.size(); ++s) {
+            sub.segments.push_back(script.segments[s]);
+            sub.segments.back().start -= offset;
           }
         }
-        for (int f = 0; f < 2; ++f) {
-          if (!contact[f]) continue;
-          mjtNum vel[6];
-          mj_objectVelocity(m, d, mjOBJ_BODY, feet[f], vel, 0);  // [angular; linear], world frame
-          tot.slip += std::hypot(vel[3], vel[4]);
-          ++tot.slip_n;
+        const pmg::CommandScript& run_script = episode > 0 ? sub : script;
+        pmg::MujocoBackendOptions bo = base.mujoco;
+        auto sim_owned = std::make_unique<pmg::MujocoBackend>(robot, bo);
+        pmg::MujocoBackend* sim = sim_owned.get();
+        const mjModel* m = sim->model();
+        mjData* d = sim->data();
+        for (int j = 0; j < nj; ++j) d->qpos[7 + j] += 0.02 * uni(rng) * (seed > 0 || episode > 0 ? 1.0 : 0.0);
+        mj_forward(m, d);
+        const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+        const int feet[2] = {mj_name2id(m, mjOBJ_BODY, robot.left_foot_link.c_str()),
+                             mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
+        const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
+
+        pmg::ControllerAppOptions opt;
+        opt.backend = std::move(sim_owned);
+        opt.telemetry = true;
+        if (single_gait) opt.clip_files = {base.clips_dir + "/walk_forward.yaml"};
+        opt.policy.noise_gyro = noise ? 0.1 : 0.0;
+        opt.policy.noise_gravity = noise ? 0.03 : 0.0;
+        opt.policy.noise_q = noise ? 0.01 : 0.0;
+        opt.policy.noise_qd = noise ? 0.5 : 0.0;
+        opt.policy.noise_seed = static_cast<unsigned>(2000 + seed + 1000 * episode);
+        opt.policy.mode = single_gait ? "single_gait" : "pmg";
+        pmg::ControllerApp loop(base, std::move(opt));
+        pmg::Controller& controller = loop.controller();
+        if (single_gait)  // the forward clip at its nominal speed, neutral posture, whatever the command
+          controller.setFixedGeneratorCommand(
+              {controller.generator().model().dynamicClip(pmg::CommandAxis::kForward, 1)->nominal_scale, 0.0, 0.0});
+        const int na = controller.policy()->runner().actionSize();
+        const double standing = loop.config().commands.standing_height;
+        const std::vector<std::string>& gen_joints = controller.generator().model().jointSpace().joint_names;
+        bool same_order = gen_joints.size() == static_cast<std::size_t>(nj);
+        for (std::size_t j = 0; same_order && j < gen_joints.size(); ++j)
+          same_order = gen_joints[j] == robot.joints[j].name;
+        if (!same_order)
+          throw std::runtime_error("the generator's joint order differs from the robot config's (" + base.robot_file +
+                                   ")");
+        const pmg::gco::LegJointIndex leg_idx = legs->jointIndices(gen_joints);
+        for (SegmentWindow& w : windows)
+          if (!std::isfinite(w.command[5])) w.command[5] = standing;
+
+        if (episode == 0) {
+          csv << "t,segment";
+          for (const char* a : kAxisNames) csv << ',' << a << "_cmd";
+          for (const char* a : kAxisNames) csv << ',' << a;
+          csv << ",height_ref,phase,contact_l,contact_r,ref_contact_l,ref_contact_r,mode";
+          for (int j = 0; j < na; ++j) csv << ",q" << j;
+          for (int j = 0; j < na; ++j) csv << ",qref" << j;
+          // the reference's implied motion (vx/vy/wz nan without a stance foot) and GCO's u'
+          csv << ",vx_ref,vy_ref,wz_ref,pitch_ref,roll_ref";
+          for (const char* a : kAxisNames) csv << ',' << a << "_uopt";
+          csv << ",episode\n";
+          frames << "t";
+          for (int b = 1; b < m->nbody; ++b)
+            frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
+          frames << "\n";
         }
-        const bool fallen = height < 0.4 || Rb[8] < 0.5 || status.fault == pmg::FaultCode::kFallHeight ||
-                            status.fault == pmg::FaultCode::kFallTilt;
-        if (t >= 1.0 && !fallen) {
-          tot.lin += std::hypot(u[0] - vx, u[1] - vy);
-          tot.yaw += std::abs(u[2] - wz);
-          tot.pitch += std::abs(u[3] - pitch);
-          tot.roll += std::abs(u[4] - roll);
-          tot.height += std::abs(u[5] - height);
-          ++tot.n;
-        }
-        csv << t << ',' << script.segments[segment].name;
-        for (double x : u) csv << ',' << x;
-        csv << ',' << vx << ',' << vy << ',' << wz << ',' << pitch << ',' << roll << ',' << height << ',' << g.base_height << ','
-            << g.phase << ',' << contact[0] << ',' << contact[1] << ',' << g.in_contact[0] << ',' << g.in_contact[1] << ','
-            << pmg::toString(status.mode);
-        for (int j = 0; j < na; ++j) csv << ',' << state.motors[static_cast<std::size_t>(j)].q;
-        for (int j = 0; j < na; ++j) csv << ',' << controller.reference()[static_cast<std::size_t>(j)];
-        csv << '\n';
-        if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
-          frames << t;
-          for (int b = 1; b < m->nbody; ++b) frames << ',' << d->xpos[3 * b] << ' ' << d->xpos[3 * b + 1] << ' ' << d->xpos[3 * b + 2];
-          frames << '\n';
-        }
-        tot.survived = t + 0.01;
-        if (fallen && !tot.fell) {
-          tot.fell = true;
-          tot.fall_time = t;
-          stop = true;
-        }
-      };
-      const pmg::RunSummary rs = loop.run(T, &script, &stop, observe);
+        std::atomic<bool> stop{false};
+        double fall_time = -1;
+        const auto observe = [&](double t_local, const pmg::TickStatus& status, std::size_t local_segment) {
+          const double t = t_local + offset;  // script time
+          // the script's segment (npos: the stand before a restart)
+          const std::size_t segment =
+              episode == 0 ? local_segment : (local_segment == 0 ? kNoSegment : first_seg + local_segment - 1);
+          const pmg::LowState& state = controller.lastState();
+          const pmg::GeneratorOutput& g = controller.generator().output();
+          const pmg::Command c = run_script.at(t_local);
+          const double u[6] = {c.vx, c.vy, c.wz, c.pitch, c.roll, c.height.value_or(standing)};
+          double Rb[9], Rt[9];
+          quatToRot(state.base_quat_wxyz.data(), Rb);
+          for (int i = 0; i < 9; ++i) Rt[i] = d->xmat[9 * torso + i];
+          const double yaw = std::atan2(Rb[3], Rb[0]);
+          const double* v = state.base_linear_velocity.data();
+          const double vx = std::cos(yaw) * v[0] + std::sin(yaw) * v[1];
+          const double vy = -std::sin(yaw) * v[0] + std::cos(yaw) * v[1];
+          const double* w_B = state.imu.gyro.data();
+          const double wz = Rb[6] * w_B[0] + Rb[7] * w_B[1] + Rb[8] * w_B[2];
+          const double pitch = std::asin(std::clamp(-Rt[6], -1.0, 1.0)), roll = std::atan2(Rt[7], Rt[8]);
+          const double height = state.base_position[2];
+          bool contact[2] = {false, false};
+          for (int ci = 0; ci < d->ncon; ++ci) {
+            const mjContact& con = d->contact[ci];
+            for (int f = 0; f < 2; ++f) {
+              const int other = con.geom1 == floor ? con.geom2 : (con.geom2 == floor ? con.geom1 : -1);
+              if (other >= 0 && m->geom_bodyid[other] == feet[f] && con.dist < 2e-3) contact[f] = true;
+            }
+          }
+          for (int f = 0; f < 2 && episode == 0; ++f) {
+            if (!contact[f]) continue;
+            mjtNum vel[6];
+            mj_objectVelocity(m, d, mjOBJ_BODY, feet[f], vel, 0);  // [angular; linear], world frame
+            tot.slip += std::hypot(vel[3], vel[4]);
+            ++tot.slip_n;
+          }
+          const bool fallen = height < 0.4 || Rb[8] < 0.5 || status.fault == pmg::FaultCode::kFallHeight ||
+                              status.fault == pmg::FaultCode::kFallTilt;
+          // What the reference the actor was given implies (valid while the loop is active).
+          Axes ref;
+          ref.fill(kNaN);
+          const bool active = status.mode == pmg::Mode::kActive;
+          const pmg::GeneratorOutput& r = controller.referenceOutput();
+          if (active) {
+            pmg::gco::fillFromGenerator(r, leg_idx, pmg::VelocityCommand{}, pmg::PostureCommand{}, &ref_in);
+            const pmg::gco::ImpliedBaseVelocity iv = pmg::gco::stanceImpliedVelocity(leg_kin, ref_in);
+            if (iv.valid) ref = {iv.v_x, iv.v_y, iv.yaw_rate, kNaN, kNaN, kNaN};
+            if (torso_fk.tipPose(r.q_ref, X_BT)) {  // level pelvis: R_WT = R_BT
+              const Eigen::Matrix3d& R = X_BT.linear();
+              ref[3] = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+              ref[4] = std::atan2(R(2, 1), R(2, 2));
+            }
+            ref[5] = r.base_height;
+          }
+          const pmg::gco::BaseCommand& up = controller.gcoResult().u_opt;
+          const Axes u_prime = {up.v_x, up.v_y, up.yaw_rate, up.pitch, up.roll, up.height};
+          if (segment < windows.size()) {
+            SegmentSeed& ss = tot.segments[segment];
+            if (fallen) ss.fell = true;
+            if (!fallen && t >= windows[segment].w_begin - 1e-9 && t < windows[segment].w_end - 1e-9) {
+              const Axes ach = {vx, vy, wz, pitch, roll, height};
+              if (ss.ticks++ == 0) ss.first_t = t;
+              ss.last_t = t;
+              if (std::isfinite(ref[0])) ++ss.stance_ticks;
+              for (int i = 0; i < kAxes; ++i) {
+                ss.achieved.add(i, ach[static_cast<std::size_t>(i)]);
+                ss.reference.add(i, ref[static_cast<std::size_t>(i)]);
+                if (active) ss.u_prime.add(i, u_prime[static_cast<std::size_t>(i)]);
+              }
+            }
+          }
+          if (episode == 0 && t >= 1.0 && !fallen) {  // Table I: until the first fall
+            tot.lin += std::hypot(u[0] - vx, u[1] - vy);
+            tot.yaw += std::abs(u[2] - wz);
+            tot.pitch += std::abs(u[3] - pitch);
+            tot.roll += std::abs(u[4] - roll);
+            tot.height += std::abs(u[5] - height);
+            ++tot.n;
+          }
+          csv << t << ',' << run_script.segments[local_segment].name;
+          for (double x : u) csv << ',' << x;
+          csv << ',' << vx << ',' << vy << ',' << wz << ',' << pitch << ',' << roll << ',' << height << ','
+              << g.base_height << ',' << g.phase << ',' << contact[0] << ',' << contact[1] << ',' << g.in_contact[0]
+              << ',' << g.in_contact[1] << ',' << pmg::toString(status.mode);
+          for (int j = 0; j < na; ++j) csv << ',' << state.motors[static_cast<std::size_t>(j)].q;
+          for (int j = 0; j < na; ++j) csv << ',' << controller.reference()[static_cast<std::size_t>(j)];
+          for (int i = 0; i < 5; ++i) csv << ',' << ref[static_cast<std::size_t>(i)];
+          for (double x : u_prime) csv << ',' << x;
+          csv << ',' << episode << '\n';
+          if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
+            frames << t;
+            for (int b = 1; b < m->nbody; ++b)
+              frames << ',' << d->xpos[3 * b] << ' ' << d->xpos[3 * b + 1] << ' ' << d->xpos[3 * b + 2];
+            frames << '\n';
+          }
+          if (episode == 0) tot.survived = t + 0.01;
+          if (fallen && fall_time < 0) {
+            fall_time = t;
+            tot.falls.push_back(t);
+            if (!tot.fell) {
+              tot.fell = true;
+              tot.fall_time = t;
+            }
+            stop = true;
+          }
+        };
+        rs = loop.run(T - offset, &run_script, &stop, observe);
+        held += static_cast<unsigned long long>(controller.policy()->runner().counters().held);
+        if (fall_time < 0 || !restart_after_fall) break;
+        // Go on after the segment it fell in (or after the first one of this episode when it
+        // fell while standing before it), as long as the script has one left.
+        const std::size_t fell_in = script.segmentIndex(fall_time);
+        const bool fell_standing = episode > 0 && fall_time < script.segments[first_seg].start;
+        first_seg = std::max(fell_in + 1, fell_standing ? first_seg + 1 : first_seg);
+        if (first_seg >= script.segments.size() || script.segments[first_seg].start >= T) break;
+        ++tot.restarts;
+      }
       totals.push_back(tot);
       const double n = std::max<long>(1, tot.n);
-      std::printf("seed %d: %s after %.2f s | LinVel %.4f m/s  YawVel %.4f rad/s  Roll %.4f rad  Pitch %.4f rad  Height %.4f m  slip %.4f m/s  (policy holds %llu; final mode %s, fault %s)\n",
+      std::printf("seed %d: %s after %.2f s | LinVel %.4f m/s  YawVel %.4f rad/s  Roll %.4f rad  Pitch %.4f rad  Height %.4f m  slip %.4f m/s  (policy holds %llu; final mode %s, fault %s)",
                   seed, tot.fell ? "FELL" : "ok", tot.survived, tot.lin / n, tot.yaw / n, tot.roll / n, tot.pitch / n,
-                  tot.height / n, tot.slip / std::max<long>(1, tot.slip_n),
-                  static_cast<unsigned long long>(controller.policy()->runner().counters().held),
-                  pmg::toString(rs.final_mode), pmg::toString(rs.fault));
+                  tot.height / n, tot.slip / std::max<long>(1, tot.slip_n), held, pmg::toString(rs.final_mode),
+                  pmg::toString(rs.fault));
+      if (tot.restarts > 0) {
+        std::printf(" | %d restarts, falls at", tot.restarts);
+        for (double f : tot.falls) std::printf(" %.2f", f);
+        std::printf(" s");
+      }
+      std::printf("\n");
       std::fflush(stdout);
     }
+    // Per segment: the mean over the seeds that ran through its window without falling.
+    struct SegmentResult {
+      Axes achieved, reference, u_prime;
+      int seeds = 0, fallen = 0;
+    };
+    std::vector<SegmentResult> seg_results(windows.size());
+    for (std::size_t k = 0; k < windows.size(); ++k) {
+      const SegmentWindow& w = windows[k];
+      AxisMeans a, r, u;
+      SegmentResult& res = seg_results[k];
+      for (const Totals& t : totals) {
+        const SegmentSeed& ss = t.segments[k];
+        const bool covered =
+            ss.ticks > 0 && !ss.fell && ss.first_t <= w.w_begin + 0.015 && ss.last_t >= w.w_end - 0.015;
+        if (!covered) {  // fell in this segment, or earlier without a restart (else: the run ended before)
+          const bool fell_before = std::any_of(t.falls.begin(), t.falls.end(), [&](double f) { return f < w.w_end; });
+          if (ss.fell || fell_before) ++res.fallen;
+          continue;
+        }
+        ++res.seeds;
+        const Axes ma = ss.achieved.mean(), mr = ss.reference.mean(), mu = ss.u_prime.mean();
+        for (int i = 0; i < kAxes; ++i) {
+          const auto ii = static_cast<std::size_t>(i);
+          a.add(i, ma[ii]);
+          r.add(i, mr[ii]);
+          u.add(i, mu[ii]);
+        }
+      }
+      res.achieved = a.mean();
+      res.reference = r.mean();
+      res.u_prime = u.mean();
+    }
+    if (!windows.empty()) {
+      std::printf("\nper segment (means over the last 60 %% of each segment and over seeds): "
+                  "command / reference / achieved\n");
+      std::printf("%-14s %5s", "segment", "seeds");
+      const char* units[kAxes] = {"m/s", "m/s", "rad/s", "rad", "rad", "m"};
+      for (int i = 0; i < kAxes; ++i) {
+        char h[32];
+        std::snprintf(h, sizeof h, "%s [%s]", kAxisNames[i], units[i]);
+        std::printf(" | %-20s", h);
+      }
+      std::printf("\n");
+      for (std::size_t k = 0; k < windows.size(); ++k) {
+        const SegmentResult& res = seg_results[k];
+        std::printf("%-14.14s %3d/%d", windows[k].name.c_str(), res.seeds, seeds);
+        for (std::size_t i = 0; i < kAxes; ++i)
+          std::printf(" | %6.3f %6.3f %6.3f", windows[k].command[i], res.reference[i], res.achieved[i]);
+        std::printf("\n");
+      }
+    }
+
     std::ofstream js(out + "/summary.json");
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
-    js << "{\"model\": \"" << model_path << "\", \"config\": \"" << config << "\", \"duration_s\": " << T << ", \"runs\": [";
+    js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"commands\": " << jstr(commands)
+       << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];
       const double n = std::max<long>(1, t.n);
@@ -245,12 +542,36 @@ int main(int argc, char** argv) {
       falls += t.fell;
       js << (s ? ", " : "") << "{\"seed\": " << s << ", \"fell\": " << (t.fell ? "true" : "false") << ", \"survived_s\": " << t.survived
          << ", \"lin_vel\": " << vals[0] << ", \"yaw_vel\": " << vals[1] << ", \"roll\": " << vals[2] << ", \"pitch\": " << vals[3]
-         << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5] << "}";
+         << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5]
+         << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts
+         << ", \"falls_s\": [";
+      for (std::size_t f = 0; f < t.falls.size(); ++f) js << (f ? ", " : "") << jnum(t.falls[f]);
+      js << "]"
+         << ", \"segments\": [";
+      for (std::size_t k = 0; k < windows.size(); ++k) {
+        const SegmentSeed& ss = t.segments[k];
+        js << (k ? ", " : "") << "{\"name\": " << jstr(windows[k].name) << ", \"ticks\": " << ss.ticks
+           << ", \"stance_ticks\": " << ss.stance_ticks << ", \"achieved\": " << jaxes(ss.achieved.mean())
+           << ", \"reference\": " << jaxes(ss.reference.mean()) << ", \"u_prime\": " << jaxes(ss.u_prime.mean()) << "}";
+      }
+      js << "]}";
     }
     const double S = static_cast<double>(totals.size());
     js << "], \"mean\": {\"lin_vel\": " << acc[0] / S << ", \"yaw_vel\": " << acc[1] / S << ", \"roll\": " << acc[2] / S
        << ", \"pitch\": " << acc[3] / S << ", \"height\": " << acc[4] / S << ", \"foot_slip\": " << acc[5] / S
-       << ", \"falls\": " << falls << "}}\n";
+       << ", \"falls\": " << falls << "}, \"segment_window\": 0.6, \"ratio_min_command\": " << kRatioMinCommand
+       << ", \"segments\": [";
+    for (std::size_t k = 0; k < windows.size(); ++k) {
+      const SegmentWindow& w = windows[k];
+      const SegmentResult& res = seg_results[k];
+      js << (k ? ",\n  " : "\n  ") << "{\"name\": " << jstr(w.name) << ", \"t_begin\": " << jnum(w.t_begin)
+         << ", \"t_end\": " << jnum(w.t_end) << ", \"window\": [" << jnum(w.w_begin) << ", " << jnum(w.w_end)
+         << "], \"seeds\": " << res.seeds << ", \"fallen\": " << res.fallen << ", \"command\": " << jaxes(w.command)
+         << ", \"reference\": " << jaxes(res.reference) << ", \"achieved\": " << jaxes(res.achieved)
+         << ", \"u_prime\": " << jaxes(res.u_prime) << ", \"ratio\": " << jaxes(ratios(res.achieved, w.command), 3)
+         << ", \"reference_ratio\": " << jaxes(ratios(res.reference, w.command), 3) << "}";
+    }
+    js << "]}\n";
     std::printf("mean over %d seeds: LinVel %.4f  YawVel %.4f  Roll %.4f  Pitch %.4f  Height %.4f  slip %.4f  falls %d/%d\n",
                 seeds, acc[0] / S, acc[1] / S, acc[2] / S, acc[3] / S, acc[4] / S, acc[5] / S, falls, seeds);
     return falls == 0 ? 0 : 3;

@@ -81,6 +81,9 @@ class Controller {
   const gco::GcoResult& gcoResult() const noexcept { return pmg_->gcoResult(); }
   /// The PMG reference of the last active tick after the rate limiter (n) [rad].
   const std::array<double, kMaxMotors>& reference() const noexcept { return q_ref_; }
+  /// The reference the policy was given on the last active tick: the generator output with the
+  /// rate-limited (and teleop) joint references (q_ref, qd_ref (n), contacts, template base state).
+  const GeneratorOutput& referenceOutput() const noexcept { return ref_out_; }
   const policy::PolicyStage* policy() const noexcept { return policy_.get(); }
   const LowCommand& lastCommand() const noexcept { return command_; }
   const LowState& lastState() const noexcept { return state_; }
