@@ -4,7 +4,12 @@
 //
 //   build-policy/bin/pmg_generator_vectors --out /tmp/vectors.json            # synthetic clips
 //   build-policy/bin/pmg_generator_vectors --clips config/clips/g1/*.yaml --out v.json
+//   build-policy/bin/pmg_generator_vectors --clips config/clips/g1 --out v.json    # folder (+ consistency map)
 //
+// Both blendings (GeneratorParams::blending) run the same command schedule from the same initial
+// phase: the top-level "ticks" use "blending" (consistent, the default; GCO runs on it), and
+// "paper": {"blending": "paper", "ticks": [...]} the paper's eqs. 4-7 (the ablation). A file named
+// consistency_map.yaml among --clips (or in a --clips folder) is the library's consistency map.
 // The JSON holds everything the port needs: the joint space (from the robot config), the
 // generator parameters, the clips as given to GeneratorModel (missing directions are derived by
 // both implementations), dt, and per tick the commands and every GeneratorOutput field.
@@ -15,9 +20,14 @@
 // the JAX GCO port (training/pmg_train/gco.py) is proven equal the same way.
 // Synthetic clips (default) are smooth periodic joint trajectories around the default pose,
 // declared provenance "synthesized"; they exercise every code path (time reversal, mirroring,
-// all three static axes, clamping) independently of the motion-preprocessing clips.
+// all three static axes, clamping) independently of the motion-preprocessing clips. For the
+// command-consistent blending, three of them carry implied_motion tables (nonlinear in the
+// amplitude, with off-axis drift, so the Gauss-Seidel solve has to cancel drift with the opposite
+// clip of another axis), one has none (the linear fallback), and a small synthetic consistency map
+// (grid sizes 4, 2, 3, 3) corrects the command.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -135,6 +145,43 @@ pmg::StaticClip syntheticStatic(const pmg::GeneratorJointSpace& js, const char* 
   return s;
 }
 
+/// Synthetic implied_motion table: own axis grows as scale·(a − curve·a²) (strictly: curve < 0.25, a ≤ 2),
+/// off-axis drift linear in a (drift = per-unit (v_x, v_y, ω)).
+void addSyntheticImplied(pmg::DynamicClip& c, double curve, const Eigen::Vector3d& drift) {
+  const double amps[] = {0.0, 0.4, 0.9, 1.4, 2.0};
+  const Eigen::Index K = 5;
+  c.implied.amplitude.resize(K);
+  c.implied.velocity.resize(K, 3);
+  const auto axis = static_cast<Eigen::Index>(c.axis);
+  for (Eigen::Index k = 0; k < K; ++k) {
+    const double a = amps[k];
+    c.implied.amplitude[k] = a;
+    c.implied.velocity.row(k) = (a * drift).transpose();
+    c.implied.velocity(k, axis) = c.direction * 0.9 * c.nominal_scale * (a - curve * a * a);
+  }
+}
+
+/// Synthetic consistency map over v_x (4), v_y (2), ω (3), height (3): a smooth Δu.
+pmg::ConsistencyMap syntheticConsistencyMap() {
+  pmg::ConsistencyMap m;
+  m.grid[0] = (Eigen::VectorXd(4) << -0.6, 0.0, 0.5, 1.2).finished();
+  m.grid[1] = (Eigen::VectorXd(2) << -0.4, 0.4).finished();
+  m.grid[2] = (Eigen::VectorXd(3) << -0.9, 0.1, 0.9).finished();
+  m.grid[3] = (Eigen::VectorXd(3) << 0.58, 0.68, 0.76).finished();
+  m.delta.resize(4 * 2 * 3 * 3, 3);
+  for (Eigen::Index i = 0; i < 4; ++i)
+    for (Eigen::Index j = 0; j < 2; ++j)
+      for (Eigen::Index k = 0; k < 3; ++k)
+        for (Eigen::Index l = 0; l < 3; ++l) {
+          const double vx = m.grid[0][i], vy = m.grid[1][j], wz = m.grid[2][k], h = m.grid[3][l];
+          const Eigen::Index row = ((i * 2 + j) * 3 + k) * 3 + l;
+          m.delta(row, 0) = 0.06 * vx * wz - 0.3 * (h - 0.74) * vx + 0.01 * static_cast<double>(k);
+          m.delta(row, 1) = 0.05 * vx * wz + 0.04 * vy * static_cast<double>(i);
+          m.delta(row, 2) = -0.08 * vx * vy + 0.05 * wz * (h - 0.6) + 0.02 * static_cast<double>(l);
+        }
+  return m;
+}
+
 /// Leg chains, resolved GCO options and FK checks (see the file comment).
 void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const pmg::gco::GcoOptions& o) {
   j.key("gco_options");
@@ -207,8 +254,10 @@ void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const 
   j.raw("],");
 }
 
-/// Command schedule: 14 segments covering standing, every axis and sign, combinations,
-/// clamping, posture axes, height "no command" (0), and smooth transitions between them.
+/// Command schedule: kScheduleSegments segments covering standing, every axis and sign,
+/// combinations, clamping (and amplitude saturation), posture axes, height "no command" (0),
+/// walking crouched / bent, and smooth transitions between them.
+constexpr int kScheduleSegments = 17;
 void commandAt(int tick, int ticks_per_segment, pmg::VelocityCommand& u_d, pmg::PostureCommand& u_s) {
   static const double table[][6] = {
       // vx, vy, wz, pitch, roll, height
@@ -216,8 +265,10 @@ void commandAt(int tick, int ticks_per_segment, pmg::VelocityCommand& u_d, pmg::
       {-0.5, 0.0, 0.0, 0.0, 0.0, 0.0},  {0.0, 0.4, 0.0, 0.0, 0.0, 0.0},   {0.0, -0.5, 0.0, 0.0, 0.0, 0.0},
       {0.0, 0.0, 0.8, 0.0, 0.0, 0.0},   {0.0, 0.0, -1.0, 0.0, 0.0, 0.0},  {0.5, 0.2, 0.5, 0.1, -0.1, 0.70},
       {2.0, -1.0, 2.0, 0.0, 0.0, 0.0},  {0.0, 0.0, 0.0, 0.4, 0.0, 0.62}, {0.0, 0.0, 0.0, -0.3, 0.25, 0.50},
-      {-0.3, 0.3, -0.4, 0.8, -0.5, 0.9}, {0.02, -0.01, 0.03, 0.0, 0.0, 0.0}};
+      {-0.3, 0.3, -0.4, 0.8, -0.5, 0.9}, {0.02, -0.01, 0.03, 0.0, 0.0, 0.0},
+      {0.8, -0.3, -0.6, 0.3, 0.0, 0.64}, {-0.4, -0.2, 0.7, -0.1, 0.15, 0.76}, {0.0, 0.0, 0.5, 0.0, 0.0, 0.66}};
   constexpr int kSegments = sizeof(table) / sizeof(table[0]);
+  static_assert(kSegments == kScheduleSegments, "kScheduleSegments");
   const int seg = (tick / ticks_per_segment) % kSegments;
   const int next = (seg + 1) % kSegments;
   const double t = static_cast<double>(tick % ticks_per_segment) / ticks_per_segment;
@@ -234,11 +285,12 @@ int main(int argc, char** argv) {
   CLI::App app{"Emit PMG generator test vectors (JSON) for the Python port"};
   std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string(), out = "pmg_vectors.json";
   std::vector<std::string> clip_files;
-  int ticks = 1400;
+  int ticks = 850;  // 17 segments x 50 ticks, per blending
   std::string gco_path = pmg::resolveData("config/gco/g1.yaml").string();
   double dt = 0.01, phase0 = 0.3;
   app.add_option("--robot", robot_path, "robot config YAML")->capture_default_str();
-  app.add_option("--clips", clip_files, "clip files (default: synthetic clips)");
+  app.add_option("--clips", clip_files, "clip files or one clip folder (default: synthetic clips); "
+                                      "consistency_map.yaml among them is the consistency map");
   app.add_option("--out", out, "output JSON file");
   app.add_option("--ticks", ticks, "generator ticks")->check(CLI::Range(1, 1000000));
   app.add_option("--dt", dt, "tick period [s]")->check(CLI::PositiveNumber);
@@ -249,25 +301,39 @@ int main(int argc, char** argv) {
     const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const pmg::GeneratorJointSpace js = pmg::generatorJointSpace(robot);
     pmg::ClipLibrary lib;
-    if (!clip_files.empty()) {
-      lib = pmg::loadClipLibrary(clip_files, robot);
+    if (clip_files.size() == 1 && std::filesystem::is_directory(clip_files[0])) {
+      lib = pmg::loadClipLibrary(clip_files[0], robot);
+    } else if (!clip_files.empty()) {
+      std::vector<std::string> files, maps;
+      for (const auto& f : clip_files)
+        (std::filesystem::path(f).filename() == pmg::kConsistencyMapFile ? maps : files).push_back(f);
+      if (maps.size() > 1) throw std::runtime_error("--clips: more than one " + std::string(pmg::kConsistencyMapFile));
+      lib = pmg::loadClipLibrary(files, robot);
+      if (!maps.empty()) lib.consistency = pmg::readConsistencyMap(maps[0]);
     } else {
       lib.dynamic_clips.push_back(syntheticDynamic(js, "walk_forward", CommandAxis::kForward, 1, 0.8, 0.9, 40, 0.0));
+      addSyntheticImplied(lib.dynamic_clips.back(), 0.12, Eigen::Vector3d(0.0, 0.05, -0.1));
       lib.dynamic_clips.push_back(syntheticDynamic(js, "walk_left", CommandAxis::kLateral, 1, 0.35, 0.8, 33, 1.0));
+      addSyntheticImplied(lib.dynamic_clips.back(), 0.2, Eigen::Vector3d(-0.04, 0.0, 0.15));
       lib.dynamic_clips.push_back(syntheticDynamic(js, "turn_left", CommandAxis::kYaw, 1, 0.7, 1.1, 48, 2.0));
-      lib.dynamic_clips.push_back(syntheticDynamic(js, "turn_right", CommandAxis::kYaw, -1, 0.6, 1.0, 45, 3.0));
+      addSyntheticImplied(lib.dynamic_clips.back(), 0.15, Eigen::Vector3d(0.06, 0.08, 0.0));
+      lib.dynamic_clips.push_back(syntheticDynamic(js, "turn_right", CommandAxis::kYaw, -1, 0.6, 1.0, 45, 3.0));  // no table
+      lib.consistency = syntheticConsistencyMap();
       lib.static_clips.push_back(syntheticStatic(js, "squat", PostureAxis::kHeight, {0.55, 0.65, 0.72, js.standing_base_height},
                                                  js.standing_base_height, 0.5));
       lib.static_clips.push_back(syntheticStatic(js, "bend", PostureAxis::kPitch, {-0.2, 0.0, 0.3, 0.6}, 0.0, 1.5));
       lib.static_clips.push_back(syntheticStatic(js, "lean", PostureAxis::kRoll, {-0.3, 0.0, 0.3}, 0.0, 2.5));
     }
-    const pmg::GeneratorParams params;
+    const pmg::GeneratorParams params;  // blending: kConsistent
+    pmg::GeneratorParams paper_params = params;
+    paper_params.blending = pmg::Blending::kPaper;
     auto model = std::make_shared<const pmg::GeneratorModel>(lib, js, params);
+    auto paper_model = std::make_shared<const pmg::GeneratorModel>(lib, js, paper_params);
     const auto legs = pmg::gco::LegModel::fromRobotConfig(robot);
     pmg::gco::GcoOptions gco_options = pmg::gco::loadGcoOptionsFile(gco_path);
     gco_options.enabled = true;
     pmg::gco::GeneratorWithGco gen(model, legs, gco_options);
-    gen.reset(phase0);
+    pmg::gco::GeneratorWithGco paper_gen(paper_model, legs, gco_options);
 
     std::FILE* f = std::fopen(out.c_str(), "w");
     if (f == nullptr) throw std::runtime_error(out + ": cannot open for writing");
@@ -287,6 +353,20 @@ int main(int argc, char** argv) {
     j.key("standing_base_height"); j.num(js.standing_base_height); j.raw(",");
     j.key("epsilon"); j.num(params.epsilon); j.raw(",");
     j.key("max_command"); j.list(params.max_command); j.raw(",");
+    j.key("blending"); j.raw("\"consistent\",");
+    j.key("consistency_map");
+    if (lib.consistency.empty()) {
+      j.raw("null,");
+    } else {
+      const char* keys[4] = {"vx", "vy", "wz", "height"};
+      j.raw("{");
+      for (std::size_t d = 0; d < 4; ++d) {
+        j.key(keys[d]);
+        j.vec(lib.consistency.grid[d]);
+        j.raw(",");
+      }
+      j.key("delta"); j.mat(lib.consistency.delta); j.raw("},");
+    }
     j.key("dynamic_clips");
     j.raw("[");
     for (std::size_t i = 0; i < lib.dynamic_clips.size(); ++i) {
@@ -299,6 +379,14 @@ int main(int argc, char** argv) {
       j.key("v_base"); j.mat(c.v_base); j.raw(",");
       j.key("omega_base"); j.mat(c.omega_base); j.raw(",");
       j.key("base_height"); j.vec(c.base_height); j.raw(",");
+      j.key("implied_motion");
+      if (c.implied.empty()) {
+        j.raw("null,");
+      } else {
+        j.raw("{");
+        j.key("amplitude"); j.vec(c.implied.amplitude); j.raw(",");
+        j.key("velocity"); j.mat(c.implied.velocity); j.raw("},");
+      }
       j.key("contact");
       std::fprintf(f, "[[%.17g,%.17g],[%.17g,%.17g]]}", c.contact[0].mu, c.contact[0].sigma, c.contact[1].mu, c.contact[1].sigma);
     }
@@ -323,45 +411,72 @@ int main(int argc, char** argv) {
     j.raw("],");
     j.key("dt"); j.num(dt); j.raw(",");
     j.key("phase0"); j.num(phase0); j.raw(",");
+    const int per_segment = std::max(1, ticks / kScheduleSegments);
+    int saturated_ticks = 0, opposite_ticks = 0;
+    const auto writeTicks = [&](pmg::gco::GeneratorWithGco& g) {
+      g.reset(phase0);
+      j.raw("[\n");
+      for (int t = 0; t < ticks; ++t) {
+        pmg::VelocityCommand u_d;
+        pmg::PostureCommand u_s;
+        commandAt(t, per_segment, u_d, u_s);
+        const pmg::gco::GcoResult& r = g.step(u_d, u_s, dt);
+        const pmg::GeneratorOutput& o = g.generatorOutput();
+        if (&g == &gen) {
+          saturated_ticks += o.amplitude_saturated > 0;
+          for (std::size_t i = 0; i < pmg::kNumCommandAxes; ++i)
+            if (o.amplitude[i] > 0 && o.clip_direction[i] != (u_d[i] < 0 ? -1 : 1)) {
+              ++opposite_ticks;
+              break;
+            }
+        }
+        j.raw(t ? ",\n{" : "{");
+        j.key("u_d"); j.list(std::vector<double>{u_d.vx, u_d.vy, u_d.wz}); j.raw(",");
+        j.key("u_s"); j.list(std::vector<double>{u_s.pitch, u_s.roll, u_s.height}); j.raw(",");
+        j.key("phase"); j.num(o.phase); j.raw(",");
+        j.key("next_phase"); j.num(o.next_phase); j.raw(",");
+        j.key("period"); j.num(o.period); j.raw(",");
+        j.key("q_ref"); j.vec(o.q_ref); j.raw(",");
+        j.key("qd_ref"); j.vec(o.qd_ref); j.raw(",");
+        j.key("alpha"); j.list(o.alpha); j.raw(",");
+        j.key("weight"); j.list(o.weight); j.raw(",");
+        j.key("amplitude"); j.list(o.amplitude); j.raw(",");
+        j.key("clip_direction"); j.list(o.clip_direction); j.raw(",");
+        j.key("amplitude_saturated"); j.num(o.amplitude_saturated); j.raw(",");
+        j.key("command_correction"); j.list(o.command_correction); j.raw(",");
+        j.key("standing_weight"); j.num(o.standing_weight); j.raw(",");
+        j.key("beta"); j.list(o.beta); j.raw(",");
+        j.key("contact_mu"); j.list(std::vector<double>{o.contact[0].mu, o.contact[1].mu}); j.raw(",");
+        j.key("contact_sigma"); j.list(std::vector<double>{o.contact[0].sigma, o.contact[1].sigma}); j.raw(",");
+        j.key("in_contact"); j.list(std::vector<double>{o.in_contact[0] ? 1.0 : 0.0, o.in_contact[1] ? 1.0 : 0.0}); j.raw(",");
+        j.key("v_base"); j.vec(o.v_base); j.raw(",");
+        j.key("omega_base"); j.vec(o.omega_base); j.raw(",");
+        j.key("yaw_rate"); j.num(o.yaw_rate); j.raw(",");
+        j.key("base_height"); j.num(o.base_height); j.raw(",");
+        j.key("clamped_joints"); j.num(o.clamped_joints); j.raw(",");
+        j.key("gco_u_opt");
+        j.list(std::vector<double>{r.u_opt.v_x, r.u_opt.v_y, r.u_opt.yaw_rate, r.u_opt.pitch, r.u_opt.roll, r.u_opt.height});
+        j.raw(",");
+        j.key("gco_delta"); j.vec(r.delta); j.raw(",");
+        j.key("gco_s"); j.list(r.contact_weight); j.raw(",");
+        j.key("gco_status"); j.num(static_cast<double>(r.status)); j.raw("}");
+      }
+      j.raw("]");
+    };
     j.key("ticks");
-    j.raw("[\n");
-    const int per_segment = std::max(1, ticks / 14);
-    for (int t = 0; t < ticks; ++t) {
-      pmg::VelocityCommand u_d;
-      pmg::PostureCommand u_s;
-      commandAt(t, per_segment, u_d, u_s);
-      const pmg::gco::GcoResult& r = gen.step(u_d, u_s, dt);
-      const pmg::GeneratorOutput& o = gen.generatorOutput();
-      j.raw(t ? ",\n{" : "{");
-      j.key("u_d"); j.list(std::vector<double>{u_d.vx, u_d.vy, u_d.wz}); j.raw(",");
-      j.key("u_s"); j.list(std::vector<double>{u_s.pitch, u_s.roll, u_s.height}); j.raw(",");
-      j.key("phase"); j.num(o.phase); j.raw(",");
-      j.key("next_phase"); j.num(o.next_phase); j.raw(",");
-      j.key("period"); j.num(o.period); j.raw(",");
-      j.key("q_ref"); j.vec(o.q_ref); j.raw(",");
-      j.key("qd_ref"); j.vec(o.qd_ref); j.raw(",");
-      j.key("alpha"); j.list(o.alpha); j.raw(",");
-      j.key("weight"); j.list(o.weight); j.raw(",");
-      j.key("standing_weight"); j.num(o.standing_weight); j.raw(",");
-      j.key("beta"); j.list(o.beta); j.raw(",");
-      j.key("contact_mu"); j.list(std::vector<double>{o.contact[0].mu, o.contact[1].mu}); j.raw(",");
-      j.key("contact_sigma"); j.list(std::vector<double>{o.contact[0].sigma, o.contact[1].sigma}); j.raw(",");
-      j.key("in_contact"); j.list(std::vector<double>{o.in_contact[0] ? 1.0 : 0.0, o.in_contact[1] ? 1.0 : 0.0}); j.raw(",");
-      j.key("v_base"); j.vec(o.v_base); j.raw(",");
-      j.key("yaw_rate"); j.num(o.yaw_rate); j.raw(",");
-      j.key("base_height"); j.num(o.base_height); j.raw(",");
-      j.key("clamped_joints"); j.num(o.clamped_joints); j.raw(",");
-      j.key("gco_u_opt");
-      j.list(std::vector<double>{r.u_opt.v_x, r.u_opt.v_y, r.u_opt.yaw_rate, r.u_opt.pitch, r.u_opt.roll, r.u_opt.height});
-      j.raw(",");
-      j.key("gco_delta"); j.vec(r.delta); j.raw(",");
-      j.key("gco_s"); j.list(r.contact_weight); j.raw(",");
-      j.key("gco_status"); j.num(static_cast<double>(r.status)); j.raw("}");
-    }
-    j.raw("]}\n");
+    writeTicks(gen);
+    j.raw(",");
+    j.key("paper");
+    j.raw("{\"blending\":\"paper\",");
+    j.key("ticks");
+    writeTicks(paper_gen);
+    j.raw("}");
+    j.raw("}\n");
     std::fclose(f);
-    std::printf("wrote %d ticks, %zu dynamic + %zu static clips to %s\n", ticks, lib.dynamic_clips.size(),
-                lib.static_clips.size(), out.c_str());
+    std::printf("wrote %d ticks x 2 blendings (consistent, paper), %zu dynamic + %zu static clips%s to %s; "
+                "consistent: %d ticks with a saturated amplitude, %d playing a clip of the other sign than u_i\n",
+                ticks, lib.dynamic_clips.size(), lib.static_clips.size(),
+                lib.consistency.empty() ? "" : " + consistency map", out.c_str(), saturated_ticks, opposite_ticks);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

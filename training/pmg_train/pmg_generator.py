@@ -10,6 +10,20 @@ thousands of environments; pass ``xp=jax.numpy``). test/policy runs
 Equations (PMG paper): eq. 4 alpha, eq. 5/7 blend with the standing pose, eq. 6 weights, eqs. 8-9
 contacts, eq. 10 posture offset, eq. 11 phase update, eq. 12 period. Conventions (standing
 weight, derived clips, finite-difference reference velocity) follow generator.hpp's header.
+
+Blending (GeneratorParams::blending; ``GeneratorModel(..., blending=...)``):
+  "consistent" (default, as the C++): the command u is first corrected by the library's consistency
+      map (4-D multilinear over v_x, v_y, omega, height; ``consistency_map.yaml`` beside the clips),
+      eq. 6 weights / eq. 12 period / eqs. 8-9 contacts come from the corrected u, and the effective
+      amplitudes e_i come from KCONSISTENT_SWEEPS Gauss-Seidel sweeps over the per-clip displacement
+      tables D = T * implied_motion.velocity (a clip without ``implied_motion`` gets the linear table
+      of generator.hpp's makeDisplacementTable). An axis may play the clip of the opposite sign of u_i
+      (``clip_direction``) to cancel another clip's drift.
+  "paper": eqs. 4-7 (e_i = w_i alpha_i), kept for the ablation.
+Both then use the unified form q_d = q_stand + sum_i e_i (q_Di(phi) - q_stand), base velocity
+sum_i e_i v_i(phi), height h_stand + sum_i e_i (h_i(phi) - h_stand).
+Under JAX everything is traced: fixed loop counts (unrolled at trace time), clips of both signs
+evaluated and selected with ``where``, no Python control flow on traced values (jit/vmap-able).
 """
 from __future__ import annotations
 
@@ -19,6 +33,9 @@ import math
 import numpy as np
 
 AXES = ("forward", "lateral", "yaw")
+BLENDINGS = ("consistent", "paper")
+KCONSISTENT_SWEEPS = 4  # pmg::kConsistentSweeps
+CONSISTENCY_MAP_FILE = "consistency_map.yaml"
 POSTURE_AXES = ("pitch", "roll", "height")
 
 
@@ -35,6 +52,15 @@ class Clip:
     omega_base: np.ndarray  # (N, 3) rad/s, heading frame
     base_height: np.ndarray # (N,) m
     contact: np.ndarray     # (2, 2): [foot][mu, sigma]
+    implied_amplitude: np.ndarray = None  # (K,) implied_motion.amplitude, or None
+    implied_velocity: np.ndarray = None   # (K, 3) implied_motion.velocity (v_x, v_y, omega) at period T
+
+
+@dataclasses.dataclass
+class ConsistencyMap:
+    """pmg::ConsistencyMap: grid[d] (d = v_x, v_y, omega, height), delta (prod n_d, 3)."""
+    grid: list
+    delta: np.ndarray
 
 
 @dataclasses.dataclass
@@ -71,8 +97,8 @@ def rotate_phase(c: Clip, shift: int) -> Clip:
     s = (np.arange(n) + shift) % n
     contact = c.contact.copy()
     contact[:, 0] = [_wrap_np(mu - shift / n) for mu in c.contact[:, 0]]
-    return Clip(c.name, c.axis, c.direction, c.nominal_scale, c.period, c.q[s].copy(), c.qd[s].copy(),
-                c.v_base[s].copy(), c.omega_base[s].copy(), c.base_height[s].copy(), contact)
+    return dataclasses.replace(c, q=c.q[s].copy(), qd=c.qd[s].copy(), v_base=c.v_base[s].copy(),
+                               omega_base=c.omega_base[s].copy(), base_height=c.base_height[s].copy(), contact=contact)
 
 
 def align_on_left_touchdown(c: Clip) -> Clip:
@@ -89,9 +115,11 @@ def time_reversed(c: Clip) -> Clip:
     s = (n - np.arange(n)) % n
     contact = c.contact.copy()
     contact[:, 0] = [_wrap_np(1.0 - mu) for mu in c.contact[:, 0]]
+    iv = None if c.implied_velocity is None else -c.implied_velocity  # the same stance paths, backwards
     return align_on_left_touchdown(
         Clip(c.name + "_time_reversed", c.axis, -c.direction, c.nominal_scale, c.period, c.q[s].copy(),
-             -c.qd[s], -c.v_base[s], -c.omega_base[s], c.base_height[s].copy(), contact))
+             -c.qd[s], -c.v_base[s], -c.omega_base[s], c.base_height[s].copy(), contact,
+             c.implied_amplitude, iv))
 
 
 def mirrored(c: Clip, js: JointSpace) -> Clip:
@@ -105,14 +133,33 @@ def mirrored(c: Clip, js: JointSpace) -> Clip:
     w[:, 2] = -c.omega_base[:, 2]
     contact = c.contact[::-1].copy()
     direction = c.direction if c.axis == 0 else -c.direction
+    iv = None
+    if c.implied_velocity is not None:  # v_y and omega change sign under the mirror
+        iv = c.implied_velocity * np.array([1.0, -1.0, -1.0])[None, :]
     return align_on_left_touchdown(Clip(c.name + "_mirrored", c.axis, direction, c.nominal_scale, c.period, q, qd, v, w,
-                                        c.base_height.copy(), contact))
+                                        c.base_height.copy(), contact, c.implied_amplitude, iv))
+
+
+def displacement_table(c: Clip):
+    """GeneratorModel::makeDisplacementTable: (amplitudes (K,), per-cycle displacement (K, 3))."""
+    if c.implied_amplitude is not None:
+        return np.asarray(c.implied_amplitude, float), np.asarray(c.implied_velocity, float) * c.period
+    d = np.zeros((2, 3))
+    d[1, 0] = c.v_base[:, 0].mean() * c.period
+    d[1, 1] = c.v_base[:, 1].mean() * c.period
+    d[1, 2] = c.omega_base[:, 2].mean() * c.period
+    d[1, c.axis] = c.direction * c.nominal_scale * c.period
+    return np.array([0.0, 1.0]), d
 
 
 class GeneratorModel:
     """Immutable model: 6 dynamic slots (axis x sign), up to 3 static clips (GeneratorModel)."""
 
-    def __init__(self, dynamic_clips, static_clips, js: JointSpace, epsilon=0.05, max_command=(1.5, 0.8, 1.5)):
+    def __init__(self, dynamic_clips, static_clips, js: JointSpace, epsilon=0.05, max_command=(1.5, 0.8, 1.5),
+                 blending="consistent", consistency=None):
+        if blending not in BLENDINGS:
+            raise ValueError(f"GeneratorModel.blending = {blending!r}: expected one of {BLENDINGS}")
+        self.blending = blending
         self.js = js
         self.epsilon = float(epsilon)
         self.max_command = np.asarray(max_command, dtype=np.float64)
@@ -134,6 +181,25 @@ class GeneratorModel:
             if self.static[s.axis] is not None:
                 raise ValueError(f"static clip '{s.name}': a second clip for the same posture axis")
             self.static[s.axis] = s
+        self.tables = [None if d is None else displacement_table(d) for d in self.dynamic]
+        for k, t in enumerate(self.tables):
+            if t is None:
+                continue
+            a, d = t
+            if d.shape != (a.shape[0], 3) or a.shape[0] < 2 or a[0] != 0.0 or np.any(np.diff(a) <= 0) or \
+                    np.any(np.diff(self.dynamic[k].direction * d[:, self.dynamic[k].axis]) <= 0):
+                raise ValueError(f"clip '{self.dynamic[k].name}': implied_motion: expected amplitudes from 0, strictly "
+                                 f"increasing, and the clip's own axis growing with them (K x 3 velocities)")
+        self.consistency = consistency
+        if consistency is not None:
+            rows = 1
+            for g in consistency.grid:
+                g = np.asarray(g, float)
+                if g.size < 1 or np.any(np.diff(g) <= 0):
+                    raise ValueError("consistency map: every grid axis needs >= 1 strictly increasing values")
+                rows *= g.size
+            if consistency.delta.shape != (rows, 3) or not np.all(np.isfinite(consistency.delta)):
+                raise ValueError(f"consistency map: delta is {consistency.delta.shape}, expected ({rows}, 3) finite")
         self.t_stand = self.dynamic[0].period if self.dynamic[0] is not None else 1.0
         self.max_samples = max([2] + [d.q.shape[0] for d in self.dynamic if d is not None])
         self.n = len(js.joint_names)
@@ -174,24 +240,88 @@ def _interp_static(xp, s: StaticClip, value):
     return (1.0 - t) * q[i] + t * q[i + 1]
 
 
+def _table_at(xp, table, e, column):
+    """MotionGenerator::tableAt: displacement of @p table on @p column at amplitude e (piecewise linear)."""
+    a, d = table
+    K = a.shape[0]
+    k = xp.sum(e > xp.asarray(a[1:K - 1])) if K > 2 else 0
+    aa, dd = xp.asarray(a), xp.asarray(d[:, column])
+    f = xp.clip((e - aa[k]) / (aa[k + 1] - aa[k]), 0.0, 1.0)
+    return (1.0 - f) * dd[k] + f * dd[k + 1]
+
+
+def _table_inverse(xp, table, target, column, direction):
+    """MotionGenerator::tableInverse: amplitude at which @p table reaches |displacement| target on its
+    own axis (grows along @p direction). Returns (amplitude, saturated)."""
+    a, d = table
+    K = a.shape[0]
+    dd = direction * np.asarray(d[:, column], float)
+    last = dd[K - 1]
+    k = xp.sum(target > xp.asarray(dd[1:K - 1])) if K > 2 else 0
+    ddx, aa = xp.asarray(dd), xp.asarray(a)
+    d0, d1 = ddx[k], ddx[k + 1]
+    f = xp.clip((target - d0) / (d1 - d0), 0.0, 1.0)
+    e = (1.0 - f) * aa[k] + f * aa[k + 1]
+    return xp.where(target >= last, a[K - 1], e), target > last
+
+
+def _lookup_correction(xp, cmap: ConsistencyMap, u, height):
+    """MotionGenerator::lookupCorrection: multilinear Δu at (v_x, v_y, omega, height), inputs clamped to the grid."""
+    x = [u[0], u[1], u[2], height]
+    sizes = [int(np.asarray(g).size) for g in cmap.grid]
+    lo, frac = [], []
+    for dim in range(4):
+        g = np.asarray(cmap.grid[dim], float)
+        n = sizes[dim]
+        if n == 1:
+            lo.append(0)
+            frac.append(0.0)
+            continue
+        v = xp.clip(x[dim], g[0], g[n - 1])
+        k = xp.sum(v > xp.asarray(g[1:n - 1])) if n > 2 else 0
+        gx = xp.asarray(g)
+        lo.append(k)
+        frac.append((v - gx[k]) / (gx[k + 1] - gx[k]))
+    stride = [0, 0, 0, 1]
+    for dim in (2, 1, 0):
+        stride[dim] = stride[dim + 1] * sizes[dim + 1]
+    delta = xp.asarray(cmap.delta)
+    corr = 0.0 * xp.asarray(delta[0])
+    for corner in range(16):
+        bits = [(corner >> dim) & 1 for dim in range(4)]
+        if any(b and sizes[dim] == 1 for dim, b in enumerate(bits)):
+            continue
+        w = 1.0
+        row = 0
+        for dim in range(4):
+            w = w * (frac[dim] if bits[dim] else 1.0 - frac[dim])
+            row = row + (lo[dim] + bits[dim]) * stride[dim]
+        corr = corr + w * delta[row]
+    return corr
+
+
 def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     """One generator tick for one robot (MotionGenerator::step). Under JAX, vmap over robots.
 
     phase: scalar in [0, 1). u_d: (3,) (v_x, v_y, omega) [m/s, m/s, rad/s], heading frame.
     u_s: (3,) (pitch [rad], roll [rad], height [m]; height <= 0 = standing height). dt [s] > 0.
-    Returns a dict with the GeneratorOutput fields (phase, next_phase, period, q_ref, qd_ref, ...).
-    Non-finite commands are not handled here (training never produces them).
+    Returns a dict with the GeneratorOutput fields (phase, next_phase, period, q_ref, qd_ref, alpha,
+    weight, amplitude, clip_direction, amplitude_saturated, command_correction, ..., v_base,
+    omega_base, yaw_rate, base_height). Non-finite commands are not handled here (training never
+    produces them).
     """
     js = model.js
     u = xp.clip(xp.asarray(u_d, dtype=xp.float64 if xp is np else None), -model.max_command, model.max_command)
+    zero = 0.0 * u[0]
     # Posture offset (evalPosture).
     q_post = xp.zeros(model.n)
     beta = []
     height_offset = 0.0
+    posture_height = js.standing_base_height + zero  # postureHeight()
     for a in range(3):
         s = model.static[a]
         if s is None:
-            beta.append(0.0 * u[0])
+            beta.append(zero)
             continue
         value = u_s[a]
         if a == 2:
@@ -203,42 +333,78 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
         q_post = q_post + _interp_static(xp, s, value) - _interp_static(xp, s, s.neutral)
         if a == 2:
             height_offset = value - s.neutral
+            posture_height = value
 
-    # Per axis: the clip of the command's sign; both evaluated, selected with where (JAX-friendly).
+    # kConsistent: the residual correction of the consistency map.
+    consistent = model.blending == "consistent"
+    correction = xp.zeros(3) + zero
+    if consistent and model.consistency is not None:
+        correction = _lookup_correction(xp, model.consistency, u, posture_height)
+        u = u + correction
+
+    # Weights (eqs. 4, 6) of the clip of each (corrected) command's sign; both signs are evaluated
+    # and selected with where (JAX-friendly).
     present = [model.dynamic[2 * i] is not None or model.dynamic[2 * i + 1] is not None for i in range(3)]
-    sum_abs = sum(xp.abs(u[i]) for i in range(3) if present[i])
+    sign = [xp.where(u[i] < 0, -1.0, 1.0) for i in range(3)]
+
+    def per_clip(i, direction, fn):
+        pos, neg = model.dynamic[2 * i], model.dynamic[2 * i + 1]
+        return xp.where(direction < 0, fn(neg), fn(pos))
+
+    sum_abs = sum(xp.abs(u[i]) for i in range(3) if present[i]) + zero
     weight, alpha = [], []
     for i in range(3):
         if not present[i]:
-            weight.append(0.0 * u[0]); alpha.append(0.0 * u[0]); continue
-        pos, neg = model.dynamic[2 * i], model.dynamic[2 * i + 1]
-        nominal = xp.where(u[i] < 0, neg.nominal_scale, pos.nominal_scale)
+            weight.append(zero); alpha.append(zero); continue
+        nominal = per_clip(i, sign[i], lambda c: c.nominal_scale)
         alpha.append(xp.clip(xp.abs(u[i]) / nominal, 0.0, 1.0))
         weight.append(xp.abs(u[i]) / (sum_abs + model.epsilon))
     sum_w = weight[0] + weight[1] + weight[2]
     w_stand = 1.0 - sum_w
 
-    def per_clip(i, fn):
-        pos, neg = model.dynamic[2 * i], model.dynamic[2 * i + 1]
-        return xp.where(u[i] < 0, fn(neg), fn(pos))
-
     period = w_stand * model.t_stand
     for i in range(3):
         if present[i]:
-            period = period + weight[i] * per_clip(i, lambda c: c.period)
+            period = period + weight[i] * per_clip(i, sign[i], lambda c: c.period)
+
+    # Effective amplitudes e_i and the clip each axis plays (direction d_i).
+    saturated = [xp.asarray(False)] * 3
+    if consistent:  # solveConsistentAmplitudes: fixed Gauss-Seidel sweeps
+        amp = [zero, zero, zero]
+        direction = list(sign)
+        for _ in range(KCONSISTENT_SWEEPS):
+            for i in range(3):
+                if not present[i]:
+                    amp[i] = zero
+                    continue
+                r = u[i] * period
+                for j in range(3):
+                    if j == i or not present[j]:
+                        continue
+                    dj = xp.where(direction[j] < 0, _table_at(xp, model.tables[2 * j + 1], amp[j], i),
+                                  _table_at(xp, model.tables[2 * j], amp[j], i))
+                    r = r - xp.where(amp[j] > 0.0, dj, 0.0)
+                target = xp.abs(r)
+                e_pos, s_pos = _table_inverse(xp, model.tables[2 * i], target, i, 1)
+                e_neg, s_neg = _table_inverse(xp, model.tables[2 * i + 1], target, i, -1)
+                neg = r < 0
+                amp[i] = xp.where(neg, e_neg, e_pos)
+                saturated[i] = xp.where(neg, s_neg, s_pos)
+                direction[i] = xp.where(neg, -1.0, 1.0)
+        alpha = list(amp)
+    else:
+        amp = [weight[i] * alpha[i] for i in range(3)]
+        direction = list(sign)
+
     h = 0.5 / model.max_samples
     q_stand = xp.asarray(js.q_stand)
+    e_sum = sum(amp[i] for i in range(3) if present[i]) + zero
 
-    def blend(phi):
-        ws = w_stand
+    def blend(phi):  # blendJoints: q_stand + sum_i e_i (q_Di(phi) - q_stand)
+        q = (1.0 - e_sum) * q_stand
         for i in range(3):
             if present[i]:
-                ws = ws + weight[i] * (1.0 - alpha[i])
-        q = ws * q_stand
-        for i in range(3):
-            if present[i]:
-                qi = per_clip(i, lambda c: _interp_rows(xp, xp.asarray(c.q), phi))
-                q = q + weight[i] * alpha[i] * qi
+                q = q + amp[i] * per_clip(i, direction[i], lambda c: _interp_rows(xp, xp.asarray(c.q), phi))
         return q
 
     q_minus = blend(phase - h)
@@ -250,24 +416,25 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
         mu, sigma = 0.0, 0.5 * w_stand
         for i in range(3):
             if present[i]:
-                mu = mu + weight[i] * per_clip(i, lambda c: c.contact[f, 0])
-                sigma = sigma + weight[i] * per_clip(i, lambda c: c.contact[f, 1])
+                mu = mu + weight[i] * per_clip(i, sign[i], lambda c: c.contact[f, 0])
+                sigma = sigma + weight[i] * per_clip(i, sign[i], lambda c: c.contact[f, 1])
         m = xp.where(sum_w > 0, wrap_phase(xp, mu / xp.where(sum_w > 0, sum_w, 1.0)), 0.0)
         sg = xp.clip(sigma, 0.0, 0.5)
         mu_f.append(m); sigma_f.append(sg)
         in_contact.append(xp.logical_or(phase_distance(xp, phase, m) < sg, sg >= 0.5))
 
     v_base = xp.zeros(3)
-    yaw_rate = 0.0
-    height = w_stand * js.standing_base_height
+    omega_base = xp.zeros(3)
+    height = js.standing_base_height + zero
     for i in range(3):
         if not present[i]:
             continue
-        wa = weight[i] * alpha[i]
-        v_base = v_base + wa * per_clip(i, lambda c: _interp_rows(xp, xp.asarray(c.v_base), phase))
-        yaw_rate = yaw_rate + wa * per_clip(i, lambda c: _interp_rows(xp, xp.asarray(c.omega_base[:, 2]), phase))
-        h_clip = per_clip(i, lambda c: _interp_rows(xp, xp.asarray(c.base_height), phase))
-        height = height + weight[i] * (alpha[i] * h_clip + (1.0 - alpha[i]) * js.standing_base_height)
+        e = amp[i]
+        v_base = v_base + e * per_clip(i, direction[i], lambda c: _interp_rows(xp, xp.asarray(c.v_base), phase))
+        omega_base = omega_base + e * per_clip(i, direction[i],
+                                               lambda c: _interp_rows(xp, xp.asarray(c.omega_base), phase))
+        h_clip = per_clip(i, direction[i], lambda c: _interp_rows(xp, xp.asarray(c.base_height), phase))
+        height = height + e * (h_clip - js.standing_base_height)
     base_height = height + height_offset
 
     q_raw = q_dyn + q_post
@@ -276,11 +443,14 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     clamped = xp.sum(xp.logical_or(q_raw < lower, q_raw > upper))
     qd_ref = (q_plus - q_minus) / (2.0 * h * period)
     next_phase = wrap_phase(xp, phase + dt / period)
+    stack = lambda xs: xp.stack([xp.asarray(x) for x in xs])
     return {"phase": phase, "next_phase": next_phase, "period": period, "q_ref": q_ref, "qd_ref": qd_ref,
-            "alpha": xp.stack([xp.asarray(a) for a in alpha]), "weight": xp.stack([xp.asarray(w) for w in weight]),
-            "standing_weight": w_stand, "beta": xp.stack([xp.asarray(b) for b in beta]),
+            "alpha": stack(alpha), "weight": stack(weight), "amplitude": stack(amp),
+            "clip_direction": stack(direction), "amplitude_saturated": xp.sum(stack(saturated).astype(xp.int32)),
+            "command_correction": correction, "standing_weight": w_stand, "beta": stack(beta),
             "contact_mu": xp.stack(mu_f), "contact_sigma": xp.stack(sigma_f), "in_contact": xp.stack(in_contact),
-            "v_base": v_base, "yaw_rate": yaw_rate, "base_height": base_height, "clamped_joints": clamped}
+            "v_base": v_base, "omega_base": omega_base, "yaw_rate": omega_base[2], "base_height": base_height,
+            "clamped_joints": clamped}
 
 
 # ---- loading -------------------------------------------------------------------------------
@@ -297,27 +467,83 @@ def joint_space_from_robot_yaml(path):
 
 
 def load_clip_file(path):
-    """Reads one clip file (docs/clip_format.md) -> Clip or StaticClip."""
+    """Reads one clip file (docs/clip_format.md) -> Clip or StaticClip (with its optional implied_motion)."""
     import yaml
     with open(path) as f:
         d = yaml.safe_load(f)
     if d["kind"] == "dynamic":
+        ia = iv = None
+        im = d.get("implied_motion")
+        if im is not None:
+            ia, iv = np.array(im["amplitude"], float), np.array(im["velocity"], float)
+            if ia.ndim != 1 or iv.shape != (ia.size, 3):
+                raise ValueError(f"{path}: implied_motion: expected K amplitudes and K x 3 velocities, got "
+                                 f"{ia.shape} and {iv.shape}")
         return Clip(d["name"], AXES.index(d["axis"]), int(d["direction"]), float(d["nominal_scale"]), float(d["period"]),
                     np.array(d["q"], float), np.array(d["qd"], float), np.array(d["v_base"], float),
                     np.array(d["omega_base"], float), np.array(d["base_height"], float),
                     np.array([[d["contact"]["left"]["mu"], d["contact"]["left"]["sigma"]],
-                              [d["contact"]["right"]["mu"], d["contact"]["right"]["sigma"]]], float))
+                              [d["contact"]["right"]["mu"], d["contact"]["right"]["sigma"]]], float), ia, iv)
     return StaticClip(d["name"], POSTURE_AXES.index(d["axis"]), np.array(d["values"], float), float(d["neutral"]),
                       np.array(d["q"], float))
 
 
-def model_from_vectors(v):
-    """GeneratorModel from a pmg_generator_vectors JSON document."""
+def load_consistency_map(path):
+    """Reads consistency_map.yaml (pmg::readConsistencyMap, docs/clip_format.md) -> ConsistencyMap."""
+    import yaml
+    with open(path) as f:
+        d = yaml.safe_load(f)
+    if not isinstance(d, dict) or d.get("kind") != "consistency_map":
+        raise ValueError(f"{path}: kind: expected 'consistency_map'")
+    grid = [np.atleast_1d(np.array(d[k], float)) for k in ("vx", "vy", "wz", "height")]
+    delta = np.array(d["delta"], float).reshape(-1, 3)
+    if delta.shape[0] != int(np.prod([g.size for g in grid])) or np.any(np.abs(delta) > 2.0):
+        raise ValueError(f"{path}: delta: expected {int(np.prod([g.size for g in grid]))} rows of 3 values, |value| <= 2")
+    return ConsistencyMap(grid, delta)
+
+
+def load_library(clips, js: JointSpace, blending="consistent", **kwargs):
+    """GeneratorModel from a clip folder (every *.yaml, consistency_map.yaml as the map) or a list of
+    files (consistency_map.yaml in the list, else beside the clips, is the map; pmg::loadClipLibrary).
+    Files are read every call (another tool may regenerate the folder)."""
+    import glob
+    import os
+    if isinstance(clips, str):
+        files = sorted(glob.glob(os.path.join(clips, "*.yaml")))
+        if not files:
+            raise FileNotFoundError(f"{clips}: no clip files (*.yaml)")
+    else:
+        files = list(clips)
+    map_files = [f for f in files if os.path.basename(f) == CONSISTENCY_MAP_FILE]
+    clip_files = [f for f in files if os.path.basename(f) != CONSISTENCY_MAP_FILE]
+    if not map_files and clip_files:
+        beside = os.path.join(os.path.dirname(clip_files[0]), CONSISTENCY_MAP_FILE)
+        if os.path.isfile(beside) and all(os.path.dirname(f) == os.path.dirname(clip_files[0]) for f in clip_files):
+            map_files = [beside]
+    cmap = load_consistency_map(map_files[0]) if map_files else None
+    loaded = [load_clip_file(f) for f in clip_files]
+    model = GeneratorModel([c for c in loaded if isinstance(c, Clip)], [c for c in loaded if isinstance(c, StaticClip)],
+                           js, blending=blending, consistency=cmap, **kwargs)
+    model.clip_files = clip_files
+    model.map_file = map_files[0] if map_files else None
+    return model
+
+
+def model_from_vectors(v, blending=None):
+    """GeneratorModel from a pmg_generator_vectors JSON document (its "blending" unless @p blending)."""
     js = JointSpace(v["joint_names"], np.array(v["q_stand"]), np.array(v["lower"]), np.array(v["upper"]),
                     np.array(v["mirror_index"], int), np.array(v["mirror_sign"], float), v["standing_base_height"])
+
+    def implied(c, k):
+        im = c.get("implied_motion")
+        return None if im is None else np.array(im[k], float)
+
     dyn = [Clip(c["name"], c["axis"], c["direction"], c["nominal_scale"], c["period"], np.array(c["q"]),
                 np.array(c["qd"]), np.array(c["v_base"]), np.array(c["omega_base"]), np.array(c["base_height"]),
-                np.array(c["contact"])) for c in v["dynamic_clips"]]
+                np.array(c["contact"]), implied(c, "amplitude"), implied(c, "velocity")) for c in v["dynamic_clips"]]
     sta = [StaticClip(s["name"], s["axis"], np.array(s["values"]), s["neutral"], np.array(s["q"]))
            for s in v["static_clips"]]
-    return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"])
+    m = v.get("consistency_map")
+    cmap = None if m is None else ConsistencyMap([np.array(m[k], float) for k in ("vx", "vy", "wz", "height")],
+                                                 np.array(m["delta"], float).reshape(-1, 3))
+    return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"], blending or v.get("blending", "paper"), cmap)
