@@ -16,9 +16,8 @@ import sys
 import numpy as np
 import yaml
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-sys.path.insert(0, os.path.join(ROOT, "training"))
-os.chdir(ROOT)
+# Run in place (python3 training/eval_mjx.py) as well as installed (pmg-eval-mjx): pmg_train sits beside this file.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
 def schedule(path):
@@ -39,9 +38,15 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("actor")
     ap.add_argument("--out", required=True)
-    ap.add_argument("--commands", default="config/policies/eval_commands.yaml")
+    ap.add_argument("--commands", default=None, help="command schedule (default: config/policies/eval_commands.yaml)")
     ap.add_argument("--duration", type=float, default=None)
+    ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args()
+    from pmg_train.paths import repo_root
+    args.actor, args.out = os.path.abspath(args.actor), os.path.abspath(args.out)
+    args.commands = os.path.abspath(args.commands) if args.commands else None
+    os.chdir(repo_root(args.repo))  # the environment's files are named relative to the checkout
+    args.commands = args.commands or "config/policies/eval_commands.yaml"
     import jax
     import jax.numpy as jnp
     from export_onnx import load_actor

@@ -15,9 +15,10 @@ import sys
 import numpy as np
 import yaml
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-sys.path.insert(0, os.path.join(ROOT, "training"))
+# Run in place (python3 training/export_onnx.py) as well as installed (pmg-export-onnx): pmg_train sits beside this file.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from pmg_train.contract import actor_forward, actor_graph, make_contract, save_onnx  # noqa: E402
+from pmg_train.paths import repo_root  # noqa: E402
 
 LEG = 12
 # Must equal pmg_train.g1_env.OBS_TERMS (that module imports JAX/MuJoCo; this one must not).
@@ -37,7 +38,9 @@ def load_actor(path):
     return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]], mode
 
 
-def export(npz, out_path, brax_check=None, robot_yaml=os.path.join(ROOT, "config/robots/g1/g1.yaml")):
+def export(npz, out_path, brax_check=None, robot_yaml=None):
+    """Writes the ONNX actor with its contract; robot_yaml: default config/robots/g1/g1.yaml of the checkout."""
+    robot_yaml = robot_yaml or os.path.join(repo_root(), "config/robots/g1/g1.yaml")
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)
@@ -60,9 +63,13 @@ def export(npz, out_path, brax_check=None, robot_yaml=os.path.join(ROOT, "config
     print("wrote", out_path)
 
 
-if __name__ == "__main__":
-    ap = argparse.ArgumentParser()
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="pmg-export-onnx", description="actor.npz -> ONNX with its pmg.contract")
     ap.add_argument("npz")
     ap.add_argument("out")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     export(a.npz, a.out)
+
+
+if __name__ == "__main__":
+    main()

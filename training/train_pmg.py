@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Train the G1 PMG-tracking policy with Brax PPO on MuJoCo MJX, export it to ONNX with its contract.
 
-Runs on the GPU machine (device tool); see training/README.md for the exact commands used.
-  python3 training/train_pmg.py --out OUT --timesteps 60000000 [--restore OUT_prev/params.pkl]
+Installed (training/pyproject.toml) as `pmg-train`; training/README.md has the commands:
+  pip install -e 'training[cuda]' && pmg-train --out runs/x --mode pmg_gco [--timesteps 150000000]
+Trains on every local JAX device (Brax PPO pmaps over jax.local_devices(): the environments are
+split evenly, gradients averaged); --devices N uses the first N. The device list is printed first.
 Writes into --out: progress.jsonl (eval + training metrics vs env steps and wall time),
 params.pkl (normaliser, policy, value: resume with --restore; written at every eval), actor.npz
 (the actor's arrays), train_config.json, g1_pmg_policy.onnx (actor + pmg.contract, export_onnx.py).
@@ -18,9 +20,8 @@ import pickle
 import sys
 import time
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-sys.path.insert(0, os.path.join(ROOT, "training"))
-os.chdir(ROOT)
+# Run in place (python3 training/train_pmg.py) as well as installed: pmg_train sits beside this file.
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 
@@ -97,30 +98,108 @@ def check_against_brax(params, make_inference_fn, env, out):
     return diff
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--timesteps", type=int, default=50_000_000)
-    ap.add_argument("--num-envs", type=int, default=8192)
-    ap.add_argument("--num-evals", type=int, default=8)
-    ap.add_argument("--restore", default=None)
+def _positive_ints(text):
+    """'512,256,128' -> (512, 256, 128); argparse type for layer sizes."""
+    try:
+        sizes = tuple(int(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated positive integers, e.g. 512,256,128")
+    if not sizes or min(sizes) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated positive integers, e.g. 512,256,128")
+    return sizes
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(prog="pmg-train", description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter, allow_abbrev=False)
+    ap.add_argument("--out", required=True, help="run directory (created; progress.jsonl is appended to)")
+    ap.add_argument("--timesteps", type=int, default=50_000_000, help="environment steps to train for")
+    ap.add_argument("--num-envs", type=int, default=8192,
+                    help="parallel environments in all (split evenly over the devices)")
+    ap.add_argument("--num-evals", type=int, default=8, help="evaluations (and checkpoints), the first at step 0")
+    ap.add_argument("--num-eval-envs", type=int, default=256,
+                    help="environments of each evaluation rollout (0: no evaluation rollouts, progress.jsonl then "
+                         "holds the training metrics only)")
+    ap.add_argument("--batch-size", type=int, default=256, help="PPO minibatch size (unrolls)")
+    ap.add_argument("--num-minibatches", type=int, default=32)
+    ap.add_argument("--unroll-length", type=int, default=20)
+    ap.add_argument("--episode-length", type=int, default=None,
+                    help="control steps per episode (default: EnvConfig.episode_length)")
+    ap.add_argument("--hidden", type=_positive_ints, default=(512, 256, 128),
+                    help="hidden layer sizes of the actor and the critic MLPs")
+    ap.add_argument("--devices", type=int, default=0,
+                    help="use the first N local JAX devices (0: all of them)")
+    ap.add_argument("--restore", default=None, help="params.pkl of an earlier run to start from")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     ap.add_argument("--smoke", action="store_true")
     ap.add_argument("--mode", default="pmg_gco", choices=["pmg_gco", "pmg", "single_gait"],
                     help="Table I configuration: full PMG (GCO), PMG without GCO, single-gait imitation")
+    ap.add_argument("--blending", default=None, choices=["consistent", "paper"],
+                    help="generator blending (default: EnvConfig.blending); paper = the PMG paper's, for the ablation")
     ap.add_argument("--arms", default="teleop", choices=["teleop", "perturb"],
                     help="arm targets in training: teleop = VR teleoperation envelope + hand payloads (issue 13, "
                          "EnvConfig.p_teleop), perturb = only the PMG arm reference +-0.3 rad (the Table I runs)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
+    for name in ("timesteps", "num_envs", "num_evals", "batch_size", "num_minibatches",
+                 "unroll_length", "episode_length"):
+        value = getattr(args, name)
+        if value is not None and value < 1:
+            ap.error(f"--{name.replace('_', '-')} = {value}: expected >= 1")
+    if args.num_eval_envs < 0:
+        ap.error(f"--num-eval-envs = {args.num_eval_envs}: expected >= 0 (0: no evaluation rollouts)")
+    if args.devices < 0:
+        ap.error(f"--devices = {args.devices}: expected >= 0 (0: all local devices)")
+    if (args.batch_size * args.num_minibatches) % args.num_envs:
+        ap.error(f"--batch-size x --num-minibatches = {args.batch_size * args.num_minibatches} must be a multiple "
+                 f"of --num-envs = {args.num_envs} (Brax PPO collects batch_size x num_minibatches unrolls per "
+                 f"update from num_envs environments)")
+    return args
+
+
+def select_devices(args):
+    """The local JAX devices this run trains on (printed); checks that the work splits evenly."""
+    import jax
+    local = jax.local_devices()
+    if args.devices > len(local):
+        raise SystemExit(f"pmg-train: --devices = {args.devices}, but JAX sees only {len(local)} local device(s): "
+                         f"{local}")
+    used = local[:args.devices] if args.devices else local
+    n = len(used)
+    log(f"JAX {jax.__version__}, backend {jax.default_backend()}, {len(local)} local device(s):",
+        ", ".join(str(d) for d in local))
+    if args.num_envs % n:
+        raise SystemExit(f"pmg-train: --num-envs = {args.num_envs} is not divisible by the {n} device(s) used; "
+                         f"pick a multiple of {n} (or --devices)")
+    per_device = args.batch_size * args.num_minibatches // n
+    if per_device * n != args.batch_size * args.num_minibatches or per_device % args.num_minibatches:
+        raise SystemExit(f"pmg-train: batch_size x num_minibatches = {args.batch_size * args.num_minibatches} "
+                         f"unrolls do not split into {args.num_minibatches} minibatches on each of {n} devices; "
+                         f"make --batch-size a multiple of {n}")
+    log(f"training on {n} device(s): {args.num_envs // n} environments and {args.batch_size // n} unrolls per "
+        f"minibatch on each")
+    if jax.default_backend() == "cpu" and args.num_envs >= 1024:
+        log("warning: JAX runs on the CPU (no GPU found: install with [cuda] on a machine with an NVIDIA driver)")
+    return used
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    from pmg_train.paths import repo_root
+    args.out = os.path.abspath(args.out)
+    if args.restore:
+        args.restore = os.path.abspath(args.restore)
+    os.chdir(repo_root(args.repo))  # the environment's files are named relative to the checkout
     os.makedirs(args.out, exist_ok=True)
 
     import jax
-    try:  # brax 0.14.2 still calls jax.device_put_replicated, removed in JAX 0.11
+    try:  # brax 0.14.2 still calls jax.device_put_replicated, removed in JAX 0.11 (pinned: 0.10.2)
         jax.device_put_replicated
     except AttributeError:
         def _device_put_replicated(x, devices):
             return jax.pmap(lambda _: x, devices=devices)(np.arange(len(devices)))
         jax.device_put_replicated = _device_put_replicated
+    devices = select_devices(args)
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn
@@ -128,6 +207,10 @@ def main():
     clip_files = sorted(glob.glob("config/clips/g1/*.yaml"))
     log("clips:", clip_files)
     cfg = EnvConfig(mode=args.mode) if args.arms == "teleop" else EnvConfig(mode=args.mode, p_teleop=0.0, p_payload=0.0)
+    if args.episode_length:
+        cfg = dataclasses.replace(cfg, episode_length=args.episode_length)
+    if args.blending:
+        cfg = dataclasses.replace(cfg, blending=args.blending)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:
@@ -135,15 +218,18 @@ def main():
         return
 
     ppo_cfg = dict(num_timesteps=args.timesteps, num_envs=args.num_envs, episode_length=cfg.episode_length,
-                   unroll_length=20, batch_size=256, num_minibatches=32, num_updates_per_batch=4,
-                   discounting=0.97, learning_rate=3e-4, entropy_cost=5e-3, reward_scaling=1.0,
-                   clipping_epsilon=0.2, gae_lambda=0.95, max_grad_norm=1.0, normalize_observations=True,
-                   num_evals=args.num_evals, num_eval_envs=256, seed=args.seed, action_repeat=1)
-    net_cfg = dict(policy_hidden_layer_sizes=(512, 256, 128), value_hidden_layer_sizes=(512, 256, 128),
+                   unroll_length=args.unroll_length, batch_size=args.batch_size, num_minibatches=args.num_minibatches,
+                   num_updates_per_batch=4, discounting=0.97, learning_rate=3e-4, entropy_cost=5e-3,
+                   reward_scaling=1.0, clipping_epsilon=0.2, gae_lambda=0.95, max_grad_norm=1.0,
+                   normalize_observations=True, num_evals=args.num_evals, num_eval_envs=max(args.num_eval_envs, 1),
+                   run_evals=args.num_eval_envs > 0,
+                   seed=args.seed, action_repeat=1, max_devices_per_host=len(devices))
+    net_cfg = dict(policy_hidden_layer_sizes=args.hidden, value_hidden_layer_sizes=args.hidden,
                    policy_obs_key="state", value_obs_key="privileged_state")
     with open(os.path.join(args.out, "train_config.json"), "w") as f:
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
-                   "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv}, f, indent=1)
+                   "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
+                   "devices": [str(d) for d in devices], "jax": jax.__version__}, f, indent=1)
     restore = None
     if args.restore:
         with open(args.restore, "rb") as f:
