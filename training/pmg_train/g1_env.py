@@ -26,13 +26,28 @@ set back to the default arm pose when an episode ends (the robot restarts in it)
 
 Configurations (EnvConfig.mode; the seed's Table I ablation, trained alike):
   "pmg_gco"     full PMG: generator + GCO (pmg_train/gco.py, equal to the C++ GeneratorWithGco,
-                ctest gco_port_equals_cpp); the actor observes u' (PMG eq. 19) as its command and
-                the velocity / yaw-rate / height rewards track u'.
-  "pmg"         PMG without GCO: the actor observes the command u; rewards track u (height: the
-                template's height).
+                ctest gco_port_equals_cpp); the actor observes u' (PMG eq. 19) as its command.
+  "pmg"         PMG without GCO: the actor observes the command u.
   "single_gait" single-gait imitation: the reference is the generator run on the walk_forward clip
-                alone at its nominal speed, whatever the command (no blending, no posture clips);
-                the actor observes u; rewards track u (height: the commanded height).
+                alone at its nominal speed, whatever the command (no blending, no posture clips,
+                blending "paper"); the actor observes u.
+In every mode the task rewards track the USER's command u (issue 12): base velocity (v_x, v_y) and
+yaw rate against u's, torso pitch / roll against the commanded pitch / roll, pelvis height against
+the commanded height; u' only shapes the reference (and is what the pmg_gco actor observes, as the
+C++ runtime feeds it).
+
+Generator (EnvConfig.blending, default "consistent" as the controller's GeneratorParams): the clip
+folder EnvConfig.clips (config/clips/g1) is read from the files at construction, including each
+clip's implied_motion table and consistency_map.yaml (pmg_generator.load_library).
+
+Command distribution (every command_resample steps, _sample_command; over the issue-12 envelope
+v_x [-0.5, 1.0] m/s, v_y [-0.4, 0.4] m/s, w [-0.8, 0.8] rad/s, pitch [-0.1, 0.4] rad, roll
+[-0.2, 0.2] rad, height [0.62, 0.78] m): p_single_axis (40 %) one velocity axis alone, p_combined
+(40 %) a combined velocity (all three axes, or two with probability p_two_axes), the rest (20 %)
+standing (zero velocity). A posture is commanded with probability p_posture_walk (40 %) while
+walking (walking crouched / bent / leaning) and p_posture_stand (75 %) while standing; a commanded
+posture sets each of pitch, roll, height with probability p_posture_axis (else neutral), at least
+one. Values are uniform in their ranges.
 
 Observation (actor, 62 values, order = policy contract terms):
   base_ang_vel_B (3)  projected_gravity_B (3)  command (6: vx, vy, wz, pitch, roll, height)
@@ -87,6 +102,8 @@ MIRROR_SIGN = (1.0, -1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
 @dataclasses.dataclass
 class EnvConfig:
     mode: str = "pmg_gco"          # "pmg_gco" | "pmg" | "single_gait" (see the module docstring)
+    blending: str = "consistent"   # generator blending: "consistent" | "paper" (ablation); single_gait: paper
+    clips: str = "config/clips/g1"  # clip folder (clips + implied_motion tables + consistency_map.yaml)
     gco_model: str = "training/pmg_train/gco_g1.json"
     mjcf: str = "config/robots/g1/g1_29dof_rev_1_0.xml"
     robot_yaml: str = "config/robots/g1/g1.yaml"
@@ -94,15 +111,20 @@ class EnvConfig:
     sim_dt: float = 0.005          # s, physics step (PD recomputed every physics step)
     episode_length: int = 1000     # control steps (10 s)
     command_resample: int = 400    # control steps between command changes
-    # Command ranges (heading frame), uniform.
+    # Command ranges (heading frame), uniform: the issue-12 envelope.
     vx: tuple = (-0.5, 1.0)
     vy: tuple = (-0.4, 0.4)
     wz: tuple = (-0.8, 0.8)
     pitch: tuple = (-0.1, 0.4)
     roll: tuple = (-0.2, 0.2)
     height: tuple = (0.62, 0.78)
-    p_stand: float = 0.1           # probability of a zero velocity command
-    p_posture: float = 0.3         # probability of a non-neutral posture command
+    # Command mix (module docstring): velocity kind, then the posture.
+    p_single_axis: float = 0.4     # one velocity axis alone
+    p_combined: float = 0.4        # combined velocity (the rest: standing, zero velocity)
+    p_two_axes: float = 0.5        # share of the combined commands with exactly two axes
+    p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
+    p_posture_stand: float = 0.75  # posture commanded while standing
+    p_posture_axis: float = 0.6    # each posture axis set in a commanded posture (at least one)
     # Domain randomisation.
     friction: tuple = (0.4, 1.25)
     mass_scale: tuple = (0.9, 1.1)
@@ -167,19 +189,33 @@ def _scale_vector():
 
 
 class G1PmgEnv(Env):
-    def __init__(self, cfg: EnvConfig, clip_files, action_scale=None):
+    def __init__(self, cfg: EnvConfig, clip_files=None, action_scale=None):
+        """@p clip_files: a clip folder or a list of clip files (consistency_map.yaml among them or
+        beside them is the consistency map); None = cfg.clips. Read from the files here."""
         if cfg.mode not in ("pmg_gco", "pmg", "single_gait"):
             raise ValueError(f"EnvConfig.mode = {cfg.mode!r}: expected 'pmg_gco', 'pmg' or 'single_gait'")
+        if cfg.blending not in pg.BLENDINGS:
+            raise ValueError(f"EnvConfig.blending = {cfg.blending!r}: expected one of {pg.BLENDINGS}")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
+        if clip_files is None:
+            clip_files = cfg.clips
+        if isinstance(clip_files, str):
+            import glob
+            import os
+            if not os.path.isdir(clip_files):
+                raise FileNotFoundError(f"EnvConfig.clips = {clip_files!r}: not a clip folder")
+            clip_files = sorted(glob.glob(os.path.join(clip_files, "*.yaml")))
         if cfg.mode == "single_gait":
             clip_files = [f for f in clip_files if f.endswith("walk_forward.yaml")]
             if len(clip_files) != 1:
                 raise ValueError("single_gait: needs exactly one walk_forward.yaml among the clips")
-        clips = [pg.load_clip_file(f) for f in clip_files]
-        self.clip_files = list(clip_files)
-        self.pmg = pg.GeneratorModel([c for c in clips if isinstance(c, pg.Clip)],
-                                     [c for c in clips if isinstance(c, pg.StaticClip)], self.js)
+            self.pmg = pg.GeneratorModel([pg.load_clip_file(clip_files[0])], [], self.js, blending="paper")
+            self.pmg.clip_files, self.pmg.map_file = list(clip_files), None
+        else:
+            self.pmg = pg.load_library(list(clip_files), self.js, blending=cfg.blending)
+        self.clip_files = list(self.pmg.clip_files)  # the clips (not the consistency map)
+        self.consistency_map_file = self.pmg.map_file
         import yaml
         with open(cfg.robot_yaml) as f:
             joints = yaml.safe_load(f)["joints"]
@@ -242,18 +278,31 @@ class G1PmgEnv(Env):
         return "mjx"
 
     def _sample_command(self, rng):
+        """User command u (6,): v_x, v_y, w, pitch, roll, height (module docstring: command mix)."""
         c = self.cfg
         k = jax.random.split(rng, 10)
-        u = lambda key, r: jax.random.uniform(key, (), minval=r[0], maxval=r[1])
-        v = jnp.array([u(k[0], c.vx), u(k[1], c.vy), u(k[2], c.wz)])
-        v = jnp.where(jax.random.uniform(k[3]) < c.p_stand, 0.0, v)
-        # Often one axis only (the seed's command sequence exercises axes alone and combined).
-        axis = jax.random.randint(k[4], (), 0, 4)
-        mask = jnp.where(axis < 3, jax.nn.one_hot(axis, 3), 1.0)
+        lo = jnp.array([c.vx[0], c.vy[0], c.wz[0]])
+        hi = jnp.array([c.vx[1], c.vy[1], c.wz[1]])
+        v = jax.random.uniform(k[0], (3,), minval=lo, maxval=hi)
+        kind = jax.random.uniform(k[1])
+        single = kind < c.p_single_axis
+        combined = jnp.logical_and(kind >= c.p_single_axis, kind < c.p_single_axis + c.p_combined)
+        axis = jax.random.randint(k[2], (), 0, 3)
+        one = jax.nn.one_hot(axis, 3)
+        # Combined: all three axes, or two (the one-hot axis dropped) with probability p_two_axes.
+        two = jax.random.uniform(k[3]) < c.p_two_axes
+        mask = jnp.where(single, one, jnp.where(combined, jnp.where(two, 1.0 - one, 1.0), 0.0))
         v = v * mask
-        posture = jnp.array([u(k[5], c.pitch), u(k[6], c.roll), u(k[7], c.height)])
+        walking = jnp.logical_or(single, combined)
+        plo = jnp.array([c.pitch[0], c.roll[0], c.height[0]])
+        phi = jnp.array([c.pitch[1], c.roll[1], c.height[1]])
+        posture = jax.random.uniform(k[4], (3,), minval=plo, maxval=phi)
         neutral = jnp.array([0.0, 0.0, self.js.standing_base_height])
-        posture = jnp.where(jax.random.uniform(k[8]) < c.p_posture, posture, neutral)
+        axes = jax.random.uniform(k[5], (3,)) < c.p_posture_axis
+        axes = jnp.where(jnp.any(axes), axes, jax.nn.one_hot(jax.random.randint(k[6], (), 0, 3), 3) > 0)
+        p_posture = jnp.where(walking, c.p_posture_walk, c.p_posture_stand)
+        commanded = jax.random.uniform(k[7]) < p_posture
+        posture = jnp.where(jnp.logical_and(commanded, axes), posture, neutral)
         return jnp.concatenate([v, posture])
 
     def _reference(self, phase, command, gco_state):
@@ -269,10 +318,9 @@ class G1PmgEnv(Env):
         u_opt, _, _, gco_state = gco_port.step(self.gco_chains, self.gco_opt, ref, command[3:], gco_state, xp=jnp)
         return ref, u_opt.astype(jnp.float32), gco_state
 
-    def _height_target(self, ref, tracked):
-        if self.cfg.mode == "pmg":
-            return jnp.asarray(ref["base_height"], jnp.float32)  # the template's height
-        return tracked[5]  # pmg_gco: h' of u'; single_gait: the commanded height
+    def _height_target(self, command):
+        """Pelvis height the reward tracks: the user's commanded height (all modes)."""
+        return jnp.asarray(command[5], jnp.float32)
 
     # ---- teleoperated arms (module docstring) -----------------------------------------------
     def _sample_arm_goals(self, rng, goal):
@@ -363,7 +411,7 @@ class G1PmgEnv(Env):
         info["ref_q"] = ref["q_ref"].astype(jnp.float32)
         info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
         info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
-        info["ref_height"] = self._height_target(ref, info["tracked"])
+        info["ref_height"] = self._height_target(info["command"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.zeros(8)
         info["arm_des_rel"] = info["ref_q"][ARM0:] - jnp.asarray(self.arm_default)
@@ -410,10 +458,10 @@ class G1PmgEnv(Env):
         phase = info["next_phase"]
         info["step"] = info["step"] + 1
         resample = (info["step"] % c.command_resample) == 0
+        user_prev = info["command"]  # the user's command u when the actor chose this action
         info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         ref_prev_contact = info["ref_contact"]
-        tracked_prev = info["tracked"]
         ref, tracked, info["gco"] = self._reference(phase, info["command"], info["gco"])
         info["phase"] = phase
 
@@ -429,7 +477,8 @@ class G1PmgEnv(Env):
         height = data.qpos[2]
         contact = self._foot_contacts(data)
 
-        cmd = tracked_prev  # what the actor observed when it chose this action (u' with GCO)
+        # Task rewards track the user's command u (not u'; module docstring).
+        cmd = user_prev
         lin_err = jnp.sum((cmd[:2] - v_H[:2]) ** 2)
         yaw_err = (cmd[2] - w_W[2]) ** 2
         ori_err = (cmd[3] - pitch) ** 2 + (cmd[4] - roll) ** 2
@@ -458,7 +507,7 @@ class G1PmgEnv(Env):
         info["ref_qd"] = ref["qd_ref"].astype(jnp.float32)
         info["ref_contact"] = ref["in_contact"].astype(jnp.float32)
         info["tracked"] = jnp.asarray(tracked, jnp.float32)
-        info["ref_height"] = self._height_target(ref, info["tracked"])
+        info["ref_height"] = self._height_target(info["command"])
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.concatenate([v_H, jnp.array([height]), contact, jnp.array([pitch, roll])])
         info["arm_des_rel"] = arm_des_rel
