@@ -239,31 +239,47 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
   Eigen::MatrixXd ramp(M, d);
   for (int r = 0; r < M; ++r) ramp.row(r).setConstant(static_cast<double>(r) / M - 0.5 * (M - 1) / M);
   if (options.closing == CycleClosing::kInSwing) {
-    for (std::size_t f = 0; f < kNumFeet; ++f) {
-      // Rate sin²(π (r − s + ½) / L) over each swing run [s, s + L) of the window (not wrapped).
+    // Zero-mean ramp whose rate is sin²(π (r − s + ½) / L) over each run [s, s + L) of the window
+    // (not wrapped) where `up(r)` holds; empty when `up` never holds.
+    const auto swingRamp = [&](const auto& up) {
       Eigen::VectorXd rate = Eigen::VectorXd::Zero(M);
       int r = 0;
       while (r < M) {
-        if (contacts[static_cast<std::size_t>(window.begin + r)][f]) {
+        if (!up(r)) {
           ++r;
           continue;
         }
         int e = r;
-        while (e < M && !contacts[static_cast<std::size_t>(window.begin + e)][f]) ++e;
+        while (e < M && up(e)) ++e;
         for (int k = r; k < e; ++k) rate(k) = std::pow(std::sin(M_PI * (k - r + 0.5) / (e - r)), 2);
         r = e;
       }
-      if (rate.sum() <= 0.0) continue;  // no swing: linear ramp
-      Eigen::VectorXd g(M + 1);
-      g(0) = 0.0;
-      for (int k = 0; k < M; ++k) g(k + 1) = g(k) + rate(k) / rate.sum();
-      const double g_mean = g.head(M).mean();
+      if (rate.sum() <= 0.0) return Eigen::VectorXd();
+      Eigen::VectorXd g(M);
+      double acc = 0.0;
+      for (int k = 0; k < M; ++k) {
+        g(k) = acc;
+        acc += rate(k) / rate.sum();
+      }
+      return Eigen::VectorXd(g.array() - g.mean());
+    };
+    const auto inSwing = [&](std::size_t f, int r) { return !contacts[static_cast<std::size_t>(window.begin + r)][f]; };
+    for (std::size_t f = 0; f < kNumFeet; ++f) {
+      const Eigen::VectorXd g = swingRamp([&](int r) { return inSwing(f, r); });
+      if (g.size() == 0) continue;  // no swing: linear ramp
       for (int j : options.leg_joints[f]) {
         if (j < 0 || j >= n)
           throw std::invalid_argument(fmt::format("buildDynamicClip({}): leg_joints[{}] holds joint {}: expected [0, {})", options.name, f, j, n));
-        ramp.col(j) = g.head(M).array() - g_mean;
+        ramp.col(j) = g;
       }
     }
+    // Base velocities and height: corrected in single support only. In double support the base
+    // yaw rate and velocity are what keeps both planted soles still relative to each other, and
+    // no base correction (GCO) can undo a change there; in single support GCO re-fits them to the
+    // stance foot anyway.
+    const Eigen::VectorXd g_base = swingRamp([&](int r) { return inSwing(0, r) || inSwing(1, r); });
+    if (g_base.size() > 0)
+      for (Eigen::Index c = n; c < d; ++c) ramp.col(c) = g_base;
   }
   Eigen::MatrixXd P(M, d);
   const Eigen::RowVectorXd drift = X.row(M) - X.row(0);

@@ -254,7 +254,8 @@ TEST(ClipBuilder, ClosingInSwingCorrectsALegOnlyWhileItsFootIsUp) {
   ContactSequence c(static_cast<std::size_t>(M + 1), {true, true});
   const Eigen::Index hip_yaw = robot.jointIndex("left_hip_yaw_joint"), waist = robot.jointIndex("waist_yaw_joint");
   for (int k = 0; k <= M; ++k) {
-    m.R_WB[static_cast<std::size_t>(k)] = Eigen::Quaterniond(Eigen::AngleAxisd(0.04 * k, Eigen::Vector3d::UnitZ()));  // turning left
+    // Turning left, slowing down: the yaw rate drifts too (closed in single support only).
+    m.R_WB[static_cast<std::size_t>(k)] = Eigen::Quaterniond(Eigen::AngleAxisd(0.04 * k - 0.0002 * k * k, Eigen::Vector3d::UnitZ()));
     m.q(k, hip_yaw) = 0.002 * k;  // drifts 0.08 rad over the cycle, in stance and in swing
     m.q(k, waist) = 0.001 * k;
     c[static_cast<std::size_t>(k)][0] = !(k >= 10 && k < 20);  // left swing [10, 20)
@@ -269,10 +270,14 @@ TEST(ClipBuilder, ClosingInSwingCorrectsALegOnlyWhileItsFootIsUp) {
   o.closing = CycleClosing::kInSwing;
   o.leg_joints = {model.leftLeg().joint_index, model.rightLeg().joint_index};
   const DynamicClip clip = buildDynamicClip(m, c, CycleWindow{0, M}, robot, o);
+  const double yaw_rate_step = -0.0004 * m.fps;  // [rad/s per sample] of the captured ω_z
   for (int k = 0; k + 1 < M; ++k) {
     const double step = clip.q(k + 1, hip_yaw) - clip.q(k, hip_yaw);
     if (k + 1 < 10 || k >= 20) EXPECT_NEAR(step, 0.002, 1e-12) << "left stance, sample " << k;  // as captured
     EXPECT_NEAR(clip.q(k + 1, waist) - clip.q(k, waist), 0.001 - 0.04 / M, 1e-12);               // linear ramp
+    const bool double_support = k < 10 || (k >= 20 && k < 25) || k >= 35;
+    if (double_support && k > 0)  // (sample 0's rate is a one-sided difference)
+      EXPECT_NEAR(clip.omega_base(k + 1, 2) - clip.omega_base(k, 2), yaw_rate_step, 1e-9) << "double support, sample " << k;
   }
   // Closed: the step across the seam (row M−1 → row 0) continues the motion.
   EXPECT_NEAR(clip.q(0, hip_yaw) - clip.q(M - 1, hip_yaw), 0.002, 1e-12);  // the seam lies in the left stance

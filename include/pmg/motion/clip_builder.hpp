@@ -67,7 +67,9 @@ enum class CycleClosing {
   kLinearRamp,
   /// The leg joints of foot f (DynamicClipOptions::leg_joints[f]) take their drift only while foot f
   /// is in swing (contact labels of the window), with a raised-cosine rate that is zero at lift-off
-  /// and touchdown; every other column (waist, arms, base velocities, height) keeps the linear ramp.
+  /// and touchdown; the base velocities and height take theirs only in single support (in double
+  /// support they are what keeps the two planted soles still against each other); waist and arms
+  /// keep the linear ramp.
   /// For a one-shot motion cut from standing to standing (turn in place), whose last stance differs
   /// from the first (CMU 69_17 ends 3 cm wider and with the left foot toed in 10°): corrected while a
   /// foot is in the air, the difference moves where that foot lands instead of sliding the feet
