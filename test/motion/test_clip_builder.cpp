@@ -273,11 +273,14 @@ TEST(ClipBuilder, ClosingInSwingCorrectsALegOnlyWhileItsFootIsUp) {
   const double yaw_rate_step = -0.0004 * m.fps;  // [rad/s per sample] of the captured ω_z
   for (int k = 0; k + 1 < M; ++k) {
     const double step = clip.q(k + 1, hip_yaw) - clip.q(k, hip_yaw);
-    if (k + 1 < 10 || k >= 20) EXPECT_NEAR(step, 0.002, 1e-12) << "left stance, sample " << k;  // as captured
+    if (k + 1 < 10 || k >= 20) {
+      EXPECT_NEAR(step, 0.002, 1e-12) << "left stance, sample " << k;  // as captured
+    }
     EXPECT_NEAR(clip.q(k + 1, waist) - clip.q(k, waist), 0.001 - 0.04 / M, 1e-12);               // linear ramp
     const bool double_support = k < 10 || (k >= 20 && k < 25) || k >= 35;
-    if (double_support && k > 0)  // (sample 0's rate is a one-sided difference)
+    if (double_support && k > 0) {  // (sample 0's rate is a one-sided difference)
       EXPECT_NEAR(clip.omega_base(k + 1, 2) - clip.omega_base(k, 2), yaw_rate_step, 1e-9) << "double support, sample " << k;
+    }
   }
   // Closed: the step across the seam (row M−1 → row 0) continues the motion.
   EXPECT_NEAR(clip.q(0, hip_yaw) - clip.q(M - 1, hip_yaw), 0.002, 1e-12);  // the seam lies in the left stance

@@ -82,7 +82,9 @@ TEST_F(PostureSynthesis, HoldTorsoPitchCompensatesPelvisTiltAndWaist) {
   for (Eigen::Index i = 0; i < 3; ++i) {
     EXPECT_NEAR(probe_->measure(s.q.row(i).transpose()).torso_pitch, pitch0, 1e-8) << "row " << i;
     for (Eigen::Index j = 0; j < s.q.cols(); ++j)
-      if (j != wp) EXPECT_EQ(s.q(i, j), before.q(i, j));
+      if (j != wp) {
+        EXPECT_EQ(s.q(i, j), before.q(i, j));
+      }
   }
   EXPECT_NEAR(probe_->measure(before.q.row(0).transpose()).torso_pitch - pitch0, 0.25, 1e-3);  // the input did couple
   EXPECT_NEAR(std::abs(s.q(0, wp)), 0.15, 0.01);  // the waist now only undoes the pelvis tilt
