@@ -258,7 +258,7 @@ int main(int argc, char** argv) {
   };
   dynamic("walk_forward", "deepmimic/humanoid3d_walk.txt", 0.0, -1.0, CommandAxis::kForward, true, 0, 0, ContactEvent::kTouchdown,
           "DeepMimic walk: the file is one closed gait cycle (Loop: wrap)");
-  // The cycle is cut with 0.1 s of standing at each end (double support 29 % of the cycle): with the
+  // The cycle is cut with 0.1 s of standing at each end (double support 31 % of the cycle): with the
   // whole standing start (from t = 0.1 s) the template blends worse with walking (GCO stance height
   // error of (0.4 m/s, -0.3 rad/s) 4.4 mm instead of 3.2 mm) for x̄ 1.08 instead of 1.16 rad/s.
   dynamic("turn_left", "cmu_bvh/cmu_69_17_turn_in_place_left_excerpt_30fps.bvh", 0.2, 1.567, CommandAxis::kYaw, true, 0, 0,
