@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
       const pmg::ConsistencyMap m = pmg::gco::computeConsistencyMap(lib, robot);
       const bool same = !lib.consistency.empty() && lib.consistency.delta.rows() == m.delta.rows() &&
                         (lib.consistency.delta - m.delta).cwiseAbs().maxCoeff() <= 1e-5;
-      for (std::size_t d = 0; same && d < 4; ++d)
+      for (std::size_t d = 0; same && d < pmg::kConsistencyMapDims; ++d)
         if (lib.consistency.grid[d].size() != m.grid[d].size() || (lib.consistency.grid[d] - m.grid[d]).cwiseAbs().maxCoeff() > 1e-6)
           ++bad;
       if (!same) ++bad;
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
         std::printf("%s: %ld grid points current\n", pmg::kConsistencyMapFile, static_cast<long>(m.delta.rows()));
     }
     if (map && !check) {
-      const pmg::ClipLibrary lib = pmg::loadClipLibrary(clips_dir, robot);  // with the tables just written
+      const pmg::ClipLibrary lib = pmg::loadClipLibrary(files, robot);  // with the tables just written, no old map
       double worst = 0.0;
       const pmg::ConsistencyMap m = pmg::gco::computeConsistencyMap(lib, robot, {}, &worst);
       const std::string path = (fs::path(clips_dir) / pmg::kConsistencyMapFile).string();

@@ -161,21 +161,23 @@ void addSyntheticImplied(pmg::DynamicClip& c, double curve, const Eigen::Vector3
   }
 }
 
-/// Synthetic consistency map over v_x (4), v_y (2), ω (3), height (3): a smooth Δu.
+/// Synthetic consistency map over v_x (4), v_y (2), ω (3), height (3), pitch (2): a smooth Δu.
 pmg::ConsistencyMap syntheticConsistencyMap() {
   pmg::ConsistencyMap m;
   m.grid[0] = (Eigen::VectorXd(4) << -0.6, 0.0, 0.5, 1.2).finished();
   m.grid[1] = (Eigen::VectorXd(2) << -0.4, 0.4).finished();
   m.grid[2] = (Eigen::VectorXd(3) << -0.9, 0.1, 0.9).finished();
   m.grid[3] = (Eigen::VectorXd(3) << 0.58, 0.68, 0.76).finished();
-  m.delta.resize(4 * 2 * 3 * 3, 3);
+  m.grid[4] = (Eigen::VectorXd(2) << 0.0, 0.35).finished();
+  m.delta.resize(4 * 2 * 3 * 3 * 2, 3);
   for (Eigen::Index i = 0; i < 4; ++i)
     for (Eigen::Index j = 0; j < 2; ++j)
       for (Eigen::Index k = 0; k < 3; ++k)
-        for (Eigen::Index l = 0; l < 3; ++l) {
-          const double vx = m.grid[0][i], vy = m.grid[1][j], wz = m.grid[2][k], h = m.grid[3][l];
-          const Eigen::Index row = ((i * 2 + j) * 3 + k) * 3 + l;
-          m.delta(row, 0) = 0.06 * vx * wz - 0.3 * (h - 0.74) * vx + 0.01 * static_cast<double>(k);
+        for (Eigen::Index l = 0; l < 3; ++l)
+          for (Eigen::Index p = 0; p < 2; ++p) {
+          const double vx = m.grid[0][i], vy = m.grid[1][j], wz = m.grid[2][k], h = m.grid[3][l], pitch = m.grid[4][p];
+          const Eigen::Index row = (((i * 2 + j) * 3 + k) * 3 + l) * 2 + p;
+          m.delta(row, 0) = 0.06 * vx * wz - 0.3 * (h - 0.74) * vx + 0.01 * static_cast<double>(k) + 0.1 * pitch * vx;
           m.delta(row, 1) = 0.05 * vx * wz + 0.04 * vy * static_cast<double>(i);
           m.delta(row, 2) = -0.08 * vx * vy + 0.05 * wz * (h - 0.6) + 0.02 * static_cast<double>(l);
         }
@@ -358,9 +360,9 @@ int main(int argc, char** argv) {
     if (lib.consistency.empty()) {
       j.raw("null,");
     } else {
-      const char* keys[4] = {"vx", "vy", "wz", "height"};
+      const char* keys[pmg::kConsistencyMapDims] = {"vx", "vy", "wz", "height", "pitch"};
       j.raw("{");
-      for (std::size_t d = 0; d < 4; ++d) {
+      for (std::size_t d = 0; d < pmg::kConsistencyMapDims; ++d) {
         j.key(keys[d]);
         j.vec(lib.consistency.grid[d]);
         j.raw(",");

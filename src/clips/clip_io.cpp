@@ -499,7 +499,7 @@ namespace {
 struct ConsistencyMapFields {
   int format_version = 0;
   std::string kind;
-  std::vector<double> vx, vy, wz, height;
+  std::vector<double> vx, vy, wz, height, pitch;
   YAML::Node delta;
   template <class A>
   void Serialize(A* a) {
@@ -509,7 +509,8 @@ struct ConsistencyMapFields {
     a->Visit("vy", &vy, "grid of v_y [m/s], strictly increasing", yaml::kRequired);
     a->Visit("wz", &wz, "grid of the yaw rate [rad/s], strictly increasing", yaml::kRequired);
     a->Visit("height", &height, "grid of the pelvis height [m], strictly increasing", yaml::kRequired);
-    a->Visit("delta", &delta, "n_vx*n_vy*n_wz*n_height rows of (dv_x, dv_y, dw)", yaml::kRequired);
+    a->Visit("pitch", &pitch, "grid of the torso pitch command [rad], strictly increasing", yaml::kRequired);
+    a->Visit("delta", &delta, "n_vx*n_vy*n_wz*n_height*n_pitch rows of (dv_x, dv_y, dw)", yaml::kRequired);
   }
 };
 }  // namespace
@@ -518,8 +519,8 @@ std::string consistencyMapToYaml(const ConsistencyMap& map, const std::string& c
   std::string out = "# PMG consistency map (command-consistent blending). Format: docs/clip_format.md\n";
   if (!comment.empty()) out += "# " + comment + "\n";
   out += "format_version: " + std::to_string(kClipFormatVersion) + "\nkind: consistency_map\n";
-  const char* keys[4] = {"vx", "vy", "wz", "height"};
-  for (int d = 0; d < 4; ++d) writeVector(out, keys[d], map.grid[static_cast<std::size_t>(d)]);
+  const char* keys[kConsistencyMapDims] = {"vx", "vy", "wz", "height", "pitch"};
+  for (std::size_t d = 0; d < kConsistencyMapDims; ++d) writeVector(out, keys[d], map.grid[d]);
   writeMatrix(out, "delta", map.delta);
   return out;
 }
@@ -542,10 +543,10 @@ ConsistencyMap readConsistencyMap(const std::string& path) {
     if (f.kind != "consistency_map")
       yaml::fail(yaml::childSource(src, "kind"), doc.root["kind"], "= '" + f.kind + "': expected 'consistency_map'");
     ConsistencyMap m;
-    const std::vector<double>* g[4] = {&f.vx, &f.vy, &f.wz, &f.height};
-    const char* keys[4] = {"vx", "vy", "wz", "height"};
+    const std::vector<double>* g[kConsistencyMapDims] = {&f.vx, &f.vy, &f.wz, &f.height, &f.pitch};
+    const char* keys[kConsistencyMapDims] = {"vx", "vy", "wz", "height", "pitch"};
     Eigen::Index rows = 1;
-    for (std::size_t d = 0; d < 4; ++d) {
+    for (std::size_t d = 0; d < kConsistencyMapDims; ++d) {
       if (g[d]->empty()) yaml::fail(yaml::childSource(src, keys[d]), doc.root[keys[d]], "is empty: expected >= 1 value");
       for (std::size_t i = 1; i < g[d]->size(); ++i)
         if (!((*g[d])[i] > (*g[d])[i - 1]))

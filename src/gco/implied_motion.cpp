@@ -131,15 +131,19 @@ ConsistencyMap computeConsistencyMap(const ClipLibrary& library, const RobotConf
   for (const auto& grid : m.grid)
     for (Eigen::Index i = 1; i < grid.size(); ++i)
       if (!(grid[i] > grid[i - 1])) throw std::invalid_argument("computeConsistencyMap: grids must be strictly increasing");
-  m.delta.setZero(static_cast<Eigen::Index>(o.vx.size() * o.vy.size() * o.wz.size() * heights.size()), 3);
+  m.grid[4] = Eigen::Map<const Eigen::VectorXd>(o.pitch.data(), static_cast<Eigen::Index>(o.pitch.size()));
+  for (const auto& grid : m.grid)
+    if (grid.size() < 1) throw std::invalid_argument("computeConsistencyMap: every grid needs a value");
+  m.delta.setZero(static_cast<Eigen::Index>(o.vx.size() * o.vy.size() * o.wz.size() * heights.size() * o.pitch.size()), 3);
   double worst = 0.0;
   Eigen::Index row = 0;
   for (double vx : o.vx)
     for (double vy : o.vy)
       for (double wz : o.wz)
-        for (double h : heights) {
+        for (double h : heights)
+          for (double pitch : o.pitch) {
           const Eigen::Vector3d u(vx, vy, wz);
-          const PostureCommand posture{0.0, 0.0, h};
+          const PostureCommand posture{pitch, 0.0, h};
           Eigen::Vector3d u_gen = u, best = u;
           double best_err = 1e9;
           for (int it = 0; it <= o.iterations; ++it) {

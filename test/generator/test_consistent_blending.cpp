@@ -183,6 +183,7 @@ TEST(ConsistentBlending, ConsistencyMapCorrectionIsMultilinear) {
   c.grid[1] = Eigen::Vector2d(-0.5, 0.5);
   c.grid[2] = Eigen::VectorXd::Constant(1, 0.0);
   c.grid[3] = Eigen::VectorXd::Constant(1, 0.75);
+  c.grid[4] = Eigen::VectorXd::Constant(1, 0.0);
   c.delta.resize(4, 3);  // rows (vx, vy): (-1,-0.5), (-1,0.5), (1,-0.5), (1,0.5); Δv_x = 0.1 vx + 0.2 vy
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) {
@@ -226,7 +227,8 @@ TEST(ConsistentBlending, RejectsTablesItCannotInvert) {
   EXPECT_NE(modelError(lib).find("implied_motion.amplitude[0]"), std::string::npos) << modelError(lib);
   lib = library();
   lib.consistency.grid[0] = Eigen::Vector2d(0.0, 1.0);
-  lib.consistency.grid[1] = lib.consistency.grid[2] = lib.consistency.grid[3] = Eigen::VectorXd::Constant(1, 0.0);
+  lib.consistency.grid[1] = lib.consistency.grid[2] = lib.consistency.grid[3] = lib.consistency.grid[4] =
+      Eigen::VectorXd::Constant(1, 0.0);
   lib.consistency.delta.setZero(3, 3);  // 2 grid points, 3 rows
   EXPECT_NE(modelError(lib).find("consistency.delta"), std::string::npos) << modelError(lib);
 }
@@ -234,7 +236,8 @@ TEST(ConsistentBlending, RejectsTablesItCannotInvert) {
 TEST(ConsistentBlending, StepDoesNotAllocate) {
   ClipLibrary lib = library();
   lib.consistency.grid[0] = Eigen::Vector2d(-1.0, 1.0);
-  lib.consistency.grid[1] = lib.consistency.grid[2] = lib.consistency.grid[3] = Eigen::VectorXd::Constant(1, 0.0);
+  lib.consistency.grid[1] = lib.consistency.grid[2] = lib.consistency.grid[3] = lib.consistency.grid[4] =
+      Eigen::VectorXd::Constant(1, 0.0);
   lib.consistency.delta = Eigen::MatrixXd::Constant(2, 3, 0.01);
   MotionGenerator gen(model(lib));
   gen.step({0.3, 0.1, 0.2}, {}, 0.01);

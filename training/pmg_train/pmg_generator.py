@@ -13,7 +13,7 @@ weight, derived clips, finite-difference reference velocity) follow generator.hp
 
 Blending (GeneratorParams::blending; ``GeneratorModel(..., blending=...)``):
   "consistent" (default, as the C++): the command u is first corrected by the library's consistency
-      map (4-D multilinear over v_x, v_y, omega, height; ``consistency_map.yaml`` beside the clips),
+      map (5-D multilinear over v_x, v_y, omega, height, pitch; ``consistency_map.yaml`` beside the clips),
       eq. 6 weights / eq. 12 period / eqs. 8-9 contacts come from the corrected u, and the effective
       amplitudes e_i come from KCONSISTENT_SWEEPS Gauss-Seidel sweeps over the per-clip displacement
       tables D = T * implied_motion.velocity (a clip without ``implied_motion`` gets the linear table
@@ -58,7 +58,7 @@ class Clip:
 
 @dataclasses.dataclass
 class ConsistencyMap:
-    """pmg::ConsistencyMap: grid[d] (d = v_x, v_y, omega, height), delta (prod n_d, 3)."""
+    """pmg::ConsistencyMap: grid[d] (d = v_x, v_y, omega, height, pitch), delta (prod n_d, 3)."""
     grid: list
     delta: np.ndarray
 
@@ -265,12 +265,16 @@ def _table_inverse(xp, table, target, column, direction):
     return xp.where(target >= last, a[K - 1], e), target > last
 
 
-def _lookup_correction(xp, cmap: ConsistencyMap, u, height):
-    """MotionGenerator::lookupCorrection: multilinear Δu at (v_x, v_y, omega, height), inputs clamped to the grid."""
-    x = [u[0], u[1], u[2], height]
+MAP_KEYS = ("vx", "vy", "wz", "height", "pitch")
+
+
+def _lookup_correction(xp, cmap: ConsistencyMap, u, height, pitch):
+    """MotionGenerator::lookupCorrection: multilinear Δu at (v_x, v_y, omega, height, pitch), inputs clamped to the grid."""
+    x = [u[0], u[1], u[2], height, pitch]
+    D = len(MAP_KEYS)
     sizes = [int(np.asarray(g).size) for g in cmap.grid]
     lo, frac = [], []
-    for dim in range(4):
+    for dim in range(D):
         g = np.asarray(cmap.grid[dim], float)
         n = sizes[dim]
         if n == 1:
@@ -282,18 +286,18 @@ def _lookup_correction(xp, cmap: ConsistencyMap, u, height):
         gx = xp.asarray(g)
         lo.append(k)
         frac.append((v - gx[k]) / (gx[k + 1] - gx[k]))
-    stride = [0, 0, 0, 1]
-    for dim in (2, 1, 0):
+    stride = [0] * (D - 1) + [1]
+    for dim in range(D - 2, -1, -1):
         stride[dim] = stride[dim + 1] * sizes[dim + 1]
     delta = xp.asarray(cmap.delta)
     corr = 0.0 * xp.asarray(delta[0])
-    for corner in range(16):
-        bits = [(corner >> dim) & 1 for dim in range(4)]
+    for corner in range(1 << D):
+        bits = [(corner >> dim) & 1 for dim in range(D)]
         if any(b and sizes[dim] == 1 for dim, b in enumerate(bits)):
             continue
         w = 1.0
         row = 0
-        for dim in range(4):
+        for dim in range(D):
             w = w * (frac[dim] if bits[dim] else 1.0 - frac[dim])
             row = row + (lo[dim] + bits[dim]) * stride[dim]
         corr = corr + w * delta[row]
@@ -339,7 +343,7 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     consistent = model.blending == "consistent"
     correction = xp.zeros(3) + zero
     if consistent and model.consistency is not None:
-        correction = _lookup_correction(xp, model.consistency, u, posture_height)
+        correction = _lookup_correction(xp, model.consistency, u, posture_height, u_s[0] + zero)
         u = u + correction
 
     # Weights (eqs. 4, 6) of the clip of each (corrected) command's sign; both signs are evaluated
@@ -495,7 +499,7 @@ def load_consistency_map(path):
         d = yaml.safe_load(f)
     if not isinstance(d, dict) or d.get("kind") != "consistency_map":
         raise ValueError(f"{path}: kind: expected 'consistency_map'")
-    grid = [np.atleast_1d(np.array(d[k], float)) for k in ("vx", "vy", "wz", "height")]
+    grid = [np.atleast_1d(np.array(d[k], float)) for k in MAP_KEYS]
     delta = np.array(d["delta"], float).reshape(-1, 3)
     if delta.shape[0] != int(np.prod([g.size for g in grid])) or np.any(np.abs(delta) > 2.0):
         raise ValueError(f"{path}: delta: expected {int(np.prod([g.size for g in grid]))} rows of 3 values, |value| <= 2")
@@ -544,6 +548,6 @@ def model_from_vectors(v, blending=None):
     sta = [StaticClip(s["name"], s["axis"], np.array(s["values"]), s["neutral"], np.array(s["q"]))
            for s in v["static_clips"]]
     m = v.get("consistency_map")
-    cmap = None if m is None else ConsistencyMap([np.array(m[k], float) for k in ("vx", "vy", "wz", "height")],
+    cmap = None if m is None else ConsistencyMap([np.atleast_1d(np.array(m[k], float)) for k in MAP_KEYS],
                                                  np.array(m["delta"], float).reshape(-1, 3))
     return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"], blending or v.get("blending", "paper"), cmap)

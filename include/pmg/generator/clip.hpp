@@ -118,16 +118,17 @@ struct StaticClip {
 };
 
 /// Residual command correction of the command-consistent blending (docs/generator.md): on a grid
-/// over (v_x, v_y, ω, height) the correction Δu such that the blended gait generated for u + Δu
+/// over (v_x, v_y, ω, height, pitch) the correction Δu such that the blended gait generated for u + Δu
 /// implies, by its stance feet, the base motion u (found offline by fixed-point iteration with the
 /// robot's leg kinematics, pmg::gco::computeConsistencyMap). Covers what the per-clip tables cannot:
-/// channel interactions (e.g. side-stepping while turning) and the leg geometry of a squat.
+/// channel interactions (e.g. side-stepping while turning) and the leg geometry of a squat or bend.
 /// Read from `consistency_map.yaml` beside the clips (docs/clip_format.md); empty = no correction.
 /// Shapes: grid[d] strictly increasing (size ≥ 1 each, d = v_x [m/s], v_y [m/s], ω [rad/s],
-/// height [m]); delta (n_vx·n_vy·n_ω·n_h × 3), row ((i·n_vy + j)·n_ω + k)·n_h + l, columns
-/// (Δv_x [m/s], Δv_y [m/s], Δω [rad/s]).
+/// height [m], pitch [rad]); delta (n_vx·n_vy·n_ω·n_h·n_p × 3), row (((i·n_vy + j)·n_ω + k)·n_h + l)·n_p + m,
+/// columns (Δv_x [m/s], Δv_y [m/s], Δω [rad/s]).
+inline constexpr std::size_t kConsistencyMapDims = 5;
 struct ConsistencyMap {
-  std::array<Eigen::VectorXd, 4> grid;
+  std::array<Eigen::VectorXd, kConsistencyMapDims> grid;
   Eigen::MatrixXd delta;
   bool empty() const { return delta.rows() == 0; }
 };

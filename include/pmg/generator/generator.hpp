@@ -34,7 +34,7 @@
 /// axis, clamped to the table's largest amplitude (reported as amplitude_saturated). α_i then
 /// reports e_i. A clip without a table gets the linear one D(e) = e T x̄ on its own axis, e ≤ 1.
 /// What the per-clip tables cannot capture (channel interactions, the leg geometry of a squat) is
-/// corrected first by the library's ConsistencyMap, when it has one: u ← u + Δu(u, height),
+/// corrected first by the library's ConsistencyMap, when it has one: u ← u + Δu(u, height, pitch),
 /// multilinear on its grid (inputs clamped to the grid), reported in GeneratorOutput::command_correction.
 ///
 /// Conventions and decisions (docs/generator.md):
@@ -349,7 +349,7 @@ class MotionGenerator {
     // kConsistent: the residual correction of the consistency map (file comment).
     out_.command_correction = {0.0, 0.0, 0.0};
     if (p.blending == Blending::kConsistent && !model_->consistencyMap().empty()) {
-      lookupCorrection(u, postureHeight(u_s));
+      lookupCorrection(u, postureHeight(u_s), u_s.pitch);
       for (std::size_t i = 0; i < kNumCommandAxes; ++i) u[i] += out_.command_correction[i];
     }
 
@@ -477,14 +477,16 @@ class MotionGenerator {
     return u_s.height <= 0.0 ? s->neutral : std::clamp(u_s.height, s->values[0], s->values[s->values.size() - 1]);
   }
 
-  // Multilinear interpolation of the consistency map at (u, height), inputs clamped to the grid.
-  void lookupCorrection(const std::array<double, kNumCommandAxes>& u, double height) noexcept {
+  // Multilinear interpolation of the consistency map at (u, height, pitch command), inputs
+  // clamped to the grid.
+  void lookupCorrection(const std::array<double, kNumCommandAxes>& u, double height, double pitch) noexcept {
+    constexpr int D = static_cast<int>(kConsistencyMapDims);
     const ConsistencyMap& m = model_->consistencyMap();
-    const double x[4] = {u[0], u[1], u[2], height};
-    Eigen::Index lo[4];
-    double f[4];
-    Eigen::Index stride[4];
-    for (int d = 0; d < 4; ++d) {
+    const double x[D] = {u[0], u[1], u[2], height, pitch};
+    Eigen::Index lo[D];
+    double f[D];
+    Eigen::Index stride[D];
+    for (int d = 0; d < D; ++d) {
       const Eigen::VectorXd& g = m.grid[static_cast<std::size_t>(d)];
       const Eigen::Index n = g.size();
       if (n == 1) {
@@ -498,12 +500,12 @@ class MotionGenerator {
       lo[d] = k;
       f[d] = (v - g[k]) / (g[k + 1] - g[k]);
     }
-    stride[3] = 1;
-    for (int d = 2; d >= 0; --d) stride[d] = stride[d + 1] * m.grid[static_cast<std::size_t>(d + 1)].size();
-    for (int corner = 0; corner < 16; ++corner) {
+    stride[D - 1] = 1;
+    for (int d = D - 2; d >= 0; --d) stride[d] = stride[d + 1] * m.grid[static_cast<std::size_t>(d + 1)].size();
+    for (int corner = 0; corner < (1 << D); ++corner) {
       double w = 1.0;
       Eigen::Index row = 0;
-      for (int d = 0; d < 4; ++d) {
+      for (int d = 0; d < D; ++d) {
         const int bit = (corner >> d) & 1;
         if (bit && m.grid[static_cast<std::size_t>(d)].size() == 1) {
           w = 0.0;
