@@ -40,6 +40,8 @@
 #include "pmg/clips/clip_validation.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "pmg/gco/implied_motion.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/motion/bvh.hpp"
 #include "pmg/motion/clip_builder.hpp"
 #include "pmg/motion/deepmimic.hpp"
@@ -124,10 +126,23 @@ std::string postureLine(const StaticClip& clip, const PostureCheck& c) {
                      c.torso_roll, c.pelvis_pitch, 1000.0 * c.height, 1000.0 * c.com_margin);
 }
 
-/// The one place where a clip becomes file text. (The lead's implied-motion block, pmg::gco, is
-/// to be computed and attached to the clip here, before clipToYaml, for every clip written.)
-template <typename Clip>
-std::string clipText(const Clip& clip) {
+/// What the clip set needs beyond the clips: the stance-implied motion table of every dynamic
+/// clip and the consistency map of the set (command-consistent blending, docs/generator.md).
+struct ImpliedContext {
+  GeneratorJointSpace joints;
+  std::shared_ptr<const pmg::gco::LegModel> legs;
+  ClipLibrary written;  ///< every clip written, with its table (for the consistency map)
+};
+
+/// The one place where a clip becomes file text: a dynamic clip gets its implied_motion table.
+std::string clipText(const DynamicClip& clip, ImpliedContext& ctx) {
+  DynamicClip c = clip;
+  c.implied = pmg::gco::computeImpliedMotion(c, ctx.joints, ctx.legs, pmg::gco::defaultImpliedAmplitudes());
+  ctx.written.dynamic_clips.push_back(c);
+  return clipToYaml(c);
+}
+std::string clipText(const StaticClip& clip, ImpliedContext& ctx) {
+  ctx.written.static_clips.push_back(clip);
   return clipToYaml(clip);
 }
 
@@ -312,6 +327,7 @@ int main(int argc, char** argv) {
     checkOutputFolder(out_dir);  // before minutes of work, not after
     const RobotConfig robot = loadRobotConfig(robot_yaml);
     const KinematicModel model(robot);
+    ImpliedContext implied_ctx{generatorJointSpace(robot), pmg::gco::LegModel::fromRobotConfig(robot), {}};
     PostureProbe probe(model);  // static templates measured with the feet flat (posture_synthesis.hpp)
     // Arm joints: neither on a leg nor on the pelvis → torso_link chain (the waist).
     std::vector<int> arm_joints;
@@ -385,7 +401,7 @@ int main(int argc, char** argv) {
                                     spec.notes, res.scale, robot_contacts.enter_height, robot_contacts.exit_height,
                                     robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st));
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip, implied_ctx));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);
       report += fmt::format("| {} | dynamic {} {:+d} | `{}` | [{}, {}) @ {:.0f} Hz | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source.file, clip.meta.frame_begin,
@@ -398,7 +414,7 @@ int main(int argc, char** argv) {
     for (const MirrorSpec& spec : mirror_specs) {
       const DynamicClip clip = mirrorClip(built.at(spec.source_clip), robot, spec.name);
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip, implied_ctx));
       report += fmt::format("| {} | dynamic {} {:+d} | mirror of `{}` | - | {:.3f} | {:.3f} | ({:.2f}, {:.2f}) / ({:.2f}, {:.2f}) | as {} |\n",
                             clip.name, toString(clip.axis), clip.direction, spec.source_clip, clip.period, clip.nominal_scale,
                             clip.contact[0].mu, clip.contact[0].sigma, clip.contact[1].mu, clip.contact[1].sigma, spec.source_clip);
@@ -452,7 +468,7 @@ int main(int argc, char** argv) {
       clip.meta.notes = fmt::format("{}; scale {:.3f}; values = {} of the retargeted robot; joints averaged with their left/right mirror (symmetric posture){}; {}", spec.notes, res.scale,
                                     spec.axis == PostureAxis::kHeight ? "pelvis height [m]" : "torso_link pitch [rad]", decoupling, statsLine(st));
       validateClip(clip, robot, spec.name);
-      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip));
+      outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip, implied_ctx));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", 0, static_cast<int>(extreme) + 1);
       report += fmt::format("| {} | static {} | `{}` | [{}, {}) @ {:.0f} Hz | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | {} |\n",
                             clip.name, toString(clip.axis), spec.source.file, clip.meta.frame_begin, clip.meta.frame_end, rm.fps,
@@ -478,7 +494,7 @@ int main(int argc, char** argv) {
           lean_opt.max_roll, lean.max_foot_error, lean.max_foot_tilt, lean.max_com_shift, lean.max_roll_error,
           1000.0 * lean.max_height_change);
       validateClip(clip, robot, clip.name);
-      outputs.emplace_back(fs::path(out_dir) / (clip.name + ".yaml"), clipText(clip));
+      outputs.emplace_back(fs::path(out_dir) / (clip.name + ".yaml"), clipText(clip, implied_ctx));
       report += fmt::format("| {} | static {} | synthesized on the robot (posture_ik_v1) | - | - | values {:.3f} … {:.3f}, neutral {:.3f} | - | "
                             "soles planted: position error {:.2f} mm, tilt {:.1e} rad; centre of mass held within {:.2f} mm; "
                             "roll error {:.1e} rad; joint-limit violations 0 (bounded solve) |\n",
@@ -494,6 +510,13 @@ int main(int argc, char** argv) {
         "were located but not transcribed), so `lean` is synthesized on the robot model (provenance `synthesized`,\n"
         "docs/motion.md). The pitch template `bend` starts at the capture's upright 0.065 rad: leaning back (pitch < 0.065)\n"
         "has no template.\n";
+    double worst_residual = 0.0;
+    const ConsistencyMap map = pmg::gco::computeConsistencyMap(implied_ctx.written, robot, {}, &worst_residual);
+    outputs.emplace_back(fs::path(out_dir) / kConsistencyMapFile,
+                         consistencyMapToYaml(map, fmt::format("written by pmg_make_clips (pmg::gco::computeConsistencyMap); "
+                                                               "worst residual after the fixed point {:.4f}", worst_residual)));
+    std::printf("%-20s %ld grid points, largest |correction| %.3f, worst residual %.4f\n", kConsistencyMapFile,
+                static_cast<long>(map.delta.rows()), map.delta.cwiseAbs().maxCoeff(), worst_residual);
     outputs.emplace_back(fs::path(out_dir) / "report.md", report);
     writeAllOrNothing(outputs);
   } catch (const std::exception& e) {

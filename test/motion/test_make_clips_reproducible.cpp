@@ -48,6 +48,12 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
     ++files;
     EXPECT_EQ(slurp(tmp / "a" / name), slurp(tmp / "b" / name)) << "not deterministic";
     if (e.path().extension() != ".yaml") continue;
+    if (name == pmg::kConsistencyMapFile) {  // not a clip: the map of the set, compared as numbers
+      const auto a = pmg::readConsistencyMap((tmp / "a" / name).string()), s = pmg::readConsistencyMap(e.path().string());
+      ASSERT_EQ(a.delta.rows(), s.delta.rows());
+      EXPECT_LT((a.delta - s.delta).cwiseAbs().maxCoeff(), 1e-4);
+      continue;
+    }
     const std::string fresh = (tmp / "a" / name).string();
     if (pmg::readClipKind(fresh) == pmg::ClipKind::kDynamic) {
       const auto a = pmg::readDynamicClip(fresh, robot), s = pmg::readDynamicClip(e.path().string(), robot);
@@ -60,7 +66,7 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
       EXPECT_LT((a.values - s.values).cwiseAbs().maxCoeff(), 1e-4);
     }
   }
-  EXPECT_GE(files, 9);  // 8 clips + report.md
+  EXPECT_GE(files, 11);  // 9 clips + consistency_map.yaml + report.md
 }
 
 }  // namespace
