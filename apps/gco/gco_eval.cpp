@@ -50,6 +50,8 @@ struct Pipeline {
   LegJointIndex idx;
   GcoInput in;
   GcoResult res;
+  Eigen::Vector3d u_opt_sum = Eigen::Vector3d::Zero();  ///< Σ u' (v_x, v_y, ω) over the measured ticks
+  int u_opt_n = 0;
 };
 
 /// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
@@ -58,6 +60,8 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
   pipe.gen.reset(0.0);
   pipe.gco.reset();
   meter.reset();
+  pipe.u_opt_sum.setZero();
+  pipe.u_opt_n = 0;
   for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     pipe.gen.step(c.u_d, c.u_s, dt);
@@ -69,6 +73,8 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
       if (tick_us) tick_us->push_back(std::chrono::duration<double, std::micro>(t2 - t0).count());
       if (gco_us) gco_us->push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
       meter.add(pipe.in, pipe.res.u_opt);
+      pipe.u_opt_sum += Eigen::Vector3d(pipe.res.u_opt.v_x, pipe.res.u_opt.v_y, pipe.res.u_opt.yaw_rate);
+      ++pipe.u_opt_n;
     }
   }
   return meter.stats();
@@ -185,7 +191,7 @@ int main(int argc, char** argv) {
     double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
     double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
     int n_walk = 0, n_all = 0, n_within = 0;
-    double axis_err[3] = {0, 0, 0};
+    double axis_err[3] = {0, 0, 0}, uopt_err[3] = {0, 0, 0};
     int axis_ok[3] = {0, 0, 0};
     struct Miss { double vx, vy, wz, pitch, roll, h, ix, iy, iw; };
     std::vector<Miss> worst;
@@ -209,6 +215,8 @@ int main(int argc, char** argv) {
                 const double implied[3] = {cyc.x(), cyc.y(), cyc.z()};
                 const double cmd[3] = {a, b, w};
                 const double abs_tol[3] = {0.03, 0.03, 0.05};
+                const Eigen::Vector3d u_opt = pipe_on.u_opt_sum / std::max(1, pipe_on.u_opt_n);
+                for (int ax = 0; ax < 3; ++ax) uopt_err[ax] += std::fabs(u_opt[ax] - cmd[ax]);
                 bool within = true;
                 for (int ax = 0; ax < 3; ++ax) {
                   const double err = std::fabs(implied[ax] - cmd[ax]);
@@ -290,6 +298,8 @@ int main(int argc, char** argv) {
                 "    v_x %.3f m/s (%d/%d within)   v_y %.3f m/s (%d/%d)   w %.3f rad/s (%d/%d)   all axes within: %d/%d commands\n",
                 axis_err[0] / n_all, axis_ok[0], n_all, axis_err[1] / n_all, axis_ok[1], n_all, axis_err[2] / n_all, axis_ok[2],
                 n_all, n_within, n_all);
+    std::printf("  GCO's u' vs command: mean |u' - u|: v_x %.3f m/s   v_y %.3f m/s   w %.3f rad/s (what the full-PMG policy is told)\n",
+                uopt_err[0] / n_all, uopt_err[1] / n_all, uopt_err[2] / n_all);
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)
       std::printf("    outside: cmd (%.2f, %.2f, %.2f | %.2f %.2f %.2f) implied (%.3f, %.3f, %.3f)\n", worst[i].vx, worst[i].vy,
                   worst[i].wz, worst[i].pitch, worst[i].roll, worst[i].h, worst[i].ix, worst[i].iy, worst[i].iw);

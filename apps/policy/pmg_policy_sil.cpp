@@ -199,6 +199,9 @@ int main(int argc, char** argv) {
   app.add_option("--config", config, "Table I configuration the actor was trained for")
       ->check(CLI::IsMember({"pmg_gco", "pmg", "single_gait"}));
   app.add_option("--gco", gco_path, "GCO options (default: the controller config's)");
+  std::string blending;
+  app.add_option("--blending", blending, "generator blending (default: the controller config's): consistent | paper")
+      ->check(CLI::IsMember({"consistent", "paper"}));
   app.add_option("--commands", commands, "command script YAML")->capture_default_str();
   app.add_option("--seeds", seeds, "runs (seed k perturbs the initial pose, and the sensor noise)")->check(CLI::Range(1, 100));
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
@@ -222,6 +225,7 @@ int main(int argc, char** argv) {
     if (!clips_dir.empty()) base.clips_dir = clips_dir;
     if (!gco_path.empty()) base.gco = pmg::gco::loadGcoOptionsFile(gco_path);
     base.gco.enabled = config == "pmg_gco";
+    if (!blending.empty()) base.generator.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
     if (!model_path.empty()) base.policy_file = model_path;
     if (base.policy_file.empty()) throw pmg::ConfigError(controller_path + ": policy.model: missing (or give --model)");
     base.policy_native = native;
@@ -532,7 +536,7 @@ int main(int argc, char** argv) {
     std::ofstream js(out + "/summary.json");
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
-    js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"commands\": " << jstr(commands)
+    js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent") << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];
