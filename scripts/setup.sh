@@ -5,7 +5,10 @@
 #      Xvfb and Mesa's software OpenGL for pmg_render_log (docs/render.md); SDL2, libsodium,
 #      Boost.Beast, OpenSSL, nlohmann-json and headless Chromium for teleoperation (docs/teleop.md);
 #   2. Python packages for the plotting/report scripts (pip);
-#   3. ONNX Runtime 1.24.4: libonnxruntime.so from the PyPI wheel + onnxruntime_c_api.h from the Go
+#   3. the training environment .venv-training (ignored by git): a venv with training/ installed
+#      editable with its CPU extra, pinned by training/requirements-lock.txt (training/README.md);
+#      ctest training_smoke_* runs in it. PMG_SKIP_TRAINING_TESTS=1 skips it (and those tests);
+#   4. ONNX Runtime 1.24.4: libonnxruntime.so from the PyPI wheel + onnxruntime_c_api.h from the Go
 #      module github.com/yalue/onnxruntime_go@v1.27.0, unpacked into third_party/onnxruntime/ (ignored
 #      by git). A robot host with an official ONNX Runtime release passes -DONNXRUNTIME_ROOT= instead.
 # Re-running it is cheap: every step checks whether its result is already there.
@@ -20,7 +23,7 @@ apt_packages=(
   libeigen3-dev liburdfdom-dev liborocos-kdl-dev libkdl-parser-dev libmujoco-dev libqhull-dev
   libnlopt-dev libnlopt-cxx-dev libceres-dev liblcm-dev liblcm-bin libglib2.0-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libspdlog-dev libfmt-dev libpagmo-dev
-  python3 python3-pip
+  python3 python3-pip python3-venv
   libglfw3-dev libpng-dev xvfb libgl1-mesa-dri
   libsdl2-dev libsodium-dev libboost-dev libssl-dev nlohmann-json3-dev chromium
 )
@@ -38,6 +41,21 @@ py=python3
 if ! $py -c "import numpy, matplotlib, yaml, onnx" 2>/dev/null; then
   echo "[setup] pip install numpy matplotlib pyyaml onnx"
   $py -m pip install -q numpy matplotlib pyyaml onnx || $py -m pip install -q --break-system-packages numpy matplotlib pyyaml onnx
+fi
+
+venv="$root/.venv-training"
+if [ "${PMG_SKIP_TRAINING_TESTS:-0}" != "1" ]; then
+  # Re-installed when the pins change (pyproject.toml, requirements-lock.txt), or when it does not import.
+  want="$(cat "$root/training/pyproject.toml" "$root/training/requirements-lock.txt" | sha256sum | cut -d' ' -f1)"
+  if [ "$(cat "$venv/.pmg-setup-stamp" 2>/dev/null)" != "$want" ] \
+     || ! "$venv/bin/python" -c "import os, sys, jax, brax, mujoco.mjx, onnx, pmg_train.paths as p
+sys.exit(not os.path.samefile(p.__file__, '$root/training/pmg_train/paths.py'))" >/dev/null 2>&1; then
+    echo "[setup] training environment $venv: pip install -e 'training[cpu]' (training/requirements-lock.txt)"
+    "$venv/bin/python" -c "" 2>/dev/null || $py -m venv --clear "$venv"
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check \
+      -c "$root/training/requirements-lock.txt" -e "$root/training[cpu]"
+    echo "$want" > "$venv/.pmg-setup-stamp"
+  fi
 fi
 
 ort_dir="$root/third_party/onnxruntime"

@@ -1,0 +1,272 @@
+#!/usr/bin/env python3
+"""CPU smoke run of the training code, in the installed training environment (ctest training_smoke_cpu).
+
+Usage: test_smoke_cpu.py [--part env|ppo|all] [--workdir DIR] [--steps 60] [--envs 8]
+Any python3 may start it: it re-runs itself with the training environment's interpreter,
+$PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
+pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
+path runs) and XLA's backend optimisation off (compiling MJX takes most of the time; these few
+steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1),
+unless PMG_SKIP_TRAINING_TESTS=1, then it is a skip (exit 77, ctest SKIP_RETURN_CODE).
+Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
+${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; "off" disables it): a re-run with unchanged code
+skips most of the compile time. ctest runs the two parts as two tests (training_smoke_env,
+training_smoke_ppo) so that they compile in parallel.
+
+1. The MJX environment (the training configuration: full PMG with GCO, randomised reset and
+   commands): --envs environments x --steps control steps with zero action (legs held at the
+   default pose by the PD), compiled as one reset + scan. Checks: every observation, privileged
+   observation and reward finite; no episode ends and the pelvis stays above 0.65 m with the trunk
+   within 0.3 rad of upright; rewards at most the sum of the positive reward weights, mean > 0;
+   the references in the observation equal the float64 NumPy ports (pmg_generator.step at the
+   env's phase and command: q_ref to 1e-4 rad; gco.step from the env's previous GCO state: u' to
+   1e-3) and the phase advances by the port's own update.
+2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
+   one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
+   export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
+   model passes onnx.checker and carries the pmg.contract; progress.jsonl reached the step count
+   with finite metrics; both devices were used.
+Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
+"""
+import argparse
+import glob
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TRAINING = os.path.dirname(HERE)
+REPO = os.path.dirname(TRAINING)
+CHILD = "PMG_TRAINING_SMOKE_CHILD"
+SKIP = 77
+
+
+def relaunch():
+    """Re-run this script with the training environment's interpreter (never returns)."""
+    py = os.environ.get("PMG_TRAINING_PYTHON") or os.path.join(REPO, ".venv-training", "bin", "python")
+    if not os.access(py, os.X_OK):
+        why = (f"training environment missing: no interpreter at {py} (scripts/setup.sh creates it: "
+               f"python3 -m venv .venv-training && .venv-training/bin/pip install -e 'training[cpu]')")
+        if os.environ.get("PMG_SKIP_TRAINING_TESTS") == "1":
+            print(f"SKIPPED (PMG_SKIP_TRAINING_TESTS=1): {why}")
+            sys.exit(SKIP)
+        print(f"FAIL: {why}; set PMG_SKIP_TRAINING_TESTS=1 to skip the training tests on purpose")
+        sys.exit(1)
+    env = dict(os.environ)
+    env[CHILD] = "1"
+    env["JAX_PLATFORMS"] = "cpu"
+    env["XLA_FLAGS"] = " ".join([env.get("XLA_FLAGS", ""), "--xla_force_host_platform_device_count=2",
+                                 "--xla_backend_optimization_level=0",
+                                 "--xla_llvm_disable_expensive_passes=true"]).strip()
+    env.setdefault("MUJOCO_GL", "disable")
+    cache = env.get("PMG_JAX_CACHE_DIR") or os.path.join(
+        env.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "pmg-training-jax")
+    if cache != "off":
+        env["JAX_COMPILATION_CACHE_DIR"] = cache
+    sys.stdout.flush()
+    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
+
+
+class Checks:
+    def __init__(self):
+        self.passed, self.failed = 0, 0
+
+    def __call__(self, ok, what):
+        ok = bool(ok)
+        print(f"{'ok  ' if ok else 'FAIL'} {what}", flush=True)
+        if ok:
+            self.passed += 1
+        else:
+            self.failed += 1
+        return ok
+
+
+def term_slices(obs_terms):
+    out, i = {}, 0
+    for name, size, _ in obs_terms:
+        out[name] = slice(i, i + size)
+        i += size
+    return out, i
+
+
+def env_checks(check, n_envs, n_steps):
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import export_onnx
+    from pmg_train import gco
+    from pmg_train import g1_env
+    from pmg_train import pmg_generator as pg
+
+    t0 = time.time()
+    cfg = g1_env.EnvConfig()  # the training configuration (full PMG with GCO)
+    env = g1_env.G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")))  # as train_pmg.py passes them
+    print(f"env built in {time.time() - t0:.1f} s: mode {cfg.mode}, clips {len(env.clip_files)}, "
+          f"{len(jax.local_devices())} host devices", flush=True)
+    sl, n_obs = term_slices(g1_env.OBS_TERMS)
+    check([(n, s) for n, s, _ in export_onnx.OBS_TERMS] == [(n, s) for n, s, _ in g1_env.OBS_TERMS] and
+          all(np.allclose(a, b) for (_, _, a), (_, _, b) in zip(export_onnx.OBS_TERMS, g1_env.OBS_TERMS)),
+          "export_onnx.OBS_TERMS equals g1_env.OBS_TERMS (the exported contract describes the env's observation)")
+    check(env.observation_size["state"] == (n_obs,) and n_obs == 62,
+          f"actor observation has the contract's {n_obs} values (expected 62)")
+
+    def rollout(key):
+        keys = jax.random.split(key, n_envs)
+        s0 = jax.vmap(env.reset)(keys)
+        zero = jnp.zeros((n_envs, env.action_size))
+
+        def body(s, _):
+            s = jax.vmap(env.step)(s, zero)
+            return s, s
+
+        _, ss = jax.lax.scan(body, s0, None, length=n_steps)
+        return jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b]), s0, ss)
+
+    t0 = time.time()
+    traj = jax.block_until_ready(jax.jit(rollout)(jax.random.PRNGKey(3)))
+    print(f"reset + {n_steps} steps x {n_envs} envs: {time.time() - t0:.1f} s (compile included)", flush=True)
+    obs = np.asarray(traj.obs["state"], np.float64)            # (T+1, n, 62)
+    priv = np.asarray(traj.obs["privileged_state"], np.float64)
+    reward = np.asarray(traj.reward, np.float64)[1:]           # (T, n)
+    done = np.asarray(traj.done)[1:]
+    qpos = np.asarray(traj.pipeline_state.qpos, np.float64)
+    info = traj.info
+
+    check(np.isfinite(obs).all() and np.isfinite(priv).all() and np.isfinite(qpos).all(),
+          f"observations, privileged observations and qpos finite ({obs.shape[0]} x {n_envs})")
+    check(priv.shape[-1] == env.observation_size["privileged_state"][0], "privileged observation size as declared")
+    check(np.isfinite(reward).all(), "rewards finite")
+    check(not done.any(), f"no episode ended in {n_steps} steps with the legs held (done count {int(done.sum())})")
+    height = qpos[:, :, 2]
+    w, x, y = qpos[:, :, 3], qpos[:, :, 4], qpos[:, :, 5]
+    up = 1.0 - 2.0 * (x * x + y * y)                            # R_WB[2, 2]: cos(tilt of the pelvis)
+    tilt = np.degrees(np.arccos(np.clip(up, -1, 1)))
+    check(height.min() > 0.65, f"pelvis above 0.65 m throughout (min {height.min():.3f} m)")
+    check(tilt.max() < np.degrees(0.3), f"pelvis within 0.3 rad of upright (max tilt {tilt.max():.1f} deg)")
+    w_pos = sum(v for v in cfg.w.values() if v > 0)
+    check(reward.max() <= w_pos + 1e-4 and reward.mean() > 0.0,
+          f"reward per step in (.., {w_pos:.2f}] (sum of positive weights), mean > 0 "
+          f"(min {reward.min():.3f}, mean {reward.mean():.3f}, max {reward.max():.3f})")
+
+    # References in the (noise-free) privileged observation against the float64 NumPy ports.
+    phase = np.asarray(info["phase"], np.float64)                # (T+1, n)
+    command = np.asarray(info["command"], np.float64)            # (T+1, n, 6)
+    gco_states = jax.tree_util.tree_map(np.asarray, info["gco"])
+    scale_cmd = np.asarray(g1_env.OBS_TERMS[[n for n, _, _ in g1_env.OBS_TERMS].index("command")][2], np.float64)
+    q_default = np.asarray(env.q_default, np.float64)
+    worst = {"q_ref": 0.0, "phase_sincos": 0.0, "next_phase": 0.0, "u_opt": 0.0}
+    for t in range(obs.shape[0]):
+        for i in range(n_envs):
+            ref = pg.step(env.pmg, phase[t, i], command[t, i, :3], command[t, i, 3:], cfg.control_dt)
+            q_rel = np.asarray(ref["q_ref"])[:g1_env.LEG] - q_default[:g1_env.LEG]
+            worst["q_ref"] = max(worst["q_ref"], float(np.abs(priv[t, i, sl["pmg_ref_q_rel"]] - q_rel).max()))
+            ph = 2 * math.pi * phase[t, i]
+            worst["phase_sincos"] = max(worst["phase_sincos"], float(np.abs(
+                priv[t, i, sl["pmg_phase"]] - [math.sin(ph), math.cos(ph)]).max()))
+            if t + 1 < obs.shape[0]:
+                d = abs(float(ref["next_phase"]) - phase[t + 1, i])
+                worst["next_phase"] = max(worst["next_phase"], min(d, 1.0 - d))
+            if t == 0:
+                state = gco.initial_state()
+            else:
+                state = {k: np.asarray(v[t - 1, i]).astype(bool if k == "have_prev" else np.float64)
+                         for k, v in gco_states.items()}
+            u_opt, _, _, _ = gco.step(env.gco_chains, env.gco_opt, ref, command[t, i, 3:], state)
+            worst["u_opt"] = max(worst["u_opt"], float(np.abs(priv[t, i, sl["command"]] / scale_cmd - u_opt).max()))
+    check(worst["q_ref"] < 1e-4, f"leg references in the observation = NumPy generator port "
+                                 f"(max |diff| {worst['q_ref']:.2e} rad < 1e-4)")
+    check(worst["phase_sincos"] < 1e-5, f"phase term = sin/cos of the env's phase (max |diff| {worst['phase_sincos']:.2e})")
+    check(worst["next_phase"] < 1e-5, f"phase advances by the port's update (max |diff| {worst['next_phase']:.2e})")
+    check(worst["u_opt"] < 1e-3, f"observed command u' = NumPy GCO port (max |diff| {worst['u_opt']:.2e} < 1e-3)")
+    moved = np.abs(np.angle(np.exp(2j * np.pi * (phase[-1] - phase[0])))).min()
+    check(moved > 0.05, f"every env's phase moved over the rollout (least {moved:.2f} rad)")
+    return obs
+
+
+def ppo_checks(check, workdir, obs):
+    import jax
+    import numpy as np
+    import onnx
+
+    import export_onnx
+    import train_pmg
+    from pmg_train.contract import actor_forward
+
+    out = os.path.join(workdir, "ppo")
+    n_dev = len(jax.local_devices())
+    timesteps = 80  # one training step: batch 8 x 2 minibatches x unroll 5 = 80 env steps
+    argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
+            "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
+            "--hidden", "32,32", "--seed", "1"]
+    if os.path.exists(os.path.join(out, "progress.jsonl")):
+        os.remove(os.path.join(out, "progress.jsonl"))
+    t0 = time.time()
+    cwd = os.getcwd()
+    try:
+        train_pmg.main(argv)
+    finally:
+        os.chdir(cwd)
+    print(f"tiny PPO run through train_pmg.main: {time.time() - t0:.1f} s (compile included)", flush=True)
+    with open(os.path.join(out, "train_config.json")) as f:
+        tc = json.load(f)
+    check(len(tc["devices"]) == n_dev == 2, f"PPO trained on all {n_dev} local devices ({tc['devices']})")
+    with open(os.path.join(out, "progress.jsonl")) as f:
+        recs = [json.loads(line) for line in f if line.strip()]
+    last = recs[-1] if recs else {}
+    check(last.get("step", 0) >= timesteps and all(math.isfinite(v) for v in last.values()),
+          f"progress.jsonl reached step {last.get('step')} >= {timesteps} with finite metrics "
+          f"(policy loss {last.get('training/policy_loss')}, value loss {last.get('training/v_loss')})")
+    check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
+    mean, std, layers, action_scale, clips, mode = export_onnx.load_actor(os.path.join(out, "actor.npz"))
+    check([w.shape for w, _ in layers] == [(62, 32), (32, 32), (32, 24)] and mode == "pmg_gco" and len(clips) > 0,
+          f"actor.npz: 62-32-32-24 MLP, mode {mode}, {len(clips)} clips")
+    model = onnx.load(os.path.join(out, "g1_pmg_policy.onnx"))
+    onnx.checker.check_model(model)
+    meta = {p.key: p.value for p in model.metadata_props}
+    brax_diff = json.loads(meta.get("pmg.training", "{}")).get("brax_vs_numpy_max_abs")
+    check("pmg.contract" in meta and brax_diff is not None and brax_diff < 1e-4,
+          f"ONNX export: checker passes, pmg.contract present, exported actor = Brax inference "
+          f"(max |diff| {brax_diff})")
+    if obs is None:  # PPO part alone: observations around the normaliser's statistics
+        obs = mean + std * np.random.default_rng(0).standard_normal((4,) + mean.shape)
+        where = "observations drawn from the normaliser's statistics"
+    else:
+        obs, where = obs[-1], "the rollout's last observations"
+    act = actor_forward(mean, std, layers, 12, obs.astype(np.float32))
+    check(np.isfinite(act).all() and np.abs(act).max() <= 1.0,
+          f"exported actor on {where}: finite, within [-1, 1] (max |a| {np.abs(act).max():.3f})")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--workdir", default=None, help="outputs (default: a temporary directory)")
+    ap.add_argument("--envs", type=int, default=8)
+    ap.add_argument("--steps", type=int, default=60)
+    ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
+                    help="env: the environment rollout checks; ppo: the tiny PPO run; all: both")
+    args = ap.parse_args()
+    if os.environ.get(CHILD) != "1":
+        relaunch()
+    t_start = time.time()
+    sys.path.insert(0, TRAINING)
+    os.chdir(REPO)
+    workdir = os.path.abspath(args.workdir) if args.workdir else tempfile.mkdtemp(prefix="pmg_smoke_")
+    os.makedirs(workdir, exist_ok=True)
+    import jax
+    print(f"{sys.executable}: JAX {jax.__version__} ({jax.default_backend()}), devices {jax.local_devices()}; "
+          f"workdir {workdir}", flush=True)
+    check = Checks()
+    obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
+    if args.part in ("ppo", "all"):
+        ppo_checks(check, workdir, obs)
+    print(f"smoke run {time.time() - t_start:.1f} s")
+    print(f"{check.passed} passed, {check.failed} failed")
+    return 0 if check.failed == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
