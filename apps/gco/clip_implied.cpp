@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
   std::string clips_dir = pmg::resolveData("config/clips/g1").string();
   bool check = false, map = true;
-  double tolerance = 2e-6;
+  double tolerance = 1e-5;  // files hold 6 decimals: pmg_make_clips computes from unrounded clips
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clips", clips_dir, "clip folder")->check(CLI::ExistingDirectory)->capture_default_str();
   app.add_flag("--check", check, "verify the stored tables instead of writing them");
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
       const pmg::ClipLibrary lib = pmg::loadClipLibrary(clips_dir, robot);
       const pmg::ConsistencyMap m = pmg::gco::computeConsistencyMap(lib, robot);
       const bool same = !lib.consistency.empty() && lib.consistency.delta.rows() == m.delta.rows() &&
-                        (lib.consistency.delta - m.delta).cwiseAbs().maxCoeff() <= 1e-5;
+                        (lib.consistency.delta - m.delta).cwiseAbs().maxCoeff() <= 1e-4;
       for (std::size_t d = 0; same && d < pmg::kConsistencyMapDims; ++d)
         if (lib.consistency.grid[d].size() != m.grid[d].size() || (lib.consistency.grid[d] - m.grid[d]).cwiseAbs().maxCoeff() > 1e-6)
           ++bad;

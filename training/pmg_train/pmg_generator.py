@@ -415,13 +415,21 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     q_plus = blend(phase + h)
     q_dyn = blend(phase)
 
+    # Contacts (eqs. 8-9); kConsistent splits the walking share sum_w among the played clips by e_i.
+    cw, cdir = list(weight), list(sign)
+    if consistent:
+        big = e_sum > 1e-12
+        for i in range(3):
+            if present[i]:
+                cw[i] = xp.where(big, sum_w * amp[i] / xp.where(big, e_sum, 1.0), weight[i])
+                cdir[i] = xp.where(big, direction[i], sign[i])
     mu_f, sigma_f, in_contact = [], [], []
     for f in range(2):
         mu, sigma = 0.0, 0.5 * w_stand
         for i in range(3):
             if present[i]:
-                mu = mu + weight[i] * per_clip(i, sign[i], lambda c: c.contact[f, 0])
-                sigma = sigma + weight[i] * per_clip(i, sign[i], lambda c: c.contact[f, 1])
+                mu = mu + cw[i] * per_clip(i, cdir[i], lambda c: c.contact[f, 0])
+                sigma = sigma + cw[i] * per_clip(i, cdir[i], lambda c: c.contact[f, 1])
         m = xp.where(sum_w > 0, wrap_phase(xp, mu / xp.where(sum_w > 0, sum_w, 1.0)), 0.0)
         sg = xp.clip(sigma, 0.0, 0.5)
         mu_f.append(m); sigma_f.append(sg)

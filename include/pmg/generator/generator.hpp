@@ -33,6 +33,8 @@
 /// clip's drift, and e_i → 0 continuously as r_i → 0), e_i = D_i,s_i^{-1}(|r_i|) on the clip's own
 /// axis, clamped to the table's largest amplitude (reported as amplitude_saturated). α_i then
 /// reports e_i. A clip without a table gets the linear one D(e) = e T x̄ on its own axis, e ≤ 1.
+/// The contact schedule (eqs. 8–9) splits the walking share Σ w_i among the played clips in
+/// proportion to e_i (eq. 6's split would time the contacts by a clip that barely moves).
 /// What the per-clip tables cannot capture (channel interactions, the leg geometry of a squat) is
 /// corrected first by the library's ConsistencyMap, when it has one: u ← u + Δu(u, height, pitch),
 /// multilinear on its grid (inputs clamped to the grid), reported in GeneratorOutput::command_correction.
@@ -390,14 +392,30 @@ class MotionGenerator {
     blendJoints(play, phase_ + h, q_plus_);
     blendJoints(play, phase_, out_.q_dynamic);
 
-    // Contacts (eqs. 8–9) and template base motion.
+    // Contacts (eqs. 8–9). kConsistent: the walking share Σ w_i of eq. 6 is split among the clips
+    // in proportion to the amplitudes they play, so the contact schedule follows the motion that
+    // dominates (with eq. 6's split, a clip playing at e = 1.4 under w = 0.4 would move its feet
+    // while the schedule says stance).
+    std::array<double, kNumCommandAxes> cw = out_.weight;
+    const DynamicClip* contact_clip[kNumCommandAxes] = {clip[0], clip[1], clip[2]};
+    if (p.blending == Blending::kConsistent) {
+      double e_sum = 0.0;
+      for (std::size_t i = 0; i < kNumCommandAxes; ++i)
+        if (play[i]) e_sum += out_.amplitude[i];
+      if (e_sum > 1e-12) {
+        for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
+          cw[i] = play[i] ? sum_w * out_.amplitude[i] / e_sum : 0.0;
+          contact_clip[i] = play[i];
+        }
+      }
+    }
     const auto& js = model_->jointSpace();
     for (std::size_t f = 0; f < kNumFeet; ++f) {
       double mu = 0.0, sigma = 0.5 * out_.standing_weight;
       for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
-        if (!clip[i]) continue;
-        mu += out_.weight[i] * clip[i]->contact[f].mu;
-        sigma += out_.weight[i] * clip[i]->contact[f].sigma;
+        if (!contact_clip[i]) continue;
+        mu += cw[i] * contact_clip[i]->contact[f].mu;
+        sigma += cw[i] * contact_clip[i]->contact[f].sigma;
       }
       out_.contact[f].mu = sum_w > 0 ? detail::wrapPhase(mu / sum_w) : 0.0;
       out_.contact[f].sigma = std::clamp(sigma, 0.0, 0.5);
