@@ -25,6 +25,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 
+PINNED_JAX = "0.10.2"  # training/pyproject.toml
+
 
 def log(*a):
     print(f"[{time.strftime('%H:%M:%S')}]", *a, flush=True)
@@ -168,6 +170,15 @@ def select_devices(args):
     n = len(used)
     log(f"JAX {jax.__version__}, backend {jax.default_backend()}, {len(local)} local device(s):",
         ", ".join(str(d) for d in local))
+    version = tuple(int(x) for x in jax.__version__.split(".")[:2])
+    if version == (0, 11) and n > 1:
+        # Measured with 0.11.2 on 2 H200s and on 2 XLA host devices: compiling a pmap over several
+        # devices of MJX's constraint solver (mjx._src.solver.solve) segfaults; 0.10.2 runs.
+        raise SystemExit(f"pmg-train: JAX {jax.__version__} segfaults compiling Brax's multi-device pmap of the "
+                         f"MJX step; install the pinned JAX (pip install -e 'training[cuda]': 0.10.2) or train on "
+                         f"one device (--devices 1)")
+    if jax.__version__ != PINNED_JAX:
+        log(f"warning: JAX {jax.__version__} is not the pinned {PINNED_JAX} (training/pyproject.toml)")
     if args.num_envs % n:
         raise SystemExit(f"pmg-train: --num-envs = {args.num_envs} is not divisible by the {n} device(s) used; "
                          f"pick a multiple of {n} (or --devices)")

@@ -6,13 +6,14 @@ Any python3 may start it: it re-runs itself with the training environment's inte
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
 path runs) and XLA's backend optimisation off (compiling MJX takes most of the time; these few
-steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1),
-unless PMG_SKIP_TRAINING_TESTS=1, then it is a skip (exit 77, ctest SKIP_RETURN_CODE).
+steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1);
+PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; "off" disables it): a re-run with unchanged code
 skips most of the compile time. ctest runs the two parts as two tests (training_smoke_env,
 training_smoke_ppo) so that they compile in parallel.
 
+0. The environment holds the versions training/pyproject.toml pins.
 1. The MJX environment (the training configuration: full PMG with GCO, randomised reset and
    commands): --envs environments x --steps control steps with zero action (legs held at the
    default pose by the PD), compiled as one reset + scan. Checks: every observation, privileged
@@ -46,14 +47,14 @@ SKIP = 77
 
 def relaunch():
     """Re-run this script with the training environment's interpreter (never returns)."""
+    if os.environ.get("PMG_SKIP_TRAINING_TESTS") == "1":
+        print("SKIPPED: PMG_SKIP_TRAINING_TESTS=1 (the training tests are disabled)")
+        sys.exit(SKIP)
     py = os.environ.get("PMG_TRAINING_PYTHON") or os.path.join(REPO, ".venv-training", "bin", "python")
     if not os.access(py, os.X_OK):
-        why = (f"training environment missing: no interpreter at {py} (scripts/setup.sh creates it: "
-               f"python3 -m venv .venv-training && .venv-training/bin/pip install -e 'training[cpu]')")
-        if os.environ.get("PMG_SKIP_TRAINING_TESTS") == "1":
-            print(f"SKIPPED (PMG_SKIP_TRAINING_TESTS=1): {why}")
-            sys.exit(SKIP)
-        print(f"FAIL: {why}; set PMG_SKIP_TRAINING_TESTS=1 to skip the training tests on purpose")
+        print(f"FAIL: training environment missing: no interpreter at {py} (scripts/setup.sh creates it: "
+              f"python3 -m venv .venv-training && .venv-training/bin/pip install -e 'training[cpu]'); "
+              f"set PMG_SKIP_TRAINING_TESTS=1 to disable the training tests on purpose")
         sys.exit(1)
     env = dict(os.environ)
     env[CHILD] = "1"
@@ -90,6 +91,27 @@ def term_slices(obs_terms):
         out[name] = slice(i, i + size)
         i += size
     return out, i
+
+
+def pin_checks(check):
+    """The environment holds exactly the versions training/pyproject.toml pins (a stale venv fails)."""
+    import importlib.metadata
+    import tomllib
+    with open(os.path.join(TRAINING, "pyproject.toml"), "rb") as f:
+        project = tomllib.load(f)["project"]
+    pins = [r for r in project["dependencies"] + project["optional-dependencies"]["cpu"] if "==" in r]
+    wrong = []
+    for req in pins:
+        name, version = req.split("==")
+        name = name.split("[")[0]
+        try:
+            have = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            have = None
+        if have != version:
+            wrong.append(f"{name} {have} (pinned {version})")
+    check(pins and not wrong, f"{len(pins)} pinned packages at their pinned versions"
+                              + (f"; differ: {', '.join(wrong)} (re-run scripts/setup.sh)" if wrong else ""))
 
 
 def env_checks(check, n_envs, n_steps):
@@ -260,6 +282,7 @@ def main():
     print(f"{sys.executable}: JAX {jax.__version__} ({jax.default_backend()}), devices {jax.local_devices()}; "
           f"workdir {workdir}", flush=True)
     check = Checks()
+    pin_checks(check)
     obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
