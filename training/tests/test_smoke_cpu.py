@@ -9,8 +9,8 @@ path runs) and XLA's backend optimisation off (compiling MJX takes most of the t
 steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1);
 PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
-${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; "off" disables it): a re-run with unchanged code
-skips most of the compile time. ctest runs the two parts as two tests (training_smoke_env,
+${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
+it): a re-run with unchanged code skips most of the compile time. ctest runs the two parts as two tests (training_smoke_env,
 training_smoke_ppo) so that they compile in parallel.
 
 0. The environment holds the versions training/pyproject.toml pins.
