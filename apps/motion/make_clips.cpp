@@ -134,15 +134,33 @@ struct ImpliedContext {
   ClipLibrary written;  ///< every clip written, with its table (for the consistency map)
 };
 
+/// The values a clip file holds (6 decimals): the tables and the map are computed from what a
+/// reader gets, so `pmg_clip_implied --check` on the written folder finds them current.
+Eigen::MatrixXd asWritten(const Eigen::MatrixXd& m) { return (m.array() * 1e6).round() / 1e6; }
+double asWritten(double x) { return std::round(x * 1e6) / 1e6; }
+
 /// The one place where a clip becomes file text: a dynamic clip gets its implied_motion table.
 std::string clipText(const DynamicClip& clip, ImpliedContext& ctx) {
   DynamicClip c = clip;
+  c.q = asWritten(c.q);
+  c.qd = asWritten(c.qd);
+  c.v_base = asWritten(c.v_base);
+  c.omega_base = asWritten(c.omega_base);
+  c.base_height = asWritten(c.base_height);
+  c.period = asWritten(c.period);
+  c.nominal_scale = asWritten(c.nominal_scale);
+  for (auto& f : c.contact) f = {asWritten(f.mu), asWritten(f.sigma)};
   c.implied = pmg::gco::computeImpliedMotion(c, ctx.joints, ctx.legs, pmg::gco::defaultImpliedAmplitudes());
+  c.implied.velocity = asWritten(c.implied.velocity);
   ctx.written.dynamic_clips.push_back(c);
   return clipToYaml(c);
 }
 std::string clipText(const StaticClip& clip, ImpliedContext& ctx) {
-  ctx.written.static_clips.push_back(clip);
+  StaticClip c = clip;
+  c.q = asWritten(c.q);
+  c.values = asWritten(c.values);
+  c.neutral = asWritten(c.neutral);
+  ctx.written.static_clips.push_back(c);
   return clipToYaml(clip);
 }
 

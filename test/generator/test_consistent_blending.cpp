@@ -10,24 +10,15 @@
 
 #include "alloc_counter.hpp"
 #include "pmg/generator/generator.hpp"
+#include "synthetic_joint_space.hpp"
 
 namespace pmg {
 namespace {
 
-constexpr int kJoints = 4;
+constexpr int kJoints = test::kSyntheticJoints;
 constexpr int kSamples = 8;
 
-GeneratorJointSpace jointSpace() {
-  GeneratorJointSpace js;
-  js.joint_names = {"l", "r", "yaw", "pitch"};
-  js.q_stand = Eigen::Vector4d(0.1, 0.1, 0.0, -0.2);
-  js.lower = Eigen::VectorXd::Constant(kJoints, -3.0);
-  js.upper = Eigen::VectorXd::Constant(kJoints, 3.0);
-  js.mirror_index = {1, 0, 2, 3};
-  js.mirror_sign = {1, 1, -1, 1};
-  js.standing_base_height = 0.75;
-  return js;
-}
+GeneratorJointSpace jointSpace() { return test::syntheticJointSpace(); }
 
 ImpliedMotionTable table(std::initializer_list<double> amplitudes, std::initializer_list<Eigen::Vector3d> rows) {
   ImpliedMotionTable t;

@@ -11,24 +11,15 @@
 
 #include "alloc_counter.hpp"
 #include "pmg/generator/generator.hpp"
+#include "synthetic_joint_space.hpp"
 
 namespace pmg {
 namespace {
 
-constexpr int kJoints = 4;  // j0 <-> j1 mirror pair (sign +1), j2 self-mirror sign -1, j3 self +1
+constexpr int kJoints = test::kSyntheticJoints;
 constexpr int kSamples = 8;
 
-GeneratorJointSpace jointSpace() {
-  GeneratorJointSpace js;
-  js.joint_names = {"l", "r", "yaw", "pitch"};
-  js.q_stand = Eigen::Vector4d(0.1, 0.1, 0.0, -0.2);
-  js.lower = Eigen::VectorXd::Constant(kJoints, -3.0);
-  js.upper = Eigen::VectorXd::Constant(kJoints, 3.0);
-  js.mirror_index = {1, 0, 2, 3};
-  js.mirror_sign = {1, 1, -1, 1};
-  js.standing_base_height = 0.75;
-  return js;
-}
+GeneratorJointSpace jointSpace() { return test::syntheticJointSpace(); }
 
 // Clip whose joint j at sample k is offset + (k+1) * 0.01 * (j+1): distinct, easy to hand-compute.
 DynamicClip makeClip(CommandAxis axis, double offset, double scale, double period, double mu_l, double mu_r) {

@@ -122,6 +122,10 @@ TEST_F(ShippedClips, RewriteIsByteIdentical) {
     const std::string path = entry.path().string();
     SCOPED_TRACE(path);
     const std::string text = slurp(path);
+    if (entry.path().filename() == pmg::kConsistencyMapFile) {  // not a clip (its header comment is not kept)
+      EXPECT_FALSE(pmg::readConsistencyMap(path).empty());
+      continue;
+    }
     if (pmg::readClipKind(path) == pmg::ClipKind::kDynamic)
       EXPECT_EQ(pmg::clipToYaml(pmg::readDynamicClip(path, robot_)), text);
     else
