@@ -209,6 +209,23 @@ std::string modelError(const ClipLibrary& lib) {
   return "no error";
 }
 
+TEST(ConsistentBlending, ConsistencyMapInterpolatesThePitchCommand) {
+  ClipLibrary lib = library();
+  ConsistencyMap& c = lib.consistency;
+  c.grid[0] = c.grid[1] = c.grid[2] = Eigen::VectorXd::Constant(1, 0.0);
+  c.grid[3] = Eigen::VectorXd::Constant(1, 0.75);
+  c.grid[4] = Eigen::Vector2d(0.0, 0.4);      // pitch [rad]
+  c.delta.resize(2, 3);
+  c.delta << 0.0, 0.02, 0.0,   // pitch 0
+      0.0, 0.10, -0.08;        // pitch 0.4
+  MotionGenerator gen(model(lib));
+  gen.step({0.3, 0.0, 0.2}, {0.1, 0.0, 0.0}, 0.01);  // a quarter of the way: Δv_y 0.04, Δω -0.02
+  EXPECT_NEAR(gen.output().command_correction[1], 0.04, 1e-12);
+  EXPECT_NEAR(gen.output().command_correction[2], -0.02, 1e-12);
+  gen.step({0.3, 0.0, 0.2}, {0.9, 0.0, 0.0}, 0.01);  // beyond the grid: its end
+  EXPECT_NEAR(gen.output().command_correction[1], 0.10, 1e-12);
+}
+
 TEST(ConsistentBlending, RejectsTablesItCannotInvert) {
   ClipLibrary lib = library();
   lib.dynamic_clips[0].implied.velocity(2, 0) = 0.4;  // forward no longer grows with the amplitude
