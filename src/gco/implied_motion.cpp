@@ -18,13 +18,6 @@ std::vector<double> defaultImpliedAmplitudes() {
   return a;
 }
 
-namespace {
-bool inContact(const FootContact& c, double phi) {
-  const double d = std::fabs(phi - c.mu), dist = std::min(d, 1.0 - d);
-  return dist < c.sigma || c.sigma >= 0.5;
-}
-}  // namespace
-
 ImpliedMotionTable computeImpliedMotion(const DynamicClip& clip, const GeneratorJointSpace& joints,
                                         std::shared_ptr<const LegModel> legs, const std::vector<double>& amplitudes) {
   const std::string where = "computeImpliedMotion(" + clip.name + ")";
@@ -53,7 +46,7 @@ ImpliedMotionTable computeImpliedMotion(const DynamicClip& clip, const Generator
       GcoInput in;
       fillLegState(idx, q, qd, &in);
       const double phi = static_cast<double>(k) / static_cast<double>(N);
-      for (std::size_t f = 0; f < kNumFeet; ++f) in.contact[f] = inContact(clip.contact[f], phi);
+      for (std::size_t f = 0; f < kNumFeet; ++f) in.contact[f] = detail::inStance(clip.contact[f], phi);
       const ImpliedBaseVelocity iv = stanceImpliedVelocity(kin, in);
       if (!iv.valid) continue;
       sum += Eigen::Vector3d(iv.v_x, iv.v_y, iv.yaw_rate);

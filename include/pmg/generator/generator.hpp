@@ -172,10 +172,25 @@ inline double wrapPhase(double phi) noexcept {
   return phi >= 1.0 ? 0.0 : phi;
 }
 
+/// Segment of a strictly increasing grid (size ≥ 2) holding x: *k with grid[k] ≤ x ≤ grid[k+1]
+/// (the first / last segment outside the grid) and the fraction of x in it, clamped to [0, 1].
+inline double gridSegment(const Eigen::VectorXd& grid, double x, Eigen::Index* k) noexcept {
+  const Eigen::Index n = grid.size();
+  Eigen::Index i = 0;
+  while (i + 2 < n && x > grid[i + 1]) ++i;
+  *k = i;
+  return std::clamp((x - grid[i]) / (grid[i + 1] - grid[i]), 0.0, 1.0);
+}
+
 /// Circular distance between two phases, in [0, 0.5].
 inline double phaseDistance(double a, double b) noexcept {
   const double d = std::fabs(wrapPhase(a) - wrapPhase(b));
   return std::min(d, 1.0 - d);
+}
+
+/// PMG contact model: a foot is in stance while |φ − μ| (circular) < σ, always when σ ≥ 0.5.
+inline bool inStance(const FootContact& c, double phi) noexcept {
+  return phaseDistance(phi, c.mu) < c.sigma || c.sigma >= 0.5;
 }
 
 /// Sample index and fraction for phase φ on N samples: φ·N = k + t.
@@ -351,7 +366,7 @@ class MotionGenerator {
     // kConsistent: the residual correction of the consistency map (file comment).
     out_.command_correction = {0.0, 0.0, 0.0};
     if (p.blending == Blending::kConsistent && !model_->consistencyMap().empty()) {
-      lookupCorrection(u, postureHeight(u_s), u_s.pitch);
+      lookupCorrection(u, posture_height_, u_s.pitch);
       for (std::size_t i = 0; i < kNumCommandAxes; ++i) u[i] += out_.command_correction[i];
     }
 
@@ -419,8 +434,7 @@ class MotionGenerator {
       }
       out_.contact[f].mu = sum_w > 0 ? detail::wrapPhase(mu / sum_w) : 0.0;
       out_.contact[f].sigma = std::clamp(sigma, 0.0, 0.5);
-      out_.in_contact[f] = detail::phaseDistance(phase_, out_.contact[f].mu) < out_.contact[f].sigma ||
-                           out_.contact[f].sigma >= 0.5;
+      out_.in_contact[f] = detail::inStance(out_.contact[f], phase_);
     }
     out_.v_base.setZero();
     out_.omega_base.setZero();
@@ -488,13 +502,6 @@ class MotionGenerator {
     }
   }
 
-  // The height the posture command asks for (the squat clip's neutral when none) [m].
-  double postureHeight(const PostureCommand& u_s) const noexcept {
-    const StaticClip* s = model_->staticClip(PostureAxis::kHeight);
-    if (!s) return model_->jointSpace().standing_base_height;
-    return u_s.height <= 0.0 ? s->neutral : std::clamp(u_s.height, s->values[0], s->values[s->values.size() - 1]);
-  }
-
   // Multilinear interpolation of the consistency map at (u, height, pitch command), inputs
   // clamped to the grid.
   void lookupCorrection(const std::array<double, kNumCommandAxes>& u, double height, double pitch) noexcept {
@@ -512,11 +519,7 @@ class MotionGenerator {
         f[d] = 0.0;
         continue;
       }
-      const double v = std::clamp(x[d], g[0], g[n - 1]);
-      Eigen::Index k = 0;
-      while (k + 2 < n && v > g[k + 1]) ++k;
-      lo[d] = k;
-      f[d] = (v - g[k]) / (g[k + 1] - g[k]);
+      f[d] = detail::gridSegment(g, x[d], &lo[d]);  // clamped: inputs outside the grid read its edge
     }
     stride[D - 1] = 1;
     for (int d = D - 2; d >= 0; --d) stride[d] = stride[d + 1] * m.grid[static_cast<std::size_t>(d + 1)].size();
@@ -539,10 +542,8 @@ class MotionGenerator {
 
   // Displacement of table `t` at amplitude e (piecewise linear; e within the table).
   static double tableAt(const GeneratorModel::DisplacementTable& t, double e, Eigen::Index column) noexcept {
-    const Eigen::Index K = t.amplitude.size();
     Eigen::Index k = 0;
-    while (k + 2 < K && e > t.amplitude[k + 1]) ++k;
-    const double f = std::clamp((e - t.amplitude[k]) / (t.amplitude[k + 1] - t.amplitude[k]), 0.0, 1.0);
+    const double f = detail::gridSegment(t.amplitude, e, &k);
     return (1 - f) * t.displacement(k, column) + f * t.displacement(k + 1, column);
   }
 
@@ -604,6 +605,7 @@ class MotionGenerator {
     bool clamped = false;
     out_.q_posture.setZero();
     posture_height_offset_ = 0.0;
+    posture_height_ = model_->jointSpace().standing_base_height;
     for (std::size_t a = 0; a < kNumPostureAxes; ++a) {
       out_.beta[a] = 0.0;
       const StaticClip* s = model_->staticClip(static_cast<PostureAxis>(a));
@@ -618,16 +620,17 @@ class MotionGenerator {
       interpolateStatic(*s, value, row_);
       interpolateStatic(*s, s->neutral, q_minus_);  // q_minus_ is scratch here
       for (Eigen::Index j = 0; j < row_.size(); ++j) out_.q_posture[j] += row_[j] - q_minus_[j];
-      if (static_cast<PostureAxis>(a) == PostureAxis::kHeight) posture_height_offset_ = value - s->neutral;
+      if (static_cast<PostureAxis>(a) == PostureAxis::kHeight) {
+        posture_height_offset_ = value - s->neutral;
+        posture_height_ = value;
+      }
     }
     return clamped;
   }
 
   static void interpolateStatic(const StaticClip& s, double value, Eigen::VectorXd& q_out) noexcept {
-    const Eigen::Index k = s.values.size();
     Eigen::Index i = 0;
-    while (i + 2 < k && value > s.values[i + 1]) ++i;
-    const double t = std::clamp((value - s.values[i]) / (s.values[i + 1] - s.values[i]), 0.0, 1.0);
+    const double t = detail::gridSegment(s.values, value, &i);
     for (Eigen::Index j = 0; j < q_out.size(); ++j) q_out[j] = (1 - t) * s.q(i, j) + t * s.q(i + 1, j);
   }
 
@@ -635,6 +638,7 @@ class MotionGenerator {
   GeneratorOutput out_;
   double phase_ = 0.0;
   double posture_height_offset_ = 0.0;
+  double posture_height_ = 0.0;  ///< the height command evalPosture used (clamped; the squat's neutral when none) [m]
   Eigen::VectorXd q_minus_, q_plus_, row_;
 };
 
