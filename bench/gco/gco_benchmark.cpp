@@ -16,9 +16,11 @@ namespace {
 using namespace pmg;
 using namespace pmg::gco;
 
-std::shared_ptr<const GeneratorModel> generatorModel(const RobotConfig& r) {
+std::shared_ptr<const GeneratorModel> generatorModel(const RobotConfig& r, Blending blending = Blending::kConsistent) {
   const GeneratorJointSpace js = pmg::generatorJointSpace(r);
-  return std::make_shared<const GeneratorModel>(loadClipLibrary(resolveData("config/clips/g1").string(), r), js);
+  GeneratorParams p;
+  p.blending = blending;
+  return std::make_shared<const GeneratorModel>(loadClipLibrary(resolveData("config/clips/g1").string(), r), js, p);
 }
 
 void BM_GcoSolveSyntheticWalk(benchmark::State& state) {
@@ -41,15 +43,18 @@ void BM_GcoSolveSyntheticWalk(benchmark::State& state) {
 }
 BENCHMARK(BM_GcoSolveSyntheticWalk);
 
+// Arg 0: the paper's blending; 1: command-consistent (amplitude solve + consistency map), walking
+// crouched and bent so that every map dimension interpolates.
 void BM_GeneratorStep(benchmark::State& state) {
   const RobotConfig robot = loadRobotConfig(resolveData("config/robots/g1/g1.yaml").string());
-  MotionGenerator gen(generatorModel(robot));
+  MotionGenerator gen(generatorModel(robot, state.range(0) == 0 ? Blending::kPaper : Blending::kConsistent));
+  state.SetLabel(state.range(0) == 0 ? "paper" : "consistent");
   for (auto _ : state) {
-    gen.step({0.6, 0.0, 0.3}, {}, 0.01);
+    gen.step({0.6, 0.1, 0.3}, {0.1, 0.0, 0.7}, 0.01);
     benchmark::DoNotOptimize(gen.output().q_ref.data());
   }
 }
-BENCHMARK(BM_GeneratorStep);
+BENCHMARK(BM_GeneratorStep)->Arg(0)->Arg(1);
 
 void BM_GeneratorPlusGco(benchmark::State& state) {
   const RobotConfig robot = loadRobotConfig(resolveData("config/robots/g1/g1.yaml").string());
