@@ -134,6 +134,11 @@ class EnvConfig:
     kp_scale: tuple = (0.9, 1.1)
     kd_scale: tuple = (0.8, 1.2)
     p_delay: float = 0.5           # probability of one control period of action latency
+    # Pushes (robustness; issue 12: falls): every push_interval [s] (uniform) the base gets a
+    # horizontal velocity change of uniform direction and magnitude in push_vel [m/s] (world frame),
+    # as a shove of a few hundred N for a few control periods would; none with deterministic_reset.
+    push_interval: tuple = (4.0, 8.0)
+    push_vel: tuple = (0.0, 0.4)
     arm_perturb: float = 0.3       # rad, max amplitude of smooth arm-target perturbations
     # Teleoperated arms (module docstring): share of the command segments with teleop on, the
     # share of the arms that follow then, waypoint hold time [s], largest joint speed [rad/s],
@@ -402,6 +407,7 @@ class G1PmgEnv(Env):
             "tp_timer": jax.random.randint(k[11], (), 1, int(round(1.0 / c.control_dt)) + 1),
             "tp_on": self._teleop_flags(k[12]),
             "tp_w": jnp.zeros(2),
+            "push_timer": self._push_interval(k[13]),
         }
         ref, tracked, info["gco"] = self._reference(info["phase"], info["command"],
                                                     jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32)
@@ -423,7 +429,7 @@ class G1PmgEnv(Env):
     def step(self, state: State, action):
         c = self.cfg
         info = dict(state.info)
-        rng, k_noise, k_cmd, k_arm, k_seg = jax.random.split(info["rng"], 5)
+        rng, k_noise, k_cmd, k_arm, k_seg, k_push = jax.random.split(info["rng"], 6)
         info["rng"] = rng
         info = self._teleop_advance(info, k_arm)
         a = jnp.clip(action, -1.0, 1.0)
@@ -450,7 +456,10 @@ class G1PmgEnv(Env):
             data = data.replace(ctrl=tau)
             return mjx.step(self.sys, data), tau
 
-        data, taus = jax.lax.scan(substep, state.pipeline_state, None, length=self.n_substeps)
+        data = state.pipeline_state
+        if not c.deterministic_reset and c.push_vel[1] > 0:
+            data, info["push_timer"] = self._push(data, info["push_timer"], k_push)
+        data, taus = jax.lax.scan(substep, data, None, length=self.n_substeps)
         tau = taus[-1]
 
         # PMG, as the controller runs it: one generator step per control tick, evaluated at the
@@ -527,6 +536,24 @@ class G1PmgEnv(Env):
                              metrics=metrics, info=info)
 
     # ---- helpers ---------------------------------------------------------------------------
+    def _push_interval(self, rng):
+        """Control steps until the next push (EnvConfig.push_interval, uniform)."""
+        lo, hi = self.cfg.push_interval
+        return jnp.round(jax.random.uniform(rng, (), minval=lo, maxval=hi) / self.cfg.control_dt).astype(jnp.int32)
+
+    def _push(self, data, timer, rng):
+        """Counts the push timer down; at zero adds a horizontal velocity change to the floating
+        base (world frame, EnvConfig.push_vel) and draws the next interval. Returns (data, timer)."""
+        k = jax.random.split(rng, 3)
+        timer = timer - 1
+        due = timer <= 0
+        angle = jax.random.uniform(k[0], (), minval=0.0, maxval=2 * math.pi)
+        speed = jax.random.uniform(k[1], (), minval=self.cfg.push_vel[0], maxval=self.cfg.push_vel[1])
+        kick = jnp.where(due, speed, 0.0) * jnp.array([jnp.cos(angle), jnp.sin(angle)])
+        data = data.replace(qvel=data.qvel.at[0:2].add(kick))
+        timer = jnp.where(due, self._push_interval(k[2]), timer)
+        return data, timer
+
     def _foot_contacts(self, data):
         con = data._impl.contact if hasattr(data, "_impl") and hasattr(data._impl, "contact") else data.contact
         dist = con.dist

@@ -206,6 +206,30 @@ def env_checks(check, n_envs, n_steps):
     check(worst["u_opt"] < 1e-3, f"observed command u' = NumPy GCO port (max |diff| {worst['u_opt']:.2e} < 1e-3)")
     moved = np.abs(np.angle(np.exp(2j * np.pi * (phase[-1] - phase[0])))).min()
     check(moved > 0.05, f"every env's phase moved over the rollout (least {moved:.2f} rad)")
+
+    # Pushes: nothing until the timer runs out, then a horizontal base-velocity change within
+    # EnvConfig.push_vel and a new interval within EnvConfig.push_interval.
+    data = traj.pipeline_state
+    last = jax.tree_util.tree_map(lambda a: a[-1, 0], data)
+    push = jax.jit(env._push)
+    quiet, timer_q = push(last, jnp.int32(5), jax.random.PRNGKey(1))
+    kicks, timers = [], []
+    for i in range(32):
+        pushed, timer = push(last, jnp.int32(1), jax.random.PRNGKey(100 + i))
+        dv = np.asarray(pushed.qvel - last.qvel, np.float64)
+        check_dv = np.abs(dv[2:]).max()
+        kicks.append((float(np.hypot(dv[0], dv[1])), check_dv))
+        timers.append(int(timer))
+    lo, hi = cfg.push_interval
+    quiet_dv = float(np.abs(np.asarray(quiet.qvel - last.qvel)).max())
+    check(quiet_dv == 0.0 and int(timer_q) == 4, f"no push before the timer runs out (|dqvel| {quiet_dv:.1e})")
+    speeds = np.array([k[0] for k in kicks])
+    check(speeds.max() <= cfg.push_vel[1] + 1e-6 and speeds.max() > 0.5 * cfg.push_vel[1] and
+          max(k[1] for k in kicks) == 0.0,
+          f"a due push changes only the horizontal base velocity, by {speeds.min():.3f}..{speeds.max():.3f} m/s "
+          f"(push_vel {cfg.push_vel})")
+    check(min(timers) >= round(lo / cfg.control_dt) and max(timers) <= round(hi / cfg.control_dt),
+          f"next push in {min(timers)}..{max(timers)} control steps (push_interval {lo}..{hi} s)")
     return obs
 
 
