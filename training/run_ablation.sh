@@ -19,7 +19,7 @@ case "$cmd" in
       IFS=: read -r mode gpu seed <<<"$job"
       name=${mode}_s${seed}
       CUDA_VISIBLE_DEVICES=$gpu setsid timeout "${minutes}m" python3 training/train_pmg.py --out "$out/$name" \
-        --mode "$mode" --seed "$seed" --timesteps "$steps" --num-evals 14 >"$out/$name.log" 2>&1 < /dev/null &
+        --mode "$mode" --seed "$seed" --timesteps "$steps" --num-evals "${NUM_EVALS:-14}" >"$out/$name.log" 2>&1 < /dev/null &
       echo "started $name on GPU $gpu"
     done
     ;;
