@@ -139,6 +139,9 @@ class EnvConfig:
     # as a shove of a few hundred N for a few control periods would; none with deterministic_reset.
     push_interval: tuple = (4.0, 8.0)
     push_vel: tuple = (0.0, 0.4)
+    # Leg-against-leg contacts (shin and foot capsules, LEG_COLLISION_PAIRS): the SIL and the robot
+    # have them; without them the policy learns gaits whose legs hook into each other.
+    leg_collisions: bool = True
     arm_perturb: float = 0.3       # rad, max amplitude of smooth arm-target perturbations
     # Teleoperated arms (module docstring): share of the command segments with teleop on, the
     # share of the arms that follow then, waypoint hold time [s], largest joint speed [rad/s],
@@ -173,15 +176,57 @@ def _pitch_roll(R):
     return pitch, roll
 
 
-def mjx_friendly_mjcf(path):
+LEG_COLLISION_PAIRS = (("left_thigh_collision", "right_thigh_collision"),
+                       ("left_shin_collision", "right_shin_collision"),
+                       ("left_foot_collision", "right_shin_collision"),
+                       ("right_foot_collision", "left_shin_collision"),
+                       ("left_foot_collision", "right_foot_collision"))
+"""Leg-against-leg contacts the training model keeps (explicit MJCF <pair>s, condim 3): side-steps
+and turns bring one shin or foot against the other leg; the SIL (full collision meshes) and the real
+robot have those contacts, and a policy trained without them hooks one leg behind the other and
+falls (docs/policy.md, "Why it fell")."""
+
+
+def mjx_friendly_mjcf(path, leg_collisions=True):
     """The SIL's MJCF text for MJX: visual-only mesh geoms (contype 0, density 0, so no effect on
     dynamics) and their mesh assets removed; the four shoulder cylinders made non-colliding (MJX
-    lacks some of their collision pairs). Collisions left: 8 foot spheres against the floor."""
+    lacks some of their collision pairs). Collisions left: 8 foot spheres against the floor and,
+    with @p leg_collisions, the leg-against-leg pairs LEG_COLLISION_PAIRS between capsules that
+    MuJoCo fits to the thigh (hip_yaw_link), shin (knee_link) collision meshes and the foot
+    (ankle_roll_link mesh) of each side
+    (compiler fitaabb: the capsule encloses the mesh's bounding box, so it errs on the side of
+    contact). Mesh files are resolved against @p path's meshdir."""
+    import os
     import re
     with open(path) as f:
         xml = f.read()
+    if leg_collisions:
+        for side in ("left", "right"):
+            xml, n_shin = re.subn(rf'<geom type="mesh" rgba="[^"]*" mesh="{side}_knee_link"/>',
+                                  f'<geom name="{side}_shin_collision" type="capsule" mesh="{side}_knee_link" '
+                                  'contype="0" conaffinity="0" group="3"/>', xml)
+            xml, n_thigh = re.subn(rf'<geom type="mesh" rgba="[^"]*" mesh="{side}_hip_yaw_link"/>',
+                                   f'<geom name="{side}_thigh_collision" type="capsule" mesh="{side}_hip_yaw_link" '
+                                   'contype="0" conaffinity="0" group="3"/>', xml)
+            xml, n_foot = re.subn(rf'(<geom [^>]*mesh="{side}_ankle_roll_link"/>)',
+                                  rf'\1<geom name="{side}_foot_collision" type="capsule" '
+                                  f'mesh="{side}_ankle_roll_link" contype="0" conaffinity="0" density="0" group="3"/>',
+                                  xml)
+            if (n_thigh, n_shin, n_foot) != (1, 1, 1):
+                raise ValueError(f"{path}: expected one collision mesh geom each of {side}_hip_yaw_link and "
+                                 f"{side}_knee_link and one {side}_ankle_roll_link mesh geom, found "
+                                 f"{n_thigh}, {n_shin}, {n_foot}")
+        pairs = "".join(f'<pair geom1="{a}" geom2="{b}" condim="3"/>' for a, b in LEG_COLLISION_PAIRS)
+        xml = xml.replace("</mujoco>", f"<contact>{pairs}</contact></mujoco>")
+        meshdir = re.search(r'meshdir="([^"]*)"', xml)
+        base = os.path.dirname(os.path.abspath(path))
+        absdir = os.path.join(base, meshdir.group(1) if meshdir else "")
+        xml = re.sub(r'<compiler ([^>]*?)/>', lambda m: "<compiler " + re.sub(r'\s*meshdir="[^"]*"', "", m.group(1))
+                     + f' meshdir="{absdir}" fitaabb="true"/>', xml, count=1)
     xml = re.sub(r'<geom[^>]*type="mesh"[^>]*/>', "", xml)
-    xml = re.sub(r'<mesh [^>]*/>', "", xml)
+    used = set(re.findall(r'<geom[^>]*mesh="([^"]+)"', xml))
+    xml = re.sub(r'<mesh [^>]*/>', lambda m: m.group(0) if re.search(r'name="([^"]+)"', m.group(0)).group(1) in used
+                 else "", xml)
     xml = re.sub(r'(<geom[^>]*type="cylinder")', r'\1 contype="0" conaffinity="0"', xml)
     return xml
 
@@ -242,7 +287,7 @@ class G1PmgEnv(Env):
             action_scale = np.clip(1.2 * dev, 0.25, 1.2)
         self.action_scale = np.asarray(action_scale, np.float32)
 
-        mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf))
+        mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf, leg_collisions=cfg.leg_collisions))
         mj.opt.timestep = cfg.sim_dt
         mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
         mj.dof_armature[6:] = 0.01
@@ -558,12 +603,13 @@ class G1PmgEnv(Env):
         con = data._impl.contact if hasattr(data, "_impl") and hasattr(data._impl, "contact") else data.contact
         dist = con.dist
         g1, g2 = con.geom1, con.geom2
+        on_floor = (g1 == self.floor_geom) | (g2 == self.floor_geom)  # not a foot on the other foot
         out = []
         for geoms in self.foot_geoms:
             hit = jnp.zeros(dist.shape, bool)
             for g in geoms:
                 hit = hit | (g1 == g) | (g2 == g)
-            out.append(jnp.any(hit & (dist < 2e-3)))
+            out.append(jnp.any(hit & on_floor & (dist < 2e-3)))
         return jnp.stack(out).astype(jnp.float32)
 
     def raw_obs(self, data, info):

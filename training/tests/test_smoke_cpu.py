@@ -45,8 +45,8 @@ CHILD = "PMG_TRAINING_SMOKE_CHILD"
 SKIP = 77
 
 
-def relaunch():
-    """Re-run this script with the training environment's interpreter (never returns)."""
+def relaunch(script=__file__):
+    """Re-run @p script (default: this one) with the training environment's interpreter (never returns)."""
     if os.environ.get("PMG_SKIP_TRAINING_TESTS") == "1":
         print("SKIPPED: PMG_SKIP_TRAINING_TESTS=1 (the training tests are disabled)")
         sys.exit(SKIP)
@@ -68,7 +68,7 @@ def relaunch():
     if cache != "off":
         env["JAX_COMPILATION_CACHE_DIR"] = cache
     sys.stdout.flush()
-    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
+    os.execve(py, [py, os.path.abspath(script)] + sys.argv[1:], env)
 
 
 class Checks:
