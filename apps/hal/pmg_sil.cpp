@@ -6,6 +6,11 @@
 //
 //   pmg_sil [--robot config/robots/g1/g1.yaml] [--plan config/hal/g1_can.yaml] --port 47000
 //           [--realtime] [--no-gantry] [--duration 20] [--drop 0.01] [--silent-joint 3] ...
+//           [--reality REALITY.yaml]
+// With --reality the SIL plays a real robot whose truth is hidden from the tools that talk to it
+// over the bus (per-joint actuator effects, encoder zero offsets, link mass errors;
+// include/pmg/hal/reality.hpp, docs/calibration.md "A real robot with a hidden truth"). It prints
+// only how many joints and links the file affects, never what.
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -17,6 +22,7 @@
 #include "pmg/hal/realtime.hpp"
 #include "pmg/hal/bus/sil_emulator.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/reality.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -29,6 +35,7 @@ int main(int argc, char** argv) {
   CLI::App app{"pmg_sil: MuJoCo 2.2 robot behind emulated CAN motor drivers (UDP loopback)"};
   std::string robot_path = pmg::resolveData("config/robots/g1/g1.yaml").string();
   std::string plan_path = pmg::resolveData("config/hal/g1_can.yaml").string();
+  std::string reality_path;
   int port = 47000, fifo = 0;
   double duration = 0.0, faults_after = 0.0, push_at = -1.0, push_force = 300.0, push_duration = 0.2;
   bool realtime = false, no_gantry = false;
@@ -36,6 +43,8 @@ int main(int argc, char** argv) {
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile)
       ->capture_default_str();
+  app.add_option("--reality", reality_path, "hidden truth of this robot (REALITY.yaml: joints, zero_offsets, links)")
+      ->check(CLI::ExistingFile);
   app.add_option("--port", port, "UDP base port (bus b: host base+2b, SIL base+2b+1; IMU after the buses)")
       ->check(CLI::Range(1024, 65000));
   app.add_flag("--realtime", realtime, "step every 2 ms of wall time and answer every command at once, like "
@@ -59,21 +68,28 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
+    pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
     const BusPlan plan = BusPlan::fromYaml(plan_path);
     // The robot config is the source of truth for the wiring: the plan must agree joint by joint.
     pmg::hal::bus::checkPlanAgainstRobot(plan.buses(), plan_path, robot);
     pmg::MujocoBackendOptions mo;
     mo.cycle_period = plan.options().period_s;
     mo.gantry.enabled = !no_gantry;
+    std::string reality_note = "none";
+    if (!reality_path.empty()) {
+      const pmg::hal::Reality reality = pmg::hal::loadReality(reality_path, robot);
+      pmg::hal::applyReality(reality, &robot, &mo);
+      reality_note = "hidden (" + std::to_string(reality.affectedJoints(robot).size()) + " joints, " +
+                     std::to_string(reality.links.size()) + " links affected)";
+    }
     auto sim = std::make_unique<pmg::MujocoBackend>(robot, mo);
     pmg::MujocoBackend* mj = sim.get();
     SilDriverEmulator sil(plan, std::move(sim), static_cast<std::uint16_t>(port));
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
-    std::printf("pmg_sil: %s, %zu buses, %zu motors, UDP base port %d, %s, gantry %s\n", robot.name.c_str(),
-                plan.buses().size(), plan.motorCount(), port, realtime ? "real time" : "lockstep",
-                no_gantry ? "off" : "on");
+    std::printf("pmg_sil: %s, %zu buses, %zu motors, UDP base port %d, %s, gantry %s, reality %s\n",
+                robot.name.c_str(), plan.buses().size(), plan.motorCount(), port, realtime ? "real time" : "lockstep",
+                no_gantry ? "off" : "on", reality_note.c_str());
     std::printf("%s", plan.report().c_str());
     std::fflush(stdout);
     if (realtime && fifo > 0) {

@@ -34,6 +34,9 @@ std::string MujocoBackendOptions::validate() const {
   for (double o : encoder_offsets)
     if (!std::isfinite(o) || std::fabs(o) > 0.5) return "mujoco.encoder_offsets: expected finite, |offset| <= 0.5 rad";
   if (std::string e = sole_contacts.validate(timestep); !e.empty()) return "mujoco." + e;
+  for (const auto& [body, scale] : body_mass_scale)
+    if (!(std::isfinite(scale) && scale >= 0.5 && scale <= 2.0))
+      return "links." + body + ".mass_scale: expected 0.5..2";
   return gantry.enabled ? gantry.validate() : std::string();
 }
 
@@ -98,6 +101,16 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
       }
     }
     if (changed == 0) throw ConfigError(robot_.mjcf_path + ": mujoco.sole_contacts: the foot bodies have no colliding geom");
+  }
+  // Model errors: body mass and rotational inertia scaled (hal/reality.hpp).
+  if (!options_.body_mass_scale.empty()) {
+    for (const auto& [body, scale] : options_.body_mass_scale) {
+      const int b = mj_name2id(model_.get(), mjOBJ_BODY, body.c_str());
+      if (b < 0) throw ConfigError(robot_.mjcf_path + ": links." + body + ": no such body in the MJCF");
+      model_->body_mass[b] *= scale;
+      for (int k = 0; k < 3; ++k) model_->body_inertia[3 * b + k] *= scale;
+    }
+    mj_setConst(model_.get(), data_.get());  // subtree masses and other derived constants
   }
   // Identified actuator models (robot config `actuator:` blocks).
   actuator_.resize(n);

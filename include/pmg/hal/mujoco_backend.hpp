@@ -17,8 +17,10 @@
 ///    friction with true stiction, viscous friction, armature and gain scales (backlash needs a
 ///    rotor body and is not applied to the robot: a configured gap is refused with an error);
 ///  - external pushes on a body (fault-injection tests);
+///  - body mass scales (model errors of a "reality", pmg_sil --reality);
 ///  - stiff "calibration bench" sole contacts (SoleContactOptions, default off).
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -69,6 +71,9 @@ struct MujocoBackendOptions {
   GantryOptions gantry;
   std::vector<double> encoder_offsets;  ///< (n or empty) hidden zero offsets [rad]: reported = true + offset
   SoleContactOptions sole_contacts;     ///< calibration-bench floor (default off)
+  /// Model errors (pmg_sil --reality, hal/reality.hpp): MJCF body name -> factor on its mass and
+  /// rotational inertia, in [0.5, 2]. An unknown body is a ConfigError.
+  std::map<std::string, double> body_mass_scale;
   std::string validate() const;     ///< empty if valid, else "field: expected ..."
 };
 
