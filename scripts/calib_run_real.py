@@ -3,11 +3,18 @@
 (JSON), plots (PNG), console summaries and identified `actuator:` blocks into docs/calibration/,
 then prints the markdown table used in docs/calibration.md.
 
-Usage: scripts/calib_run_real.py [--build BUILD_DIR] [--only NAME ...] [--table-only]
+Usage: scripts/calib_run_real.py [--build BUILD_DIR] [--only NAME ...] [--table-only] [--jobs N] [--threads T]
+                                 [--out DIR] [--no-plot] [--exe CMD]
+
+--jobs N runs N experiments at a time (each with --threads T workers); --exe replaces the
+pmg_calib_dynamics command (e.g. a loader line on another machine); --out writes elsewhere than
+docs/calibration (the table reads from there too).
 """
 import argparse
+import concurrent.futures
 import json
 import os
+import shlex
 import subprocess
 import sys
 
@@ -43,23 +50,27 @@ def experiments():
         yield (f"bam_xl330_heldout_kp{held}", "config/bench/bam_xl330.yaml", train, ho)
 
 
-def table():
-    rows = ["| run | baseline held-out RMSE [rad] | extended held-out RMSE [rad] | gain | named causes (ranked) | parameters |",
-            "|---|---|---|---|---|---|"]
+def table(out=OUT):
+    rows = ["| run | noise floor [mrad] | folds | baseline CV / held-out RMSE [rad] | extended CV / held-out RMSE [rad] | "
+            "held-out gain | named causes (CV gain) | parameters |",
+            "|---|---|---|---|---|---|---|---|"]
     for name, *_ in experiments():
-        path = os.path.join(ROOT, OUT, name + ".json")
+        path = os.path.join(ROOT, out, name + ".json")
         if not os.path.exists(path):
             continue
         r = json.load(open(path))
         b, e = r["baseline"]["heldout_rmse_rad"], r["extended"]["heldout_rmse_rad"]
+        bcv, ecv = r["baseline"]["selection"]["cv_rmse_rad"], r["extended"]["selection"]["cv_rmse_rad"]
         causes = ", ".join(f"{c['name']} ({c['gain']:.2f})" for c in r["causes"]) or "none"
         skip = ("kp_scale", "kd_scale", "kp_per_log_unit", "kd_per_log_unit")
         params = ", ".join(f"{k} {v:.4g}" for k, v in r["extended"]["params"].items() if k not in skip)
-        rows.append(f"| {name} | {b:.4f} | {e:.4f} | {1 - e / b:.2f} | {causes} | {params} |")
+        sel = r["selection"]
+        rows.append(f"| {name} | {1e3 * r['noise_floor_rad']:.2f} | {sel['folds']} {sel['fold_unit'].replace('_', ' ')} | "
+                    f"{bcv:.4f} / {b:.4f} | {ecv:.4f} / {e:.4f} | {1 - e / b:.2f} | {causes} | {params} |")
     rows += ["", "Held-out RMSE [rad] per residual region, baseline → extended (share of samples):", "",
              "| run | velocity reversals | high torque | steady holds | fast moves |", "|---|---|---|---|---|"]
     for name, *_ in experiments():
-        path = os.path.join(ROOT, OUT, name + ".json")
+        path = os.path.join(ROOT, out, name + ".json")
         if not os.path.exists(path):
             continue
         reg = {g["region"]: g for g in json.load(open(path))["residual_regions"]}
@@ -74,24 +85,39 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--only", nargs="*")
     ap.add_argument("--table-only", action="store_true")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default=OUT)
+    ap.add_argument("--no-plot", action="store_true")
+    ap.add_argument("--exe")
     a = ap.parse_args()
-    os.makedirs(os.path.join(ROOT, OUT), exist_ok=True)
+    out = a.out
+    os.makedirs(os.path.join(ROOT, out), exist_ok=True)
     if not a.table_only:
-        exe = os.path.join(a.build, "bin", "pmg_calib_dynamics")
-        for name, rig, train, ho in experiments():
-            if a.only and name not in a.only:
-                continue
-            print("==", name, flush=True)
-            cmd = [exe, "--rig", rig, "--train", *train, "--heldout", *ho, "--threads", "2",
-                   "--report", f"{OUT}/{name}.json", "--plot", f"{OUT}/{name}.png",
-                   "--actuator-out", f"{OUT}/{name}.actuator.yaml"]
+        exe = shlex.split(a.exe) if a.exe else [os.path.join(a.build, "bin", "pmg_calib_dynamics")]
+
+        def run(job):
+            name, rig, train, ho = job
+            cmd = [*exe, "--rig", rig, "--train", *train, "--heldout", *ho, "--threads", str(a.threads),
+                   "--report", f"{out}/{name}.json", "--actuator-out", f"{out}/{name}.actuator.yaml"]
+            if not a.no_plot:
+                cmd += ["--plot", f"{out}/{name}.png"]
             res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-            open(os.path.join(ROOT, OUT, name + ".txt"), "w").write(res.stdout)
-            print(res.stdout, end="")
-            if res.returncode != 0:
-                print(res.stderr, file=sys.stderr)
-                return res.returncode
-    print(table())
+            open(os.path.join(ROOT, out, name + ".txt"), "w").write(res.stdout)
+            return name, res
+
+        jobs = [e for e in experiments() if not a.only or e[0] in a.only]
+        rc = 0
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+            for name, res in pool.map(run, jobs):
+                print("==", name, flush=True)
+                print(res.stdout, end="")
+                if res.returncode != 0:
+                    print(res.stderr, file=sys.stderr)
+                    rc = res.returncode
+        if rc:
+            return rc
+    print(table(out))
     return 0
 
 

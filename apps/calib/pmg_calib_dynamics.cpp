@@ -43,7 +43,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"bobyqa", "crs2", "cmaes", "cmaes_pagmo"}));
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)");
   app.add_option("--candidates", candidates, "catalogue entries to test (default: all)")->delimiter(',');
-  app.add_option("--min-gain-per-param", opt.min_gain_per_param, "held-out RMSE gain required per extra parameter");
+  app.add_option("--min-gain-per-param", opt.min_gain_per_param,
+                 "cross-validated RMSE gain required per extra parameter (rule 1, docs/calibration.md)");
+  app.add_option("--noise-z", opt.noise_z, "rule 2: CV RMSE drop must exceed this x noise floor / sqrt(effective samples)");
+  app.add_option("--min-rmse-over-floor", opt.min_rmse_over_floor,
+                 "rule 3: a model whose CV RMSE is within this multiple of the noise floor is not extended");
+  app.add_option("--cv-folds", opt.cv_folds, "K of the K-fold cross-validation over the training logs (2..20)");
+  app.add_option("--cv-evals", opt.cv_evals, "objective evaluations per fold re-fit");
   app.add_option("--max-evals-baseline", opt.max_evals_baseline, "objective evaluations for the baseline fit");
   app.add_option("--max-evals-candidate", opt.max_evals_candidate, "objective evaluations per candidate fit");
   app.add_option("--actuator-out", actuator_out, "write the extended model as an `actuator:` YAML block");
@@ -73,12 +79,18 @@ int main(int argc, char** argv) {
       if (!out) throw std::runtime_error(report_path + ": cannot write report");
       out << pmg::calib::report_to_json(rep);
     }
-    fmt::print("baseline held-out RMSE {:.5f} rad (kp {:.4g} N·m/rad, kd {:.4g} N·m·s/rad, armature {:.4g} kg·m²)\n",
-               rep.baseline.heldout_rmse_rad, rep.baseline.params.at("kp"), rep.baseline.params.at("kd"),
-               rep.baseline.params.at("armature"));
-    if (rep.causes.empty()) fmt::print("causes: none beats the baseline meaningfully\n");
+    fmt::print("noise floor {:.3g} rad (encoder quantum {:.3g} rad, high-frequency noise {:.3g} rad; {:.0f} effective "
+               "samples of {}); selection: {}-fold CV over training {}\n",
+               rep.noise.floor_rad, rep.noise.quantum_rad, rep.noise.hf_rad, rep.noise.effective_samples, rep.noise.samples,
+               rep.cv_folds, rep.cv_fold_unit == "logs" ? "logs" : "time blocks");
+    fmt::print("baseline CV RMSE {:.5f} rad, held-out RMSE {:.5f} rad (kp {:.4g} N·m/rad, kd {:.4g} N·m·s/rad, armature {:.4g} "
+               "kg·m²)\n",
+               rep.baseline.cv_rmse_rad, rep.baseline.heldout_rmse_rad, rep.baseline.params.at("kp"),
+               rep.baseline.params.at("kd"), rep.baseline.params.at("armature"));
+    if (rep.causes.empty()) fmt::print("causes: none is significant in cross-validation against the noise floor\n");
     for (const auto& c : rep.causes)
-      fmt::print("cause {:<24} held-out RMSE {:.5f} rad, gain {:.3f}\n", c.name, c.fit.heldout_rmse_rad, c.gain);
+      fmt::print("cause {:<24} CV RMSE {:.5f} rad, CV gain {:.3f}; held-out RMSE of the model up to it {:.5f} rad\n", c.name,
+                 c.fit.cv_rmse_rad, c.gain, c.fit.heldout_rmse_rad);
     fmt::print("extended held-out RMSE {:.5f} rad (gain {:.3f}); wall time {:.1f} s; report {}\n",
                rep.extended.heldout_rmse_rad, 1.0 - rep.extended.heldout_rmse_rad / rep.baseline.heldout_rmse_rad,
                rep.wall_time_s, report_path);

@@ -73,6 +73,7 @@ YAML::Node actuator_block_to_yaml(const ActuatorBlock& b) {
     if (v != 0.0) n[k] = v;
   };
   put("delay_s", p.delay_s);
+  if (p.kt_scale != 1.0) n["kt_scale"] = p.kt_scale;
   put("offset_rad", p.offset_rad);
   put("tau_stall_Nm", p.tau_stall_Nm);
   put("w_max_rad_per_s", p.w_max_rad_per_s);
@@ -125,6 +126,7 @@ ActuatorBlock actuator_block_from_params(const RigConfig& rig, const std::map<st
   a.kl = get("kl", 0.0);
   a.fv_Nms_per_rad = get("fv_Nms_per_rad", 0.0);
   a.delay_s = get("delay_s", 0.0);
+  a.kt_scale = get("kt_scale", 1.0);
   a.offset_rad = get("offset_rad", 0.0);
   a.backlash_gap_rad = get("gap_rad", 0.0);
   b.armature_kgm2 = get("armature", rig.armature_kgm2);

@@ -50,6 +50,7 @@ const std::map<std::string, std::vector<std::string>>& param_table() {
       {"load_dependent_friction", {"fc_Nm", "kl"}},
       {"backlash", {"gap_rad"}},
       {"transport_delay", {"delay_s"}},
+      {"torque_constant", {"kt_scale"}},
       {"torque_saturation", {"tau_max_Nm"}},
       {"torque_speed_limit", {"tau_stall_Nm", "w_max_rad_per_s"}},
       {"zero_offset", {"offset_rad"}},
@@ -84,6 +85,7 @@ Spec spec_for(const std::string& p, const RigConfig& rig, const Scales& sc) {
   if (p == "tau_stall_Nm") return {p, 0.1 * sc.tau_peak, 4.0 * sc.tau_peak, 2.0 * sc.tau_peak, true};
   if (p == "w_max_rad_per_s") return {p, 0.3 * sc.w_peak, 50.0 * sc.w_peak, 20.0 * sc.w_peak, true};
   if (p == "offset_rad") return {p, -0.2, 0.2, 0.0, false};
+  if (p == "kt_scale") return {p, 0.2, 3.0, 1.0, true};
   throw std::invalid_argument("unknown calibration parameter '" + p + "'");
 }
 
@@ -111,6 +113,8 @@ std::vector<ParamMap> scan_grid(const std::string& c, const RigConfig& rig, cons
   if (c == "torque_speed_limit")
     for (double f : {0.7, 1.5})
       for (double w : {1.0, 2.0, 5.0}) g.push_back({{"tau_stall_Nm", f * sc.tau_peak}, {"w_max_rad_per_s", w * sc.w_peak}});
+  if (c == "torque_constant")
+    for (double k : {0.6, 0.75, 0.9, 1.1, 1.3}) g.push_back({{"kt_scale", k}});
   if (c == "zero_offset")
     for (double o : {-0.05, -0.02, -0.007, 0.007, 0.02, 0.05}) g.push_back({{"offset_rad", o}});
   return g;
@@ -136,29 +140,97 @@ class WorkerSims {
   std::unique_ptr<BenchSimulator> plain_, backlash_;
 };
 
-/// Mean squared error over a set of logs; rollouts spread over the given workers (one thread each).
-double mse(const RigConfig& rig, const std::vector<const BenchLog*>& logs, const ParamMap& params,
+/// Rows of one log that count in a loss: [lo, hi) or, with `outside`, every row but those. The
+/// whole log is always rolled out (open loop from its first row); only the counting differs.
+struct Piece {
+  const BenchLog* log = nullptr;
+  std::size_t lo = 0, hi = 0;
+  bool outside = false;
+  bool whole() const { return !outside && lo == 0 && hi >= log->size(); }
+  std::size_t rows() const { return outside ? log->size() - (hi - lo) : hi - lo; }
+};
+
+std::vector<Piece> whole_logs(const std::vector<const BenchLog*>& logs) {
+  std::vector<Piece> v;
+  for (const auto* l : logs) v.push_back(Piece{l, 0, l->size(), false});
+  return v;
+}
+
+double piece_sse(BenchSimulator& sim, const Piece& p, const RigParams& rp) {
+  if (p.whole()) return sim.rollout(*p.log, rp);
+  thread_local RolloutTrace tr;
+  const double full = sim.rollout(*p.log, rp, &tr);
+  if (!std::isfinite(full)) return full;
+  double s = 0.0;
+  for (std::size_t i = 0; i < p.log->size(); ++i) {
+    if (((i >= p.lo) && (i < p.hi)) == p.outside) continue;
+    const double e = tr.q[i] - p.log->q[i];
+    s += e * e;
+  }
+  return s;
+}
+
+/// Mean squared error over pieces of logs (rollouts spread over the workers, one thread each).
+double mse(const RigConfig& rig, const std::vector<Piece>& pieces, const ParamMap& params,
            std::vector<WorkerSims*>& workers) {
   const RigParams rp = rig_params_from(rig, params);
   const bool backlash = params.count("gap_rad") > 0;
   std::size_t rows = 0;
-  for (const auto* l : logs) rows += l->size();
-  std::vector<double> sse(logs.size(), 0.0);
-  const std::size_t nw = std::min(workers.size(), logs.size());
+  for (const auto& p : pieces) rows += p.rows();
+  std::vector<double> sse(pieces.size(), 0.0);
+  const std::size_t nw = std::min(workers.size(), pieces.size());
+  auto run = [&](std::size_t w, std::size_t stride) {
+    for (std::size_t i = w; i < pieces.size(); i += stride) sse[i] = piece_sse(workers[w]->get(backlash), pieces[i], rp);
+  };
   if (nw <= 1) {
-    for (std::size_t i = 0; i < logs.size(); ++i) sse[i] = workers[0]->get(backlash).rollout(*logs[i], rp);
+    run(0, 1);
   } else {
     std::vector<std::thread> th;
-    for (std::size_t w = 1; w < nw; ++w)
-      th.emplace_back([&, w] {
-        for (std::size_t i = w; i < logs.size(); i += nw) sse[i] = workers[w]->get(backlash).rollout(*logs[i], rp);
-      });
-    for (std::size_t i = 0; i < logs.size(); i += nw) sse[i] = workers[0]->get(backlash).rollout(*logs[i], rp);
+    for (std::size_t w = 1; w < nw; ++w) th.emplace_back(run, w, nw);
+    run(0, nw);
     for (auto& t : th) t.join();
   }
   double total = 0.0;
   for (double s : sse) total += s;
-  return std::isfinite(total) ? total / static_cast<double>(rows) : 1e6;
+  return std::isfinite(total) && rows > 0 ? total / static_cast<double>(rows) : 1e6;
+}
+
+/// Mean squared error over whole logs.
+double mse(const RigConfig& rig, const std::vector<const BenchLog*>& logs, const ParamMap& params,
+           std::vector<WorkerSims*>& workers) {
+  return mse(rig, whole_logs(logs), params, workers);
+}
+
+/// K-fold partition of the training logs: fold k trains on train[k] and is scored on test[k].
+struct Folds {
+  std::vector<std::vector<Piece>> train, test;
+  std::string unit;  ///< "logs" | "time_blocks"
+  int k() const { return static_cast<int>(test.size()); }
+};
+
+Folds make_folds(const std::vector<const BenchLog*>& tr, int k_max) {
+  Folds f;
+  if (tr.size() >= 2) {
+    const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(k_max), tr.size());
+    f.unit = "logs";
+    f.train.resize(k);
+    f.test.resize(k);
+    for (std::size_t i = 0; i < tr.size(); ++i)
+      for (std::size_t j = 0; j < k; ++j) (j == i % k ? f.test : f.train)[j].push_back(Piece{tr[i], 0, tr[i]->size(), false});
+  } else {
+    const BenchLog* l = tr.front();
+    const std::size_t n = l->size();
+    const std::size_t k = std::max<std::size_t>(2, std::min<std::size_t>(static_cast<std::size_t>(k_max), n / 20));
+    if (n < 40) throw std::invalid_argument(fmt::format("calibrate_dynamics: training log '{}' has {} rows; cross-validation "
+                                                        "over time blocks needs >= 40", l->name, n));
+    f.unit = "time_blocks";
+    for (std::size_t j = 0; j < k; ++j) {
+      const std::size_t lo = j * n / k, hi = (j + 1) * n / k;
+      f.test.push_back({Piece{l, lo, hi, false}});
+      f.train.push_back({Piece{l, lo, hi, true}});
+    }
+  }
+  return f;
 }
 
 struct FitOutcome {
@@ -381,7 +453,7 @@ Optimizer parse_optimizer(const std::string& name) {
 const std::vector<std::string>& catalogue_names() {
   static const std::vector<std::string> names = {
       "coulomb_friction", "viscous_friction", "stribeck_friction", "load_dependent_friction", "backlash",
-      "transport_delay",  "torque_saturation", "torque_speed_limit", "zero_offset"};
+      "transport_delay",  "torque_constant",  "torque_saturation", "torque_speed_limit", "zero_offset"};
   return names;
 }
 
@@ -408,6 +480,15 @@ void CalibrationOptions::validate() const {
     throw std::invalid_argument(fmt::format("CalibrationOptions.max_evals_candidate = {}: expected >= 10", max_evals_candidate));
   if (profile_evals < 4)
     throw std::invalid_argument(fmt::format("CalibrationOptions.profile_evals = {}: expected >= 4", profile_evals));
+  if (!(noise_z > 0.0 && std::isfinite(noise_z)))
+    throw std::invalid_argument(fmt::format("CalibrationOptions.noise_z = {}: expected > 0", noise_z));
+  if (!(min_rmse_over_floor >= 1.0 && std::isfinite(min_rmse_over_floor)))
+    throw std::invalid_argument(
+        fmt::format("CalibrationOptions.min_rmse_over_floor = {}: expected >= 1", min_rmse_over_floor));
+  if (cv_folds < 2 || cv_folds > 20)
+    throw std::invalid_argument(fmt::format("CalibrationOptions.cv_folds = {}: expected in [2, 20]", cv_folds));
+  if (cv_evals < 20)
+    throw std::invalid_argument(fmt::format("CalibrationOptions.cv_evals = {}: expected >= 20", cv_evals));
   for (const auto& c : candidates) catalogue_params(c);
 }
 
@@ -427,6 +508,7 @@ RigParams rig_params_from(const RigConfig& rig, const std::map<std::string, doub
   a.kl = get(p, "kl", 0.0);
   a.fv_Nms_per_rad = get(p, "fv_Nms_per_rad", 0.0);
   a.delay_s = get(p, "delay_s", 0.0);
+  a.kt_scale = get(p, "kt_scale", 1.0);
   a.offset_rad = get(p, "offset_rad", 0.0);
   a.backlash_gap_rad = get(p, "gap_rad", 0.0);
   return r;
@@ -457,6 +539,148 @@ FittedModel fit_baseline(const RigConfig& rig, const std::vector<BenchLog>& trai
   return m;
 }
 
+namespace {
+
+NoiseFloor noise_floor_of(const std::vector<const BenchLog*>& logs) {
+  NoiseFloor nf;
+  double q_min = std::numeric_limits<double>::infinity();
+  std::vector<double> abs_r;
+  std::size_t rows = 0;
+  for (const auto* l : logs) {
+    const auto& q = l->q;
+    rows += q.size();
+    for (std::size_t i = 1; i < q.size(); ++i) {
+      const double d = std::abs(q[i] - q[i - 1]);
+      if (d > 1e-9) q_min = std::min(q_min, d);
+    }
+    // 5-point local quadratic (Savitzky-Golay) smoothing; residual of the centre sample, taken
+    // where the joint moves slowest (lowest quarter of |q[i+1] - q[i-1]| in this log): errors
+    // that grow with speed (sampling-time jitter, unresolved fast transients) stay out. For white
+    // noise the residual (symmetric weights) and the speed (antisymmetric) are independent.
+    std::vector<std::pair<double, double>> rv;  // (speed, |residual|)
+    for (std::size_t i = 2; i + 2 < q.size(); ++i) {
+      const double sm = (-3.0 * q[i - 2] + 12.0 * q[i - 1] + 17.0 * q[i] + 12.0 * q[i + 1] - 3.0 * q[i + 2]) / 35.0;
+      rv.emplace_back(std::abs(q[i + 1] - q[i - 1]), std::abs(q[i] - sm));
+    }
+    if (rv.empty()) continue;
+    const std::size_t quarter = std::max<std::size_t>(1, rv.size() / 4);
+    std::nth_element(rv.begin(), rv.begin() + static_cast<long>(quarter - 1), rv.end());
+    for (std::size_t i = 0; i < quarter; ++i) abs_r.push_back(rv[i].second);
+  }
+  nf.quantum_rad = std::isfinite(q_min) ? q_min : 0.0;
+  // Robust scale (1.4826 x median |r|). White noise of std s leaves a residual of variance
+  // s^2 (1 - 17/35) after this smoother.
+  double med = 0.0;
+  if (!abs_r.empty()) {
+    std::nth_element(abs_r.begin(), abs_r.begin() + static_cast<long>(abs_r.size() / 2), abs_r.end());
+    med = abs_r[abs_r.size() / 2];
+  }
+  nf.hf_rad = 1.4826 * med / std::sqrt(18.0 / 35.0);
+  nf.floor_rad = std::sqrt(nf.hf_rad * nf.hf_rad + nf.quantum_rad * nf.quantum_rad / 12.0);
+  nf.samples = rows;
+  nf.effective_samples = static_cast<double>(std::max<std::size_t>(rows, 1));
+  return nf;
+}
+
+/// The significance rule of CalibrationOptions::min_gain_per_param (rules 1-4).
+struct Rule {
+  double thr = 0.03, z = 3.0, room = 2.0;
+  double floor = 0.0, neff = 1.0, min_delay = 0.0;
+
+  /// True if `new_cv` (a model with `extra` more parameters than the reference, `params` its
+  /// fitted values, `entry` the catalogue entry that was added) is significant against `ref_cv`.
+  /// `why` receives the verdict text.
+  bool test(double ref_cv, double new_cv, std::size_t extra, const ParamMap& params, const std::string& entry,
+            std::string& why) const {
+    const double gain = 1.0 - new_cv / ref_cv;
+    const double need_gain = thr * static_cast<double>(extra);
+    const double drop = ref_cv - new_cv;
+    const double need_drop = z * floor / std::sqrt(neff);
+    std::vector<std::string> fails;
+    if (!(gain > need_gain))
+      fails.push_back(fmt::format("CV gain {:.3f} <= {:.3f} required for {} parameter(s)", gain, need_gain, extra));
+    if (!(drop > need_drop))
+      fails.push_back(fmt::format("CV RMSE drop {:.3g} rad <= {:.3g} rad = {} x noise floor {:.3g} rad / sqrt({:.0f} effective "
+                                  "samples)", drop, need_drop, z, floor, neff));
+    if (!(ref_cv > room * floor))
+      fails.push_back(fmt::format("reference CV RMSE {:.3g} rad <= {} x noise floor {:.3g} rad (explained to the noise)", ref_cv,
+                                  room, floor));
+    if (entry == "transport_delay") {
+      const double d = get(params, "delay_s", 0.0);
+      if (!(d >= min_delay))
+        fails.push_back(fmt::format("delay {:.4g} s < {:.4g} s (driver / sample period): not a transport delay", d, min_delay));
+    }
+    if (fails.empty()) {
+      why = fmt::format("CV gain {:.3f} > {:.3f} for {} parameter(s); CV RMSE drop {:.3g} rad > {:.3g} rad (noise); reference "
+                        "{:.3g} rad > {} x floor", gain, need_gain, extra, drop, need_drop, ref_cv, room);
+      return true;
+    }
+    why.clear();
+    for (const auto& f : fails) why += (why.empty() ? "" : "; ") + f;
+    return false;
+  }
+};
+
+/// K-fold CV RMSE of the model with free parameters `names`: per fold, BOBYQA (options.cv_evals)
+/// warm-started from `full` (the fit on all training logs) on the fold's training pieces, scored on
+/// its test pieces. Folds are spread over `workers` (one fold per worker at a time).
+double cv_rmse(const RigConfig& rig, const Folds& folds, const ParamMap& full, const std::vector<std::string>& names,
+               const Scales& sc, const CalibrationOptions& o, std::vector<WorkerSims*>& workers, int* evals) {
+  const std::size_t k = folds.test.size();
+  std::vector<double> sse(k, 0.0);
+  std::vector<std::size_t> rows(k, 0);
+  std::vector<int> ev(k, 0);
+  std::atomic<std::size_t> next{0};
+  auto work = [&](WorkerSims* ws) {
+    std::vector<WorkerSims*> mine{ws};
+    for (std::size_t f = next++; f < k; f = next++) {
+      Objective obj = [&](const ParamMap& m) { return mse(rig, folds.train[f], m, mine); };
+      std::vector<Spec> specs;
+      for (const auto& p : names) {
+        Spec s = spec_for(p, rig, sc);
+        s.init = full.at(p);
+        specs.push_back(s);
+      }
+      const FitOutcome fo = fit(specs, {}, obj, Optimizer::kBobyqa, o.cv_evals, o.seed);
+      ev[f] = fo.evals;
+      for (const auto& p : folds.test[f]) rows[f] += p.rows();
+      const double m = mse(rig, folds.test[f], fo.params, mine);
+      sse[f] = m >= 1e6 ? std::numeric_limits<double>::infinity() : m * static_cast<double>(rows[f]);
+    }
+  };
+  {
+    std::vector<std::thread> th;
+    const std::size_t nw = std::min(workers.size(), k);
+    for (std::size_t w = 1; w < nw; ++w) th.emplace_back(work, workers[w]);
+    work(workers[0]);
+    for (auto& t : th) t.join();
+  }
+  double s = 0.0;
+  std::size_t r = 0;
+  for (std::size_t f = 0; f < k; ++f) {
+    s += sse[f];
+    r += rows[f];
+    if (evals) *evals += ev[f];
+  }
+  return std::sqrt(s / static_cast<double>(std::max<std::size_t>(r, 1)));
+}
+
+std::vector<std::string> model_names(const std::vector<std::string>& base, const std::vector<std::string>& causes) {
+  std::set<std::string> n(base.begin(), base.end());
+  for (const auto& c : causes)
+    for (const auto& p : catalogue_params(c)) n.insert(p);
+  return {n.begin(), n.end()};
+}
+
+}  // namespace
+
+NoiseFloor estimate_noise_floor(const std::vector<BenchLog>& logs) {
+  if (logs.empty()) throw std::invalid_argument("estimate_noise_floor: no logs");
+  std::vector<const BenchLog*> p;
+  for (const auto& l : logs) p.push_back(&l);
+  return noise_floor_of(p);
+}
+
 CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<BenchLog>& train,
                                      const std::vector<BenchLog>& heldout, const CalibrationOptions& options) {
   options.validate();
@@ -464,7 +688,6 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   if (train.empty()) throw std::invalid_argument("calibrate_dynamics: at least one training log is required (--train)");
   if (heldout.empty()) throw std::invalid_argument("calibrate_dynamics: at least one held-out log is required (--heldout)");
   const auto t_start = std::chrono::steady_clock::now();
-  const double thr = options.min_gain_per_param;
   const int nthreads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   auto log_msg = [&](const std::string& s) {
     if (options.verbose) fmt::print(stderr, "[calib] {}\n", s);
@@ -483,8 +706,12 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   rep.optimizer = optimizer_name(options.optimizer);
   for (const auto& l : train) rep.train_logs.push_back(l.name);
   for (const auto& l : heldout) rep.heldout_logs.push_back(l.name);
+  const Folds folds = make_folds(tr, options.cv_folds);
+  rep.cv_folds = folds.k();
+  rep.cv_fold_unit = folds.unit;
 
-  // ---- Baseline eta = [Kp, Kd, I] ------------------------------------------------------------
+  // ---- Baseline eta = [Kp, Kd, I], its CV RMSE ----------------------------------------------
+  // Everything up to the final report uses the training logs only.
   Scales sc;
   sc.dt = rig.sim_dt_s;
   const std::vector<std::string> base_names = {"kp_scale", "kd_scale", "armature"};
@@ -493,41 +720,87 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   FitOutcome base = run_baseline_fit(rig, tr, base_specs, options, all_workers);
   rep.baseline.params = base.params;
   rep.baseline.train_rmse_rad = std::sqrt(base.mse);
-  rep.baseline.heldout_rmse_rad = std::sqrt(mse(rig, ho, base.params, all_workers));
   rep.baseline.evaluations = base.evals;
-  log_msg(fmt::format("baseline: kp_scale {:.4g} kd_scale {:.4g} armature {:.4g}; train RMSE {:.4g} rad, held-out {:.4g} rad ({} evals)",
-                      base.params["kp_scale"], base.params["kd_scale"], base.params["armature"], rep.baseline.train_rmse_rad,
-                      rep.baseline.heldout_rmse_rad, base.evals));
+  rep.baseline.cv_rmse_rad = cv_rmse(rig, folds, base.params, base_names, sc, options, all_workers, &rep.baseline.evaluations);
+  log_msg(fmt::format("baseline: kp_scale {:.4g} kd_scale {:.4g} armature {:.4g}; train RMSE {:.4g} rad, {}-fold CV ({}) {:.4g} rad "
+                      "({} evals)", base.params["kp_scale"], base.params["kd_scale"], base.params["armature"],
+                      rep.baseline.train_rmse_rad, folds.k(), folds.unit, rep.baseline.cv_rmse_rad, rep.baseline.evaluations));
 
-  // Scales from the fitted baseline.
+  // Scales from the fitted baseline; noise floor and effective samples from its training residual.
+  rep.noise = noise_floor_of(tr);
   {
     RolloutTrace trace;
     const RigParams rp = rig_params_from(rig, base.params);
     sc.tau_peak = 1e-6;
     sc.w_peak = 1e-3;
+    double num = 0.0, den = 0.0;
     for (const auto* l : tr) {
       all_workers[0]->get(false).rollout(*l, rp, &trace);
       for (double x : trace.tau_motor) sc.tau_peak = std::max(sc.tau_peak, std::abs(x));
       for (double x : measured_velocity(*l)) sc.w_peak = std::max(sc.w_peak, std::abs(x));
+      double mean = 0.0;
+      for (std::size_t i = 0; i < l->size(); ++i) mean += trace.q[i] - l->q[i];
+      mean /= static_cast<double>(std::max<std::size_t>(l->size(), 1));
+      for (std::size_t i = 0; i < l->size(); ++i) {
+        const double e = trace.q[i] - l->q[i] - mean;
+        den += e * e;
+        if (i > 0) num += e * (trace.q[i - 1] - l->q[i - 1] - mean);
+      }
     }
+    const double rho = den > 0.0 ? std::clamp(num / den, 0.0, 0.999999) : 0.0;
+    const double n = static_cast<double>(rep.noise.samples);
+    rep.noise.effective_samples = std::clamp(n * (1.0 - rho) / (1.0 + rho), 1.0, std::max(n, 1.0));
   }
+  Rule rule;
+  rule.thr = options.min_gain_per_param;
+  rule.z = options.noise_z;
+  rule.room = options.min_rmse_over_floor;
+  rule.floor = rep.noise.floor_rad;
+  rule.neff = rep.noise.effective_samples;
+  {
+    std::vector<double> dts;
+    for (const auto* l : tr)
+      for (std::size_t i = 1; i < l->size(); ++i) dts.push_back(l->t[i] - l->t[i - 1]);
+    double med = 0.0;
+    if (!dts.empty()) {
+      std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+      med = dts[dts.size() / 2];
+    }
+    rule.min_delay = std::max(1.0 / rig.rate_hz, med);
+  }
+  log_msg(fmt::format("noise floor {:.3g} rad (quantum {:.3g} rad, high-frequency {:.3g} rad), {:.0f} effective of {} samples; "
+                      "minimum transport delay {:.4g} s", rep.noise.floor_rad, rep.noise.quantum_rad, rep.noise.hf_rad,
+                      rep.noise.effective_samples, rep.noise.samples, rule.min_delay));
+  bool has_tau_ff = false;
+  for (const auto* l : tr)
+    for (double x : l->tau_ff) has_tau_ff = has_tau_ff || x != 0.0;
 
-  // ---- Candidates (one worker each, in parallel) ---------------------------------------------
+  // ---- Candidates (one worker each, in parallel): fit on all training logs, then K-fold CV ----
   std::vector<std::string> cands = options.candidates.empty() ? catalogue_names() : options.candidates;
   rep.candidates.resize(cands.size());
+  std::vector<char> fitted(cands.size(), 0);
   std::atomic<std::size_t> next{0};
   std::mutex err_mutex;
   std::string first_error;
   auto run_candidate = [&](WorkerSims* ws, std::size_t ci) {
     const std::string& c = cands[ci];
+    CandidateResult r;
+    r.name = c;
+    r.reference_cv_rmse_rad = rep.baseline.cv_rmse_rad;
+    if (c == "torque_constant" && !has_tau_ff) {
+      r.verdict = "not fitted: no training log carries a feed-forward torque (on PD data kt_scale is kp and kd scaled "
+                  "together, which the baseline fits)";
+      r.fit.params = base.params;
+      rep.candidates[ci] = r;
+      return;
+    }
     std::vector<WorkerSims*> mine{ws};
     Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
-    // Coarse scan of the new parameters with the baseline fixed; BOBYQA from the two best points.
-    std::vector<std::pair<double, ParamMap>> scanned;
     // Profile scan: at each grid point of the new parameters, the baseline parameters are
     // re-fitted briefly with the new ones held fixed (effects such as backlash or load-dependent
     // friction trade off against the gains along curved valleys that a local method started from
-    // the plain baseline does not follow).
+    // the plain baseline does not follow). BOBYQA from the two best points.
+    std::vector<std::pair<double, ParamMap>> scanned;
     std::vector<Spec> base_only;
     for (const auto& p : base_names) base_only.push_back(spec_for(p, rig, sc));
     for (const ParamMap& g : scan_grid(c, rig, sc)) {
@@ -565,17 +838,15 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
       evals += f1.evals;
       if (f1.mse < fo.mse) fo = f1;
     }
-    fo.evals = evals;
-    CandidateResult r;
-    r.name = c;
     r.fit.params = fo.params;
     r.fit.train_rmse_rad = std::sqrt(fo.mse);
-    r.fit.heldout_rmse_rad = std::sqrt(mse(rig, ho, fo.params, mine));
-    r.fit.evaluations = fo.evals;
+    r.fit.cv_rmse_rad = cv_rmse(rig, folds, fo.params, model_names(base_names, {c}), sc, options, mine, &evals);
+    r.fit.evaluations = evals;
     for (const auto& p : catalogue_params(c)) r.params[p] = fo.params.at(p);
-    r.gain = 1.0 - r.fit.heldout_rmse_rad / rep.baseline.heldout_rmse_rad;
+    r.gain = 1.0 - r.fit.cv_rmse_rad / rep.baseline.cv_rmse_rad;
     rep.candidates[ci] = r;
-    log_msg(fmt::format("{:<24} held-out RMSE {:.4g} rad  gain {:+.3f}  {}", c, r.fit.heldout_rmse_rad, r.gain, json_params(r.params)));
+    fitted[ci] = 1;
+    log_msg(fmt::format("{:<24} CV RMSE {:.4g} rad  CV gain {:+.3f}  {}", c, r.fit.cv_rmse_rad, r.gain, json_params(r.params)));
   };
   {
     std::vector<std::thread> th;
@@ -595,35 +866,33 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     if (!first_error.empty()) throw std::runtime_error("calibrate_dynamics: candidate fit failed: " + first_error);
   }
 
-  // ---- Name: significance with per-parameter penalty, nesting ------------------------------
+  // ---- Name: the significance rule against the baseline's CV RMSE, nesting ------------------
   auto find = [&](const std::string& n) -> CandidateResult* {
-    for (auto& r : rep.candidates)
-      if (r.name == n) return &r;
+    for (std::size_t i = 0; i < rep.candidates.size(); ++i)
+      if (rep.candidates[i].name == n && fitted[i]) return &rep.candidates[i];
     return nullptr;
   };
-  for (auto& r : rep.candidates) {
-    const double need = thr * static_cast<double>(catalogue_params(r.name).size());
-    r.significant = r.gain > need;
-    r.verdict = r.significant ? fmt::format("held-out gain {:.3f} > {:.3f} required for {} parameter(s)", r.gain, need,
-                                            catalogue_params(r.name).size())
-                              : fmt::format("held-out gain {:.3f} <= {:.3f} required for {} parameter(s)", r.gain, need,
-                                            catalogue_params(r.name).size());
+  for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
+    if (!fitted[i]) continue;
+    auto& r = rep.candidates[i];
+    r.significant = rule.test(rep.baseline.cv_rmse_rad, r.fit.cv_rmse_rad, catalogue_params(r.name).size(), r.fit.params,
+                              r.name, r.verdict);
   }
   for (auto& big : rep.candidates) {
     const std::string small_name = nested_entry(big.name);
     CandidateResult* small = small_name.empty() ? nullptr : find(small_name);
     if (!small || !big.significant) continue;
-    const double extra = static_cast<double>(catalogue_params(big.name).size() - catalogue_params(small_name).size());
-    const double need = small->fit.heldout_rmse_rad * (1.0 - thr * extra);
-    if (big.fit.heldout_rmse_rad < need) {
+    const std::size_t extra = catalogue_params(big.name).size() - catalogue_params(small_name).size();
+    std::string why;
+    if (rule.test(small->fit.cv_rmse_rad, big.fit.cv_rmse_rad, extra, big.fit.params, big.name, why)) {
       if (small->significant) {
         small->significant = false;
-        small->verdict += fmt::format("; superseded by {} (nests it, beats it on held-out data)", big.name);
+        small->verdict += fmt::format("; superseded by {} (nests it, beats it in cross-validation)", big.name);
       }
     } else if (small->significant) {
       big.significant = false;
-      big.verdict += fmt::format("; does not beat the nested {} clearly (held-out RMSE {:.4g} vs {:.4g}, needs < {:.4g})",
-                                 small_name, big.fit.heldout_rmse_rad, small->fit.heldout_rmse_rad, need);
+      big.verdict += fmt::format("; does not beat the nested {} clearly (CV RMSE {:.4g} vs {:.4g}: {})", small_name,
+                                 big.fit.cv_rmse_rad, small->fit.cv_rmse_rad, why);
     }
   }
   std::vector<const CandidateResult*> pool;
@@ -631,10 +900,9 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     if (r.significant) pool.push_back(&r);
   std::sort(pool.begin(), pool.end(), [](const auto* a, const auto* b) { return a->gain > b->gain; });
 
-  // ---- Extend: forward selection. The best single cause first; then, in parallel, each other
-  // individually significant entry is fitted together with the causes chosen so far, and the best
-  // one joins if it lowers the held-out RMSE by the per-parameter margin. The causes are the ones
-  // that pay for their parameters in the joint model, ranked by the order they joined. -----------
+  // ---- Extend: forward selection on CV RMSE. The best single cause first; then, in parallel,
+  // each other individually significant entry is fitted together with the causes chosen so far,
+  // cross-validated, and the best one joins if it passes the rule against the current model. ----
   rep.extended = rep.baseline;
   if (!pool.empty()) {
     rep.extended = pool.front()->fit;
@@ -644,7 +912,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     while (!remaining.empty()) {
       struct Trial {
         FitOutcome fo;
-        double heldout = std::numeric_limits<double>::infinity();
+        double cv = std::numeric_limits<double>::infinity();
         std::size_t added = 0;
       };
       std::vector<Trial> trials(remaining.size());
@@ -654,10 +922,11 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
         Objective obj = [&](const ParamMap& m) { return mse(rig, tr, m, mine); };
         for (std::size_t k = nxt++; k < remaining.size(); k = nxt++) {
           const CandidateResult& cause = *remaining[k];
-          std::set<std::string> names(base_names.begin(), base_names.end());
-          for (const auto& c : rep.extended_causes)
-            for (const auto& p : catalogue_params(c)) names.insert(p);
-          for (const auto& p : catalogue_params(cause.name)) trials[k].added += names.insert(p).second ? 1 : 0;
+          const std::vector<std::string> before = model_names(base_names, rep.extended_causes);
+          std::vector<std::string> with = rep.extended_causes;
+          with.push_back(cause.name);
+          const std::vector<std::string> names = model_names(base_names, with);
+          trials[k].added = names.size() - before.size();
           if (trials[k].added == 0) continue;
           std::vector<Spec> specs;
           for (const auto& p : names) {
@@ -666,7 +935,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
             specs.push_back(sp);
           }
           trials[k].fo = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate, options.seed);
-          trials[k].heldout = std::sqrt(mse(rig, ho, trials[k].fo.params, mine));
+          trials[k].cv = cv_rmse(rig, folds, trials[k].fo.params, names, sc, options, mine, &trials[k].fo.evals);
         }
       };
       {
@@ -678,19 +947,26 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
       }
       std::size_t best = 0;
       for (std::size_t k = 1; k < trials.size(); ++k)
-        if (trials[k].heldout < trials[best].heldout) best = k;
+        if (trials[k].cv < trials[best].cv) best = k;
       const Trial& bt = trials[best];
-      const bool accept = bt.added > 0 &&
-                          bt.heldout < rep.extended.heldout_rmse_rad * (1.0 - thr * static_cast<double>(bt.added));
-      log_msg(fmt::format("extend with {}: held-out RMSE {:.4g} (current {:.4g}) -> {}", remaining[best]->name, bt.heldout,
-                          rep.extended.heldout_rmse_rad, accept ? "accepted" : "rejected"));
+      std::string why;
+      const bool accept = bt.added > 0 && rule.test(rep.extended.cv_rmse_rad, bt.cv, bt.added, bt.fo.params,
+                                                    remaining[best]->name, why);
+      log_msg(fmt::format("extend with {}: CV RMSE {:.4g} (current {:.4g}) -> {} ({})", remaining[best]->name, bt.cv,
+                          rep.extended.cv_rmse_rad, accept ? "accepted" : "rejected", why));
       if (!accept) break;
+      CandidateResult joined = *remaining[best];
+      joined.reference_cv_rmse_rad = rep.extended.cv_rmse_rad;
+      joined.gain = 1.0 - bt.cv / rep.extended.cv_rmse_rad;
+      joined.verdict = "joined the model: " + why;
       rep.extended.params = bt.fo.params;
       rep.extended.train_rmse_rad = std::sqrt(bt.fo.mse);
-      rep.extended.heldout_rmse_rad = bt.heldout;
+      rep.extended.cv_rmse_rad = bt.cv;
       rep.extended.evaluations = bt.fo.evals;
-      rep.extended_causes.push_back(remaining[best]->name);
-      rep.causes.push_back(*remaining[best]);
+      joined.fit = rep.extended;
+      for (const auto& p : catalogue_params(joined.name)) joined.params[p] = rep.extended.params.at(p);
+      rep.extended_causes.push_back(joined.name);
+      rep.causes.push_back(joined);
       remaining.erase(remaining.begin() + static_cast<long>(best));
     }
   }
@@ -702,6 +978,13 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
       r.verdict += "; adds nothing significant once the chosen causes are in the model";
     }
   }
+
+  // ---- Report: held-out (test) RMSE, once, for the baseline and the chosen model (chain) ------
+  rep.baseline.heldout_rmse_rad = std::sqrt(mse(rig, ho, rep.baseline.params, all_workers));
+  for (auto& c : rep.causes) c.fit.heldout_rmse_rad = std::sqrt(mse(rig, ho, c.fit.params, all_workers));
+  rep.extended.heldout_rmse_rad = rep.causes.empty() ? rep.baseline.heldout_rmse_rad : rep.causes.back().fit.heldout_rmse_rad;
+  log_msg(fmt::format("held-out RMSE: baseline {:.4g} rad, extended {:.4g} rad", rep.baseline.heldout_rmse_rad,
+                      rep.extended.heldout_rmse_rad));
 
   // ---- Show: where the baseline residuals concentrate (held-out) ----------------------------
   {
@@ -774,29 +1057,41 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
 }
 
 std::string report_to_json(const CalibrationReport& r) {
+  auto sel = [&](double cv, double ref) {
+    std::string t = fmt::format("{{\"method\": \"kfold\", \"folds\": {}, \"fold_unit\": \"{}\", \"cv_rmse_rad\": {}", r.cv_folds,
+                                r.cv_fold_unit, json_num(cv));
+    if (std::isfinite(ref))
+      t += fmt::format(", \"reference_cv_rmse_rad\": {}, \"cv_gain\": {}", json_num(ref), json_num(1.0 - cv / ref));
+    return t + "}";
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   std::string s = "{\n";
-  s += fmt::format("  \"baseline\": {{\"params\": {}, \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}}},\n",
-                   json_params(r.baseline.params), json_num(r.baseline.train_rmse_rad), json_num(r.baseline.heldout_rmse_rad));
+  s += fmt::format("  \"baseline\": {{\"params\": {}, \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"selection\": {}}},\n",
+                   json_params(r.baseline.params), json_num(r.baseline.train_rmse_rad), json_num(r.baseline.heldout_rmse_rad),
+                   sel(r.baseline.cv_rmse_rad, nan));
   s += "  \"causes\": [";
   for (std::size_t i = 0; i < r.causes.size(); ++i) {
     const auto& c = r.causes[i];
-    s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"train_rmse_rad\": {}}}",
+    s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"train_rmse_rad\": {}, "
+                     "\"selection\": {}, \"verdict\": \"{}\"}}",
                      i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.gain),
-                     json_num(c.fit.train_rmse_rad));
+                     json_num(c.fit.train_rmse_rad), sel(c.fit.cv_rmse_rad, c.reference_cv_rmse_rad), c.verdict);
   }
   s += r.causes.empty() ? "],\n" : "\n  ],\n";
   s += fmt::format("  \"extended\": {{\"params\": {}, \"causes\": [", json_params(r.extended.params));
   for (std::size_t i = 0; i < r.extended_causes.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.extended_causes[i]);
-  s += fmt::format("], \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}}},\n", json_num(r.extended.train_rmse_rad),
-                   json_num(r.extended.heldout_rmse_rad),
-                   json_num(1.0 - r.extended.heldout_rmse_rad / r.baseline.heldout_rmse_rad));
+  s += fmt::format("], \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"selection\": {}}},\n",
+                   json_num(r.extended.train_rmse_rad), json_num(r.extended.heldout_rmse_rad),
+                   json_num(1.0 - r.extended.heldout_rmse_rad / r.baseline.heldout_rmse_rad),
+                   sel(r.extended.cv_rmse_rad, r.baseline.cv_rmse_rad));
   s += "  \"candidates\": [";
   for (std::size_t i = 0; i < r.candidates.size(); ++i) {
     const auto& c = r.candidates[i];
     s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"train_rmse_rad\": {}, \"gain\": {}, "
-                     "\"significant\": {}, \"verdict\": \"{}\", \"evaluations\": {}}}",
+                     "\"significant\": {}, \"verdict\": \"{}\", \"evaluations\": {}, \"selection\": {}}}",
                      i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.fit.train_rmse_rad),
-                     json_num(c.gain), c.significant ? "true" : "false", c.verdict, c.fit.evaluations);
+                     json_num(c.gain), c.significant ? "true" : "false", c.verdict, c.fit.evaluations,
+                     sel(c.fit.cv_rmse_rad, c.reference_cv_rmse_rad));
   }
   s += "\n  ],\n  \"residual_regions\": [";
   for (std::size_t i = 0; i < r.regions.size(); ++i) {
@@ -809,7 +1104,13 @@ std::string report_to_json(const CalibrationReport& r) {
   for (std::size_t i = 0; i < r.train_logs.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.train_logs[i]);
   s += "],\n  \"heldout_logs\": [";
   for (std::size_t i = 0; i < r.heldout_logs.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", r.heldout_logs[i]);
-  s += fmt::format("],\n  \"optimizer\": \"{}\",\n  \"wall_time_s\": {}\n}}\n", r.optimizer, json_num(r.wall_time_s));
+  s += fmt::format("],\n  \"noise_floor_rad\": {},\n  \"noise\": {{\"quantum_rad\": {}, \"hf_rad\": {}, \"floor_rad\": {}, "
+                   "\"effective_samples\": {}, \"samples\": {}}},\n",
+                   json_num(r.noise.floor_rad), json_num(r.noise.quantum_rad), json_num(r.noise.hf_rad),
+                   json_num(r.noise.floor_rad), json_num(r.noise.effective_samples), r.noise.samples);
+  s += fmt::format("  \"selection\": {{\"method\": \"kfold\", \"folds\": {}, \"fold_unit\": \"{}\", \"data\": \"training logs only\"}},\n",
+                   r.cv_folds, r.cv_fold_unit);
+  s += fmt::format("  \"optimizer\": \"{}\",\n  \"wall_time_s\": {}\n}}\n", r.optimizer, json_num(r.wall_time_s));
   return s;
 }
 

@@ -61,6 +61,7 @@ void SyntheticLogOptions::validate() const {
   chk(amplitude_rad > 0.0 && amplitude_rad <= 2.0, "amplitude_rad", amplitude_rad, "in (0, 2] rad");
   chk(kp_log >= 0.0, "kp_log", kp_log, ">= 0");
   chk(kd_log >= 0.0, "kd_log", kd_log, ">= 0");
+  chk(tau_ff_Nm >= 0.0 && std::isfinite(tau_ff_Nm), "tau_ff_Nm", tau_ff_Nm, ">= 0 N·m");
   chk(noise_rad >= 0.0, "noise_rad", noise_rad, ">= 0 rad");
   chk(quantum_rad >= 0.0, "quantum_rad", quantum_rad, ">= 0 rad");
 }
@@ -88,8 +89,17 @@ BenchLog generate_bench_log(const RigConfig& rig, const RigParams& truth, const 
       c = q_end + (1.0 - q_end) * smoothstep((t - t_lift) / (0.6 * (t_off - t_lift)));
     }
     log.t.push_back(t);
-    log.q_cmd.push_back(c);
     log.enabled.push_back(t < t_off ? 1 : 0);
+    if (o.tau_ff_Nm > 0.0) {
+      // Torque control: the shape becomes the feed-forward torque, ramped out before torque-off.
+      log.q_cmd.push_back(0.0);
+      log.kp.push_back(0.0);
+      log.kd.push_back(0.0);
+      const double shape = t < t_lift ? command(o.trajectory, t, t_lift, o.amplitude_rad) / o.amplitude_rad : 0.0;
+      log.tau_ff.push_back(o.tau_ff_Nm * shape);
+      continue;
+    }
+    log.q_cmd.push_back(c);
     if (o.kp_log > 0.0) log.kp.push_back(o.kp_log);
     if (o.kd_log > 0.0) log.kd.push_back(o.kd_log);
   }
@@ -148,6 +158,9 @@ HiddenEffect draw_hidden_effect(const std::string& name, std::uint64_t seed, con
     a.tau_stall_Nm = U(0.9, 1.2);
     a.w_max_rad_per_s = U(3.0, 5.0);
     h.params = {{"tau_stall_Nm", a.tau_stall_Nm}, {"w_max_rad_per_s", a.w_max_rad_per_s}};
+  } else if (name == "torque_constant") {
+    a.kt_scale = U(0.7, 0.9);
+    h.params = {{"kt_scale", a.kt_scale}};
   } else if (name == "zero_offset") {
     a.offset_rad = U(0.02, 0.05) * (U(0.0, 1.0) < 0.5 ? -1.0 : 1.0);
     h.params = {{"offset_rad", a.offset_rad}};

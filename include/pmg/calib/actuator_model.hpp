@@ -1,6 +1,6 @@
 // Extended per-joint actuator model: turns a motor driver's PD command into the torque applied to
 // the joint, with the effects that bench calibration (pmg_calib_dynamics, issue 6) can name:
-// transport delay, zero offset, torque saturation, voltage-limited torque-speed envelope, Coulomb /
+// transport delay, torque constant (delivered / commanded torque), zero offset, torque saturation, voltage-limited torque-speed envelope, Coulomb /
 // Stribeck / load-dependent friction with true stiction, and viscous friction. Backlash is a
 // mechanical dead zone between rotor and link; it needs a second body in the simulator (see
 // BenchSimulator for the MuJoCo construction) and is carried here only as a parameter.
@@ -50,7 +50,12 @@ struct ActuatorParams {
   double delay_s = 0.0;
   /// zero_offset: encoder reading minus true angle [rad].
   double offset_rad = 0.0;
-  /// torque_saturation: symmetric clip of the motor torque [N·m] (+inf = none).
+  /// torque_constant: delivered torque = kt_scale x commanded torque (dimensionless, in (0, 5]):
+  /// a motor whose torque constant (or current sensing) differs from the driver's assumption. On
+  /// position-controlled (PD) data it is indistinguishable from scaling kp and kd together; on
+  /// torque-controlled data (feed-forward torque, kp = kd = 0) it is the only torque scale.
+  double kt_scale = 1.0;
+  /// torque_saturation: symmetric clip of the delivered motor torque [N·m] (+inf = none).
   double torque_limit_Nm = std::numeric_limits<double>::infinity();
   /// torque_speed_limit: voltage-limited envelope
   /// -tau_stall (1 + w/w_max) <= tau <= tau_stall (1 - w/w_max); off when either is 0.
@@ -79,6 +84,7 @@ struct ActuatorParams {
     check(std::isfinite(rate_hz) && rate_hz >= 0.0, "rate_hz", ">= 0 Hz");
     check(std::isfinite(delay_s) && delay_s >= 0.0 && delay_s <= 0.25, "delay_s", "in [0, 0.25] s");
     check(std::isfinite(offset_rad) && std::abs(offset_rad) <= 0.5, "offset_rad", "in [-0.5, 0.5] rad");
+    check(std::isfinite(kt_scale) && kt_scale > 0.0 && kt_scale <= 5.0, "kt_scale", "in (0, 5]");
     check(torque_limit_Nm > 0.0, "torque_limit_Nm", "> 0 N·m (or +inf)");
     check(std::isfinite(tau_stall_Nm) && tau_stall_Nm >= 0.0, "tau_stall_Nm", ">= 0 N·m");
     check(std::isfinite(w_max_rad_per_s) && w_max_rad_per_s >= 0.0, "w_max_rad_per_s", ">= 0 rad/s");
@@ -119,7 +125,7 @@ struct JointSample {
 
 /// Torques produced by one step() (N·m, about the joint axis).
 struct ActuatorOutput {
-  double tau_motor_Nm = 0.0;     ///< driver torque after delay, saturation and envelope
+  double tau_motor_Nm = 0.0;     ///< delivered torque: kt_scale x driver torque, after delay, saturation, envelope
   double tau_friction_Nm = 0.0;  ///< dry + viscous friction
   double tau_applied_Nm = 0.0;   ///< tau_motor + tau_friction: write this to qfrc_applied / ctrl
   bool stuck = false;            ///< the dry friction held the joint this step
@@ -172,7 +178,8 @@ class ActuatorModel {
   }
 
   /// One physics step. Pushes `cmd` into the delay line, runs the driver's PD on the delayed
-  /// command and the (offset) encoder reading at rate_hz, limits the torque, then adds friction.
+  /// command and the (offset) encoder reading at rate_hz, scales it by kt_scale (delivered torque),
+  /// limits it, then adds friction.
   /// Stiction is implicit: if the dry friction can bring the joint to rest within this step
   /// (semi-implicit Euler, v+ = v + dt/I * tau_total) without exceeding the break-away torque, it
   /// does exactly that. Requires p.validate() to have passed and j.dt_s > 0.
@@ -197,7 +204,7 @@ class ActuatorModel {
                                 : 0.0;
     }
     ActuatorOutput out;
-    out.tau_motor_Nm = c.enabled ? limit_torque(p, s.held_tau_Nm, j.dq_rad_per_s) : 0.0;
+    out.tau_motor_Nm = c.enabled ? limit_torque(p, p.kt_scale * s.held_tau_Nm, j.dq_rad_per_s) : 0.0;
 
     // Friction.
     const double tau_visc = -p.fv_Nms_per_rad * j.dq_rad_per_s;

@@ -12,6 +12,7 @@
 ///   kd_scale: 1.0              # multiplies the configured PD damping
 ///   rate_hz: 500               # driver PD update rate (0 = every physics step)
 ///   delay_s: 0.002             # transport delay of the command
+///   kt_scale: 1.0              # delivered torque / commanded torque (torque constant)
 ///   offset_rad: 0.0            # encoder reading - true angle
 ///   torque_limit_Nm: 25.0      # torque saturation (.inf = none)
 ///   tau_stall_Nm: 0.0          # torque-speed envelope (0 = off)
@@ -54,6 +55,7 @@ struct ActuatorBlock {
     a->Visit("kd_scale", &kd_scale, "multiplies the PD damping");
     a->Visit("rate_hz", &params.rate_hz, "driver PD rate [Hz] (0 = every physics step)");
     a->Visit("delay_s", &params.delay_s, "command transport delay [s]");
+    a->Visit("kt_scale", &params.kt_scale, "delivered / commanded torque (torque constant)");
     a->Visit("offset_rad", &params.offset_rad, "encoder reading - true angle [rad]");
     a->Visit("torque_limit_Nm", &params.torque_limit_Nm, "torque saturation [N m] (.inf = none)",
              yaml::kAllowNonFinite);

@@ -28,6 +28,10 @@ struct SyntheticLogOptions {
   double amplitude_rad = 0.8;    ///< command amplitude, in (0, 2] rad
   double kp_log = 1.0;           ///< value of the log's kp column (rig log gain units); 0 = no column
   double kd_log = 1.0;           ///< value of the log's kd column; 0 = no column
+  /// > 0: a torque-controlled log (as the DFKI AK80-6 runs): kp = kd = 0 columns, q_cmd = 0 and
+  /// tau_ff = tau_ff_Nm x (trajectory shape / amplitude_rad) [N·m] while moving, then torque off for
+  /// the free swing. 0 = position (PD) control.
+  double tau_ff_Nm = 0.0;
   double noise_rad = 2e-4;       ///< encoder noise standard deviation [rad], >= 0
   double quantum_rad = 0.0015339807878856412;  ///< encoder resolution [rad] (4096 counts/rev), >= 0
   std::uint64_t seed = 1;
