@@ -582,7 +582,7 @@ NoiseFloor noise_floor_of(const std::vector<const BenchLog*>& logs) {
   return nf;
 }
 
-/// The significance rule of CalibrationOptions::min_gain_per_param (rules 1-4).
+/// The significance rule of CalibrationOptions::min_gain_per_param (rules 1-5).
 struct Rule {
   double thr = 0.03, z = 3.0, room = 2.0;
   double floor = 0.0, neff = 1.0, min_delay = 0.0;
@@ -590,8 +590,10 @@ struct Rule {
   /// True if `new_cv` (a model with `extra` more parameters than the reference, `params` its
   /// fitted values, `entry` the catalogue entry that was added) is significant against `ref_cv`.
   /// `why` receives the verdict text.
-  bool test(double ref_cv, double new_cv, std::size_t extra, const ParamMap& params, const std::string& entry,
+  bool test(const FittedModel& ref, const FittedModel& cand, std::size_t extra, const std::string& entry,
             std::string& why) const {
+    const double ref_cv = ref.cv_rmse_rad, new_cv = cand.cv_rmse_rad;
+    const ParamMap& params = cand.params;
     const double gain = 1.0 - new_cv / ref_cv;
     const double need_gain = thr * static_cast<double>(extra);
     const double drop = ref_cv - new_cv;
@@ -605,6 +607,14 @@ struct Rule {
     if (!(ref_cv > room * floor))
       fails.push_back(fmt::format("reference CV RMSE {:.3g} rad <= {} x noise floor {:.3g} rad (explained to the noise)", ref_cv,
                                   room, floor));
+    {
+      const std::size_t k = std::min(ref.cv_fold_mse.size(), cand.cv_fold_mse.size());
+      std::size_t better = 0;
+      for (std::size_t f = 0; f < k; ++f) better += cand.cv_fold_mse[f] < ref.cv_fold_mse[f] ? 1 : 0;
+      const std::size_t need = (3 * k + 3) / 4;  // ceil(3K/4)
+      if (better < need)
+        fails.push_back(fmt::format("lower test error in only {} of {} folds (needs {})", better, k, need));
+    }
     if (entry == "transport_delay") {
       const double d = get(params, "delay_s", 0.0);
       if (!(d >= min_delay))
@@ -625,7 +635,8 @@ struct Rule {
 /// warm-started from `full` (the fit on all training logs) on the fold's training pieces, scored on
 /// its test pieces. Folds are spread over `workers` (one fold per worker at a time).
 double cv_rmse(const RigConfig& rig, const Folds& folds, const ParamMap& full, const std::vector<std::string>& names,
-               const Scales& sc, const CalibrationOptions& o, std::vector<WorkerSims*>& workers, int* evals) {
+               const Scales& sc, const CalibrationOptions& o, std::vector<WorkerSims*>& workers, int* evals,
+               std::vector<double>* fold_mse) {
   const std::size_t k = folds.test.size();
   std::vector<double> sse(k, 0.0);
   std::vector<std::size_t> rows(k, 0);
@@ -657,10 +668,12 @@ double cv_rmse(const RigConfig& rig, const Folds& folds, const ParamMap& full, c
   }
   double s = 0.0;
   std::size_t r = 0;
+  if (fold_mse) fold_mse->assign(k, 0.0);
   for (std::size_t f = 0; f < k; ++f) {
     s += sse[f];
     r += rows[f];
     if (evals) *evals += ev[f];
+    if (fold_mse) (*fold_mse)[f] = sse[f] / static_cast<double>(std::max<std::size_t>(rows[f], 1));
   }
   return std::sqrt(s / static_cast<double>(std::max<std::size_t>(r, 1)));
 }
@@ -721,7 +734,8 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   rep.baseline.params = base.params;
   rep.baseline.train_rmse_rad = std::sqrt(base.mse);
   rep.baseline.evaluations = base.evals;
-  rep.baseline.cv_rmse_rad = cv_rmse(rig, folds, base.params, base_names, sc, options, all_workers, &rep.baseline.evaluations);
+  rep.baseline.cv_rmse_rad = cv_rmse(rig, folds, base.params, base_names, sc, options, all_workers, &rep.baseline.evaluations,
+                                     &rep.baseline.cv_fold_mse);
   log_msg(fmt::format("baseline: kp_scale {:.4g} kd_scale {:.4g} armature {:.4g}; train RMSE {:.4g} rad, {}-fold CV ({}) {:.4g} rad "
                       "({} evals)", base.params["kp_scale"], base.params["kd_scale"], base.params["armature"],
                       rep.baseline.train_rmse_rad, folds.k(), folds.unit, rep.baseline.cv_rmse_rad, rep.baseline.evaluations));
@@ -840,7 +854,8 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     }
     r.fit.params = fo.params;
     r.fit.train_rmse_rad = std::sqrt(fo.mse);
-    r.fit.cv_rmse_rad = cv_rmse(rig, folds, fo.params, model_names(base_names, {c}), sc, options, mine, &evals);
+    r.fit.cv_rmse_rad =
+        cv_rmse(rig, folds, fo.params, model_names(base_names, {c}), sc, options, mine, &evals, &r.fit.cv_fold_mse);
     r.fit.evaluations = evals;
     for (const auto& p : catalogue_params(c)) r.params[p] = fo.params.at(p);
     r.gain = 1.0 - r.fit.cv_rmse_rad / rep.baseline.cv_rmse_rad;
@@ -875,8 +890,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
   for (std::size_t i = 0; i < rep.candidates.size(); ++i) {
     if (!fitted[i]) continue;
     auto& r = rep.candidates[i];
-    r.significant = rule.test(rep.baseline.cv_rmse_rad, r.fit.cv_rmse_rad, catalogue_params(r.name).size(), r.fit.params,
-                              r.name, r.verdict);
+    r.significant = rule.test(rep.baseline, r.fit, catalogue_params(r.name).size(), r.name, r.verdict);
   }
   for (auto& big : rep.candidates) {
     const std::string small_name = nested_entry(big.name);
@@ -884,7 +898,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
     if (!small || !big.significant) continue;
     const std::size_t extra = catalogue_params(big.name).size() - catalogue_params(small_name).size();
     std::string why;
-    if (rule.test(small->fit.cv_rmse_rad, big.fit.cv_rmse_rad, extra, big.fit.params, big.name, why)) {
+    if (rule.test(small->fit, big.fit, extra, big.name, why)) {
       if (small->significant) {
         small->significant = false;
         small->verdict += fmt::format("; superseded by {} (nests it, beats it in cross-validation)", big.name);
@@ -913,6 +927,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
       struct Trial {
         FitOutcome fo;
         double cv = std::numeric_limits<double>::infinity();
+        std::vector<double> fold_mse;
         std::size_t added = 0;
       };
       std::vector<Trial> trials(remaining.size());
@@ -935,7 +950,8 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
             specs.push_back(sp);
           }
           trials[k].fo = fit(specs, {}, obj, Optimizer::kBobyqa, options.max_evals_candidate, options.seed);
-          trials[k].cv = cv_rmse(rig, folds, trials[k].fo.params, names, sc, options, mine, &trials[k].fo.evals);
+          trials[k].cv =
+              cv_rmse(rig, folds, trials[k].fo.params, names, sc, options, mine, &trials[k].fo.evals, &trials[k].fold_mse);
         }
       };
       {
@@ -950,8 +966,11 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
         if (trials[k].cv < trials[best].cv) best = k;
       const Trial& bt = trials[best];
       std::string why;
-      const bool accept = bt.added > 0 && rule.test(rep.extended.cv_rmse_rad, bt.cv, bt.added, bt.fo.params,
-                                                    remaining[best]->name, why);
+      FittedModel trial_model;
+      trial_model.params = bt.fo.params;
+      trial_model.cv_rmse_rad = bt.cv;
+      trial_model.cv_fold_mse = bt.fold_mse;
+      const bool accept = bt.added > 0 && rule.test(rep.extended, trial_model, bt.added, remaining[best]->name, why);
       log_msg(fmt::format("extend with {}: CV RMSE {:.4g} (current {:.4g}) -> {} ({})", remaining[best]->name, bt.cv,
                           rep.extended.cv_rmse_rad, accept ? "accepted" : "rejected", why));
       if (!accept) break;
@@ -962,6 +981,7 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
       rep.extended.params = bt.fo.params;
       rep.extended.train_rmse_rad = std::sqrt(bt.fo.mse);
       rep.extended.cv_rmse_rad = bt.cv;
+      rep.extended.cv_fold_mse = bt.fold_mse;
       rep.extended.evaluations = bt.fo.evals;
       joined.fit = rep.extended;
       for (const auto& p : catalogue_params(joined.name)) joined.params[p] = rep.extended.params.at(p);

@@ -67,7 +67,8 @@ struct CalibrationOptions {
   ///  2. noise: CV_ref - CV_new > noise_z x floor / sqrt(N_eff);
   ///  3. room: CV_ref > min_rmse_over_floor x floor (a model that already explains the data to
   ///     within that multiple of the noise floor is not extended);
-  ///  4. transport_delay only: the fitted delay_s >= max(driver period 1 / rate_hz, the log's
+  ///  4. consistency: the new model's test error is lower in at least ceil(3K/4) of the K folds;
+  ///  5. transport_delay only: the fitted delay_s >= max(driver period 1 / rate_hz, the log's
   ///     median sample period) (a shorter one is the driver's zero-order hold, not a delay).
   double min_gain_per_param = 0.03;
   double noise_z = 3.0;               ///< rule 2 multiple, > 0
@@ -98,6 +99,7 @@ struct FittedModel {
   /// chain (CandidateResult in CalibrationReport::causes); NaN elsewhere (never measured).
   double heldout_rmse_rad = std::numeric_limits<double>::quiet_NaN();
   double cv_rmse_rad = std::numeric_limits<double>::quiet_NaN();  ///< what selection used
+  std::vector<double> cv_fold_mse;  ///< per fold: mean squared test error of the fold re-fit [rad²]
   int evaluations = 0;
 };
 
