@@ -1077,9 +1077,15 @@ CalibrationReport calibrate_dynamics(const RigConfig& rig, const std::vector<Ben
 }
 
 std::string report_to_json(const CalibrationReport& r) {
-  auto sel = [&](double cv, double ref) {
+  auto sel = [&](const FittedModel& m, double ref) {
+    const double cv = m.cv_rmse_rad;
     std::string t = fmt::format("{{\"method\": \"kfold\", \"folds\": {}, \"fold_unit\": \"{}\", \"cv_rmse_rad\": {}", r.cv_folds,
                                 r.cv_fold_unit, json_num(cv));
+    if (!m.cv_fold_mse.empty()) {
+      t += ", \"fold_rmse_rad\": [";
+      for (std::size_t f = 0; f < m.cv_fold_mse.size(); ++f) t += fmt::format("{}{}", f ? ", " : "", json_num(std::sqrt(m.cv_fold_mse[f])));
+      t += "]";
+    }
     if (std::isfinite(ref))
       t += fmt::format(", \"reference_cv_rmse_rad\": {}, \"cv_gain\": {}", json_num(ref), json_num(1.0 - cv / ref));
     return t + "}";
@@ -1088,14 +1094,14 @@ std::string report_to_json(const CalibrationReport& r) {
   std::string s = "{\n";
   s += fmt::format("  \"baseline\": {{\"params\": {}, \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"selection\": {}}},\n",
                    json_params(r.baseline.params), json_num(r.baseline.train_rmse_rad), json_num(r.baseline.heldout_rmse_rad),
-                   sel(r.baseline.cv_rmse_rad, nan));
+                   sel(r.baseline, nan));
   s += "  \"causes\": [";
   for (std::size_t i = 0; i < r.causes.size(); ++i) {
     const auto& c = r.causes[i];
     s += fmt::format("{}\n    {{\"name\": \"{}\", \"params\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"train_rmse_rad\": {}, "
                      "\"selection\": {}, \"verdict\": \"{}\"}}",
                      i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.gain),
-                     json_num(c.fit.train_rmse_rad), sel(c.fit.cv_rmse_rad, c.reference_cv_rmse_rad), c.verdict);
+                     json_num(c.fit.train_rmse_rad), sel(c.fit, c.reference_cv_rmse_rad), c.verdict);
   }
   s += r.causes.empty() ? "],\n" : "\n  ],\n";
   s += fmt::format("  \"extended\": {{\"params\": {}, \"causes\": [", json_params(r.extended.params));
@@ -1103,7 +1109,7 @@ std::string report_to_json(const CalibrationReport& r) {
   s += fmt::format("], \"train_rmse_rad\": {}, \"heldout_rmse_rad\": {}, \"gain\": {}, \"selection\": {}}},\n",
                    json_num(r.extended.train_rmse_rad), json_num(r.extended.heldout_rmse_rad),
                    json_num(1.0 - r.extended.heldout_rmse_rad / r.baseline.heldout_rmse_rad),
-                   sel(r.extended.cv_rmse_rad, r.baseline.cv_rmse_rad));
+                   sel(r.extended, r.baseline.cv_rmse_rad));
   s += "  \"candidates\": [";
   for (std::size_t i = 0; i < r.candidates.size(); ++i) {
     const auto& c = r.candidates[i];
@@ -1111,7 +1117,7 @@ std::string report_to_json(const CalibrationReport& r) {
                      "\"significant\": {}, \"verdict\": \"{}\", \"evaluations\": {}, \"selection\": {}}}",
                      i ? "," : "", c.name, json_params(c.params), json_num(c.fit.heldout_rmse_rad), json_num(c.fit.train_rmse_rad),
                      json_num(c.gain), c.significant ? "true" : "false", c.verdict, c.fit.evaluations,
-                     sel(c.fit.cv_rmse_rad, c.reference_cv_rmse_rad));
+                     sel(c.fit, c.reference_cv_rmse_rad));
   }
   s += "\n  ],\n  \"residual_regions\": [";
   for (std::size_t i = 0; i < r.regions.size(); ++i) {

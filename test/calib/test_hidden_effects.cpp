@@ -1,6 +1,6 @@
 // The suite hides one catalogue effect in synthetic bench logs at a seeded random magnitude and
 // requires pmg::calib::calibrate_dynamics (the engine of pmg_calib_dynamics) to name it first,
-// recover its parameter within a stated tolerance and report a held-out gain; and to name nothing
+// recover its parameter within a stated tolerance, with a CV gain and a held-out gain; and to name nothing
 // on clean data.
 #include <cmath>
 #include <cstdlib>
@@ -82,7 +82,7 @@ TEST_P(HiddenEffect, NamedFirstAndParameterRecovered) {
   for (const auto& k : rep.causes) named += k.name + " ";
   ASSERT_FALSE(rep.causes.empty()) << "hidden " << c.effect << " not named";
   EXPECT_EQ(rep.causes.front().name, c.effect) << "named: " << named;
-  EXPECT_GT(rep.causes.front().gain, 0.2) << "held-out gain of the hidden effect";
+  EXPECT_GT(rep.causes.front().gain, 0.2) << "CV gain of the hidden effect (the number that chose it)";
   EXPECT_LT(rep.extended.heldout_rmse_rad, 0.8 * rep.baseline.heldout_rmse_rad);
   for (const auto& t : c.tol) {
     const double want = hidden.params.at(t.param);
