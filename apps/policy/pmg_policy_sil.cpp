@@ -8,7 +8,7 @@
 // on), command shaper, reference limiter, PMG generator + GCO, policy stage and runner that
 // pmg_controller runs. The script (--commands, the one command-script format) is injected as
 // pmg_controller --script does. Only the metrics read simulator truth, from an observer after each
-// tick.
+// tick. The run is built by pmg::makeSilRun (pmg/controller/sil_eval.hpp, shared with pmg_sim2real_eval).
 //
 // --config selects the Table I configuration the actor was trained for (the contract check refuses
 // a mismatch, naming pmg.gco / pmg.mode):
@@ -73,6 +73,7 @@
 #include "pmg/common/data_paths.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/controller/controller_app.hpp"
+#include "pmg/controller/sil_eval.hpp"
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
@@ -215,9 +216,7 @@ int main(int argc, char** argv) {
       ->check(pmg::cli::finiteIn(0.01, 10.0));
   CLI11_PARSE(app, argc, argv);
   try {
-    pmg::ControllerConfig base = pmg::loadControllerConfig(controller_path);
-    base.makeOffline();
-    base.mujoco.gantry.enabled = false;
+    pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
     if (!robot_path.empty()) {
       base.robot_file = robot_path;
       base.robot = pmg::loadRobotConfig(robot_path);
@@ -293,29 +292,24 @@ int main(int argc, char** argv) {
           }
         }
         const pmg::CommandScript& run_script = episode > 0 ? sub : script;
-        pmg::MujocoBackendOptions bo = base.mujoco;
-        auto sim_owned = std::make_unique<pmg::MujocoBackend>(robot, bo);
-        pmg::MujocoBackend* sim = sim_owned.get();
-        const mjModel* m = sim->model();
-        mjData* d = sim->data();
-        for (int j = 0; j < nj; ++j) d->qpos[7 + j] += 0.02 * uni(rng) * (seed > 0 || episode > 0 ? 1.0 : 0.0);
-        mj_forward(m, d);
+        // One ControllerApp over the SIL (pmg/controller/sil_eval.hpp, shared with pmg_sim2real_eval).
+        pmg::SilRunOptions so;
+        so.initial_q_offsets.resize(static_cast<std::size_t>(nj));
+        for (int j = 0; j < nj; ++j)
+          so.initial_q_offsets[static_cast<std::size_t>(j)] = 0.02 * uni(rng) * (seed > 0 || episode > 0 ? 1.0 : 0.0);
+        so.sensor_noise = noise;
+        so.noise_seed = static_cast<unsigned>(2000 + seed + 1000 * episode);
+        if (single_gait) so.clip_files = {base.clips_dir + "/walk_forward.yaml"};
+        so.policy_mode = single_gait ? "single_gait" : "pmg";
+        so.telemetry = true;
+        pmg::SilRun sil = pmg::makeSilRun(base, so);
+        pmg::ControllerApp& loop = *sil.app;
+        const mjModel* m = sil.sim->model();
+        mjData* d = sil.sim->data();
         const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
         const int feet[2] = {mj_name2id(m, mjOBJ_BODY, robot.left_foot_link.c_str()),
                              mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
         const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
-
-        pmg::ControllerAppOptions opt;
-        opt.backend = std::move(sim_owned);
-        opt.telemetry = true;
-        if (single_gait) opt.clip_files = {base.clips_dir + "/walk_forward.yaml"};
-        opt.policy.noise_gyro = noise ? 0.1 : 0.0;
-        opt.policy.noise_gravity = noise ? 0.03 : 0.0;
-        opt.policy.noise_q = noise ? 0.01 : 0.0;
-        opt.policy.noise_qd = noise ? 0.5 : 0.0;
-        opt.policy.noise_seed = static_cast<unsigned>(2000 + seed + 1000 * episode);
-        opt.policy.mode = single_gait ? "single_gait" : "pmg";
-        pmg::ControllerApp loop(base, std::move(opt));
         pmg::Controller& controller = loop.controller();
         if (single_gait)  // the forward clip at its nominal speed, neutral posture, whatever the command
           controller.setFixedGeneratorCommand(
@@ -386,8 +380,7 @@ int main(int argc, char** argv) {
             tot.slip += std::hypot(vel[3], vel[4]);
             ++tot.slip_n;
           }
-          const bool fallen = height < 0.4 || Rb[8] < 0.5 || status.fault == pmg::FaultCode::kFallHeight ||
-                              status.fault == pmg::FaultCode::kFallTilt;
+          const bool fallen = pmg::silRobotFell(state, status);
           // What the reference the actor was given implies (valid while the loop is active).
           Axes ref;
           ref.fill(kNaN);

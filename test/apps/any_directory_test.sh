@@ -73,6 +73,10 @@ expect 0 sil "$bin/pmg_sil" --realtime --duration 0.05 --port "$port" && has sil
 expect 0 gco_eval "$bin/pmg_gco_eval" --vx 0.3 --vy 0 --wz 0 --pitch 0 --roll 0 --height 0 --seconds 1 --warmup 0
 expect 0 policy_sil "$bin/pmg_policy_sil" --seeds 1 --duration 0.3 --out policy_sil && has policy_sil "mean over 1 seeds"
 [[ -f policy_sil/summary.json ]] || fail "policy_sil: no policy_sil/summary.json"
+printf '{}\n' >empty_reality.yaml
+expect 0 sim2real "$bin/pmg_sim2real_eval" --policies "p=$data/config/controller/g1_sil_policy.yaml" \
+  --realities empty_reality.yaml --duration 0.3 --skip 0 --out sim2real && has sim2real "Dynamic + Zero-point"
+[[ -f sim2real/summary.json && -f sim2real/p/sim.csv ]] || fail "sim2real: no sim2real/summary.json or p/sim.csv"
 expect 0 controller "$bin/pmg_controller" --config "$data/config/controller/g1_sil.yaml" --duration 0.2 --no-lcm
 # Benchmarks, shortened.
 expect 0 bench_controller "$bin/bench_controller" --seconds 0.3
@@ -92,7 +96,7 @@ expect 1 calib_dynamics_bad_plot "$bin/pmg_calib_dynamics" --rig "$data/config/b
 expect 1 calib_zero_bad_out "$bin/pmg_calib_zero" --config "$data/config/robots/g1/g1.yaml" --out no_such_dir/zero.yaml &&
   has calib_zero_bad_out "no_such_dir/zero.yaml: cannot write"
 
-left="$(ls -A | grep -v -E '\.(out|lcmlog|csv|png|json)$|^policy_sil$')"
+left="$(ls -A | grep -v -E '\.(out|lcmlog|csv|png|json)$|^policy_sil$|^sim2real$|^empty_reality\.yaml$')"
 [[ -z "$left" ]] || fail "unexpected files in the working directory: $left"
 echo "$failures failures"
 [[ $failures -eq 0 ]]
