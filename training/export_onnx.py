@@ -38,9 +38,14 @@ def load_actor(path):
     return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]], mode
 
 
-def export(npz, out_path, brax_check=None, robot_yaml=None):
-    """Writes the ONNX actor with its contract; robot_yaml: default config/robots/g1/g1.yaml of the checkout."""
-    robot_yaml = robot_yaml or os.path.join(repo_root(), "config/robots/g1/g1.yaml")
+def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
+    """Writes the ONNX actor with its contract; robot_yaml: default config/robots/g1/g1.yaml of the
+    checkout (relative paths: to the checkout). The contract's kp / kd are the robot config's: a policy
+    trained with physically informed gains is exported with config/robots/g1/g1_pig.yaml. @p training:
+    extra entries of the `pmg.training` metadata (gains, actuators)."""
+    robot_yaml = robot_yaml or "config/robots/g1/g1.yaml"
+    if not os.path.isabs(robot_yaml):
+        robot_yaml = os.path.join(repo_root(), robot_yaml)
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)
@@ -58,7 +63,10 @@ def export(npz, out_path, brax_check=None, robot_yaml=None):
         pmg={"enabled": True, "gco": mode == "pmg_gco", "mode": "single_gait" if mode == "single_gait" else "pmg",
              "clips": ",".join(clips), "epsilon": EPSILON},
         reference_pairs=list(zip(obs, act)))
-    meta = {"pmg.training": json.dumps({"brax_vs_numpy_max_abs": brax_check, "source": os.path.basename(npz)})}
+    info = {"brax_vs_numpy_max_abs": brax_check, "source": os.path.basename(npz),
+            "robot": os.path.relpath(robot_yaml, repo_root())}
+    info.update(training or {})
+    meta = {"pmg.training": json.dumps(info)}
     save_onnx(out_path, actor_graph(mean, std, layers, LEG), contract, extra_metadata=meta)
     print("wrote", out_path)
 
@@ -67,8 +75,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog="pmg-export-onnx", description="actor.npz -> ONNX with its pmg.contract")
     ap.add_argument("npz")
     ap.add_argument("out")
+    ap.add_argument("--robot", default=None,
+                    help="robot config whose kp/kd the contract carries (default config/robots/g1/g1.yaml; "
+                         "config/robots/g1/g1_pig.yaml for a policy trained with --gains physically_informed)")
     a = ap.parse_args(argv)
-    export(a.npz, a.out)
+    export(a.npz, a.out, robot_yaml=a.robot)
 
 
 if __name__ == "__main__":

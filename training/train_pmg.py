@@ -15,6 +15,7 @@ import dataclasses
 import functools
 import glob
 import json
+import math
 import os
 import pickle
 import sys
@@ -63,6 +64,12 @@ def smoke(env, out):
         f"reward {float(s.reward.mean()):.3f}, height {float(s.pipeline_state.qpos[:, 2].mean()):.3f}")
     with open(os.path.join(out, "smoke.json"), "w") as f:
         json.dump({"jax_port_max_abs": worst, "control_steps_per_s": n * 50 / dt}, f)
+
+
+def export_robot_yaml(cfg):
+    """The robot config whose kp / kd the exported contract carries (the controller refuses a policy
+    whose contract gains differ from its robot config's): g1_pig.yaml for physically informed gains."""
+    return "config/robots/g1/g1_pig.yaml" if cfg.gains == "physically_informed" else cfg.robot_yaml
 
 
 def save_params(params, out, env, clip_names):
@@ -142,7 +149,23 @@ def parse_args(argv=None):
     ap.add_argument("--arms", default="teleop", choices=["teleop", "perturb"],
                     help="arm targets in training: teleop = VR teleoperation envelope + hand payloads (issue 13, "
                          "EnvConfig.p_teleop), perturb = only the PMG arm reference +-0.3 rad (the Table I runs)")
+    ap.add_argument("--gains", default="nominal", choices=["nominal", "physically_informed"],
+                    help="PD gains: nominal = the robot config's kp/kd (Baseline); physically_informed = kp = I w_n^2, "
+                         "kd = 2 zeta I w_n with the reflected rotor inertia I (also the armature; "
+                         "pmg_train/gains.py, config/robots/g1/g1_pig.yaml, which the ONNX contract then carries)")
+    ap.add_argument("--actuators", default="",
+                    help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
+                         "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
+    ap.add_argument("--actuator-dr", type=float, default=None,
+                    help="relative half-width of the domain randomisation around each identified actuator parameter "
+                         "(default: EnvConfig.actuator_dr)")
     args = ap.parse_args(argv)
+    if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
+        ap.error(f"--actuator-dr = {args.actuator_dr}: expected a relative half-width in [0, 1)")
+    if args.actuators:
+        if not os.path.isfile(args.actuators):
+            ap.error(f"--actuators = {args.actuators!r}: no such file")
+        args.actuators = os.path.abspath(args.actuators)
     for name in ("timesteps", "num_envs", "num_evals", "batch_size", "num_minibatches",
                  "unroll_length", "episode_length"):
         value = getattr(args, name)
@@ -222,6 +245,9 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, episode_length=args.episode_length)
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
+    cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators)
+    if args.actuator_dr is not None:
+        cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:
@@ -240,7 +266,13 @@ def main(argv=None):
     with open(os.path.join(args.out, "train_config.json"), "w") as f:
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
                    "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
-                   "devices": [str(d) for d in devices], "jax": jax.__version__}, f, indent=1)
+                   "devices": [str(d) for d in devices], "jax": jax.__version__,
+                   "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
+                             "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
+                   "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
+                                 "blocks": {n: {k: (None if isinstance(v, float) and math.isinf(v) else v)
+                                                for k, v in b.items() if k != "_named" and v is not None}
+                                            for n, b in env.actuator_blocks.items()}}}, f, indent=1)
     restore = None
     if args.restore:
         with open(args.restore, "rb") as f:
@@ -271,7 +303,9 @@ def main(argv=None):
     save_params(params, args.out, env, clip_names)
     diff = check_against_brax(params, make_inference_fn, env, args.out)
     from export_onnx import export
-    export(os.path.join(args.out, "actor.npz"), os.path.join(args.out, "g1_pmg_policy.onnx"), brax_check=diff)
+    export(os.path.join(args.out, "actor.npz"), os.path.join(args.out, "g1_pmg_policy.onnx"), brax_check=diff,
+           robot_yaml=export_robot_yaml(cfg),
+           training={"gains": cfg.gains, "actuators": cfg.actuators, "actuator_dr": cfg.actuator_dr})
 
 
 if __name__ == "__main__":

@@ -24,6 +24,44 @@ the wrist_yaw_link bodies (which carry the rubber hands) by the domain randomisa
 auto-reset keeps `info`, so draws made in reset() hold per environment slot; the teleop state is
 set back to the default arm pose when an episode ends (the robot restarts in it).
 
+PD gains (EnvConfig.gains, issue 15): "nominal" = the robot config's kp / kd with armature
+0.01 kg m^2 (the Baseline policy); "physically_informed" = kp = I w_n^2, kd = 2 zeta I w_n per joint
+with I the motor's reflected rotor inertia, w_n = 2 pi 10 Hz, zeta = 2 (pmg_train/gains.py: the
+BeyondMimic G1 values, source cited there), and the joints' armature is I too (the generic armature
+DR becomes I x U(0.8, 1.5)). config/robots/g1/g1_pig.yaml holds the same kp / kd for the controller.
+
+Actuator models (EnvConfig.actuators, issue 15): a calibrated robot config as pmg_calib_joints
+writes it (the robot config with `actuator:` blocks, inline or as file paths, on the calibrated
+joints; keys of include/pmg/calib/actuator_yaml.hpp). For every joint with a block, each physics
+substep (5 ms) applies the identified model of pmg::calib::ActuatorModel (its port,
+pmg_train/actuator.py, equal to the C++ model: ctest actuator_port_equals_cpp):
+  - gain scales: kp x kp_scale, kd x kd_scale (of the gains above); armature_kgm2 -> dof_armature;
+  - transport delay: the command goes through the port's delay line (linear interpolation between
+    substeps, so delays that are fractions of 5 ms act as fractions);
+  - torque constant, saturation, torque-speed envelope: tau = limit(kt_scale (kp (q_des' - q) +
+    kd (qd_des' - dq))) with the joint's torque limit as the upper bound of torque_limit_Nm;
+  - the D term stays implicit for stability at 5 ms (as for the nominal joints): dof_damping =
+    0.05 + kt_scale kd + fv (viscous friction too), and the explicit kt_scale kd dq goes into
+    qfrc_applied, so the total is the model's explicit torque (saturated when it saturates) plus the
+    stabilising implicit -c (dq_next - dq);
+  - dry friction: MJX's dof_frictionloss (a constraint, so MuJoCo's solver provides the stiction),
+    set every substep to the port's kinetic friction at the current velocity and motor torque,
+    fc + (max(fs, fc) - fc) exp(-(dq/vs)^2) + kl |tau| (the break-away torque at rest). The port's
+    own implicit stiction needs this step's mass-matrix diagonal and bias forces before the step,
+    which mjx.step does not expose (a second forward pass per substep would double the cost).
+    MJX keeps a friction row only for dofs whose frictionloss was > 0 when the model was put
+    (all joints: 0.2 N m), and a row with frictionloss 0 locks the joint: floor 1e-5 N m.
+  - not applied: offset_rad and the file's zero_offsets (the deployed controller corrects zero
+    offsets: the "Dynamic + Zero-point" policy differs only in its robot config), rate_hz (drivers at
+    >= 200 Hz run at least once per 5 ms substep; a lower rate is reported), backlash (refused).
+Domain randomisation around the identified values: per episode each identified parameter is
+value x U(1 - dr, 1 + dr), dr = EnvConfig.actuator_dr, independently per joint (the identified value
+itself with deterministic_reset): kp_scale and kd_scale always (pmg_calib_joints fits the baseline
+gains of every calibrated joint; a block omits them at 1), and every other key the block names
+(armature, delay, kt_scale, torque limit, envelope, fc, fs, kl, fv); unnamed effects stay off.
+They replace the generic kp / kd / armature / frictionloss ranges on those joints; joints without a
+block keep the generic ranges.
+
 Configurations (EnvConfig.mode; the seed's Table I ablation, trained alike):
   "pmg_gco"     full PMG: generator + GCO (pmg_train/gco.py, equal to the C++ GeneratorWithGco,
                 ctest gco_port_equals_cpp); the actor observes u' (PMG eq. 19) as its command.
@@ -71,6 +109,8 @@ import numpy as np
 from brax.envs.base import Env, State
 from mujoco import mjx
 
+from . import actuator as act_port
+from . import gains as gains_mod
 from . import gco as gco_port
 from . import pmg_generator as pg
 
@@ -97,6 +137,56 @@ TELEOP_HI = (0.5, 1.6, 1.0, 1.9, 1.0, 1.0, 1.0)
 TELEOP_CARRY_LO = (-1.6, -0.1, -0.5, -0.6, -1.0, -1.0, -1.0)
 TELEOP_CARRY_HI = (-0.2, 0.5, 0.5, 1.6, 1.0, 1.0, 1.0)
 MIRROR_SIGN = (1.0, -1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
+GAINS = ("nominal", "physically_informed")
+NOMINAL_ARMATURE = 0.01     # kg m^2, the SIL's MuJoCo 2.2 joint armature (nominal gains)
+FRICTIONLOSS_FLOOR = 1e-5   # N m: MJX keeps a dof's friction row only if its frictionloss was > 0 when the
+                            # model was put, and a row with frictionloss 0 turns into a hard velocity lock
+# Identified actuator parameters drawn per episode around the identified value (EnvConfig.actuator_dr);
+# the other keys of the block are used as identified (vs_rad_per_s) or not at all (offset_rad, rate_hz,
+# backlash_gap_rad: module docstring "Actuator models").
+ACT_DR_KEYS = ("kp_scale", "kd_scale", "armature_kgm2", "delay_s", "kt_scale", "torque_limit_Nm", "tau_stall_Nm",
+               "w_max_rad_per_s", "fc_Nm", "fs_Nm", "kl", "fv_Nms_per_rad")
+ACT_KEYS = ACT_DR_KEYS + ("vs_rad_per_s",)
+
+
+def load_actuator_blocks(path, joint_names):
+    """The `actuator:` blocks of a calibrated robot config (pmg_calib_joints --out; the robot config
+    format, docs/calibration.md): {joint name: parsed block (actuator.parse_block)}. A block is an
+    inline map or the path of an actuator file (a top-level `actuator:` map, relative to @p path).
+    Each parsed block also holds "_named": the keys the block gives. Joints must be among
+    @p joint_names. The file's top-level `zero_offsets:` is not read (training never applies encoder
+    offsets: the deployed controller corrects them). Raises ValueError naming the file, joint and key."""
+    import os
+
+    import yaml
+    with open(path) as f:
+        doc = yaml.safe_load(f)
+    if not isinstance(doc, dict) or not isinstance(doc.get("joints"), list):
+        raise ValueError(f"{path}: expected a robot config with a `joints:` list")
+    known = set(joint_names)
+    blocks = {}
+    for i, j in enumerate(doc["joints"]):
+        name = j.get("name") if isinstance(j, dict) else None
+        if name not in known:
+            raise ValueError(f"{path}: joints[{i}].name = {name!r}: not a joint of the training robot")
+        block = j.get("actuator")
+        if block is None:
+            continue
+        where = f"{path}: joints.{name}.actuator"
+        if isinstance(block, str):
+            afile = os.path.join(os.path.dirname(os.path.abspath(path)), block)
+            with open(afile) as f:
+                adoc = yaml.safe_load(f)
+            if not isinstance(adoc, dict) or set(adoc) != {"actuator"}:
+                raise ValueError(f"{where}: file {afile!r} must hold exactly one top-level `actuator:` map")
+            block, where = adoc["actuator"], f"{afile}: actuator"
+        parsed = act_port.parse_block(block, where)
+        if parsed["backlash_gap_rad"] > 0:
+            raise ValueError(f"{where}.backlash_gap_rad = {parsed['backlash_gap_rad']}: backlash needs a rotor "
+                             f"body; the training model (like the G1 SIL) does not model it (expected 0)")
+        parsed["_named"] = tuple(block)
+        blocks[name] = parsed
+    return blocks
 
 
 @dataclasses.dataclass
@@ -134,6 +224,13 @@ class EnvConfig:
     kp_scale: tuple = (0.9, 1.1)
     kd_scale: tuple = (0.8, 1.2)
     p_delay: float = 0.5           # probability of one control period of action latency
+    # Identified actuator models (issue 15; module docstring "Actuator models"): a calibrated robot
+    # config (pmg_calib_joints --out: the robot config with `actuator:` blocks on some joints); "" = none.
+    actuators: str = ""
+    actuator_dr: float = 0.1       # relative half-width of the per-episode DR around each identified value
+    # PD gains: "nominal" (robot config kp/kd, armature 0.01) or "physically_informed" (kp = I w_n^2,
+    # kd = 2 zeta I w_n, armature I: pmg_train/gains.py, config/robots/g1/g1_pig.yaml).
+    gains: str = "nominal"
     # Pushes (robustness; issue 12: falls): every push_interval [s] (uniform) the base gets a
     # horizontal velocity change of uniform direction and magnitude in push_vel [m/s] (world frame),
     # as a shove of a few hundred N for a few control periods would; none with deterministic_reset.
@@ -246,6 +343,10 @@ class G1PmgEnv(Env):
             raise ValueError(f"EnvConfig.mode = {cfg.mode!r}: expected 'pmg_gco', 'pmg' or 'single_gait'")
         if cfg.blending not in pg.BLENDINGS:
             raise ValueError(f"EnvConfig.blending = {cfg.blending!r}: expected one of {pg.BLENDINGS}")
+        if cfg.gains not in GAINS:
+            raise ValueError(f"EnvConfig.gains = {cfg.gains!r}: expected one of {GAINS}")
+        if not (0.0 <= cfg.actuator_dr < 1.0):
+            raise ValueError(f"EnvConfig.actuator_dr = {cfg.actuator_dr}: expected a relative half-width in [0, 1)")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
         if clip_files is None:
@@ -269,9 +370,17 @@ class G1PmgEnv(Env):
         import yaml
         with open(cfg.robot_yaml) as f:
             joints = yaml.safe_load(f)["joints"]
-        self.kp = np.array([j["kp"] for j in joints], np.float32)
-        self.kd = np.array([j["kd"] for j in joints], np.float32)
+        self.joint_names = [j["name"] for j in joints]
+        if cfg.gains == "physically_informed":
+            kp, kd, inertia = gains_mod.pig_gains(self.joint_names)
+            self.kp, self.kd = np.array(kp, np.float32), np.array(kd, np.float32)
+            self.armature = np.array(inertia, np.float64)
+        else:
+            self.kp = np.array([j["kp"] for j in joints], np.float32)
+            self.kd = np.array([j["kd"] for j in joints], np.float32)
+            self.armature = np.full(len(joints), NOMINAL_ARMATURE, np.float64)
         self.tau_max = np.array([j["torque_limit"] for j in joints], np.float32)
+        self._setup_actuators(cfg)
         self.q_default = np.asarray(self.js.q_stand, np.float32)
         # Single gait: the generator always runs the forward clip at its nominal speed.
         self.single_gait_ud = np.array([self.pmg.dynamic[0].nominal_scale, 0.0, 0.0], np.float32)
@@ -290,9 +399,15 @@ class G1PmgEnv(Env):
         mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf, leg_collisions=cfg.leg_collisions))
         mj.opt.timestep = cfg.sim_dt
         mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
-        mj.dof_armature[6:] = 0.01
+        mj.dof_armature[6:] = self.armature
         mj.dof_frictionloss[6:] = 0.2
         mj.dof_damping[6:] = 0.05 + self.kd  # the PD's D term, integrated implicitly
+        if self.act_idx.size:  # identified joints: their armature and model friction (the step sets them per episode)
+            v = 6 + self.act_idx
+            c = self.act_center
+            mj.dof_armature[v] = np.where(self.act_has_armature, c["armature_kgm2"], mj.dof_armature[v])
+            mj.dof_frictionloss[v] = np.maximum(np.maximum(c["fc_Nm"], c["fs_Nm"]), FRICTIONLOSS_FLOOR)
+            mj.dof_damping[v] = 0.05 + c["kt_scale"] * c["kd_scale"] * self.kd[self.act_idx] + c["fv_Nms_per_rad"]
         mj.opt.iterations = 4
         mj.opt.ls_iterations = 8
         self.mj_model = mj
@@ -313,6 +428,94 @@ class G1PmgEnv(Env):
         upper = np.array([j["upper"] for j in joints])[self.arm_idx]
         self.arm_lower, self.arm_upper = lower.astype(np.float32), upper.astype(np.float32)
         self.arm_default = self.q_default[self.arm_idx]
+
+    def _setup_actuators(self, cfg):
+        """Identified actuator models from cfg.actuators (module docstring "Actuator models"):
+        act_idx (joint indices with a block, robot order), act_center (identified values per key,
+        (m,) float64), act_has_armature, act_rows (delay-line length)."""
+        blocks = load_actuator_blocks(cfg.actuators, self.joint_names) if cfg.actuators else {}
+        self.actuator_blocks = blocks
+        self.act_idx = np.array([i for i, n in enumerate(self.joint_names) if n in blocks], np.int32)
+        m = self.act_idx.size
+        self.act_center = {k: np.zeros(m) for k in ACT_KEYS}
+        self.act_has_armature = np.zeros(m, bool)
+        self.act_randomised = {k: np.zeros(m, bool) for k in ACT_DR_KEYS}
+        self.act_rows = 2
+        if not m:
+            return
+        ordered = [blocks[self.joint_names[i]] for i in self.act_idx]
+        for k in ACT_KEYS:
+            self.act_center[k] = np.array([b[k] if b[k] is not None else 0.0 for b in ordered], np.float64)
+        self.act_has_armature = np.array([b["armature_kgm2"] is not None for b in ordered])
+        # Randomised: the gain scales (pmg_calib_joints fits them on every calibrated joint; a block omits
+        # them at 1) and every key the block names; keys it does not name stay at their "off" value.
+        named = [set(b["_named"]) for b in ordered]
+        self.act_randomised = {k: np.array([k in ("kp_scale", "kd_scale") or k in n for n in named])
+                               for k in ACT_DR_KEYS}
+        # Saturation: the block's and the joint's torque limit, whichever is lower (as pmg::MujocoBackend).
+        self.act_center["torque_limit_Nm"] = np.minimum(self.act_center["torque_limit_Nm"],
+                                                        self.tau_max[self.act_idx].astype(np.float64))
+        max_delay = float(self.act_center["delay_s"].max()) * (1.0 + cfg.actuator_dr)
+        self.act_rows = int(math.ceil(max_delay / cfg.sim_dt)) + 2
+        slow = [n for n, b in zip((self.joint_names[i] for i in self.act_idx), ordered)
+                if 0 < b["rate_hz"] < 1.0 / cfg.sim_dt]
+        if slow:
+            print(f"g1_env: {cfg.actuators}: rate_hz below the {1.0 / cfg.sim_dt:g} Hz physics rate on {slow}: the "
+                  f"driver's zero-order hold is not modelled in training (the PD is recomputed every physics step)")
+
+    def _draw_actuators(self, rng):
+        """Identified actuator parameters of one episode, (m,) each: value x U(1 - dr, 1 + dr) per
+        joint and key (ACT_DR_KEYS), the identified values with deterministic_reset."""
+        c, dr = self.cfg, self.cfg.actuator_dr
+        m = self.act_idx.size
+        draw = {}
+        keys = jax.random.split(rng, len(ACT_KEYS))
+        for key, k in zip(ACT_KEYS, keys):
+            centre = jnp.asarray(self.act_center[key], jnp.float32)
+            if key in ACT_DR_KEYS and not c.deterministic_reset and dr > 0:
+                scale = jax.random.uniform(k, (m,), minval=1.0 - dr, maxval=1.0 + dr)
+                centre = centre * jnp.where(jnp.asarray(self.act_randomised[key]), scale, 1.0)
+            draw[key] = centre
+        draw["kt_scale"] = jnp.clip(draw["kt_scale"], 1e-3, 5.0)
+        draw["kl"] = jnp.clip(draw["kl"], 0.0, 0.99)
+        draw["delay_s"] = jnp.clip(draw["delay_s"], 0.0, (self.act_rows - 2) * c.sim_dt)
+        draw["torque_limit_Nm"] = jnp.minimum(draw["torque_limit_Nm"], jnp.asarray(self.tau_max[self.act_idx]))
+        return draw
+
+    def _act_line_reset(self):
+        """An empty delay line for the identified joints (actuator.init_state: the rows it uses)."""
+        s = act_port.init_state(self.act_idx.size, self.act_rows, xp=jnp, dtype=jnp.float32)
+        return {k: s[k] for k in ("fifo", "fifo_enabled", "head", "count")}
+
+    def actuator_sys(self, sys, draw):
+        """@p sys with the identified joints' armature (where identified) and the implicit damping of
+        their PD's D term: 0.05 (the SIL's joint damping) + kt_scale kd_scale kd + fv [N m s/rad]."""
+        v = 6 + jnp.asarray(self.act_idx)
+        kd = jnp.asarray(self.kd[self.act_idx])
+        arm = jnp.where(jnp.asarray(self.act_has_armature), draw["armature_kgm2"], sys.dof_armature[v])
+        damp = 0.05 + draw["kt_scale"] * draw["kd_scale"] * kd + draw["fv_Nms_per_rad"]
+        return sys.replace(dof_armature=sys.dof_armature.at[v].set(arm), dof_damping=sys.dof_damping.at[v].set(damp))
+
+    def actuator_torque(self, draw, line, q_des, qd_des, q, dq):
+        """One physics substep of the identified joints' actuator model (module docstring): pushes the
+        command (q_des, qd_des at the identified joints, (m,)) into the delay line, runs the delayed
+        PD with kp kp_scale, kd kd_scale on the true joint state (q, dq (m,)), scales by kt_scale, limits
+        (saturation, torque-speed envelope at dq). Returns (line, tau_motor (m,) [N m] for ctrl, the
+        explicit part of the implicit D term, kt kd kd_scale dq (m,) [N m] for qfrc_applied, dry
+        friction magnitude (m,) [N m] for dof_frictionloss)."""
+        idx = self.act_idx
+        kp = jnp.asarray(self.kp[idx]) * draw["kp_scale"]
+        kd = jnp.asarray(self.kd[idx]) * draw["kd_scale"]
+        m = idx.size
+        cmd = {"q_des_rad": q_des, "dq_des_rad_per_s": qd_des, "kp_Nm_per_rad": kp, "kd_Nms_per_rad": kd,
+               "tau_ff_Nm": jnp.zeros(m), "enabled": jnp.ones(m, bool)}
+        line = act_port.push_command(line, cmd, xp=jnp)
+        c, _ = act_port.delayed_command(draw, line, self.cfg.sim_dt, xp=jnp)
+        pd = draw["kt_scale"] * (c[2] * (c[0] - q) + c[3] * (c[1] - dq))
+        tau_m = act_port.limit_torque(draw, pd, dq, xp=jnp)
+        d_explicit = draw["kt_scale"] * kd * dq
+        friction = jnp.maximum(act_port.kinetic_friction(draw, dq, tau_m, xp=jnp), FRICTIONLOSS_FLOOR)
+        return line, tau_m, d_explicit, friction
 
     # ---- Brax Env interface ----------------------------------------------------------------
     @property
@@ -454,6 +657,9 @@ class G1PmgEnv(Env):
             "tp_w": jnp.zeros(2),
             "push_timer": self._push_interval(k[13]),
         }
+        if self.act_idx.size:
+            info["act"] = self._draw_actuators(k[14])
+            info["act_line"] = self._act_line_reset()
         ref, tracked, info["gco"] = self._reference(info["phase"], info["command"],
                                                     jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32)
                                                                            if x.dtype != bool else x,
@@ -494,17 +700,36 @@ class G1PmgEnv(Env):
         kp = jnp.asarray(self.kp) * info["kp_scale"]
         kd = jnp.asarray(self.kd)
 
-        def substep(data, _):
+        ident = self.act_idx.size > 0
+        sys = self.sys
+        if ident:
+            idx = jnp.asarray(self.act_idx)
+            v = 6 + idx
+            sys = self.actuator_sys(sys, info["act"])
+
+        def substep(carry, _):
+            data, line = carry
             q = data.qpos[7:]
             tau = kp * (q_des - q) + kd * qd_des  # -kd*qd is the implicit joint damping
             tau = jnp.clip(tau, -self.tau_max, self.tau_max)
+            sys_k = sys
+            if ident:
+                line, tau_m, d_explicit, friction = self.actuator_torque(
+                    info["act"], line, q_des[idx], qd_des[idx], q[idx], data.qvel[v])
+                tau = tau.at[idx].set(tau_m)
+                # The implicit damping (dof_damping) takes -c dq_next; adding c dq here leaves the model's
+                # explicit torque, saturation included, plus the stabilising implicit -c (dq_next - dq).
+                data = data.replace(qfrc_applied=jnp.zeros_like(data.qfrc_applied).at[v].set(d_explicit))
+                sys_k = sys.replace(dof_frictionloss=sys.dof_frictionloss.at[v].set(friction))
             data = data.replace(ctrl=tau)
-            return mjx.step(self.sys, data), tau
+            return (mjx.step(sys_k, data), line), tau
 
         data = state.pipeline_state
         if not c.deterministic_reset and c.push_vel[1] > 0:
             data, info["push_timer"] = self._push(data, info["push_timer"], k_push)
-        data, taus = jax.lax.scan(substep, data, None, length=self.n_substeps)
+        (data, line), taus = jax.lax.scan(substep, (data, info.get("act_line")), None, length=self.n_substeps)
+        if ident:
+            info["act_line"] = line
         tau = taus[-1]
 
         # PMG, as the controller runs it: one generator step per control tick, evaluated at the
@@ -569,6 +794,8 @@ class G1PmgEnv(Env):
         info["tp_tgt"] = jnp.where(done, jnp.asarray(self.arm_default), info["tp_tgt"])
         info["tp_vel"] = jnp.where(done, 0.0, info["tp_vel"])
         info["tp_w"] = jnp.where(done, 0.0, info["tp_w"])
+        if ident:  # the restarted episode's motors have no command history
+            info["act_line"] = dict(info["act_line"], count=jnp.where(done, 0, info["act_line"]["count"]))
         obs = self._obs(data, info, k_noise)
         metrics = dict(state.metrics)  # wrappers add their own entries (e.g. "reward")
         metrics.update({"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
@@ -658,7 +885,12 @@ def make_randomization_fn(env: G1PmgEnv):
             hand = jax.random.uniform(k[6], (2,), minval=c.hand_payload[0], maxval=c.hand_payload[1])
             hand = jnp.where(jax.random.uniform(k[7], (2,)) < c.p_payload, hand, 0.0)
             mass = mass.at[jnp.asarray(env.hand_bodies)].add(hand)
-            arm = sys.dof_armature.at[6:].set(jax.random.uniform(k[3], (29,), minval=c.armature[0], maxval=c.armature[1]))
+            if c.gains == "physically_informed":  # the generic range relative to the nominal 0.01, around I
+                arm = sys.dof_armature.at[6:].set(jnp.asarray(env.armature) * jax.random.uniform(
+                    k[3], (29,), minval=c.armature[0] / NOMINAL_ARMATURE, maxval=c.armature[1] / NOMINAL_ARMATURE))
+            else:
+                arm = sys.dof_armature.at[6:].set(jax.random.uniform(k[3], (29,), minval=c.armature[0],
+                                                                     maxval=c.armature[1]))
             fl = sys.dof_frictionloss.at[6:].set(jax.random.uniform(k[4], (29,), minval=c.frictionloss[0],
                                                                     maxval=c.frictionloss[1]))
             damp = sys.dof_damping.at[6:].set(0.05 + jnp.asarray(env.kd) * jax.random.uniform(

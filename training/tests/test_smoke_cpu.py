@@ -22,6 +22,18 @@ training_smoke_ppo) so that they compile in parallel.
    the references in the observation equal the float64 NumPy ports (pmg_generator.step at the
    env's phase and command: q_ref to 1e-4 rad; gco.step from the env's previous GCO state: u' to
    1e-3) and the phase advances by the port's own update.
+1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
+   the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
+   effect on; an env built with a calibrated robot config written into the workdir (left knee inline
+   {kp_scale 0.8, delay 4 ms, fc 1 N m, offset 0.02 rad}, right hip pitch from an actuator file
+   {kt_scale 0.9, limit 60 N m, fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets map) and one with
+   gains=physically_informed: randomised resets, zero action, finite and upright; the identified
+   parameters are drawn within +-actuator_dr of the file's values, unnamed effects stay off, offsets
+   are not applied; with the identified values (one physics substep per env.step) the knee's and the
+   hip's motor torque equal the NumPy port's prediction (kp x 0.8 with the 4 ms delay interpolated
+   between 5 ms substeps; kt 0.9, 60 N m saturation) and differ from the nominal PD, the implicit
+   damping, armature and the knee's friction row (1 N m) are the model's; PIG kp / kd equal
+   config/robots/g1/g1_pig.yaml and the armature is the reflected inertia.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -233,6 +245,226 @@ def env_checks(check, n_envs, n_steps):
     return obs
 
 
+CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
+CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
+                "fs_Nm": 0.5, "vs_rad_per_s": 0.05, "kl": 0.01}
+
+
+def write_calibrated_robot(workdir):
+    """A calibrated robot config as pmg_calib_joints writes it: g1.yaml with an inline `actuator:` flow
+    block on the left knee, an actuator-file path on the right hip pitch, and a zero_offsets map."""
+    import yaml
+    with open("config/robots/g1/g1.yaml") as f:
+        text = f.read()
+
+    def flow(d):
+        return "{" + ", ".join(f"{k}: {v}" for k, v in d.items()) + "}"
+    for name, block in (("left_knee_joint", flow(CAL_KNEE)), ("right_hip_pitch_joint", "rhp.actuator.yaml")):
+        lines = text.splitlines(keepends=True)
+        for i, line in enumerate(lines):
+            if line.lstrip().startswith(f"- {{name: {name},"):
+                lines[i] = line.rstrip().rstrip("}") + f", actuator: {block}}}\n"
+        text = "".join(lines)
+    text += "zero_offsets: {left_ankle_pitch_joint: 0.03}\n"
+    path = os.path.join(workdir, "g1_calibrated.yaml")
+    with open(path, "w") as f:
+        f.write(text)
+    with open(os.path.join(workdir, "rhp.actuator.yaml"), "w") as f:
+        f.write("actuator: " + flow(CAL_HIP_FILE) + "\n")
+    yaml.safe_load(open(path))  # still YAML
+    return path
+
+
+def actuator_port_jax_checks(check):
+    """JAX float32 port (jit + scan) = float64 NumPy port on random sequences with every effect on."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    from pmg_train import actuator as act
+    rng = np.random.default_rng(7)
+    n, T, dt = 16, 300, 0.005
+    # Driver rates 0 / 500 Hz (a PD every 5 ms step, as in the env): at rates whose period is not a
+    # multiple of dt the zero-order hold's firing test (timer >= period - 1e-9 s) sits within float32
+    # rounding of the threshold, so float32 and float64 fire on different steps (the C++ model's
+    # own threshold; test_actuator_port.py --jax32 measures it on the C++ vectors).
+    vals = {"rate_hz": rng.choice([0.0, 500.0], n), "delay_s": rng.uniform(0, 0.03, n),
+            "offset_rad": rng.uniform(-0.05, 0.05, n), "kt_scale": rng.uniform(0.7, 1.3, n),
+            "torque_limit_Nm": rng.uniform(5, 50, n), "tau_stall_Nm": rng.uniform(10, 60, n) * (rng.random(n) < 0.5),
+            "w_max_rad_per_s": rng.uniform(5, 20, n), "fc_Nm": rng.uniform(0, 1.5, n), "fs_Nm": rng.uniform(0, 2, n),
+            "vs_rad_per_s": rng.uniform(0.02, 0.3, n), "kl": rng.uniform(0, 0.2, n),
+            "fv_Nms_per_rad": rng.uniform(0, 0.4, n)}
+    cmd = np.stack([np.cumsum(rng.normal(0, 0.02, (T, n)), 0), rng.normal(0, 1, (T, n)),
+                    np.repeat(rng.uniform(20, 200, (1, n)), T, 0), np.repeat(rng.uniform(0.5, 5, (1, n)), T, 0),
+                    rng.normal(0, 2, (T, n)), (rng.random((T, n)) > 0.03).astype(float)], -1)
+    dq = np.where(rng.random((T, n)) < 0.3, 0.0, rng.normal(0, 2, (T, n)))
+    joint = np.stack([np.cumsum(rng.normal(0, 0.01, (T, n)), 0), dq, np.full((T, n), 0.05),
+                      rng.normal(0, 3, (T, n))], -1)
+
+    def inputs(t, xp, c, j):
+        cm = {k: c[t][:, i] for i, k in enumerate(act.COMMAND_KEYS)}
+        cm["enabled"] = c[t][:, 5] != 0
+        return cm, {"q_rad": j[t][:, 0], "dq_rad_per_s": j[t][:, 1], "inertia_kgm2": j[t][:, 2],
+                    "tau_other_Nm": j[t][:, 3], "dt_s": dt}
+    p64 = act.make_params(n, **vals)
+    s = act.init_state(n, 16)
+    ref = []
+    for t in range(T):
+        s, o = act.step(p64, s, *inputs(t, np, cmd, joint))
+        ref.append(o["tau_applied_Nm"])
+    ref = np.array(ref)
+    p32 = act.make_params(n, xp=jnp, **vals)
+
+    @jax.jit
+    def run(c, j):
+        def body(s, x):
+            cm = {k: x[0][:, i] for i, k in enumerate(act.COMMAND_KEYS)}
+            cm["enabled"] = x[0][:, 5] != 0
+            jj = {"q_rad": x[1][:, 0], "dq_rad_per_s": x[1][:, 1], "inertia_kgm2": x[1][:, 2],
+                  "tau_other_Nm": x[1][:, 3], "dt_s": jnp.float32(dt)}
+            s, o = act.step(p32, s, cm, jj, xp=jnp)
+            return s, o["tau_applied_Nm"]
+        return jax.lax.scan(body, act.init_state(n, 16, xp=jnp), (c, j))[1]
+    ours = np.asarray(run(jnp.asarray(cmd, jnp.float32), jnp.asarray(joint, jnp.float32)), np.float64)
+    err = np.abs(ours - ref)
+    ok = err <= 1e-3 * (1.0 + np.abs(ref))
+    check(ok.mean() >= 0.995, f"JAX float32 actuator port (jit, scan) = NumPy float64 port: {ok.mean() * 100:.2f} % of "
+                              f"{err.size} steps within 1e-3 (1 + |tau|), median {np.median(err):.1e} N m "
+                              f"(stiction / driver-rate branch flips at thresholds allowed in 0.5 %)")
+
+
+def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
+    """Calibrated and physically-informed-gain environments (docstring 1b)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    import yaml
+    from pmg_train import actuator as act
+    from pmg_train import g1_env
+    from pmg_train import gains
+
+    clips = sorted(glob.glob("config/clips/g1/*.yaml"))
+    cal_path = write_calibrated_robot(workdir)
+    cfg = g1_env.EnvConfig(actuators=cal_path)
+    env = g1_env.G1PmgEnv(cfg, clips)
+    knee, hip = 3, 6
+    c = env.act_center
+    check(list(env.act_idx) == [knee, hip] and np.allclose(c["kp_scale"], [0.8, 1.0]) and
+          np.allclose(c["delay_s"], [0.004, 0.0]) and np.allclose(c["fc_Nm"], [1.0, 0.0]) and
+          np.allclose(c["kt_scale"], [1.0, 0.9]) and np.allclose(c["torque_limit_Nm"], [139.0, 60.0]) and
+          list(env.act_has_armature) == [False, True],
+          f"calibrated robot config read: blocks on {[env.joint_names[i] for i in env.act_idx]} (inline and "
+          f"file), torque limit = min(block, joint)")
+
+    def rollout(e, tag):
+        reset, step = jax.jit(e.reset), jax.jit(e.step)
+        t0 = time.time()
+        heights, tilts, finite, dones, states = [], [], True, 0, []
+        for i in range(n_envs):
+            st = reset(jax.random.PRNGKey(10 + i))
+            states.append(st)
+            for _ in range(n_steps):
+                st = step(st, jnp.zeros(e.action_size))
+                qp = np.asarray(st.pipeline_state.qpos, np.float64)
+                finite &= bool(np.isfinite(qp).all() and np.isfinite(np.asarray(st.obs["state"])).all()
+                               and np.isfinite(float(st.reward)))
+                dones += int(st.done)
+                heights.append(qp[2])
+                tilts.append(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (qp[4] ** 2 + qp[5] ** 2)))))
+        print(f"{tag}: reset + {n_steps} steps x {n_envs} envs {time.time() - t0:.1f} s (compile included)", flush=True)
+        check(finite and dones == 0 and min(heights) > 0.65 and max(tilts) < 0.3,
+              f"{tag}: randomised resets, zero action, {n_steps} steps x {n_envs}: finite, no episode ended "
+              f"({dones}), pelvis above 0.65 m (min {min(heights):.3f}), within 0.3 rad of upright "
+              f"(max {max(tilts):.3f})")
+        return states, step
+
+    states, _ = rollout(env, "calibrated env")
+    draws = [{k: np.asarray(v, np.float64) for k, v in st.info["act"].items()} for st in states]
+    dr = cfg.actuator_dr
+    within = all(np.all(np.abs(d[k] - c[k]) <= dr * np.abs(c[k]) + 1e-6) for d in draws for k in g1_env.ACT_DR_KEYS)
+    moved = any(abs(d["kp_scale"][0] - 0.8) > 1e-4 and abs(d["delay_s"][0] - 0.004) > 1e-7 for d in draws)
+    off = all(d["kt_scale"][0] == 1.0 and d["delay_s"][1] == 0.0 and d["fc_Nm"][1] == 0.0 for d in draws)
+    kps = ", ".join("%.3f" % d["kp_scale"][0] for d in draws)
+    delays = ", ".join("%.2f" % (d["delay_s"][0] * 1e3) for d in draws)
+    check(within and moved and off,
+          f"identified parameters drawn within +-{dr:g} x the file's values (knee kp_scale {kps}, delay {delays} "
+          f"ms); unnamed effects stay off")
+
+    # One physics substep per env.step, the identified values: the motor torques equal the port's.
+    probe = g1_env.G1PmgEnv(g1_env.EnvConfig(actuators=cal_path, deterministic_reset=True, push_vel=(0.0, 0.0)), clips)
+    probe.n_substeps = 1
+    step1 = jax.jit(probe.step)
+    st = states[0]
+    centre = {k: jnp.asarray(v, jnp.float32) for k, v in c.items()}
+    info = dict(st.info, act=centre, delay=jnp.float32(0.0), push_timer=jnp.int32(10 ** 6))
+    st = st.replace(info=info)
+    p = act.make_params(2, **{k: c[k] for k in act.PARAM_KEYS if k in c})  # offset_rad: not applied (0)
+    ps = act.init_state(2, probe.act_rows)
+    kp_e = probe.kp[[knee, hip]].astype(np.float64) * c["kp_scale"]
+    kd_e = probe.kd[[knee, hip]].astype(np.float64) * c["kd_scale"]
+    worst, nominal_gap, fric_worst, damp_worst = 0.0, 0.0, 0.0, 0.0
+    t0 = time.time()
+    for k in range(8):
+        a = np.zeros(12, np.float32)
+        a[knee], a[hip] = (0.6, -0.4) if k < 4 else (-0.5, 0.3)
+        q = np.asarray(st.pipeline_state.qpos[7:], np.float64)
+        dq = np.asarray(st.pipeline_state.qvel[6:], np.float64)
+        q_des = probe.q_default[:12].astype(np.float64) + probe.action_scale.astype(np.float64) * a
+        ps, o = act.step(p, ps, {"q_des_rad": q_des[[knee, hip]], "dq_des_rad_per_s": np.zeros(2),
+                                 "kp_Nm_per_rad": kp_e, "kd_Nms_per_rad": kd_e, "tau_ff_Nm": np.zeros(2),
+                                 "enabled": np.ones(2, bool)},
+                         {"q_rad": q[[knee, hip]], "dq_rad_per_s": dq[[knee, hip]], "inertia_kgm2": np.zeros(2),
+                          "tau_other_Nm": np.zeros(2), "dt_s": cfg.sim_dt})
+        st = step1(st, jnp.asarray(a))
+        ctrl = np.asarray(st.pipeline_state.ctrl, np.float64)[[knee, hip]]
+        worst = max(worst, float(np.max(np.abs(ctrl - o["tau_motor_Nm"]) / (1.0 + np.abs(o["tau_motor_Nm"])))))
+        nominal = np.clip(probe.kp[[knee, hip]] * (q_des[[knee, hip]] - q[[knee, hip]]), -probe.tau_max[[knee, hip]],
+                          probe.tau_max[[knee, hip]])
+        nominal_gap = max(nominal_gap, float(abs(nominal[0] - ctrl[0])))
+        applied = np.asarray(st.pipeline_state.qfrc_applied, np.float64)[6 + np.array([knee, hip])]
+        damp_worst = max(damp_worst, float(np.max(np.abs(applied - c["kt_scale"] * kd_e * dq[[knee, hip]]))))
+        efc = np.asarray(st.pipeline_state._impl.efc_frictionloss, np.float64)
+        ne = int(st.pipeline_state._impl.ne)
+        fl = efc[ne + np.array([knee, hip])]  # friction rows follow the equality rows, in dof order
+        fric = np.maximum(act.kinetic_friction(p, dq[[knee, hip]], o["tau_motor_Nm"]), g1_env.FRICTIONLOSS_FLOOR)
+        fric_worst = max(fric_worst, float(np.max(np.abs(fl - fric))))
+    print(f"identified-model probe: 8 substeps {time.time() - t0:.1f} s (compile included)", flush=True)
+    check(worst < 1e-3 and nominal_gap > 1.0,
+          f"with the identified values the knee and hip motor torques (ctrl) equal the NumPy port's (kp x 0.8, "
+          f"4 ms delay over 5 ms substeps; kt 0.9, 60 N m limit): max rel. diff {worst:.1e} < 1e-3; the knee's "
+          f"differs from the nominal PD by up to {nominal_gap:.1f} N m")
+    sys_c = probe.actuator_sys(probe.sys, centre)
+    v = 6 + np.array([knee, hip])
+    want_damp = 0.05 + c["kt_scale"] * kd_e + c["fv_Nms_per_rad"]
+    check(damp_worst < 1e-3 and np.allclose(np.asarray(sys_c.dof_damping)[v], want_damp, rtol=1e-5) and
+          abs(float(sys_c.dof_armature[v[1]]) - 0.02) < 1e-7 and abs(float(sys_c.dof_armature[v[0]]) - 0.01) < 1e-7
+          and fric_worst < 1e-4,
+          f"implicit D term 0.05 + kt kd + fv = {np.round(want_damp, 3).tolist()} N m s/rad with its explicit part "
+          f"in qfrc_applied (max diff {damp_worst:.1e}); armature 0.02 where identified; friction rows = the "
+          f"port's kinetic friction (knee {fl[0]:.3f} N m; max diff {fric_worst:.1e})")
+    sl, _ = term_slices(g1_env.OBS_TERMS)
+    q_meas = float(st.obs["privileged_state"][sl["joint_pos_rel"]][knee])  # noise-free, scale 1
+    check(abs(q_meas - float(st.pipeline_state.qpos[7 + knee] - probe.q_default[knee])) < 1e-5,
+          "encoder offsets of the file (offset_rad, zero_offsets) are not applied: the observed knee angle is the "
+          "true one")
+
+    # Physically informed gains.
+    pig = g1_env.G1PmgEnv(g1_env.EnvConfig(gains="physically_informed"), clips)
+    with open("config/robots/g1/g1_pig.yaml") as f:
+        pig_yaml = yaml.safe_load(f)["joints"]
+    kp, kd, inertia = gains.pig_gains(pig.joint_names)
+    arm = np.asarray(pig.mj_model.dof_armature[6:])
+    check(np.allclose(pig.kp, [j["kp"] for j in pig_yaml]) and np.allclose(pig.kd, [j["kd"] for j in pig_yaml]) and
+          np.allclose(arm, inertia) and np.allclose(pig.kp, np.asarray(inertia) * (20 * math.pi) ** 2, rtol=1e-4) and
+          np.allclose(pig.kd, 4.0 * np.asarray(inertia) * 20 * math.pi, rtol=1e-3),
+          f"physically informed gains: kp = I w_n^2, kd = 2 zeta I w_n (w_n 2 pi 10 Hz, zeta 2) = g1_pig.yaml, "
+          f"armature = I (knee kp {pig.kp[knee]:.2f}, kd {pig.kd[knee]:.3f}, I {arm[knee]:.5f})")
+    sys_r, _ = g1_env.make_randomization_fn(pig)(pig.sys, jax.random.split(jax.random.PRNGKey(0), 8))
+    ratio = np.asarray(sys_r.dof_armature)[:, 6:] / np.asarray(inertia)[None]
+    check(ratio.min() >= 0.8 - 1e-6 and ratio.max() <= 1.5 + 1e-6,
+          f"PIG armature DR = I x U(0.8, 1.5) (ratios {ratio.min():.3f}..{ratio.max():.3f})")
+    rollout(pig, "physically informed gains env")
+
+
 def ppo_checks(check, workdir, obs):
     import jax
     import numpy as np
@@ -308,6 +540,9 @@ def main():
     check = Checks()
     pin_checks(check)
     obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
+    if args.part in ("env", "all"):
+        actuator_port_jax_checks(check)
+        actuator_env_checks(check, workdir)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")
