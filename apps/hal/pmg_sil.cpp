@@ -6,7 +6,7 @@
 //
 //   pmg_sil [--robot config/robots/g1/g1.yaml] [--plan config/hal/g1_can.yaml] --port 47000
 //           [--realtime] [--no-gantry] [--duration 20] [--drop 0.01] [--silent-joint 3] ...
-//           [--reality REALITY.yaml]
+//           [--reality REALITY.yaml] [--bench-contacts]
 // With --reality the SIL plays a real robot whose truth is hidden from the tools that talk to it
 // over the bus (per-joint actuator effects, encoder zero offsets, link mass errors;
 // include/pmg/hal/reality.hpp, docs/calibration.md "A real robot with a hidden truth"). It prints
@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   std::string reality_path;
   int port = 47000, fifo = 0;
   double duration = 0.0, faults_after = 0.0, push_at = -1.0, push_force = 300.0, push_duration = 0.2;
-  bool realtime = false, no_gantry = false;
+  bool realtime = false, no_gantry = false, bench_contacts = false;
   SilFaults f;
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--plan", plan_path, "bus plan YAML (same file as the controller's)")->check(CLI::ExistingFile)
@@ -50,6 +50,9 @@ int main(int argc, char** argv) {
   app.add_flag("--realtime", realtime, "step every 2 ms of wall time and answer every command at once, like "
                                        "the drivers (default: lockstep, step when a cycle's commands arrived)");
   app.add_flag("--no-gantry", no_gantry, "robot stands on the ground instead of hanging in the virtual gantry");
+  app.add_flag("--bench-contacts", bench_contacts,
+               "stiff calibration-bench sole contacts (the rigid floor pmg_calib_zero's protocol stands on; "
+               "default: the MJCF's soft contacts)");
   app.add_option("--duration", duration, "stop after this much simulated time [s]; 0 = until Ctrl-C");
   app.add_option("--fifo", fifo, "SCHED_FIFO priority in --realtime (0 = normal)")->check(CLI::Range(0, 99));
   app.add_option("--faults-after", faults_after, "start injecting the faults below at this simulated time [s]");
@@ -75,6 +78,7 @@ int main(int argc, char** argv) {
     pmg::MujocoBackendOptions mo;
     mo.cycle_period = plan.options().period_s;
     mo.gantry.enabled = !no_gantry;
+    mo.sole_contacts.enabled = bench_contacts;
     std::string reality_note = "none";
     if (!reality_path.empty()) {
       const pmg::hal::Reality reality = pmg::hal::loadReality(reality_path, robot);
@@ -87,9 +91,9 @@ int main(int argc, char** argv) {
     SilDriverEmulator sil(plan, std::move(sim), static_cast<std::uint16_t>(port));
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
-    std::printf("pmg_sil: %s, %zu buses, %zu motors, UDP base port %d, %s, gantry %s, reality %s\n",
+    std::printf("pmg_sil: %s, %zu buses, %zu motors, UDP base port %d, %s, gantry %s, %s sole contacts, reality %s\n",
                 robot.name.c_str(), plan.buses().size(), plan.motorCount(), port, realtime ? "real time" : "lockstep",
-                no_gantry ? "off" : "on", reality_note.c_str());
+                no_gantry ? "off" : "on", bench_contacts ? "bench" : "MJCF", reality_note.c_str());
     std::printf("%s", plan.report().c_str());
     std::fflush(stdout);
     if (realtime && fifo > 0) {

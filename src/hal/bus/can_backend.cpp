@@ -55,6 +55,7 @@ CanBackend::CanBackend(BusPlan plan, std::vector<std::unique_ptr<CanTransport>> 
   skip_bus_.assign(nb, 0);
   motor_counters_.resize(static_cast<std::size_t>(num_joints_));
   got_.assign(static_cast<std::size_t>(num_joints_), 0);
+  enabled_.assign(static_cast<std::size_t>(num_joints_), 0);
   bus_off_cycles_.assign(nb, 0);
   double busiest = 0.0;
   for (const BusLoad& l : plan_.loads()) busiest = std::max(busiest, l.busy_s);
@@ -129,6 +130,9 @@ void CanBackend::handleFrame(std::size_t b, const CanFrame& f, pmg::LowState& st
   }
   const MotorSpec& m = plan_.buses()[b].motors[static_cast<std::size_t>(k)];
   MotorLinkCounters& c = motor_counters_[static_cast<std::size_t>(m.joint_index)];
+  // Any frame from the driver answers an enable request (it is only sent until the first answer):
+  // the driver is in motor mode from then on.
+  enabled_[static_cast<std::size_t>(m.joint_index)] = 1;
   if (late) {
     ++c.late;
     return;
@@ -196,7 +200,10 @@ pmg::BackendStatus CanBackend::exchange(const pmg::LowCommand& command, pmg::Low
     }
     const MotorProtocol& p = *protocols_[e.bus];
     const MotorSpec& m = plan_.buses()[e.bus].motors[e.motor];
-    if (cycles_ == 0) {
+    if (!enabled_[static_cast<std::size_t>(m.joint_index)]) {
+      // Until the driver answers, ask it to enter motor mode again every cycle: a lost enable
+      // (driver not powered yet, pmg_sil still starting) must not leave a limp motor that the
+      // supervisor believes is holding its target.
       p.encodeControl(m, ControlRequest::kEnable, f);
     } else {
       const pmg::MotorCommand& jc = command.motors[static_cast<std::size_t>(m.joint_index)];

@@ -351,3 +351,60 @@ TEST(SilFaults, PushOnThePelvisIsDetectedAsAFall) {
     r.sil_->post([sim](pmg::HalBackend&) { sim->push(sim->pelvisBody(), Eigen::Vector3d(0.0, 800.0, 0.0), 0.25); });
   }, FaultCode::kFallTilt, -1, 750, /*gantry=*/false);
 }
+
+// The drivers are enabled by a request the backend repeats until each driver answers: enable
+// frames lost because the robot (here pmg_sil's emulator) was not listening yet must not leave
+// limp motors behind a supervisor that believes they hold their targets (pmg_calib_joints once
+// captured a knee hanging at 0.01 rad while commanding 0.3 rad: its first cycles ran before pmg_sil
+// had bound its ports).
+TEST(SilFaults, EnableLostWhileTheRobotStartsIsRepeatedUntilAnswered) {
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
+  BusPlan plan = BusPlan::fromYaml(pmg::test::g1CanPlanPath());
+  std::unique_ptr<CanTransport> imu;
+  std::vector<std::unique_ptr<CanTransport>> transports;
+  std::uint16_t base = 0;
+  for (int attempt = 0;; ++attempt) {
+    base = basePort(attempt + 7);
+    try {
+      transports = makeHostUdpTransports(plan, base, imu);
+      break;
+    } catch (const std::system_error&) {
+      if (attempt >= 20) throw;
+    }
+  }
+  CanBackendOptions co;
+  co.lockstep = true;
+  co.lockstep_timeout_s = 0.005;
+  CanBackend can(plan, std::move(transports), std::move(imu), co);
+  const int n = static_cast<int>(robot.numJoints());
+  const int knee = 3;
+  pmg::LowCommand cmd;
+  cmd.num_motors = n;
+  for (int j = 0; j < n; ++j) {
+    const pmg::JointConfig& jc = robot.joints[static_cast<std::size_t>(j)];
+    cmd.motors[static_cast<std::size_t>(j)] = pmg::MotorCommand{jc.default_position, 0.0, jc.kp, jc.kd, 0.0};
+  }
+  pmg::LowState st;
+  // Nobody listens yet: the first enable requests are lost.
+  for (int c = 0; c < 5; ++c) EXPECT_EQ(can.exchange(cmd, st), pmg::BackendStatus::kFault);
+  // The robot comes up.
+  pmg::MujocoBackendOptions mo;
+  mo.gantry.enabled = true;
+  auto sim = std::make_unique<pmg::MujocoBackend>(robot, mo);
+  SilDriverEmulator sil(plan, std::move(sim), base);
+  std::atomic<bool> stop{false};
+  std::thread t([&] {
+    while (!stop.load()) sil.runCycle(0.02);
+  });
+  // Bend the knee 0.3 rad beyond its default: after 1 s every driver must answer and the knee hold
+  // the target (a limp knee hangs near 0 rad in the gantry).
+  cmd.motors[knee].q = robot.joints[knee].default_position + 0.3;
+  int ok = 0;
+  for (int c = 0; c < 500; ++c) ok += can.exchange(cmd, st) == pmg::BackendStatus::kOk;
+  stop = true;
+  t.join();
+  EXPECT_GT(ok, 400);
+  ASSERT_TRUE(st.motors[knee].valid);
+  EXPECT_NEAR(st.motors[knee].q, cmd.motors[knee].q, 0.05);
+  EXPECT_GT(sil.counters().controls, 0u);
+}

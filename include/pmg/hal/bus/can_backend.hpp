@@ -5,8 +5,9 @@
 ///
 /// exchange(), once per 2 ms HAL cycle (noexcept, allocation-free):
 ///  1. drain frames left over from the previous cycle (counted as late replies, not used);
-///  2. per motor: joint command -> motor side (direction, offset) -> protocol frame -> send (the
-///     first cycle sends ControlRequest::kEnable instead). A non-finite command is never encoded:
+///  2. per motor: joint command -> motor side (direction, offset) -> protocol frame -> send (until
+///     the driver has answered once, ControlRequest::kEnable is sent instead, every cycle: a lost
+///     enable request is repeated, never left as a limp motor). A non-finite command is never encoded:
 ///     the motor gets a zero-torque command instead (counted in nonfinite_commands). By default
 ///     all frames are queued at the slot start, bus by bus in plan order: the controller's TX
 ///     queue and CAN arbitration serialise them, and the plan's schedule bounds when each goes out.
@@ -99,6 +100,7 @@ class CanBackend final : public pmg::HalBackend {
   std::vector<std::array<std::int16_t, 256>> route_;  ///< [bus][motor id] -> motor index or -1
   std::vector<MotorLinkCounters> motor_counters_;     ///< (num joints)
   std::vector<std::uint8_t> got_;                     ///< replied this cycle (num joints)
+  std::vector<std::uint8_t> enabled_;                 ///< driver answered an enable request (num joints)
   std::vector<int> bus_off_cycles_;
   std::vector<::pollfd> pollfds_;
   struct SendEvent {
