@@ -29,6 +29,7 @@ set(CMAKE_INSTALL_RPATH "$ORIGIN/${_pmg_bin_to_lib}")
 # found by the tools through pmg::resolveData("scripts/<name>").
 set(PMG_HELPER_SCRIPTS
   ${PMG_SOURCE_DIR}/scripts/calib_plot.py
+  ${PMG_SOURCE_DIR}/scripts/plot_joint_calibration.py
   ${PMG_SOURCE_DIR}/scripts/gco_plot.py
   ${PMG_SOURCE_DIR}/scripts/motion_plot_clips.py
   ${PMG_SOURCE_DIR}/scripts/motion_plot_retarget.py

@@ -84,14 +84,14 @@ def grade(reality, joints_report, zero, joints):
     est = (zero or {}).get("zero_offsets") or {}
     for j in joints:
         rep = joints_report["joints"].get(j, {})
-        named = [e["name"] for e in rep.get("effects", [])]
+        named = [e["name"] for e in rep.get("causes", [])]
         row = {"joint": j, "named": named, "residual_rad": rep.get("simulator_residual_rad")}
         block = effects.get(j)
         if block:
             key = next(k for k in block if k in EFFECTS)
             name, pkey, rel, ab = EFFECTS[key]
             truth = block[key]
-            got = rep["effects"][0]["params"].get(pkey) if named and named[0] == name else None
+            got = rep["causes"][0]["params"].get(pkey) if named and named[0] == name else None
             tol = rel * abs(truth) if rel > 0 else ab
             row.update({"hidden": name, "truth": truth, "estimate": got, "tolerance": tol,
                         "named_first": bool(named) and named[0] == name,
@@ -143,7 +143,7 @@ def main():
     t_zero = 0.0
     if not args.skip_zero:
         t1 = time.time()
-        cfg0 = controller_config(out, args.port + 40, lockstep=False)
+        cfg0 = controller_config(out, args.port + 40, lockstep=True)
         zero_path = os.path.join(out, "zero.yaml")
         rc = run_against_sil(
             [os.path.join(bin_dir, "pmg_sil"), "--reality", reality_path, "--port", str(args.port + 40), "--no-gantry",

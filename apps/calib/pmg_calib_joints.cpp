@@ -1,17 +1,19 @@
 // pmg_calib_joints: single-joint response calibration of the whole robot hanging in the gantry
-// (issue 15; the PMG paper's "Sim-to-Real Transfer"). Each joint in turn is excited (quasi-steps,
-// a chirp; a held-out mixed log) while every other joint is held, through the product's HAL stack
-// with its supervisor (makeHalStack). The robot is whatever the controller config's backend is:
-// `can` reaches a robot (or `pmg_sil --reality`) over the motor bus only. Each joint is then fitted
-// as the pendulum the whole-robot MuJoCo model reduces to with the others locked at their measured
-// positions (include/pmg/calib/joint_calibration.hpp), by pmg_calib_dynamics' engine: baseline
-// kp/kd/armature, then the catalogue's causes selected by cross-validation on the training logs and
-// judged against the noise floor; held-out error reported once.
+// (issue 15; the PMG paper's "Sim-to-Real Transfer", eq. 20). Each joint in turn is excited
+// (quasi-steps, a chirp; a held-out mixed log) while every other joint is held, through the
+// product's HAL stack with its supervisor (makeHalStack). The robot is whatever the controller
+// config's backend is: `can` reaches a robot (or `pmg_sil --reality`) over the motor bus only. The
+// same excitation on the nominal simulator gives the bus latency and the gate (a joint the
+// simulator already reproduces gets nothing named); every other joint is fitted in the whole-robot
+// MuJoCo model (include/pmg/calib/joint_calibration.hpp, fitJointInRobot): catalogue entries on
+// that joint's actuator, selected by cross-validation over the two training logs and judged
+// against the encoder's noise floor; the held-out log reports the chosen model's error once.
 //
 //   pmg_calib_joints --config config/controller/g1_sil_can.yaml [--joints a,b,...]
 //                    --out CALIBRATED_ROBOT.yaml --report REPORT.json [--plot DIR]
-// The calibrated robot config is the input one with an `actuator:` block per calibrated joint (the
-// extended model's parameters) and absolute model paths.
+// The calibrated robot config is the input one with an `actuator:` block per joint where something
+// was named, and absolute model paths.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -83,9 +85,9 @@ std::string flowBlock(const pmg::calib::ActuatorBlock& b) {
 
 int main(int argc, char** argv) {
   CLI::App app{"pmg_calib_joints: single-joint response calibration of the whole robot in the gantry"};
-  std::string config_path, joints_csv, out_path, report_path, plot_dir, optimizer = "bobyqa";
+  std::string config_path, joints_csv, out_path, report_path, plot_dir;
   pmg::calib::JointExcitation ex;
-  pmg::calib::CalibrationOptions opt;
+  pmg::calib::RobotFitOptions fopt;
   app.add_option("--config", config_path, "controller config YAML (its robot and backend: can reaches the robot)")
       ->required()->check(CLI::ExistingFile);
   app.add_option("--joints", joints_csv, "comma-separated joint names (default: the 12 leg joints)");
@@ -93,8 +95,9 @@ int main(int argc, char** argv) {
   app.add_option("--report", report_path, "report JSON to write")->required();
   app.add_option("--plot", plot_dir, "folder for per-joint held-out traces (CSV) and plots (PNG)");
   app.add_option("--amplitude", ex.amplitude_rad, "excitation amplitude around the hold pose [rad]")->check(CLI::Range(0.01, 0.5));
-  app.add_option("--threads", opt.threads, "fit threads (0 = all cores)")->check(CLI::Range(0, 256));
-  app.add_option("--optimizer", optimizer, "bobyqa | cmaes | cmaes-pagmo");
+  app.add_option("--threads", fopt.threads, "fit threads (one whole-robot simulator each)")->check(CLI::Range(1, 64));
+  app.add_option("--max-causes", fopt.max_causes, "entries named per joint at most")->check(CLI::Range(0, 5));
+  app.add_option("--min-cv-gain", fopt.min_cv_gain, "share by which an entry must lower the CV residual")->check(CLI::Range(0.01, 0.99));
   double gate_floor_multiple = 4.0, gate_min_rad = 3e-4;
   app.add_option("--gate-floor", gate_floor_multiple, "a joint is examined only if its robot-vs-simulator residual exceeds "
                                                       "this multiple of the noise floor ...")->check(CLI::Range(1.0, 100.0));
@@ -104,10 +107,10 @@ int main(int argc, char** argv) {
     const auto wall0 = std::chrono::steady_clock::now();
     pmg::requireWritableFile(out_path);
     pmg::requireWritableFile(report_path);
-    const std::string plot_script = pmg::resolveData("scripts/calib_plot.py").string();
+    const std::string plot_script = pmg::resolveData("scripts/plot_joint_calibration.py").string();
+    const std::string report_tmp = report_path + ".plot.json";
     if (!plot_dir.empty()) std::filesystem::create_directories(plot_dir);
-    opt.optimizer = pmg::calib::parse_optimizer(optimizer);
-    opt.validate();
+    fopt.validate();
     const pmg::ControllerConfig cc = pmg::loadControllerConfig(config_path);
     const pmg::RobotConfig& robot = cc.robot;
     std::vector<int> idx;
@@ -182,90 +185,128 @@ int main(int argc, char** argv) {
       lagged_sim.clear();
       refs.push_back(pmg::calib::captureJoint(lagged_sim, nominal_robot, idx[k], ex, hold, {}));
     }
-    // 3. Fit each joint on both, and take the difference.
+    // 3. Per joint: the gate (does the nominal simulator already reproduce it, on the training
+    //    logs?), then the fit in the whole-robot model (pmg::calib::fitJointInRobot). The joints
+    //    that misfit are fitted in order of their residual, largest first, each in the model that
+    //    carries the blocks identified so far: a joint whose misfit only came from its neighbours'
+    //    effects (a knee's friction shows in the hip pitch's response) is then explained by them.
+    pmg::MujocoBackendOptions fit_opt = nominal_opt;
+    std::vector<std::string> trace_files;
+    std::vector<std::pair<double, std::size_t>> order;
+    std::vector<double> residuals(idx.size()), gates(idx.size()), floors(idx.size());
     for (std::size_t k = 0; k < idx.size(); ++k) {
+      const std::string& name = robot.joints[static_cast<std::size_t>(idx[k])].name;
+      const auto sse = pmg::calib::logSquaredErrors(caps[k], refs[k]);
+      residuals[k] = std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+      floors[k] = pmg::calib::estimate_noise_floor(caps[k].train).floor_rad;
+      gates[k] = std::max(gate_floor_multiple * floors[k], gate_min_rad);
+      nlohmann::json j;
+      j["simulator_residual_rad"] = residuals[k];
+      j["gate_rad"] = gates[k];
+      j["noise_floor_rad"] = floors[k];
+      j["capture_s"] = caps[k].duration_s;
+      j["causes"] = nlohmann::json::array();
+      if (residuals[k] <= gates[k]) {
+        j["verdict"] = "the nominal simulator reproduces this joint (training logs): nothing to name, not fitted";
+        j["baseline"] = {{"train_rad", residuals[k]}};
+        fmt::print("  {}: robot vs simulator residual {:.2g} rad <= gate {:.2g} rad: nothing to name\n", name, residuals[k], gates[k]);
+      } else {
+        order.emplace_back(residuals[k], k);
+      }
+      report["joints"][name] = j;
+    }
+    std::sort(order.begin(), order.end(), std::greater<>());
+    pmg::RobotConfig model = nominal_robot;  // + the blocks identified so far
+    for (const auto& [res0, k] : order) {
       const int i = idx[k];
       const std::string& name = robot.joints[static_cast<std::size_t>(i)].name;
       const pmg::calib::JointCapture& cap = caps[k];
-      const pmg::calib::JointCapture& ref = refs[k];
-      const pmg::calib::JointRig jr = pmg::calib::rigForJoint(robot, i, cap.held_q);
-      auto rigLogs = [&](const std::vector<pmg::calib::BenchLog>& in) {
-        std::vector<pmg::calib::BenchLog> out;
-        for (const auto& l : in) out.push_back(pmg::calib::toRigFrame(l, jr.q_down_rad));
-        return out;
-      };
-      // The gate first: a joint whose response the simulator reproduces to within the noise gets
-      // nothing named and is not fitted (its nominal model is right).
-      const double residual = pmg::calib::simulationResidual(cap, ref);
-      const pmg::calib::NoiseFloor floor = pmg::calib::estimate_noise_floor(rigLogs(cap.train));
-      const double gate = std::max(gate_floor_multiple * floor.floor_rad, gate_min_rad);
-      if (residual <= gate) {
-        report["joints"][name] = {{"simulator_residual_rad", residual}, {"gate_rad", gate}, {"noise_floor_rad", floor.floor_rad},
-                                  {"effects", nlohmann::json::array()}, {"capture_s", cap.duration_s},
-                                  {"verdict", "the nominal simulator reproduces this joint: nothing to name, not fitted"}};
-        fmt::print("  {}: robot vs simulator residual {:.2g} rad <= gate {:.2g} rad: nothing to name\n", name, residual, gate);
-        std::fflush(stdout);
-        continue;
-      }
-      const pmg::calib::CalibrationReport sim = pmg::calib::calibrate_dynamics(jr.rig, rigLogs(ref.train), rigLogs(ref.heldout), opt);
-      const pmg::calib::CalibrationReport rep = pmg::calib::calibrate_dynamics(jr.rig, rigLogs(cap.train), rigLogs(cap.heldout), opt);
-      auto causeList = [](const pmg::calib::CalibrationReport& r) {
-        std::vector<std::pair<std::string, std::map<std::string, double>>> out;
-        for (const auto& c : r.causes) out.emplace_back(c.name, c.params);
-        return out;
-      };
-      std::vector<double> gains;
-      for (const auto& c : rep.causes) gains.push_back(c.gain);
-      const std::vector<pmg::calib::JointEffect> effects = pmg::calib::differentialEffects(
-          jr.rig, sim.baseline.params, causeList(sim), rep.baseline.params, causeList(rep), gains);
-      nlohmann::json j = nlohmann::json::parse(pmg::calib::report_to_json(rep));
-      j["rig"] = {{"mass_kg", jr.rig.mass_kg},         {"com_m", jr.rig.com_m},
-                  {"link_inertia_kgm2", jr.rig.link_inertia_kgm2}, {"inertia_free_kgm2", jr.inertia_kgm2},
-                  {"inertia_locked_kgm2", jr.inertia_locked_kgm2},
-                  {"gravity_amplitude_Nm", jr.gravity_amplitude_Nm}, {"q_down_rad", jr.q_down_rad},
-                  {"gravity_fit_residual_Nm", jr.fit_residual_Nm}, {"armature_nominal_kgm2", jr.rig.armature_kgm2},
-                  {"rate_hz", jr.rig.rate_hz}};
-      j["capture_s"] = cap.duration_s;
-      nlohmann::json simj = nlohmann::json::parse(pmg::calib::report_to_json(sim));
-      j["simulator"] = {{"baseline", simj["baseline"]}, {"causes", simj["causes"]}};
-      nlohmann::json ej = nlohmann::json::array();
-      for (const auto& e : effects) ej.push_back({{"name", e.name}, {"params", e.params}, {"size", e.size}});
-      j["effects"] = ej;
-      j["simulator_residual_rad"] = residual;
-      j["gate_rad"] = gate;
-      j["verdict"] = effects.empty() ? "the simulator misses this joint's response, but no catalogue entry explains the difference"
-                                     : "named: what the robot's fit has and the simulator's has not";
-      report["joints"][name] = j;
-      blocks[name] = flowBlock(pmg::calib::effectsBlock(jr.rig, sim.baseline.params, rep.baseline.params, effects));
-      std::string causes;
-      for (const auto& e : effects) causes += fmt::format("{}{} ({:.3g})", causes.empty() ? "" : ", ", e.name, e.size);
-      std::string sim_causes;
-      for (const auto& c : sim.causes) sim_causes += (sim_causes.empty() ? "" : ", ") + c.name;
-      fmt::print("  {}: robot vs simulator residual {:.2g} rad (gate {:.2g}); simulator's own fit names: {}\n", name, residual,
-                 gate, sim_causes.empty() ? "none" : sim_causes);
-      fmt::print("  {}: baseline held-out RMSE {:.5f} rad, extended {:.5f} rad; noise floor {:.2g} rad; effects: {}; fit {:.1f} s\n",
-                 name, rep.baseline.heldout_rmse_rad, rep.extended.heldout_rmse_rad, rep.noise.floor_rad,
-                 causes.empty() ? "none" : causes, rep.wall_time_s);
-      std::fflush(stdout);
-      if (!plot_dir.empty()) {
-        const std::string traces = (std::filesystem::path(plot_dir) / (name + "_heldout.csv")).string();
-        const std::string jreport = (std::filesystem::path(plot_dir) / (name + "_report.json")).string();
-        pmg::calib::write_trace_csv(jr.rig, rigLogs(cap.heldout), rep, traces);
-        // The raw captures, robot and nominal simulator side by side (pmg CSV bench logs).
-        for (const auto& [who, logs] : {std::pair{std::string("robot"), &cap}, std::pair{std::string("simulator"), &ref}}) {
-          std::vector<pmg::calib::BenchLog> all = logs->train;
-          all.insert(all.end(), logs->heldout.begin(), logs->heldout.end());
-          for (const auto& l : all) {
-            const std::string tag = l.name.substr(l.name.find(':') + 1);
-            pmg::calib::write_bench_log_csv(l, (std::filesystem::path(plot_dir) / (name + "_" + who + "_" + tag + ".csv")).string());
-          }
+      nlohmann::json& j = report["joints"][name];
+      // Re-gate in the model with the other joints' identified blocks.
+      if (!blocks.empty()) {
+        pmg::calib::JointSimulator sim(model, fit_opt, bus_lag);
+        const auto sse = pmg::calib::logSquaredErrors(cap, sim.capture(i, std::nullopt, ex, hold, false));
+        const double r = std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+        j["residual_with_identified_neighbours_rad"] = r;
+        if (r <= gates[k]) {
+          j["verdict"] = "explained by the other joints' identified models (residual " + fmt::format("{:.2g}", r) +
+                         " rad <= gate): nothing to name, not fitted";
+          j["baseline"] = {{"train_rad", res0}};
+          fmt::print("  {}: residual {:.2g} rad, {:.2g} rad with the identified neighbours <= gate {:.2g} rad: nothing to name\n",
+                     name, res0, r, gates[k]);
+          std::fflush(stdout);
+          continue;
         }
-        std::ofstream(jreport) << pmg::calib::report_to_json(rep);
-        const std::string png = (std::filesystem::path(plot_dir) / (name + ".png")).string();
-        const std::string cmd = fmt::format("python3 {} --report {} --traces {} --out {}", shellQuote(plot_script),
-                                            shellQuote(jreport), shellQuote(traces), shellQuote(png));
-        if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plot failed: " + cmd);
       }
+      const pmg::calib::RobotFitResult fit =
+          pmg::calib::fitJointInRobot(model, fit_opt, bus_lag, i, cap, ex, hold, floors[k], fopt);
+      auto modelJson = [](const pmg::calib::RobotFitModel& m) {
+        nlohmann::json o = {{"name", m.name}, {"params", m.params}, {"cv_rad", m.cv_rad}, {"gain", m.gain}, {"verdict", m.verdict}};
+        if (m.heldout_rad >= 0) o["heldout_rad"] = m.heldout_rad;
+        return o;
+      };
+      j["baseline"] = modelJson(fit.baseline);
+      j["baseline"]["train_rad"] = res0;
+      for (const auto& c : fit.causes) j["causes"].push_back(modelJson(c));
+      j["extended"] = modelJson(fit.extended);
+      j["candidates"] = nlohmann::json::array();
+      for (const auto& c : fit.candidates) j["candidates"].push_back(modelJson(c));
+      j["evaluations"] = fit.evaluations;
+      j["fit_wall_s"] = fit.wall_s;
+      j["verdict"] = fit.causes.empty() ? "the simulator misses this joint's response, but no catalogue entry explains it "
+                                          "significantly (see candidates)"
+                                        : "named: the entries that make the whole-robot model reproduce the response";
+      if (!fit.causes.empty()) {
+        blocks[name] = flowBlock(fit.block);
+        model.joints[static_cast<std::size_t>(i)].actuator_yaml = blocks[name];
+        model.joints[static_cast<std::size_t>(i)].actuator_source = "pmg_calib_joints: " + name;
+      }
+      std::string causes;
+      for (const auto& c : fit.causes) {
+        std::string ps;
+        for (const auto& [key, v] : c.params) ps += fmt::format("{}{} {:.4g}", ps.empty() ? "" : ", ", key, v);
+        causes += fmt::format("{}{} ({}; CV gain {:.2f})", causes.empty() ? "" : "; ", c.name, ps, c.gain);
+      }
+      fmt::print("  {}: residual {:.2g} rad (gate {:.2g}); CV {:.2g} -> {:.2g} rad, held-out {:.2g} -> {:.2g} rad; named: {}; "
+                 "{} captures simulated in {:.1f} s\n",
+                 name, res0, gates[k], fit.baseline.cv_rad, fit.extended.cv_rad, fit.baseline.heldout_rad,
+                 fit.extended.heldout_rad, causes.empty() ? "nothing" : causes, fit.evaluations, fit.wall_s);
+      std::fflush(stdout);
+    }
+    // Held-out traces of every fitted joint: robot, nominal simulator, calibrated simulator (the
+    // model with every identified block).
+    if (!plot_dir.empty()) {
+      for (const auto& [res0, k] : order) {
+        const int i = idx[k];
+        const std::string& name = robot.joints[static_cast<std::size_t>(i)].name;
+        pmg::calib::JointSimulator sim(model, fit_opt, bus_lag);
+        const pmg::calib::JointCapture cal = sim.capture(i, std::nullopt, ex, hold);
+        pmg::calib::JointSimulator calsim(model, fit_opt, bus_lag);
+        const auto it = blocks.find(name);
+        const pmg::calib::JointCapture cal2 =
+            it == blocks.end() ? cal
+                               : calsim.capture(i, pmg::calib::parse_actuator_block(YAML::Load(it->second), name), ex, hold);
+        const std::string csv = (std::filesystem::path(plot_dir) / (name + "_heldout.csv")).string();
+        std::ofstream f(csv);
+        f << "t,q_cmd,q_robot,q_nominal,q_calibrated\n";
+        const auto& a = caps[k].heldout[0];
+        const auto& b = refs[k].heldout[0];
+        const auto& c = cal2.heldout[0];
+        for (std::size_t r = 0; r < std::min({a.q.size(), b.q.size(), c.q.size()}); ++r)
+          f << fmt::format("{:.4f},{:.6f},{:.6f},{:.6f},{:.6f}\n", a.t[r], a.q_cmd[r], a.q[r], b.q[r], c.q[r]);
+        trace_files.push_back(csv);
+      }
+    }
+    if (!plot_dir.empty() && !trace_files.empty()) {
+      const std::string png = (std::filesystem::path(plot_dir) / "joint_calibration.png").string();
+      std::string cmd = fmt::format("python3 {} --report {} --out {}", shellQuote(plot_script), shellQuote(report_tmp), shellQuote(png));
+      for (const auto& t : trace_files) cmd += " " + shellQuote(t);
+      {
+        std::ofstream out(report_tmp);
+        out << report.dump(1) << "\n";
+      }
+      if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plot failed: " + cmd);
+      std::filesystem::remove(report_tmp);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     report["robot_time_s"] = robot_time;

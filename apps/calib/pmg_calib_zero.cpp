@@ -152,8 +152,13 @@ int main(int argc, char** argv) {
       if (inject_seed >= 0 || !inject_file.empty())
         throw std::invalid_argument("--inject-offsets / --inject-random only apply to --backend mujoco");
       hs.backend = pmg::BackendKind::kCan;
-      hs.lockstep = false;
-      device = std::make_unique<PacedBackend>(pmg::makeCanBackendFor(hs));
+      // The controller config's timing decides: `realtime` (a robot) paces the exchange to the bus
+      // period; `lockstep` (pmg_sil in lockstep, e.g. a SIL with a hidden reality) waits for every
+      // reply instead, deterministic and immune to a loaded host.
+      if (hs.lockstep)
+        device = pmg::makeCanBackendFor(hs);
+      else
+        device = std::make_unique<PacedBackend>(pmg::makeCanBackendFor(hs));
     }
     auto* sil = dynamic_cast<pmg::MujocoBackend*>(device.get());
     // The protocol's leg gains (stiffer than the walking gains) are declared to the supervisor.

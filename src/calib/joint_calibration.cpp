@@ -2,16 +2,19 @@
 #include "pmg/calib/joint_calibration.hpp"
 
 #include <algorithm>
+#include <chrono>
+#include <memory>
+#include <thread>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
-#include <mujoco/mujoco.h>
+#include <fmt/ranges.h>
 
-#include "pmg/calib/dynamics_calibration.hpp"
-#include "pmg/common/mujoco_model.hpp"
+#include <yaml-cpp/yaml.h>
+
 #include "pmg/hal/modes.hpp"
 
 namespace pmg::calib {
@@ -77,7 +80,8 @@ std::vector<std::pair<std::string, std::vector<double>>> excitationSignals(const
 }
 
 JointCapture captureJoint(HalBackend& backend, const RobotConfig& robot, int index, const JointExcitation& ex,
-                          const Eigen::VectorXd& hold_targets, const std::function<void(const std::string&)>& log) {
+                          const Eigen::VectorXd& hold_targets, const std::function<void(const std::string&)>& log,
+                          bool with_heldout) {
   const int n = static_cast<int>(robot.numJoints());
   if (index < 0 || index >= n) throw std::invalid_argument(fmt::format("captureJoint: joint index {} not in [0, {})", index, n));
   if (hold_targets.size() != n)
@@ -117,6 +121,7 @@ JointCapture captureJoint(HalBackend& backend, const RobotConfig& robot, int ind
   // Settle at the hold targets (the stack was engaged at the default pose).
   for (int k = 0; k < static_cast<int>(std::lround(0.5 / dt)); ++k) send(0.0);
   for (const auto& [name, sig] : signals) {
+    if (name == "mixed" && !with_heldout) break;
     BenchLog lg;
     lg.name = jc.name + ":" + name;
     std::vector<double> t, q, dq, tau;
@@ -219,138 +224,272 @@ double simulationResidual(const JointCapture& robot, const JointCapture& sim) {
   return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
 }
 
-JointRig rigForJoint(const RobotConfig& robot, int index, const Eigen::VectorXd& held_q) {
-  const int n = static_cast<int>(robot.numJoints());
-  if (index < 0 || index >= n) throw std::invalid_argument(fmt::format("rigForJoint: joint index {} not in [0, {})", index, n));
-  if (held_q.size() != n) throw std::invalid_argument(fmt::format("rigForJoint: held_q has {} entries, expected {}", held_q.size(), n));
-  const JointConfig& jc = robot.joints[static_cast<std::size_t>(index)];
-  MjModelPtr model = loadMujocoModel(robot.mjcf_path, Mujoco22Options{});
-  mjModel* m = model.get();
-  mjData* d = mj_makeData(m);
-  std::vector<int> adr(static_cast<std::size_t>(n));
-  int jid = -1;
-  for (int i = 0; i < n; ++i) {
-    const std::string& name = robot.joints[static_cast<std::size_t>(i)].name;
-    const int id = mj_name2id(m, mjOBJ_JOINT, name.c_str());
-    if (id < 0) {
-      mj_deleteData(d);
-      throw std::runtime_error(robot.mjcf_path + ": joint '" + name + "' not in the model");
+JointSimulator::JointSimulator(const RobotConfig& model, const MujocoBackendOptions& options, int bus_latency_cycles)
+    : robot_(model),
+      sim_(robot_, [&] {
+        MujocoBackendOptions o = options;
+        o.gantry.enabled = true;
+        o.disable_contacts = true;
+        o.encoder_offsets.clear();
+        return o;
+      }()),
+      lagged_(sim_, bus_latency_cycles) {
+  for (const auto& j : robot_.joints)
+    configured_.push_back(j.actuator_yaml.empty() ? std::nullopt
+                                                  : std::optional<ActuatorBlock>(parse_actuator_block(
+                                                        YAML::Load(j.actuator_yaml), j.actuator_source)));
+}
+
+JointCapture JointSimulator::capture(int index, const std::optional<ActuatorBlock>& block, const JointExcitation& ex,
+                                     const Eigen::VectorXd& hold_targets, bool with_heldout) {
+  sim_.setActuatorBlock(index, block);
+  sim_.reset();
+  lagged_.clear();
+  ++evaluations_;
+  JointCapture c = captureJoint(lagged_, robot_, index, ex, hold_targets, {}, with_heldout);
+  sim_.setActuatorBlock(index, configured_[static_cast<std::size_t>(index)]);
+  return c;
+}
+
+std::vector<std::pair<double, long>> logSquaredErrors(const JointCapture& robot, const JointCapture& sim) {
+  std::vector<std::pair<double, long>> out;
+  auto add = [&](const std::vector<BenchLog>& a, const std::vector<BenchLog>& b) {
+    if (a.size() < b.size()) throw std::invalid_argument("logSquaredErrors: the simulator has logs the robot has not");
+    for (std::size_t l = 0; l < b.size(); ++l) {
+      const std::size_t len = std::min(a[l].q.size(), b[l].q.size());
+      double mean = 0.0;
+      for (std::size_t k = 0; k < len; ++k) mean += a[l].q[k] - b[l].q[k];
+      mean /= static_cast<double>(std::max<std::size_t>(len, 1));
+      double sse = 0.0;
+      for (std::size_t k = 0; k < len; ++k) {
+        const double e = a[l].q[k] - b[l].q[k] - mean;
+        sse += e * e;
+      }
+      out.emplace_back(std::isfinite(sse) ? sse : 1e30, static_cast<long>(len));
     }
-    adr[static_cast<std::size_t>(i)] = m->jnt_qposadr[id];
-    if (i == index) jid = id;
-  }
-  const int dof = m->jnt_dofadr[jid];
-  const int body = m->jnt_bodyid[jid];
-  mj_resetData(m, d);
-  d->qpos[2] = 1.0;  // base upright (gantry); position irrelevant
-  for (int i = 0; i < n; ++i) d->qpos[adr[static_cast<std::size_t>(i)]] = held_q(i);
-  const double q_hold = held_q(index);
-  constexpr int kSamples = 13;
-  Eigen::MatrixXd A(kSamples, 2);
-  Eigen::VectorXd g(kSamples);
-  for (int s = 0; s < kSamples; ++s) {
-    const double q = q_hold - 1.2 + 2.4 * s / (kSamples - 1);
-    d->qpos[adr[static_cast<std::size_t>(index)]] = q;
-    mj_forward(m, d);
-    A(s, 0) = std::sin(q);
-    A(s, 1) = std::cos(q);
-    g(s) = -d->qfrc_bias[dof];  // generalized gravity force on the joint (velocities are zero)
-  }
-  const Eigen::Vector2d ab = A.colPivHouseholderQr().solve(g);
-  JointRig out;
-  out.gravity_amplitude_Nm = std::hypot(ab(0), ab(1));
-  out.q_down_rad = std::atan2(ab(1), -ab(0));  // g = -A sin(q - q_down)
-  out.fit_residual_Nm = (A * ab - g).cwiseAbs().maxCoeff();
-  d->qpos[adr[static_cast<std::size_t>(index)]] = q_hold;
-  mj_forward(m, d);
-  out.inertia_locked_kgm2 = d->qM[m->dof_Madr[dof]] - m->dof_armature[dof];
-  // Apparent inertia with every other DOF free (base and joints): 1 / (M^-1)_jj.
-  std::vector<mjtNum> e(static_cast<std::size_t>(m->nv), 0.0), x(static_cast<std::size_t>(m->nv), 0.0);
-  e[static_cast<std::size_t>(dof)] = 1.0;
-  mj_solveM(m, d, x.data(), e.data(), 1);
-  out.inertia_kgm2 = 1.0 / x[static_cast<std::size_t>(dof)] - m->dof_armature[dof];
-  RigConfig& r = out.rig;
-  r.source_file = robot.source_file + ": " + jc.name + " (whole-robot model reduced to a pendulum)";
-  const double grav = std::sqrt(m->opt.gravity[0] * m->opt.gravity[0] + m->opt.gravity[1] * m->opt.gravity[1] +
-                                m->opt.gravity[2] * m->opt.gravity[2]);
-  r.gravity_mps2 = grav;
-  // The locked subtree as the pendulum: its mass, its centre of mass at the distance that gives the
-  // gravity amplitude, its inertia about the axis (M_jj). (The free apparent inertia, the lower
-  // bound, fitted worse on the nominal simulator: hip pitch held-out RMSE 29 mrad instead of 7.)
-  r.mass_kg = m->body_subtreemass[body];
-  r.com_m = out.gravity_amplitude_Nm / (r.mass_kg * grav);
-  r.link_inertia_kgm2 = std::max(0.0, out.inertia_locked_kgm2 - r.mass_kg * r.com_m * r.com_m);
-  r.kp_Nm_per_rad = jc.kp;
-  r.kd_Nms_per_rad = jc.kd;
-  r.armature_kgm2 = m->dof_armature[dof];
-  r.torque_limit_Nm = jc.torque_limit;
-  r.rate_hz = 1.0 / m->opt.timestep;  // the SIL's drivers recompute the PD every physics step
-  r.encoder_motor_side = true;
-  r.log_gain_to_SI = 1.0;
-  r.sim_dt_s = m->opt.timestep;
-  mj_deleteData(d);
-  r.validate();
+  };
+  add(robot.train, sim.train);
+  add(robot.heldout, sim.heldout);
   return out;
 }
 
-namespace {
-double param(const std::map<std::string, double>& p, const char* key, double dflt) {
-  const auto it = p.find(key);
-  return it == p.end() ? dflt : it->second;
+const std::vector<RobotFitEntry>& robotFitCatalogue() {
+  static const std::vector<RobotFitEntry> entries = {
+      {"pd_gain", "kp_scale", 0.5, 1.6, false},
+      {"armature", "armature_kgm2", 0.002, 0.15, true},
+      {"coulomb_friction", "fc_Nm", 0.05, 8.0, true},
+      {"viscous_friction", "fv_Nms_per_rad", 0.05, 8.0, true},
+      {"transport_delay", "delay_s", 0.0005, 0.03, true},
+  };
+  return entries;
 }
-}  // namespace
 
-std::vector<JointEffect> differentialEffects(const RigConfig& rig, const std::map<std::string, double>& sim_baseline,
-                                             const std::vector<std::pair<std::string, std::map<std::string, double>>>& sim_causes,
-                                             const std::map<std::string, double>& robot_baseline,
-                                             const std::vector<std::pair<std::string, std::map<std::string, double>>>& robot_causes,
-                                             const std::vector<double>& robot_cause_gains) {
-  std::vector<JointEffect> base, causes;
-  const double kp = param(robot_baseline, "kp_scale", 1.0) / param(sim_baseline, "kp_scale", 1.0);
-  if (std::fabs(kp - 1.0) > 0.06) base.push_back({"pd_gain", {{"kp_scale", kp}}, kp - 1.0});
-  const double arm_sim = param(sim_baseline, "armature", rig.armature_kgm2);
-  const double ref_inertia = arm_sim + rig.link_inertia_about_axis();
-  const double excess = param(robot_baseline, "armature", rig.armature_kgm2) - arm_sim;
-  if (excess > std::max(0.004, 0.10 * ref_inertia))
-    base.push_back({"armature", {{"armature_kgm2", rig.armature_kgm2 + excess}}, excess / ref_inertia});
-  std::sort(base.begin(), base.end(), [](const auto& a, const auto& b) { return std::fabs(a.size) > std::fabs(b.size); });
-  for (std::size_t k = 0; k < robot_causes.size(); ++k) {
-    const auto& [name, params] = robot_causes[k];
-    const std::map<std::string, double>* sim = nullptr;
-    for (const auto& [sname, sparams] : sim_causes)
-      if (sname == name || nested_entry(name) == sname || nested_entry(sname) == name) sim = &sparams;
-    bool named = sim == nullptr;
-    if (!named) {
-      const auto& keys = catalogue_params(name);
-      const std::string key = keys.empty() ? std::string() : keys.front();
-      const double r = param(params, key.c_str(), 0.0), s0 = param(*sim, key.c_str(), 0.0);
-      named = std::fabs(r) >= 1.5 * std::fabs(s0) && std::fabs(r) > 0.0;
-    }
-    if (named) causes.push_back({name, params, k < robot_cause_gains.size() ? robot_cause_gains[k] : 0.0});
+ActuatorBlock blockFromParams(const std::map<std::string, double>& params) {
+  ActuatorBlock b;
+  for (const auto& [key, v] : params) {
+    if (key == "kp_scale") b.kp_scale = v;
+    else if (key == "armature_kgm2") b.armature_kgm2 = v;
+    else if (key == "fc_Nm") b.params.fc_Nm = v;
+    else if (key == "fv_Nms_per_rad") b.params.fv_Nms_per_rad = v;
+    else if (key == "delay_s") b.params.delay_s = v;
+    else throw std::invalid_argument("blockFromParams: unknown parameter '" + key + "'");
   }
-  base.insert(base.end(), causes.begin(), causes.end());
-  return base;
-}
-
-ActuatorBlock effectsBlock(const RigConfig& rig, const std::map<std::string, double>& sim_baseline,
-                           const std::map<std::string, double>& robot_baseline, const std::vector<JointEffect>& effects) {
-  std::map<std::string, double> p;
-  for (const auto& e : effects)
-    if (e.name != "pd_gain" && e.name != "armature") p.insert(e.params.begin(), e.params.end());
-  ActuatorBlock b = actuator_block_from_params(rig, p);
-  b.kp_scale = param(robot_baseline, "kp_scale", 1.0) / param(sim_baseline, "kp_scale", 1.0);
-  b.kd_scale = param(robot_baseline, "kd_scale", 1.0) / param(sim_baseline, "kd_scale", 1.0);
-  const double arm = rig.armature_kgm2 + param(robot_baseline, "armature", rig.armature_kgm2) -
-                     param(sim_baseline, "armature", rig.armature_kgm2);
-  b.armature_kgm2 = std::max(0.0, arm);
   return b;
 }
 
-BenchLog toRigFrame(const BenchLog& log, double q_down) {
-  BenchLog out = log;
-  for (double& v : out.q) v -= q_down;
-  for (double& v : out.q_cmd) v -= q_down;
-  return out;
+void RobotFitOptions::validate() const {
+  auto check = [](bool ok, const char* field, double v, const char* range) {
+    if (!ok) throw std::invalid_argument(fmt::format("RobotFitOptions.{} = {}: expected {}", field, v, range));
+  };
+  check(threads >= 1 && threads <= 64, "threads", threads, "1..64");
+  check(grid >= 3 && grid <= 50, "grid", grid, "3..50");
+  check(refine >= 2 && refine <= 50, "refine", refine, "2..50");
+  check(max_causes >= 0 && max_causes <= 5, "max_causes", max_causes, "0..5");
+  check(min_cv_gain > 0 && min_cv_gain < 1, "min_cv_gain", min_cv_gain, "(0, 1)");
+  check(noise_z > 0 && std::isfinite(noise_z), "noise_z", noise_z, "> 0");
+  check(min_over_floor >= 1 && std::isfinite(min_over_floor), "min_over_floor", min_over_floor, ">= 1");
+}
+
+namespace {
+
+// Squared errors per log of one parameter set (cached by the caller's search).
+using Sse = std::vector<std::pair<double, long>>;
+
+double rms(const Sse& e, const std::vector<int>& logs) {
+  double s = 0.0;
+  long n = 0;
+  for (int l : logs) {
+    s += e[static_cast<std::size_t>(l)].first;
+    n += e[static_cast<std::size_t>(l)].second;
+  }
+  return n > 0 ? std::sqrt(s / static_cast<double>(n)) : 0.0;
+}
+
+// One parameter's search: a grid over [lo, hi] shared by every fold (each evaluation scores every
+// log), then a golden-section refinement per fold around that fold's best grid point.
+struct ParamSearch {
+  const RobotFitEntry& entry;
+  std::function<Sse(double)> eval;  // squared errors per log at parameter value x
+  int grid, refine;
+  std::vector<std::pair<double, Sse>> grid_pts;
+
+  double toU(double x) const { return entry.log_scale ? std::log(x) : x; }
+  double fromU(double u) const { return entry.log_scale ? std::exp(u) : u; }
+
+  void runGrid() {
+    const double a = toU(entry.lo), b = toU(entry.hi);
+    for (int k = 0; k < grid; ++k) {
+      const double x = fromU(a + (b - a) * k / (grid - 1));
+      grid_pts.emplace_back(x, eval(x));
+    }
+  }
+  // The best value for the logs `fold` (minimising their RMS residual).
+  std::pair<double, Sse> fit(const std::vector<int>& fold) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < grid_pts.size(); ++k)
+      if (rms(grid_pts[k].second, fold) < rms(grid_pts[best].second, fold)) best = k;
+    double a = toU(grid_pts[best > 0 ? best - 1 : 0].first);
+    double b = toU(grid_pts[std::min(best + 1, grid_pts.size() - 1)].first);
+    std::pair<double, Sse> top = grid_pts[best];
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    double c = b - g * (b - a), d = a + g * (b - a);
+    Sse fc = eval(fromU(c)), fd = eval(fromU(d));
+    for (int it = 2; it < refine; ++it) {
+      if (rms(fc, fold) < rms(fd, fold)) {
+        b = d;
+        d = c;
+        fd = fc;
+        c = b - g * (b - a);
+        fc = eval(fromU(c));
+      } else {
+        a = c;
+        c = d;
+        fc = fd;
+        d = a + g * (b - a);
+        fd = eval(fromU(d));
+      }
+    }
+    if (rms(fc, fold) < rms(top.second, fold)) top = {fromU(c), fc};
+    if (rms(fd, fold) < rms(top.second, fold)) top = {fromU(d), fd};
+    return top;
+  }
+};
+
+}  // namespace
+
+RobotFitResult fitJointInRobot(const RobotConfig& model_in, const MujocoBackendOptions& options, int bus_latency_cycles,
+                               int index, const JointCapture& robot_capture, const JointExcitation& ex,
+                               const Eigen::VectorXd& hold_targets, double noise_floor_rad, const RobotFitOptions& opt) {
+  opt.validate();
+  if (robot_capture.train.size() != 2 || robot_capture.heldout.size() != 1)
+    throw std::invalid_argument("fitJointInRobot(" + robot_capture.joint + "): expected 2 training logs and 1 held-out log");
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<int> fold_a{0}, fold_b{1}, train{0, 1}, heldout{2};
+  RobotConfig model = model_in;
+  model.joints.at(static_cast<std::size_t>(index)).actuator_yaml.clear();
+  std::vector<std::unique_ptr<JointSimulator>> sims;
+  for (int t = 0; t < opt.threads; ++t)
+    sims.push_back(std::make_unique<JointSimulator>(model, options, bus_latency_cycles));
+  auto evaluate = [&](JointSimulator& sim, const std::map<std::string, double>& params, bool with_heldout = false) {
+    const std::optional<ActuatorBlock> block =
+        params.empty() ? std::nullopt : std::optional<ActuatorBlock>(blockFromParams(params));
+    return logSquaredErrors(robot_capture, sim.capture(index, block, ex, hold_targets, with_heldout));
+  };
+  // CV residual of a one-parameter addition to `fixed`: fit on each training log, score on the other.
+  struct Trial {
+    RobotFitModel model;
+    Sse all_train_fit;  // squared errors at the parameter fitted on both training logs
+  };
+  auto trial = [&](JointSimulator& sim, const RobotFitEntry& e, const std::map<std::string, double>& fixed) {
+    ParamSearch ps{e, [&](double x) {
+                     std::map<std::string, double> p = fixed;
+                     p[e.key] = x;
+                     return evaluate(sim, p);
+                   },
+                   opt.grid, opt.refine, {}};
+    ps.runGrid();
+    const auto fa = ps.fit(fold_a), fb = ps.fit(fold_b), ft = ps.fit(train);
+    const double sse = fa.second[1].first + fb.second[0].first;
+    const long n = fa.second[1].second + fb.second[0].second;
+    Trial tr;
+    tr.model.name = e.name;
+    tr.model.params = fixed;
+    tr.model.params[e.key] = ft.first;
+    tr.model.cv_rad = std::sqrt(sse / static_cast<double>(std::max(n, 1L)));
+    tr.all_train_fit = ft.second;
+    return tr;
+  };
+  // Trials of every entry not yet chosen, spread over the threads.
+  auto trials = [&](const std::map<std::string, double>& fixed, const std::vector<const RobotFitEntry*>& entries) {
+    std::vector<Trial> out(entries.size());
+    std::vector<std::string> errors(entries.size());
+    std::vector<std::thread> workers;
+    for (std::size_t t = 0; t < sims.size(); ++t) {
+      workers.emplace_back([&, t] {
+        for (std::size_t k = t; k < entries.size(); k += sims.size()) {
+          try {
+            out[k] = trial(*sims[t], *entries[k], fixed);
+          } catch (const std::exception& e) {
+            errors[k] = e.what();
+          }
+        }
+      });
+    }
+    for (auto& w : workers) w.join();
+    for (const auto& e : errors)
+      if (!e.empty()) throw std::runtime_error("fitJointInRobot(" + robot_capture.joint + "): " + e);
+    return out;
+  };
+
+  RobotFitResult res;
+  const Sse base = evaluate(*sims[0], {}, true);
+  res.baseline.name = "baseline";
+  res.baseline.cv_rad = rms(base, train);  // no parameter: its CV residual is its training residual
+  res.baseline.heldout_rad = rms(base, heldout);
+  res.baseline.verdict = "the nominal model";
+  RobotFitModel current = res.baseline;
+  std::vector<const RobotFitEntry*> remaining;
+  for (const auto& e : robotFitCatalogue()) remaining.push_back(&e);
+  for (int step = 0; step < opt.max_causes && !remaining.empty(); ++step) {
+    // No room left: the model already explains the training logs to within min_over_floor x the
+    // noise floor (rule 3 of every trial would fail), so no trial is run.
+    if (!(current.cv_rad > opt.min_over_floor * noise_floor_rad)) {
+      if (step == 0) res.baseline.verdict = "the nominal model already explains the training logs to within the noise: nothing tried";
+      break;
+    }
+    std::vector<Trial> tr = trials(current.params, remaining);
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < tr.size(); ++k)
+      if (tr[k].model.cv_rad < tr[best].model.cv_rad) best = k;
+    for (auto& t : tr) {
+      t.model.gain = 1.0 - t.model.cv_rad / current.cv_rad;
+      std::vector<std::string> fails;
+      if (!(t.model.gain > opt.min_cv_gain)) fails.push_back(fmt::format("CV gain {:.3f} <= {:.2f}", t.model.gain, opt.min_cv_gain));
+      if (!(current.cv_rad - t.model.cv_rad > opt.noise_z * noise_floor_rad))
+        fails.push_back(fmt::format("CV drop {:.2g} rad <= {} x floor {:.2g} rad", current.cv_rad - t.model.cv_rad, opt.noise_z,
+                                    noise_floor_rad));
+      if (!(current.cv_rad > opt.min_over_floor * noise_floor_rad))
+        fails.push_back(fmt::format("reference CV {:.2g} rad <= {} x floor", current.cv_rad, opt.min_over_floor));
+      t.model.verdict = fails.empty() ? "significant" : fmt::format("{}", fmt::join(fails, "; "));
+    }
+    if (step == 0)
+      for (const auto& t : tr) res.candidates.push_back(t.model);
+    const Trial& b = tr[best];
+    if (b.model.verdict != "significant") break;
+    RobotFitModel chosen = b.model;
+    chosen.verdict = step == 0 ? "chosen first: lowest CV residual, significant"
+                               : "chosen: lowest CV residual with the earlier causes, significant";
+    current = chosen;
+    res.causes.push_back(chosen);
+    remaining.erase(remaining.begin() + static_cast<std::ptrdiff_t>(best));
+  }
+  // Held-out residual, once, for each prefix of the chosen chain.
+  for (auto& c : res.causes) c.heldout_rad = rms(evaluate(*sims[0], c.params, true), heldout);
+  res.extended = res.causes.empty() ? res.baseline : res.causes.back();
+  res.block = blockFromParams(res.extended.params);
+  for (const auto& s : sims) res.evaluations += s->evaluations();
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
 }
 
 }  // namespace pmg::calib

@@ -115,6 +115,12 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
   // Identified actuator models (robot config `actuator:` blocks).
   actuator_.resize(n);
   actuator_state_.resize(n);
+  nominal_armature_.resize(static_cast<Eigen::Index>(n));
+  nominal_frictionloss_.resize(static_cast<Eigen::Index>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    nominal_armature_[static_cast<Eigen::Index>(i)] = model_->dof_armature[dof_adr_[i]];
+    nominal_frictionloss_[static_cast<Eigen::Index>(i)] = model_->dof_frictionloss[dof_adr_[i]];
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const JointConfig& j = robot_.joints[i];
     if (j.actuator_yaml.empty()) continue;
@@ -127,14 +133,34 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
     if (block.params.backlash_gap_rad > 0)
       throw ConfigError(j.actuator_source + ".backlash_gap_rad: backlash needs a rotor body; the G1 SIL does not "
                                             "model it (expected 0 for joint " + j.name + ")");
-    block.params.torque_limit_Nm = std::min(block.params.torque_limit_Nm, j.torque_limit);
-    const int v = dof_adr_[i];
-    if (block.armature_kgm2) model_->dof_armature[v] = *block.armature_kgm2;
-    model_->dof_frictionloss[v] = 0.0;  // the actuator model's friction replaces MuJoCo's dry friction
-    actuator_[i] = block;
-    any_actuator_ = true;
+    setActuatorBlock(static_cast<int>(i), block);
   }
+  if (options_.disable_contacts) model_->opt.disableflags |= mjDSBL_CONTACT;
   reset();
+}
+
+void MujocoBackend::setActuatorBlock(int i, const std::optional<calib::ActuatorBlock>& block) {
+  if (i < 0 || i >= static_cast<int>(dof_adr_.size()))
+    throw std::invalid_argument("MujocoBackend::setActuatorBlock: joint index " + std::to_string(i) + " out of range");
+  const auto k = static_cast<std::size_t>(i);
+  const int v = dof_adr_[k];
+  model_->dof_armature[v] = nominal_armature_[i];
+  model_->dof_frictionloss[v] = nominal_frictionloss_[i];
+  actuator_[k].reset();
+  actuator_state_[k].reset();
+  if (block) {
+    block->params.validate();
+    if (block->params.backlash_gap_rad > 0)
+      throw ConfigError("joint " + robot_.joints[k].name + ": backlash_gap_rad needs a rotor body (expected 0 in the G1 SIL)");
+    calib::ActuatorBlock b = *block;
+    b.params.torque_limit_Nm = std::min(b.params.torque_limit_Nm, robot_.joints[k].torque_limit);
+    if (b.armature_kgm2) model_->dof_armature[v] = *b.armature_kgm2;
+    // A block that names dry friction replaces MuJoCo's (the actuator model has true stiction);
+    // one that does not keeps the model's own frictionloss, so that a block changes only what it names.
+    if (b.params.fc_Nm > 0.0 || b.params.fs_Nm > 0.0 || b.params.kl > 0.0) model_->dof_frictionloss[v] = 0.0;
+    actuator_[k] = b;
+  }
+  any_actuator_ = std::any_of(actuator_.begin(), actuator_.end(), [](const auto& a) { return a.has_value(); });
 }
 
 void MujocoBackend::reset() noexcept {

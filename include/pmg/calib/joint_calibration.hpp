@@ -1,25 +1,25 @@
 #pragma once
 /// @file joint_calibration.hpp
 /// Single-joint response calibration on the whole robot (issue 15; the PMG paper's "Sim-to-Real
-/// Transfer": each joint in turn, the others held, robot hanging in the gantry). Three pieces:
+/// Transfer": each joint in turn, the others held, robot hanging in the gantry, the simulator's
+/// response fitted to the real one, PMG eq. 20). Three pieces:
 ///  1. excitation: per joint, diverse target trajectories around its hold position (quasi-steps of
 ///     several sizes and both signs, a chirp), continuous (cosine ramps, no target jumps);
 ///  2. capture: the trajectories run through any pmg::HalBackend (the product's HAL stack with the
 ///     supervisor: makeHalStack), every other joint held at its hold target with its PD gains; the
 ///     log holds what the driver was told and what the encoder read, nothing else;
-///  3. reduction: with the other joints at their measured positions, one joint of the MuJoCo
-///     model becomes a pendulum about its axis: gravity torque -A sin(q - q_down) of the locked
-///     subtree (statics: the held joints do hold it) and the locked subtree's inertia M_jj. The
-///     dynamics are only approximately those of a locked subtree (the held joints' PD and the
-///     gantry are soft), so every verdict is differential against the nominal simulator's own fit
-///     (differentialEffects). That pendulum is the bench rig of pmg_calib_dynamics (RigConfig: angle 0 =
-///     hanging down), so the catalogue, the selection by cross-validation and the noise floor apply
-///     unchanged. The reduction neglects the gantry's compliance (the pelvis sways by millimetres).
+///  3. fit in the whole-robot model: the same excitation replayed on the nominal MuJoCo model of the
+///     robot (JointSimulator: every joint, the gantry, the bus latency the captures show), with a
+///     catalogue entry's actuator block on the excited joint, its parameter fitted so that the
+///     simulated response matches the captured one (fitJointInRobot). Entries are selected by
+///     cross-validation over the two training logs and judged against the encoder's noise floor;
+///     the held-out log reports the chosen model's error once.
 /// Setup/offline code: allocates, throws std::runtime_error / std::invalid_argument naming the
 /// joint, field and expected range.
 
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +29,7 @@
 #include "pmg/calib/bench_log.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/hal/backend.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
 
 namespace pmg::calib {
 
@@ -61,8 +62,10 @@ struct JointCapture {
 /// gains. Log row k: t = time of the reading, q = reading, q_cmd/kp/kd = the command the driver
 /// holds from then on (the next exchange's). @p log receives progress lines (may be empty).
 /// @throws std::runtime_error on a backend fault or when the supervisor latches damping.
+/// @p with_heldout false stops after the training logs (fits need no held-out response).
 JointCapture captureJoint(HalBackend& backend, const RobotConfig& robot, int index, const JointExcitation& ex,
-                          const Eigen::VectorXd& hold_targets, const std::function<void(const std::string&)>& log);
+                          const Eigen::VectorXd& hold_targets, const std::function<void(const std::string&)>& log,
+                          bool with_heldout = true);
 
 /// A backend whose commands take effect @p cycles HAL cycles late (a delay line of whole commands):
 /// the nominal simulator given the bus latency the robot's captures show (bus_latency_cycles).
@@ -91,52 +94,88 @@ int responseLagCycles(const JointCapture& robot, const JointCapture& sim, int ma
 /// pmg_calib_zero finds, does not count): how wrong the simulation is about this joint's response.
 double simulationResidual(const JointCapture& robot, const JointCapture& sim);
 
-/// The bench-rig pendulum equivalent to joint @p index of the robot's MuJoCo 2.2 model (the SIL's
-/// nominal model: pmg::loadMujocoModel with its default armature, damping, frictionloss), base
-/// fixed upright, every joint at @p held_q (n, model angles).
-struct JointRig {
-  RigConfig rig;                  ///< mass = subtree mass, com_m / link inertia from A and M_jj
-  double q_down_rad = 0.0;        ///< joint angle at which the locked subtree hangs straight down
-  double gravity_amplitude_Nm = 0.0;  ///< A: gravity torque = -A sin(q - q_down)
-  /// Apparent inertia about the axis with every other DOF free, 1 / (M^-1)_jj, minus the model
-  /// armature [kg m^2] (reported: the truth lies between this and the locked value, since the held
-  /// joints' PD and the gantry are soft; the rig uses the locked value).
-  double inertia_kgm2 = 0.0;
-  double inertia_locked_kgm2 = 0.0;  ///< M_jj minus the model armature (others locked): the rig's [kg m^2]
-  double fit_residual_Nm = 0.0;   ///< largest |gravity torque - sinusoid| over the samples
-};
-/// @throws std::runtime_error if the model cannot be loaded or the joint is not in it.
-JointRig rigForJoint(const RobotConfig& robot, int index, const Eigen::VectorXd& held_q);
+/// The whole-robot simulator of one fitting thread: pmg::MujocoBackend of a robot config (its
+/// `actuator:` blocks are the model's: none for the nominal robot, the joints identified so far
+/// when calibrating joint after joint) hanging in the gantry, without contacts (the feet never touch
+/// the floor there; ~15x faster), behind a CommandLatencyBackend of the bus latency.
+class JointSimulator {
+ public:
+  /// @throws ConfigError if a block of @p model is invalid.
+  JointSimulator(const RobotConfig& model, const MujocoBackendOptions& options, int bus_latency_cycles);
+  /// Runs the excitation of joint @p index with @p block on that joint (std::nullopt: the ideal
+  /// motor) instead of its configured one, which is restored afterwards.
+  JointCapture capture(int index, const std::optional<ActuatorBlock>& block, const JointExcitation& ex,
+                       const Eigen::VectorXd& hold_targets, bool with_heldout = true);
+  long evaluations() const noexcept { return evaluations_; }
 
-/// Differential verdict of one joint (for joints whose simulationResidual exceeds the gate; a
-/// joint the simulator already reproduces gets nothing named): the same excitation and the same reduction on the nominal
-/// simulator (the control experiment: the SIL's MuJoCo model in the gantry, no hidden effects) and
-/// on the robot, both calibrated by calibrate_dynamics. A one-joint pendulum lacks the coupling to
-/// the held joints and the gantry, and the model's passive joint friction and damping; those
-/// misfits show in both fits alike. What the robot's fit has and the simulator's has not is what
-/// the simulation gets wrong:
-///  - "pd_gain": |kp_scale_robot / kp_scale_sim - 1| > 0.06 (params kp_scale = that ratio);
-///  - "armature": armature_robot - armature_sim > max(0.004 kg m^2, 10 % of the simulator's
-///    inertia about the axis) (params armature_kgm2 = model armature + that excess);
-///  - a cause named on the robot and not on the simulator (the same entry or one nested in it), or
-///    named on both with its first parameter at least 1.5x the simulator's (params: the robot's).
-/// Sorted by relative size (baseline deviations) then in the robot's naming order.
-struct JointEffect {
-  std::string name;                       ///< catalogue entry, "pd_gain" or "armature"
-  std::map<std::string, double> params;   ///< catalogue parameter keys (docs/calibration.md)
-  double size = 0.0;                      ///< relative deviation, or the cause's CV gain on the robot
+ private:
+  RobotConfig robot_;
+  MujocoBackend sim_;
+  CommandLatencyBackend lagged_;
+  std::vector<std::optional<ActuatorBlock>> configured_;
+  long evaluations_ = 0;
 };
-std::vector<JointEffect> differentialEffects(const RigConfig& rig, const std::map<std::string, double>& sim_baseline,
-                                             const std::vector<std::pair<std::string, std::map<std::string, double>>>& sim_causes,
-                                             const std::map<std::string, double>& robot_baseline,
-                                             const std::vector<std::pair<std::string, std::map<std::string, double>>>& robot_causes,
-                                             const std::vector<double>& robot_cause_gains);
-/// The actuator block for the robot config: kp/kd scales relative to the simulator's fit, armature
-/// = the model's plus the excess, and the parameters of the named effects (nothing else).
-ActuatorBlock effectsBlock(const RigConfig& rig, const std::map<std::string, double>& sim_baseline,
-                           const std::map<std::string, double>& robot_baseline, const std::vector<JointEffect>& effects);
 
-/// @p log in the rig's angle frame: q, q_cmd shifted by -q_down.
-BenchLog toRigFrame(const BenchLog& log, double q_down);
+/// Per log of @p sim (train logs, then held-out logs, in capture order; @p sim may lack the held-out
+/// ones): sum of squared differences of the
+/// robot's and the simulator's joint positions [rad^2] after removing the log's mean difference
+/// (an encoder zero offset is pmg_calib_zero's business), and the sample count.
+std::vector<std::pair<double, long>> logSquaredErrors(const JointCapture& robot, const JointCapture& sim);
+
+/// A catalogue entry as the whole-robot fit uses it: one parameter (the ActuatorBlock key of
+/// docs/calibration.md) searched in [lo, hi] (log-spaced grid when log_scale).
+struct RobotFitEntry {
+  std::string name;   ///< catalogue name: pd_gain, armature, coulomb_friction, viscous_friction, transport_delay
+  std::string key;    ///< kp_scale, armature_kgm2, fc_Nm, fv_Nms_per_rad, delay_s
+  double lo = 0.0, hi = 0.0;
+  bool log_scale = false;
+};
+/// The entries fitted by default (the effects a G1 leg actuator shows in pmg_reality_draw's ranges,
+/// with margins): pd_gain kp_scale [0.5, 1.6]; armature [0.002, 0.15] kg m^2; coulomb_friction fc
+/// [0.05, 8] N m; viscous_friction fv [0.05, 8] N m s/rad; transport_delay [0.5, 30] ms.
+const std::vector<RobotFitEntry>& robotFitCatalogue();
+/// The actuator block of a parameter map (keys of RobotFitEntry::key; others are an error).
+ActuatorBlock blockFromParams(const std::map<std::string, double>& params);
+
+struct RobotFitOptions {
+  int threads = 2;            ///< fitting threads (one JointSimulator each), >= 1
+  int grid = 6;               ///< coarse grid points per parameter, >= 3
+  int refine = 5;             ///< golden-section evaluations around the best grid point, >= 2
+  int max_causes = 2;         ///< forward selection stops after this many entries
+  double min_cv_gain = 0.25;  ///< an entry must lower the CV residual by this share ...
+  double noise_z = 3.0;       ///< ... and by more than noise_z x noise floor ...
+  double min_over_floor = 2;  ///< ... and the reference must exceed this multiple of the floor
+  void validate() const;      ///< throws std::invalid_argument naming the field
+};
+
+/// One fitted model: its entries' parameters, the CV residual over the two training logs (fit on
+/// one, score on the other), the gain 1 - cv/cv_reference, and the held-out residual [rad].
+struct RobotFitModel {
+  std::string name;                       ///< entry added last ("baseline": none)
+  std::map<std::string, double> params;   ///< every entry's parameter so far
+  double cv_rad = 0.0;
+  double gain = 0.0;
+  double heldout_rad = -1.0;              ///< < 0 where not evaluated (candidates not chosen)
+  std::string verdict;                    ///< why it was (not) chosen
+};
+struct RobotFitResult {
+  RobotFitModel baseline;                 ///< the nominal model (no parameter)
+  std::vector<RobotFitModel> candidates;  ///< each entry alone (first step of the selection; empty
+                                          ///< when the baseline leaves no room above the noise floor)
+  std::vector<RobotFitModel> causes;      ///< the chosen entries, in order (params cumulative)
+  RobotFitModel extended;                 ///< the final model (= last cause or the baseline)
+  ActuatorBlock block;                    ///< extended.params as an actuator block
+  long evaluations = 0;                   ///< whole-robot captures simulated
+  double wall_s = 0.0;
+};
+/// Fits joint @p index of the robot whose captures are @p robot_capture (train: 2 logs, held-out:
+/// 1) in the whole-robot model: JointSimulator(s) of @p model (the nominal robot config, plus the
+/// blocks identified on other joints; joint @p index's own block is ignored) with @p options and
+/// the bus latency. Forward selection over robotFitCatalogue() by 2-fold CV over the training logs;
+/// significance against @p noise_floor_rad; held-out residuals of the baseline and the chosen
+/// chain only.
+RobotFitResult fitJointInRobot(const RobotConfig& model, const MujocoBackendOptions& options, int bus_latency_cycles,
+                               int index, const JointCapture& robot_capture, const JointExcitation& ex,
+                               const Eigen::VectorXd& hold_targets, double noise_floor_rad, const RobotFitOptions& opt);
 
 }  // namespace pmg::calib

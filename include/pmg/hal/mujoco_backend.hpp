@@ -74,6 +74,9 @@ struct MujocoBackendOptions {
   /// Model errors (pmg_sil --reality, hal/reality.hpp): MJCF body name -> factor on its mass and
   /// rotational inertia, in [0.5, 2]. An unknown body is a ConfigError.
   std::map<std::string, double> body_mass_scale;
+  /// No contacts at all (mjDSBL_CONTACT): for offline fits of a robot hanging in the gantry, whose
+  /// feet never touch the floor, at ~15x the speed (pmg_calib_joints). Never for a robot on the ground.
+  bool disable_contacts = false;
   std::string validate() const;     ///< empty if valid, else "field: expected ..."
 };
 
@@ -97,6 +100,12 @@ class MujocoBackend final : public HalBackend {
   int pelvisBody() const noexcept { return pelvis_body_; }
   /// Latest torques applied by the motor model (n) [N·m].
   const Eigen::VectorXd& appliedTorque() const noexcept { return tau_; }
+  /// Replaces joint @p i's identified actuator model (std::nullopt: the ideal motor of the MJCF) and
+  /// resets its state. Armature: the block's or the MJCF's; MuJoCo's frictionloss is kept unless the
+  /// block names dry friction (fc, fs or kl), which then replaces it. Setup/offline only (allocates
+  /// nothing, but is not meant to run between exchanges of a live robot).
+  /// @throws std::invalid_argument (index), ConfigError / std::invalid_argument (invalid block).
+  void setActuatorBlock(int i, const std::optional<calib::ActuatorBlock>& block);
   /// Whether joint @p i runs an identified actuator model.
   bool hasActuatorModel(int i) const noexcept { return actuator_[static_cast<std::size_t>(i)].has_value(); }
 
@@ -116,6 +125,7 @@ class MujocoBackend final : public HalBackend {
   std::vector<std::optional<calib::ActuatorBlock>> actuator_;  // per joint, from the robot config
   std::vector<calib::ActuatorState> actuator_state_;           // per joint (fixed-size delay lines)
   bool any_actuator_ = false;
+  Eigen::VectorXd nominal_armature_, nominal_frictionloss_;    // per joint, as loaded from the MJCF
   Eigen::Vector3d anchor_{0, 0, 0};
   Eigen::Vector3d push_force_{0, 0, 0};
   int push_body_ = -1;
