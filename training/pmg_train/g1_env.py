@@ -139,6 +139,7 @@ TELEOP_CARRY_HI = (-0.2, 0.5, 0.5, 1.6, 1.0, 1.0, 1.0)
 MIRROR_SIGN = (1.0, -1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
 GAINS = ("nominal", "physically_informed")
 NOMINAL_ARMATURE = 0.01     # kg m^2, the SIL's MuJoCo 2.2 joint armature (nominal gains)
+MODEL_FRICTIONLOSS = 0.2    # N m: the SIL model's joint friction (module docstring)
 FRICTIONLOSS_FLOOR = 1e-5   # N m: MJX keeps a dof's friction row only if its frictionloss was > 0 when the
                             # model was put, and a row with frictionloss 0 turns into a hard velocity lock
 # Identified actuator parameters drawn per episode around the identified value (EnvConfig.actuator_dr);
@@ -400,7 +401,7 @@ class G1PmgEnv(Env):
         mj.opt.timestep = cfg.sim_dt
         mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
         mj.dof_armature[6:] = self.armature
-        mj.dof_frictionloss[6:] = 0.2
+        mj.dof_frictionloss[6:] = MODEL_FRICTIONLOSS
         mj.dof_damping[6:] = 0.05 + self.kd  # the PD's D term, integrated implicitly
         if self.act_idx.size:  # identified joints: their armature and model friction (the step sets them per episode)
             v = 6 + self.act_idx
@@ -452,6 +453,10 @@ class G1PmgEnv(Env):
         named = [set(b["_named"]) for b in ordered]
         self.act_randomised = {k: np.array([k in ("kp_scale", "kd_scale") or k in n for n in named])
                                for k in ACT_DR_KEYS}
+        # A block that names no dry friction keeps the model's joint friction, as the SIL does
+        # (pmg::MujocoBackend::setActuatorBlock): a block changes only what it names.
+        no_dry = np.array([not ({"fc_Nm", "fs_Nm", "kl"} & n) for n in named])
+        self.act_center["fc_Nm"] = np.where(no_dry, MODEL_FRICTIONLOSS, self.act_center["fc_Nm"])
         # Saturation: the block's and the joint's torque limit, whichever is lower (as pmg::MujocoBackend).
         self.act_center["torque_limit_Nm"] = np.minimum(self.act_center["torque_limit_Nm"],
                                                         self.tau_max[self.act_idx].astype(np.float64))
