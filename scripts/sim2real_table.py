@@ -56,6 +56,7 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--controller", default=os.path.join(ROOT, "config", "controller", "g1_sil_policy_consistent.yaml"))
     a = ap.parse_args()
+    a.out = os.path.abspath(a.out)
     os.makedirs(a.out, exist_ok=True)
     exe = os.path.join(os.path.abspath(a.build), "bin", "pmg_sim2real_eval")
     results = {r: [] for r in ROWS}
