@@ -139,8 +139,8 @@ ActuatorBlock blockFromParams(const std::map<std::string, double>& params);
 
 struct RobotFitOptions {
   int threads = 2;            ///< fitting threads (one JointSimulator each), >= 1
-  int grid = 6;               ///< coarse grid points per parameter, >= 3
-  int refine = 5;             ///< golden-section evaluations around the best grid point, >= 2
+  int grid = 7;               ///< coarse grid points per parameter, >= 3
+  int refine = 7;             ///< golden-section evaluations around the best grid point, >= 2
   int max_causes = 2;         ///< forward selection stops after this many entries
   double min_cv_gain = 0.25;  ///< an entry must lower the CV residual by this share ...
   double noise_z = 3.0;       ///< ... and by more than noise_z x noise floor ...
