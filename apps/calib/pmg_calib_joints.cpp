@@ -73,6 +73,12 @@ std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<st
   return text;
 }
 
+// RMS residual [rad] over the two training logs (each log's mean difference removed).
+double trainResidual(const pmg::calib::JointCapture& robot, const pmg::calib::JointCapture& sim) {
+  const auto sse = pmg::calib::logSquaredErrors(robot, sim);
+  return std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+}
+
 std::string flowBlock(const pmg::calib::ActuatorBlock& b) {
   YAML::Emitter em;
   em.SetDoublePrecision(6);
@@ -196,8 +202,7 @@ int main(int argc, char** argv) {
     std::vector<double> residuals(idx.size()), gates(idx.size()), floors(idx.size());
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const std::string& name = robot.joints[static_cast<std::size_t>(idx[k])].name;
-      const auto sse = pmg::calib::logSquaredErrors(caps[k], refs[k]);
-      residuals[k] = std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+      residuals[k] = trainResidual(caps[k], refs[k]);
       floors[k] = pmg::calib::estimate_noise_floor(caps[k].train).floor_rad;
       gates[k] = std::max(gate_floor_multiple * floors[k], gate_min_rad);
       nlohmann::json j;
@@ -225,8 +230,7 @@ int main(int argc, char** argv) {
       // Re-gate in the model with the other joints' identified blocks.
       if (!blocks.empty()) {
         pmg::calib::JointSimulator sim(model, fit_opt, bus_lag);
-        const auto sse = pmg::calib::logSquaredErrors(cap, sim.capture(i, std::nullopt, ex, hold, false));
-        const double r = std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+        const double r = trainResidual(cap, sim.capture(i, std::nullopt, ex, hold, false));
         j["residual_with_identified_neighbours_rad"] = r;
         if (r <= gates[k]) {
           j["verdict"] = "explained by the other joints' identified models (residual " + fmt::format("{:.2g}", r) +
@@ -279,13 +283,14 @@ int main(int argc, char** argv) {
       for (const auto& [res0, k] : order) {
         const int i = idx[k];
         const std::string& name = robot.joints[static_cast<std::size_t>(i)].name;
-        pmg::calib::JointSimulator sim(model, fit_opt, bus_lag);
-        const pmg::calib::JointCapture cal = sim.capture(i, std::nullopt, ex, hold);
-        pmg::calib::JointSimulator calsim(model, fit_opt, bus_lag);
+        // The model carries joint i's identified block (if any): capture with it, once.
         const auto it = blocks.find(name);
-        const pmg::calib::JointCapture cal2 =
-            it == blocks.end() ? cal
-                               : calsim.capture(i, pmg::calib::parse_actuator_block(YAML::Load(it->second), name), ex, hold);
+        pmg::calib::JointSimulator sim(model, fit_opt, bus_lag);
+        const pmg::calib::JointCapture cal2 = sim.capture(
+            i, it == blocks.end() ? std::nullopt
+                                  : std::optional<pmg::calib::ActuatorBlock>(
+                                        pmg::calib::parse_actuator_block(YAML::Load(it->second), name)),
+            ex, hold);
         const std::string csv = (std::filesystem::path(plot_dir) / (name + "_heldout.csv")).string();
         std::ofstream f(csv);
         f << "t,q_cmd,q_robot,q_nominal,q_calibrated\n";

@@ -206,21 +206,10 @@ int responseLagCycles(const JointCapture& robot, const JointCapture& sim, int ma
 double simulationResidual(const JointCapture& robot, const JointCapture& sim) {
   double sum = 0.0;
   long n = 0;
-  auto add = [&](const std::vector<BenchLog>& a, const std::vector<BenchLog>& b) {
-    for (std::size_t l = 0; l < a.size() && l < b.size(); ++l) {
-      const std::size_t len = std::min(a[l].q.size(), b[l].q.size());
-      double mean = 0.0;
-      for (std::size_t k = 0; k < len; ++k) mean += a[l].q[k] - b[l].q[k];
-      mean /= std::max<std::size_t>(len, 1);
-      for (std::size_t k = 0; k < len; ++k) {
-        const double e = a[l].q[k] - b[l].q[k] - mean;
-        sum += e * e;
-      }
-      n += static_cast<long>(len);
-    }
-  };
-  add(robot.train, sim.train);
-  add(robot.heldout, sim.heldout);
+  for (const auto& [sse, len] : logSquaredErrors(robot, sim)) {
+    sum += sse;
+    n += len;
+  }
   return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
 }
 
