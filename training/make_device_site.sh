@@ -15,8 +15,14 @@ python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 -
   tensorboardx==2.6.5 flask==3.1.3 flask-cors==6.0.5 ml-collections==1.1.0 blinker==1.9.0 itsdangerous==2.2.0
 mkdir -p "$tmp/site"
 for w in "$tmp"/*.whl; do unzip -q -o "$w" -d "$tmp/site"; done
+# Dropped as well: packages that pip requires but that train_pmg.py never imports (checked with
+# sys.modules after importing train_pmg, the env and Brax PPO: flask, websockets, tensorboardX, glfw
+# with MUJOCO_GL=disable) and MuJoCo's C headers: the tracked tree has grown, and tree + site must
+# stay under the 64 MiB a device command carries.
 rm -rf "$tmp/site/mujoco/experimental" "$tmp/site/mujoco/mjx/test_data" "$tmp/site"/mujoco/_render_filament* \
-       "$tmp/site"/mujoco/_simulate* "$tmp/site/OpenGL"
+       "$tmp/site"/mujoco/_simulate* "$tmp/site/OpenGL" "$tmp/site/mujoco/include" "$tmp/site"/flask* \
+       "$tmp/site"/websockets* "$tmp/site"/tensorboardX* "$tmp/site"/glfw "$tmp/site"/glfw-* \
+       "$tmp/site"/blinker* "$tmp/site"/itsdangerous*
 mkdir -p "$root/.whl"
 tar czf "$root/.whl/site.tgz" -C "$tmp/site" .
 rm -rf "$tmp"

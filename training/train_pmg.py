@@ -158,7 +158,10 @@ def parse_args(argv=None):
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
     ap.add_argument("--actuator-dr", type=float, default=None,
                     help="relative half-width of the domain randomisation around each identified actuator parameter "
-                         "(default: EnvConfig.actuator_dr)")
+                         "the calibration gives no uncertainty for (default: EnvConfig.actuator_dr)")
+    ap.add_argument("--actuator-dr-z", type=float, default=None,
+                    help="a parameter with a calibrated uncertainty u (`actuator_uncertainty:`) is drawn within +- z u "
+                         "(default: EnvConfig.actuator_dr_z)")
     args = ap.parse_args(argv)
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
         ap.error(f"--actuator-dr = {args.actuator_dr}: expected a relative half-width in [0, 1)")
@@ -248,6 +251,8 @@ def main(argv=None):
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators)
     if args.actuator_dr is not None:
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
+    if args.actuator_dr_z is not None:
+        cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:
@@ -271,8 +276,12 @@ def main(argv=None):
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
                    "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
                                  "blocks": {n: {k: (None if isinstance(v, float) and math.isinf(v) else v)
-                                                for k, v in b.items() if k != "_named" and v is not None}
-                                            for n, b in env.actuator_blocks.items()}}}, f, indent=1)
+                                                for k, v in b.items() if not k.startswith("_") and v is not None}
+                                            for n, b in env.actuator_blocks.items()},
+                                 "uncertainty": {n: b["_uncertainty"] for n, b in env.actuator_blocks.items()},
+                                 "dr_relative": {env.joint_names[i]: {k: float(env.act_dr[k][r])
+                                                                      for k in env.act_dr if env.act_dr[k][r] > 0}
+                                                 for r, i in enumerate(env.act_idx)}}}, f, indent=1)
     restore = None
     if args.restore:
         with open(args.restore, "rb") as f:

@@ -52,7 +52,10 @@ std::string readText(const std::string& path) {
 
 // The robot config text with `actuator:` blocks on the calibrated joints (flow-style joint lines, as
 // the shipped configs have them) and its model paths absolute.
-std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<std::string, std::string>& blocks) {
+// Each calibrated joint also gets `actuator_uncertainty:` (RobotFitModel::uncertainty), from which
+// training sizes its domain randomisation.
+std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<std::string, std::string>& blocks,
+                                const std::map<std::string, std::string>& uncertainties) {
   std::string text = readText(robot.source_file);
   const std::string dir = std::filesystem::path(robot.source_file).parent_path().string();
   for (const char* key : {"urdf", "mjcf"}) {
@@ -63,12 +66,15 @@ std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<st
              m.suffix().str();
   }
   for (const auto& [joint, block] : blocks) {
-    const std::regex line("(\\{\\s*name:\\s*" + joint + "\\s*,[^\\n]*?)(,\\s*actuator:\\s*\\{[^}]*\\})?\\}");
+    const std::regex line("(\\{\\s*name:\\s*" + joint + "\\s*,[^\\n]*?)(,\\s*actuator:\\s*\\{[^}]*\\})?"
+                          "(,\\s*actuator_uncertainty:\\s*\\{[^}]*\\})?\\}");
     std::smatch m;
     if (!std::regex_search(text, m, line))
       throw pmg::ConfigError(robot.source_file + ": joint '" + joint +
                              "' is not a one-line flow map {name: ..., ...}: cannot insert its actuator block");
-    text = m.prefix().str() + m[1].str() + ", actuator: " + block + "}" + m.suffix().str();
+    const auto u = uncertainties.find(joint);
+    text = m.prefix().str() + m[1].str() + ", actuator: " + block +
+           (u == uncertainties.end() ? std::string() : ", actuator_uncertainty: " + u->second) + "}" + m.suffix().str();
   }
   return text;
 }
@@ -158,7 +164,7 @@ int main(int argc, char** argv) {
     nlohmann::json report;
     report["config"] = config_path;
     report["excitation"] = {{"amplitude_rad", ex.amplitude_rad}, {"ramp_s", ex.ramp_s}, {"hold_s", ex.hold_s}, {"chirp_s", ex.chirp_s}};
-    std::map<std::string, std::string> blocks;
+    std::map<std::string, std::string> blocks, uncertainties;  // flow maps per calibrated joint
     double robot_time = 0.0;
     // 1. Capture every joint on the robot, then the same on the nominal simulator.
     std::vector<pmg::calib::JointCapture> caps, refs;
@@ -246,6 +252,7 @@ int main(int argc, char** argv) {
           pmg::calib::fitJointInRobot(model, fit_opt, bus_lag, i, cap, ex, hold, floors[k], fopt);
       auto modelJson = [](const pmg::calib::RobotFitModel& m) {
         nlohmann::json o = {{"name", m.name}, {"params", m.params}, {"cv_rad", m.cv_rad}, {"gain", m.gain}, {"verdict", m.verdict}};
+        if (!m.uncertainty.empty()) o["uncertainty"] = m.uncertainty;
         if (m.heldout_rad >= 0) o["heldout_rad"] = m.heldout_rad;
         return o;
       };
@@ -262,6 +269,14 @@ int main(int argc, char** argv) {
                                         : "named: the entries that make the whole-robot model reproduce the response";
       if (!fit.causes.empty()) {
         blocks[name] = flowBlock(fit.block);
+        {
+          YAML::Emitter em;
+          em.SetDoublePrecision(3);
+          YAML::Node n(YAML::NodeType::Map);
+          for (const auto& [key, v] : fit.extended.uncertainty) n[key] = v;
+          em << YAML::Flow << n;
+          uncertainties[name] = em.c_str();
+        }
         model.joints[static_cast<std::size_t>(i)].actuator_yaml = blocks[name];
         model.joints[static_cast<std::size_t>(i)].actuator_source = "pmg_calib_joints: " + name;
       }
@@ -325,7 +340,7 @@ int main(int argc, char** argv) {
       std::ofstream out(out_path);
       if (!out) throw std::runtime_error(out_path + ": cannot write");
       out << "# Calibrated by pmg_calib_joints from " << config_path << " (report " << report_path << ")\n"
-          << calibratedRobotText(robot, blocks);
+          << calibratedRobotText(robot, blocks, uncertainties);
     }
     fmt::print("pmg_calib_joints: {} joints, {:.1f} s on the robot, {:.1f} s wall; report {}, calibrated config {}\n",
                idx.size(), robot_time, wall, report_path, out_path);

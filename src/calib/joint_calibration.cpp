@@ -332,8 +332,10 @@ struct ParamSearch {
       grid_pts.emplace_back(x, eval(x));
     }
   }
-  // The best value for the logs `fold` (minimising their RMS residual).
-  std::pair<double, Sse> fit(const std::vector<int>& fold) {
+  // The best value for the logs `fold` (minimising their RMS residual). @p resolution (optional)
+  // receives half the final golden-section bracket in parameter units: how finely the search
+  // located the minimum.
+  std::pair<double, Sse> fit(const std::vector<int>& fold, double* resolution = nullptr) {
     std::size_t best = 0;
     for (std::size_t k = 1; k < grid_pts.size(); ++k)
       if (rms(grid_pts[k].second, fold) < rms(grid_pts[best].second, fold)) best = k;
@@ -360,6 +362,7 @@ struct ParamSearch {
     }
     if (rms(fc, fold) < rms(top.second, fold)) top = {fromU(c), fc};
     if (rms(fd, fold) < rms(top.second, fold)) top = {fromU(d), fd};
+    if (resolution) *resolution = 0.5 * (fromU(b) - fromU(a));
     return top;
   }
 };
@@ -389,7 +392,8 @@ RobotFitResult fitJointInRobot(const RobotConfig& model_in, const MujocoBackendO
     RobotFitModel model;
     Sse all_train_fit;  // squared errors at the parameter fitted on both training logs
   };
-  auto trial = [&](JointSimulator& sim, const RobotFitEntry& e, const std::map<std::string, double>& fixed) {
+  auto trial = [&](JointSimulator& sim, const RobotFitEntry& e, const std::map<std::string, double>& fixed,
+                   const std::map<std::string, double>& fixed_uncertainty) {
     ParamSearch ps{e, [&](double x) {
                      std::map<std::string, double> p = fixed;
                      p[e.key] = x;
@@ -397,19 +401,22 @@ RobotFitResult fitJointInRobot(const RobotConfig& model_in, const MujocoBackendO
                    },
                    opt.grid, opt.refine, {}};
     ps.runGrid();
-    const auto fa = ps.fit(fold_a), fb = ps.fit(fold_b), ft = ps.fit(train);
+    double resolution = 0.0;
+    const auto fa = ps.fit(fold_a), fb = ps.fit(fold_b), ft = ps.fit(train, &resolution);
     const double sse = fa.second[1].first + fb.second[0].first;
     const long n = fa.second[1].second + fb.second[0].second;
     Trial tr;
     tr.model.name = e.name;
     tr.model.params = fixed;
     tr.model.params[e.key] = ft.first;
+    tr.model.uncertainty = fixed_uncertainty;
+    tr.model.uncertainty[e.key] = std::max({std::abs(fa.first - ft.first), std::abs(fb.first - ft.first), resolution});
     tr.model.cv_rad = std::sqrt(sse / static_cast<double>(std::max(n, 1L)));
     tr.all_train_fit = ft.second;
     return tr;
   };
   // Trials of every entry not yet chosen, spread over the threads.
-  auto trials = [&](const std::map<std::string, double>& fixed, const std::vector<const RobotFitEntry*>& entries) {
+  auto trials = [&](const RobotFitModel& base_model, const std::vector<const RobotFitEntry*>& entries) {
     std::vector<Trial> out(entries.size());
     std::vector<std::string> errors(entries.size());
     std::vector<std::thread> workers;
@@ -417,7 +424,7 @@ RobotFitResult fitJointInRobot(const RobotConfig& model_in, const MujocoBackendO
       workers.emplace_back([&, t] {
         for (std::size_t k = t; k < entries.size(); k += sims.size()) {
           try {
-            out[k] = trial(*sims[t], *entries[k], fixed);
+            out[k] = trial(*sims[t], *entries[k], base_model.params, base_model.uncertainty);
           } catch (const std::exception& e) {
             errors[k] = e.what();
           }
@@ -446,7 +453,7 @@ RobotFitResult fitJointInRobot(const RobotConfig& model_in, const MujocoBackendO
       if (step == 0) res.baseline.verdict = "the nominal model already explains the training logs to within the noise: nothing tried";
       break;
     }
-    std::vector<Trial> tr = trials(current.params, remaining);
+    std::vector<Trial> tr = trials(current, remaining);
     std::size_t best = 0;
     for (std::size_t k = 1; k < tr.size(); ++k)
       if (tr[k].model.cv_rad < tr[best].model.cv_rad) best = k;

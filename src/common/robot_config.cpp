@@ -1,5 +1,6 @@
 #include "pmg/common/robot_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -146,6 +147,7 @@ struct RobotSection {
 struct JointEntry {
   JointConfig j;
   YAML::Node actuator;
+  std::map<std::string, double> actuator_uncertainty;
   template <class A>
   void Serialize(A* a) {
     a->Visit("name", &j.name, "joint name as in URDF/MJCF", yaml::kRequired);
@@ -161,6 +163,8 @@ struct JointEntry {
     a->Visit("mirror", &j.mirror, "left/right mirror joint (default: itself)");
     a->Visit("mirror_sign", &j.mirror_sign, "q_mirror = mirror_sign * q (+-1)");
     a->Visit("actuator", &actuator, "actuator model: a map or the path of an actuator file");
+    a->Visit("actuator_uncertainty", &actuator_uncertainty,
+             "uncertainty of the identified actuator parameters {key: value >= 0}, same units (pmg_calib_joints)");
   }
 };
 
@@ -254,6 +258,7 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
   for (std::size_t i = 0; i < file.joints.size(); ++i) {
     JointEntry& e = file.joints[i];
     if (e.j.mirror.empty()) e.j.mirror = e.j.name;
+    std::vector<std::string> block_keys;  // the keys the actuator block names
     if (const YAML::Node& a = e.actuator; !a.IsNull()) {
       const yaml::YamlSource asrc = yaml::childSource(yaml::itemSource(joints_src, i), "actuator");
       if (a.IsScalar()) {  // path of an actuator file with a top-level `actuator:` map
@@ -274,12 +279,29 @@ RobotConfig loadRobotConfig(const std::string& yaml_path) {
         }
         e.j.actuator_yaml = YAML::Dump(adoc.root["actuator"]);
         e.j.actuator_source = yaml::location(adoc.source, adoc.root["actuator"]) + ": actuator";
+        for (const auto& kv : adoc.root["actuator"]) block_keys.push_back(kv.first.Scalar());
       } else if (a.IsMap()) {
         e.j.actuator_yaml = YAML::Dump(a);
+        for (const auto& kv : a) block_keys.push_back(kv.first.Scalar());
         e.j.actuator_source = yaml::location(asrc, a) + ": " + asrc.key_path;
       } else {
         yaml::fail(asrc, a, "expected a map of actuator parameters or the path of an actuator file");
       }
+    }
+    // An uncertainty belongs to a parameter the block identifies (same key, same unit).
+    if (!e.actuator_uncertainty.empty()) {
+      const yaml::YamlSource usrc = yaml::childSource(yaml::itemSource(joints_src, i), "actuator_uncertainty");
+      const YAML::Node unode = joints_node[i]["actuator_uncertainty"];
+      for (const auto& [key, v] : e.actuator_uncertainty) {
+        if (std::find(block_keys.begin(), block_keys.end(), key) == block_keys.end())
+          yaml::fail(usrc, unode, "'" + key + "': not a parameter the joint's `actuator:` block names" +
+                                      (block_keys.empty() ? std::string(" (the joint has no actuator block)")
+                                                          : " (expected one of its keys, e.g. '" +
+                                                                yaml::nearestKey(key, block_keys) + "')"));
+        if (!(v >= 0.0) || !std::isfinite(v))
+          yaml::fail(usrc, unode, "'" + key + "' = " + std::to_string(v) + ": expected a finite value >= 0");
+      }
+      e.j.actuator_uncertainty = e.actuator_uncertainty;
     }
     c.joints.push_back(e.j);
   }

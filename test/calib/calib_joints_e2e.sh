@@ -2,8 +2,9 @@
 # End-to-end pmg_calib_joints through the motor bus (issue 15): pmg_sil plays a robot whose left hip
 # yaw driver is 25 % stiffer than the model (REALITY.yaml, hidden from the tool: separate process,
 # CAN frames over UDP); pmg_calib_joints calibrates three leg joints through the HAL stack and
-# must name pd_gain on the hip yaw (kp_scale 1.25 within 0.05, the bench tests' tolerance) and nothing on the knee and ankle;
-# the calibrated robot config it writes must load in the SIL.
+# must name pd_gain on the hip yaw (kp_scale 1.25 within 0.05, the bench tests' tolerance, with an
+# uncertainty in (0, 0.05)) and nothing on the knee and ankle; the calibrated robot config it writes
+# (the block and its `actuator_uncertainty:`) must load in the SIL.
 #   calib_joints_e2e.sh BIN_DIR SOURCE_DIR
 set -eu
 bin=$1 src=$2
@@ -26,6 +27,8 @@ fail = []
 e = j["left_hip_yaw_joint"]["causes"]
 if not e or e[0]["name"] != "pd_gain" or abs(e[0]["params"]["kp_scale"] - 1.25) > 0.05:
     fail.append(f"left_hip_yaw_joint: expected pd_gain kp_scale 1.25 +- 0.05 first, got {e}")
+elif not 0 < e[0].get("uncertainty", {}).get("kp_scale", -1) < 0.05:
+    fail.append(f"left_hip_yaw_joint: expected an uncertainty of kp_scale in (0, 0.05), got {e[0].get('uncertainty')}")
 for name in ("left_knee_joint", "left_ankle_pitch_joint"):
     if j[name]["causes"]:
         fail.append(f"{name}: expected nothing named, got {j[name]['causes']}")
@@ -36,6 +39,6 @@ sys.exit(1 if fail else 0)
 PY
 kill $sil 2>/dev/null || true
 wait $sil 2>/dev/null || true
-grep -q "left_hip_yaw_joint.*actuator:" "$d/calibrated.yaml"
+grep -q "left_hip_yaw_joint.*actuator: {[^}]*}, actuator_uncertainty: {kp_scale: " "$d/calibrated.yaml"
 # (a port block of its own: one SIL takes 14 ports from its base)
 "$bin/pmg_sil" --robot "$d/calibrated.yaml" --realtime --duration 0.05 --port 47460 > "$d/sil2.log" 2>&1 || { cat "$d/sil2.log"; exit 1; }

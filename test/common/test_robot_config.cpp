@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 
@@ -123,6 +124,43 @@ TEST(RobotConfig, BusesAndMotorIdsAreNamed) {
   EXPECT_EQ(c.joints[0].motor_id, 1);
   EXPECT_EQ(c.joints[6].bus, "can1");  // right hip pitch: first motor of the second leg bus
   EXPECT_EQ(c.joints[6].motor_id, 1);
+}
+
+// `actuator_uncertainty:` (pmg_calib_joints): read per joint, only for parameters the joint's block
+// names, finite and >= 0; anything else is refused naming the file, the joint and the key.
+TEST(RobotConfig, ActuatorUncertaintyBelongsToTheBlocksParameters) {
+  auto withKnee = [](const std::string& extra) {
+    return std::regex_replace(test::g1RobotConfigText(), std::regex("(mirror: right_knee_joint, mirror_sign: 1)\\}"),
+                              "$1" + extra + "}", std::regex_constants::format_first_only);
+  };
+  const test::TempDir dir;
+  const RobotConfig c = loadRobotConfig(
+      dir.write("ok.yaml", withKnee(", actuator: {fc_Nm: 2.0, delay_s: 0.004}, actuator_uncertainty: {fc_Nm: 0.05, delay_s: 0.0002}")));
+  const std::map<std::string, double> want{{"delay_s", 0.0002}, {"fc_Nm", 0.05}};
+  EXPECT_EQ(c.joints[3].actuator_uncertainty, want);
+  EXPECT_TRUE(c.joints[4].actuator_uncertainty.empty());
+  const struct {
+    const char* name;
+    std::string extra;
+    std::string message;
+  } bad[] = {
+      {"not_in_block", ", actuator: {fc_Nm: 2.0}, actuator_uncertainty: {fv_Nms_per_rad: 0.1}",
+       "'fv_Nms_per_rad': not a parameter the joint's `actuator:` block names (expected one of its keys, e.g. 'fc_Nm')"},
+      {"no_block", ", actuator_uncertainty: {fc_Nm: 0.1}", "(the joint has no actuator block)"},
+      {"negative", ", actuator: {fc_Nm: 2.0}, actuator_uncertainty: {fc_Nm: -0.1}", "expected a finite value >= 0"},
+  };
+  for (const auto& b : bad) {
+    const std::string path = dir.write(std::string(b.name) + ".yaml", withKnee(b.extra));
+    try {
+      loadRobotConfig(path);
+      ADD_FAILURE() << b.name << ": accepted";
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << what;
+      EXPECT_NE(what.find("actuator_uncertainty"), std::string::npos) << what;
+      EXPECT_NE(what.find(b.message), std::string::npos) << b.name << ": " << what;
+    }
+  }
 }
 
 }  // namespace

@@ -55,10 +55,15 @@ pmg_train/actuator.py, equal to the C++ model: ctest actuator_port_equals_cpp):
     offsets: the "Dynamic + Zero-point" policy differs only in its robot config), rate_hz (drivers at
     >= 200 Hz run at least once per 5 ms substep; a lower rate is reported), backlash (refused).
 Domain randomisation around the identified values: per episode each identified parameter is
-value x U(1 - dr, 1 + dr), dr = EnvConfig.actuator_dr, independently per joint (the identified value
-itself with deterministic_reset): kp_scale and kd_scale always (pmg_calib_joints fits the baseline
-gains of every calibrated joint; a block omits them at 1), and every other key the block names
-(armature, delay, kt_scale, torque limit, envelope, fc, fs, kl, fv); unnamed effects stay off.
+value x U(1 - dr, 1 + dr), independently per joint (the identified value itself with
+deterministic_reset): kp_scale and kd_scale always (a block omits them at 1), and every other key the
+block names (armature, delay, kt_scale, torque limit, envelope, fc, fs, kl, fv); unnamed effects stay
+off. The width is sized from the calibration: where the joint's `actuator_uncertainty:` gives the
+parameter's uncertainty u (pmg_calib_joints: the spread of its cross-validation fits, at least the
+search's resolution), dr = z u / |value| (EnvConfig.actuator_dr_z, 2), clipped to
+[actuator_dr_min, actuator_dr_max] = [0.02, 0.5] (a floor so that the policy never trains on one
+exact value; a ceiling so that a poorly determined parameter does not swamp the model); a randomised
+key without an uncertainty (a gain scale the calibration did not fit) gets EnvConfig.actuator_dr.
 They replace the generic kp / kd / armature / frictionloss ranges on those joints; joints without a
 block keep the generic ranges.
 
@@ -186,7 +191,21 @@ def load_actuator_blocks(path, joint_names):
             raise ValueError(f"{where}.backlash_gap_rad = {parsed['backlash_gap_rad']}: backlash needs a rotor "
                              f"body; the training model (like the G1 SIL) does not model it (expected 0)")
         parsed["_named"] = tuple(block)
+        unc = j.get("actuator_uncertainty") or {}
+        uwhere = f"{path}: joints.{name}.actuator_uncertainty"
+        if not isinstance(unc, dict):
+            raise ValueError(f"{uwhere}: expected a map {{actuator key: uncertainty}}")
+        for k, v in unc.items():
+            if k not in block:
+                raise ValueError(f"{uwhere}.{k}: not a parameter the joint's `actuator:` block names "
+                                 f"(expected one of {sorted(block)})")
+            if not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ValueError(f"{uwhere}.{k} = {v!r}: expected a finite value >= 0 (the parameter's unit)")
+        parsed["_uncertainty"] = {k: float(v) for k, v in unc.items()}
         blocks[name] = parsed
+    for i, j in enumerate(doc["joints"]):
+        if isinstance(j, dict) and j.get("actuator_uncertainty") is not None and j.get("actuator") is None:
+            raise ValueError(f"{path}: joints.{j.get('name')}.actuator_uncertainty: the joint has no `actuator:` block")
     return blocks
 
 
@@ -228,7 +247,14 @@ class EnvConfig:
     # Identified actuator models (issue 15; module docstring "Actuator models"): a calibrated robot
     # config (pmg_calib_joints --out: the robot config with `actuator:` blocks on some joints); "" = none.
     actuators: str = ""
-    actuator_dr: float = 0.1       # relative half-width of the per-episode DR around each identified value
+    # Per-episode DR around each identified value (module docstring "Actuator models"): a parameter the
+    # calibration gives an uncertainty u for (`actuator_uncertainty:`) is drawn within +- z u, as a
+    # relative half-width clipped to [actuator_dr_min, actuator_dr_max]; any other randomised key within
+    # +- actuator_dr (relative).
+    actuator_dr: float = 0.1
+    actuator_dr_z: float = 2.0
+    actuator_dr_min: float = 0.02
+    actuator_dr_max: float = 0.5
     # PD gains: "nominal" (robot config kp/kd, armature 0.01) or "physically_informed" (kp = I w_n^2,
     # kd = 2 zeta I w_n, armature I: pmg_train/gains.py, config/robots/g1/g1_pig.yaml).
     gains: str = "nominal"
@@ -348,6 +374,9 @@ class G1PmgEnv(Env):
             raise ValueError(f"EnvConfig.gains = {cfg.gains!r}: expected one of {GAINS}")
         if not (0.0 <= cfg.actuator_dr < 1.0):
             raise ValueError(f"EnvConfig.actuator_dr = {cfg.actuator_dr}: expected a relative half-width in [0, 1)")
+        if not (0.0 <= cfg.actuator_dr_min <= cfg.actuator_dr_max < 1.0) or not cfg.actuator_dr_z >= 0.0:
+            raise ValueError(f"EnvConfig.actuator_dr_min/max/z = {cfg.actuator_dr_min}/{cfg.actuator_dr_max}/"
+                             f"{cfg.actuator_dr_z}: expected 0 <= min <= max < 1 and z >= 0")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
         if clip_files is None:
@@ -441,6 +470,7 @@ class G1PmgEnv(Env):
         self.act_center = {k: np.zeros(m) for k in ACT_KEYS}
         self.act_has_armature = np.zeros(m, bool)
         self.act_randomised = {k: np.zeros(m, bool) for k in ACT_DR_KEYS}
+        self.act_dr = {k: np.zeros(m) for k in ACT_DR_KEYS}
         self.act_rows = 2
         if not m:
             return
@@ -453,6 +483,16 @@ class G1PmgEnv(Env):
         named = [set(b["_named"]) for b in ordered]
         self.act_randomised = {k: np.array([k in ("kp_scale", "kd_scale") or k in n for n in named])
                                for k in ACT_DR_KEYS}
+        # Relative DR half-widths: sized from the calibration's uncertainty where it gives one.
+        for k in ACT_DR_KEYS:
+            w = np.full(m, cfg.actuator_dr)
+            for r, b in enumerate(ordered):
+                u = b["_uncertainty"].get(k)
+                if u is not None:
+                    value = abs(float(self.act_center[k][r]))
+                    rel = cfg.actuator_dr_z * u / value if value > 0 else cfg.actuator_dr_max
+                    w[r] = min(max(rel, cfg.actuator_dr_min), cfg.actuator_dr_max)
+            self.act_dr[k] = np.where(self.act_randomised[k], w, 0.0)
         # A block that names no dry friction keeps the model's joint friction, as the SIL does
         # (pmg::MujocoBackend::setActuatorBlock): a block changes only what it names.
         no_dry = np.array([not ({"fc_Nm", "fs_Nm", "kl"} & n) for n in named])
@@ -460,7 +500,7 @@ class G1PmgEnv(Env):
         # Saturation: the block's and the joint's torque limit, whichever is lower (as pmg::MujocoBackend).
         self.act_center["torque_limit_Nm"] = np.minimum(self.act_center["torque_limit_Nm"],
                                                         self.tau_max[self.act_idx].astype(np.float64))
-        max_delay = float(self.act_center["delay_s"].max()) * (1.0 + cfg.actuator_dr)
+        max_delay = float(np.max(self.act_center["delay_s"] * (1.0 + self.act_dr["delay_s"])))
         self.act_rows = int(math.ceil(max_delay / cfg.sim_dt)) + 2
         slow = [n for n, b in zip((self.joint_names[i] for i in self.act_idx), ordered)
                 if 0 < b["rate_hz"] < 1.0 / cfg.sim_dt]
@@ -470,16 +510,16 @@ class G1PmgEnv(Env):
 
     def _draw_actuators(self, rng):
         """Identified actuator parameters of one episode, (m,) each: value x U(1 - dr, 1 + dr) per
-        joint and key (ACT_DR_KEYS), the identified values with deterministic_reset."""
-        c, dr = self.cfg, self.cfg.actuator_dr
+        joint and key (ACT_DR_KEYS, dr = act_dr[key]), the identified values with deterministic_reset."""
+        c = self.cfg
         m = self.act_idx.size
         draw = {}
         keys = jax.random.split(rng, len(ACT_KEYS))
         for key, k in zip(ACT_KEYS, keys):
             centre = jnp.asarray(self.act_center[key], jnp.float32)
-            if key in ACT_DR_KEYS and not c.deterministic_reset and dr > 0:
-                scale = jax.random.uniform(k, (m,), minval=1.0 - dr, maxval=1.0 + dr)
-                centre = centre * jnp.where(jnp.asarray(self.act_randomised[key]), scale, 1.0)
+            if key in ACT_DR_KEYS and not c.deterministic_reset:
+                dr = jnp.asarray(self.act_dr[key], jnp.float32)
+                centre = centre * jax.random.uniform(k, (m,), minval=1.0 - dr, maxval=1.0 + dr)
             draw[key] = centre
         draw["kt_scale"] = jnp.clip(draw["kt_scale"], 1e-3, 5.0)
         draw["kl"] = jnp.clip(draw["kl"], 0.0, 0.99)

@@ -27,8 +27,9 @@ training_smoke_ppo) so that they compile in parallel.
    effect on; an env built with a calibrated robot config written into the workdir (left knee inline
    {kp_scale 0.8, delay 4 ms, fc 1 N m, offset 0.02 rad}, right hip pitch from an actuator file
    {kt_scale 0.9, limit 60 N m, fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets map) and one with
-   gains=physically_informed: randomised resets, zero action, finite and upright; the identified
-   parameters are drawn within +-actuator_dr of the file's values, unnamed effects stay off, offsets
+   gains=physically_informed: randomised resets, zero action, finite and upright; the DR widths are
+   sized from the knee's actuator_uncertainty (z u / |value|, floored) and are actuator_dr where none is
+   given; the identified parameters are drawn within those widths, unnamed effects stay off, offsets
    are not applied; with the identified values (one physics substep per env.step) the knee's and the
    hip's motor torque equal the NumPy port's prediction (kp x 0.8 with the 4 ms delay interpolated
    between 5 ms substeps; kt 0.9, 60 N m saturation) and differ from the nominal PD, the implicit
@@ -246,6 +247,7 @@ def env_checks(check, n_envs, n_steps):
 
 
 CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
+CAL_KNEE_UNCERTAINTY = {"kp_scale": 0.02, "delay_s": 0.0004, "fc_Nm": 0.001}  # pmg_calib_joints-style
 CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
                 "fs_Nm": 0.5, "vs_rad_per_s": 0.05, "kl": 0.01}
 
@@ -263,7 +265,8 @@ def write_calibrated_robot(workdir):
         lines = text.splitlines(keepends=True)
         for i, line in enumerate(lines):
             if line.lstrip().startswith(f"- {{name: {name},"):
-                lines[i] = line.rstrip().rstrip("}") + f", actuator: {block}}}\n"
+                extra = f", actuator_uncertainty: {flow(CAL_KNEE_UNCERTAINTY)}" if name == "left_knee_joint" else ""
+                lines[i] = line.rstrip().rstrip("}") + f", actuator: {block}{extra}}}\n"
         text = "".join(lines)
     text += "zero_offsets: {left_ankle_pitch_joint: 0.03}\n"
     path = os.path.join(workdir, "g1_calibrated.yaml")
@@ -380,13 +383,23 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     states, _ = rollout(env, "calibrated env")
     draws = [{k: np.asarray(v, np.float64) for k, v in st.info["act"].items()} for st in states]
     dr = cfg.actuator_dr
-    within = all(np.all(np.abs(d[k] - c[k]) <= dr * np.abs(c[k]) + 1e-6) for d in draws for k in g1_env.ACT_DR_KEYS)
+    # Widths from the knee's actuator_uncertainty: z u / |value| (kp_scale 2 x 0.02 / 0.8 = 0.05, delay
+    # 2 x 0.0004 / 0.004 = 0.2, fc 2 x 0.001 / 1.0 -> the 0.02 floor); the hip's keys get actuator_dr.
+    want_w = {"kp_scale": 0.05, "delay_s": 0.2, "fc_Nm": cfg.actuator_dr_min}
+    widths_ok = all(abs(env.act_dr[k][0] - w) < 1e-9 for k, w in want_w.items()) and \
+        abs(env.act_dr["kd_scale"][0] - dr) < 1e-9 and abs(env.act_dr["kp_scale"][1] - dr) < 1e-9 and \
+        env.act_dr["armature_kgm2"][0] == 0.0
+    check(widths_ok, f"DR widths sized from the calibration's uncertainty: knee kp_scale "
+                     f"{env.act_dr['kp_scale'][0]:.3f} (want 0.05), delay {env.act_dr['delay_s'][0]:.3f} (0.2), "
+                     f"fc {env.act_dr['fc_Nm'][0]:.3f} (floor {cfg.actuator_dr_min}); no uncertainty: {dr}")
+    within = all(np.all(np.abs(d[k] - c[k]) <= env.act_dr[k] * np.abs(c[k]) + 1e-6)
+                 for d in draws for k in g1_env.ACT_DR_KEYS)
     moved = any(abs(d["kp_scale"][0] - 0.8) > 1e-4 and abs(d["delay_s"][0] - 0.004) > 1e-7 for d in draws)
     off = all(d["kt_scale"][0] == 1.0 and d["delay_s"][1] == 0.0 and d["fc_Nm"][1] == 0.0 for d in draws)
     kps = ", ".join("%.3f" % d["kp_scale"][0] for d in draws)
     delays = ", ".join("%.2f" % (d["delay_s"][0] * 1e3) for d in draws)
     check(within and moved and off,
-          f"identified parameters drawn within +-{dr:g} x the file's values (knee kp_scale {kps}, delay {delays} "
+          f"identified parameters drawn within their widths of the file's values (knee kp_scale {kps}, delay {delays} "
           f"ms); unnamed effects stay off")
 
     # One physics substep per env.step, the identified values: the motor torques equal the port's.

@@ -153,6 +153,12 @@ struct RobotFitOptions {
 struct RobotFitModel {
   std::string name;                       ///< entry added last ("baseline": none)
   std::map<std::string, double> params;   ///< every entry's parameter so far
+  /// Per parameter of `params` (same key, same unit): how well the training logs determine it,
+  /// the largest deviation of a one-log estimate (fit on the steps alone, on the chirp alone) from
+  /// the estimate on both, and at least half the final search bracket (the search's resolution).
+  /// pmg_calib_joints writes it as the joint's `actuator_uncertainty:`; training sizes its domain
+  /// randomisation from it (training/pmg_train/g1_env.py).
+  std::map<std::string, double> uncertainty;
   double cv_rad = 0.0;
   double gain = 0.0;
   double heldout_rad = -1.0;              ///< < 0 where not evaluated (candidates not chosen)

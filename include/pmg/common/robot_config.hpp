@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <stdexcept>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@ struct JointConfig {
   /// simulator that applies it (pmg::MujocoBackend, pmg::calib::parse_actuator_block).
   std::string actuator_yaml;
   std::string actuator_source;  ///< where the block came from (file and key), for error messages
+  /// How well calibration determined the block's parameters: {actuator key: uncertainty}, in the
+  /// key's own unit, >= 0, only for keys the block names (pmg_calib_joints writes it, from the spread
+  /// of its cross-validation fits; training sizes its domain randomisation from it). Optional key
+  /// `actuator_uncertainty:` beside `actuator:`; empty when absent. Not used by the simulator.
+  std::map<std::string, double> actuator_uncertainty;
   /// Encoder zero offset [rad] = encoder reading − true joint angle, |offset| ≤ 0.5 (pmg_calib_zero,
   /// docs/calibration.md). From the optional top-level `zero_offsets:` key: a map {joint_name: offset} or
   /// the path of a file with such a map under `zero_offsets:` (the `--out` file of pmg_calib_zero),
