@@ -15,6 +15,8 @@
    - every affected joint: its effect named first, its parameter within the bench tests'
      tolerances (test/calib/test_hidden_effects.cpp: fc 15 %, fv 20 %, delay 25 %, armature 25 %,
      kp_scale +-0.05);
+   - its reported uncertainty covers the error: |estimate - truth| <= 2 x uncertainty (the z with
+     which training sizes its domain randomisation);
    - every zero offset within 0.005 rad (joints without one: |estimate| <= 0.005 rad);
    - every unaffected joint: nothing named.
 Exit code 0 iff every check passes. The tools under test never see the reality file.
@@ -42,6 +44,7 @@ EFFECTS = {
     "kp_scale": ("pd_gain", "kp_scale", 0.0, 0.05),
 }
 ZERO_TOL = 0.005
+UNC_Z = 2.0  # EnvConfig.actuator_dr_z: training draws an identified parameter within +- z x its uncertainty
 
 
 def controller_config(out_dir, port, lockstep):
@@ -92,11 +95,14 @@ def grade(reality, joints_report, zero, joints):
             name, pkey, rel, ab = EFFECTS[key]
             truth = block[key]
             got = rep["causes"][0]["params"].get(pkey) if named and named[0] == name else None
+            unc = rep["causes"][0].get("uncertainty", {}).get(pkey) if got is not None else None
             tol = rel * abs(truth) if rel > 0 else ab
-            row.update({"hidden": name, "truth": truth, "estimate": got, "tolerance": tol,
+            row.update({"hidden": name, "truth": truth, "estimate": got, "tolerance": tol, "uncertainty": unc,
                         "named_first": bool(named) and named[0] == name,
-                        "within": got is not None and abs(got - truth) <= tol})
-            row["pass"] = row["named_first"] and row["within"]
+                        "within": got is not None and abs(got - truth) <= tol,
+                        # the reported uncertainty must cover the error at the z training sizes DR with (2)
+                        "covered": got is not None and unc is not None and abs(got - truth) <= UNC_Z * unc})
+            row["pass"] = row["named_first"] and row["within"] and row["covered"]
         else:
             row.update({"hidden": None, "pass": not named})
         z_true = offsets.get(j, 0.0)

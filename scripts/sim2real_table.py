@@ -12,10 +12,10 @@ runs the same actor three ways (controller configs written into OUT):
   Baseline               the nominal robot config (no calibration)
   Dynamic Calibration    the calibrated robot config without its zero offsets
   Dynamic + Zero-point   the calibrated robot config
-A policy trained on the identified models (the paper's rows) needs the device machine
-(training/run_finetune.sh); here the actor is the same, so Motion Imitation Error changes only through
-the zero offsets the HAL corrects, and Sim-to-Real Error measures how well each deployed simulator
-predicts the real robot. Writes OUT/table2.json, OUT/table2.md and OUT/table2.png.
+The trained rows (an actor per row, test table2_trained_policies) are in docs/calibration.md, "Table II
+with trained policies"; here the actor is the same, so Motion Imitation Error changes only through the
+zero offsets the HAL corrects, and Sim-to-Real Error measures how well each deployed simulator predicts
+the real robot. A REALITY_DIR's calibrated_robot.yaml may use model paths relative to it. Writes OUT/table2.json, OUT/table2.md and OUT/table2.png.
 """
 import argparse
 import json
@@ -66,7 +66,10 @@ def main():
         cal = os.path.join(rdir, "calibrated_robot.yaml")
         nozero = os.path.join(a.out, f"{tag}_robot_dynamic.yaml")
         # The calibrated config without its zero offsets (the Dynamic Calibration row).
-        text = "".join(l for l in open(cal) if not l.startswith("zero_offsets:"))
+        # (written elsewhere: its relative model paths made absolute)
+        text = "".join(re.sub(r"^(\s*(?:urdf|mjcf):\s*)([^\s#/][^\s#]*)",
+                              lambda m: m.group(1) + os.path.normpath(os.path.join(rdir, m.group(2))), l)
+                       for l in open(cal) if not l.startswith("zero_offsets:"))
         open(nozero, "w").write(text)
         cfgs = {"Baseline": os.path.join(a.out, f"{tag}_baseline.yaml"),
                 "Dynamic Calibration": os.path.join(a.out, f"{tag}_dynamic.yaml"),
@@ -100,7 +103,7 @@ def main():
         t = table[n]
         lines.append(f"| {n} | {t['motion_imitation_error_rad']:.4f} | {t['sim_to_real_error_rad']:.4f} | "
                      f"{t['sim_to_real_error_rad'] / base:.2f} | {PAPER[n][0]} / {PAPER[n][1]} |")
-    lines.append(f"| Physically Informed Gains | not run (needs a policy trained with those gains) | | | "
+    lines.append(f"| Physically Informed Gains | a trained row only (docs/calibration.md, "Table II with trained policies") | | | "
                  f"{PAPER['Physically Informed Gains'][0]} / {PAPER['Physically Informed Gains'][1]} |")
     open(os.path.join(a.out, "table2.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -116,7 +116,7 @@ def pig_robot_yaml(nominal_text):
         motor, count = motor_of(n)
         header.append(f"#   {key:22s} I {i:.9f}  kp {_fmt(p):>8s}  kd {_fmt(d):>6s}  "
                       f"({'2 x ' if count == 2 else ''}{motor.replace('_', '-')})")
-    header.append("# Deploy the policy trained with these gains with config/controller/g1_sil_policy_pig.yaml.")
+    header.append("# Deploy the policy trained with these gains with config/controller/g1_sil_table2_pig.yaml.")
     return "\n".join(header) + "\n" + "".join(out)
 
 
