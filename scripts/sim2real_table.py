@@ -103,7 +103,7 @@ def main():
         t = table[n]
         lines.append(f"| {n} | {t['motion_imitation_error_rad']:.4f} | {t['sim_to_real_error_rad']:.4f} | "
                      f"{t['sim_to_real_error_rad'] / base:.2f} | {PAPER[n][0]} / {PAPER[n][1]} |")
-    lines.append(f"| Physically Informed Gains | a trained row only (docs/calibration.md, "Table II with trained policies") | | | "
+    lines.append(f"| Physically Informed Gains | a trained row only (docs/calibration.md, 'Table II with trained policies') | | | "
                  f"{PAPER['Physically Informed Gains'][0]} / {PAPER['Physically Informed Gains'][1]} |")
     open(os.path.join(a.out, "table2.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -1,0 +1,128 @@
+#pragma once
+/// @file task_scene.hpp
+/// Task scenes for teleoperated tasks in the MuJoCo 2.2 SIL (issue 14, the paper's Table III:
+/// wiping a table, carrying a box): tables and free objects composed with the robot's MJCF, their
+/// per-trial randomisation, and the object poses an operator sees. Setup code: allocates and throws
+/// pmg::ConfigError naming the file, line and key. Frames: W = the SIL's world (x forward from the
+/// robot's start, y left, z up, origin on the floor under the pelvis at start); a table's frame T
+/// = its top centre, yawed by the table's yaw. SI units (m, kg, rad).
+///
+/// Scene file (config/tasks/*.yaml):
+/// ```yaml
+/// tables:                          # static boxes from the floor to `height`
+///   - {name: table, top_size: [0.6, 1.6], height: 0.76, pos: [0.62, 0.0], yaw: 0.0, friction: 0.8}
+/// objects:                         # free bodies resting on a table's top at the start
+///   - name: towel
+///     kind: towel                  # towel (a thin plate) | box
+///     size: [0.30, 0.30, 0.006]    # full extents x, y, z [m]
+///     mass: 0.12                   # [kg]
+///     friction: 0.9                # sliding friction coefficient against the table and the hands
+///     on: table                    # the table it rests on
+///     pos: [-0.05, 0.45]           # its centre in the table frame T [m]
+///     yaw: 0.0                     # about z, relative to the table [rad]
+///     randomize: {x: [-0.12, 0.0], y: [0.30, 0.55], yaw: [-0.3, 0.3]}   # per trial, uniform (optional)
+/// ```
+/// Unknown keys are errors; sizes and masses > 0; friction in (0, 2]; an object's footprint (at its
+/// nominal pose and at every corner of its randomisation ranges) must lie on its table's top.
+/// The robot's own bodies are untouched; the scene's bodies are named "task_<name>".
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <mujoco/mujoco.h>
+
+#include "pmg/common/robot_config.hpp"
+
+namespace pmg {
+
+/// A static table: a box from the floor to `height`.
+struct TaskTable {
+  std::string name;
+  std::array<double, 2> top_size{0.6, 1.2};  ///< top extents along its x and y [m], > 0
+  double height = 0.76;                      ///< top surface above the floor [m], in (0.1, 1.5]
+  std::array<double, 2> pos{0.6, 0.0};       ///< centre in W [m]
+  double yaw = 0.0;                          ///< about z in W [rad]
+  double friction = 0.8;                     ///< sliding friction of the top, (0, 2]
+  template <class A>
+  void Serialize(A* a);
+  std::string validate() const;  ///< "" if valid, else "field = v: expected ..."
+};
+
+/// Per-trial randomisation of an object's pose on its table (uniform in each interval).
+struct TaskRandomization {
+  std::optional<std::array<double, 2>> x, y;  ///< centre in T [m]: [lo, hi]
+  std::optional<std::array<double, 2>> yaw;   ///< relative to the table [rad]: [lo, hi]
+  template <class A>
+  void Serialize(A* a);
+  std::string validate() const;
+};
+
+enum class TaskObjectKind { kTowel, kBox };
+
+/// A free object resting on a table's top at the start.
+struct TaskObject {
+  std::string name;
+  TaskObjectKind kind = TaskObjectKind::kBox;
+  std::array<double, 3> size{0.3, 0.3, 0.2};  ///< full extents [m], > 0
+  double mass = 1.0;                          ///< [kg], > 0
+  double friction = 0.8;                      ///< (0, 2]
+  std::string on;                             ///< the table's name
+  std::array<double, 2> pos{0.0, 0.0};        ///< centre in the table frame T [m]
+  double yaw = 0.0;                           ///< relative to the table [rad]
+  std::optional<TaskRandomization> randomize;
+  template <class A>
+  void Serialize(A* a);
+  std::string validate() const;
+};
+
+/// A task scene (see the file comment).
+struct TaskScene {
+  std::string source;  ///< the file it was read from ("" if built in code)
+  std::vector<TaskTable> tables;
+  std::vector<TaskObject> objects;
+  template <class A>
+  void Serialize(A* a);
+  /// Cross-checks: unique names, `on` names a table, footprints on the top (nominal and at the
+  /// randomisation's corners). @throws pmg::ConfigError naming the source, the object and the field.
+  void check() const;
+  const TaskTable& table(const std::string& name) const;  ///< @throws std::out_of_range
+};
+
+/// Reads and checks a scene file. @throws pmg::ConfigError "<file>:<line>: <key>: <what>".
+TaskScene loadTaskScene(const std::string& path);
+
+/// The scene of trial @p seed: every object's randomised pose drawn (uniform, std::mt19937_64
+/// seeded with @p seed; the same seed gives the same scene) and written into its pos / yaw; the
+/// randomisation is then cleared. Objects without `randomize` keep their pose.
+TaskScene drawTaskTrial(const TaskScene& scene, std::uint64_t seed);
+
+/// The MJCF `<body>` elements of the scene (tables as static bodies, objects with a free joint
+/// that has no armature, damping or friction of its own), object centres at their start pose
+/// resting on the top (1 mm above, to settle). Object poses use the nominal pos / yaw: draw a
+/// trial first for randomised scenes.
+std::string taskSceneBodies(const TaskScene& scene);
+
+/// The robot's MJCF with the scene's bodies added to its world, written to @p out_mjcf_path (a
+/// model file of its own, so the shipped MJCF stays pristine; its meshdir is made absolute), and a
+/// copy of @p robot that loads it (mjcf_path = @p out_mjcf_path). @throws pmg::ConfigError if the
+/// file cannot be written or the robot MJCF has no world body.
+RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene, const std::string& out_mjcf_path);
+
+/// An object's state as the simulator holds it (the truth: an operator's view adds noise and
+/// latency on top).
+struct TaskObjectState {
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();           ///< centre [m]
+  Eigen::Quaterniond q_W = Eigen::Quaterniond::Identity();  ///< orientation
+  Eigen::Vector3d v_W = Eigen::Vector3d::Zero();           ///< linear velocity of the centre [m/s]
+};
+
+/// The state of object @p name ("task_<name>" in the model). @throws std::out_of_range if the
+/// model has no such body.
+TaskObjectState taskObjectState(const mjModel* model, const mjData* data, const std::string& name);
+
+}  // namespace pmg

@@ -1,0 +1,241 @@
+#include "pmg/hal/task_scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "pmg/common/config_error.hpp"
+#include "pmg/common/yaml_archive.hpp"
+
+namespace pmg {
+namespace fs = std::filesystem;
+
+std::vector<std::pair<std::string, TaskObjectKind>> yamlEnumNames(TaskObjectKind) {
+  return {{"towel", TaskObjectKind::kTowel}, {"box", TaskObjectKind::kBox}};
+}
+
+namespace {
+
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool frictionOk(double v) { return std::isfinite(v) && v > 0.0 && v <= 2.0; }
+
+std::string interval(const char* key, const std::optional<std::array<double, 2>>& r) {
+  if (r && !((*r)[0] <= (*r)[1])) return fmt::format("{} = [{}, {}]: expected [lo, hi] with lo <= hi", key, (*r)[0], (*r)[1]);
+  return "";
+}
+
+}  // namespace
+
+template <class A>
+void TaskTable::Serialize(A* a) {
+  a->Visit("name", &name, "table name", yaml::kRequired);
+  a->Visit("top_size", &top_size, "top extents x, y [m]", yaml::kRequired);
+  a->Visit("height", &height, "top surface above the floor [m]", yaml::kRequired);
+  a->Visit("pos", &pos, "centre in the world frame [m]", yaml::kRequired);
+  a->Visit("yaw", &yaw, "about z [rad]");
+  a->Visit("friction", &friction, "sliding friction of the top");
+}
+
+std::string TaskTable::validate() const {
+  if (!positive(top_size[0]) || !positive(top_size[1]))
+    return fmt::format("top_size = [{}, {}]: expected extents > 0 m", top_size[0], top_size[1]);
+  if (!(height > 0.1 && height <= 1.5)) return fmt::format("height = {}: expected (0.1, 1.5] m", height);
+  if (!frictionOk(friction)) return fmt::format("friction = {}: expected (0, 2]", friction);
+  return "";
+}
+
+template <class A>
+void TaskRandomization::Serialize(A* a) {
+  a->Visit("x", &x, "centre x in the table frame [m]: [lo, hi]");
+  a->Visit("y", &y, "centre y in the table frame [m]: [lo, hi]");
+  a->Visit("yaw", &yaw, "yaw relative to the table [rad]: [lo, hi]");
+}
+
+std::string TaskRandomization::validate() const {
+  for (const auto& [k, r] : {std::pair{"x", x}, std::pair{"y", y}, std::pair{"yaw", yaw}})
+    if (std::string e = interval(k, r); !e.empty()) return e;
+  return "";
+}
+
+template <class A>
+void TaskObject::Serialize(A* a) {
+  a->Visit("name", &name, "object name", yaml::kRequired);
+  a->Visit("kind", &kind, "towel | box", yaml::kRequired);
+  a->Visit("size", &size, "full extents x, y, z [m]", yaml::kRequired);
+  a->Visit("mass", &mass, "[kg]", yaml::kRequired);
+  a->Visit("friction", &friction, "sliding friction coefficient");
+  a->Visit("on", &on, "the table it rests on", yaml::kRequired);
+  a->Visit("pos", &pos, "centre in the table frame [m]");
+  a->Visit("yaw", &yaw, "relative to the table [rad]");
+  a->Visit("randomize", &randomize, "per-trial pose ranges");
+}
+
+std::string TaskObject::validate() const {
+  if (!positive(size[0]) || !positive(size[1]) || !positive(size[2]))
+    return fmt::format("size = [{}, {}, {}]: expected extents > 0 m", size[0], size[1], size[2]);
+  if (!positive(mass)) return fmt::format("mass = {}: expected > 0 kg", mass);
+  if (!frictionOk(friction)) return fmt::format("friction = {}: expected (0, 2]", friction);
+  return "";
+}
+
+template <class A>
+void TaskScene::Serialize(A* a) {
+  a->Visit("tables", &tables, "static tables", yaml::kRequired);
+  a->Visit("objects", &objects, "free objects on the tables", yaml::kRequired);
+}
+
+const TaskTable& TaskScene::table(const std::string& name) const {
+  for (const auto& t : tables)
+    if (t.name == name) return t;
+  throw std::out_of_range("no table '" + name + "'");
+}
+
+void TaskScene::check() const {
+  const std::string where = source.empty() ? std::string("task scene") : source;
+  std::set<std::string> names;
+  for (const auto& t : tables)
+    if (!names.insert(t.name).second) throw ConfigError(fmt::format("{}: tables.{}: the name is used twice", where, t.name));
+  for (const auto& o : objects) {
+    if (!names.insert(o.name).second) throw ConfigError(fmt::format("{}: objects.{}: the name is used twice", where, o.name));
+    const TaskTable* t = nullptr;
+    for (const auto& c : tables)
+      if (c.name == o.on) t = &c;
+    if (!t) throw ConfigError(fmt::format("{}: objects.{}.on = '{}': no table of that name", where, o.name, o.on));
+    // The footprint's corners must lie on the top, at the nominal pose and at every corner of the
+    // randomisation's ranges.
+    std::vector<std::array<double, 3>> poses{{o.pos[0], o.pos[1], o.yaw}};
+    if (o.randomize) {
+      const auto& r = *o.randomize;
+      const std::array<double, 2> xs = r.x.value_or(std::array<double, 2>{o.pos[0], o.pos[0]});
+      const std::array<double, 2> ys = r.y.value_or(std::array<double, 2>{o.pos[1], o.pos[1]});
+      const std::array<double, 2> yaws = r.yaw.value_or(std::array<double, 2>{o.yaw, o.yaw});
+      for (double x : xs)
+        for (double y : ys)
+          for (double yaw : yaws) poses.push_back({x, y, yaw});
+    }
+    for (const auto& [x, y, yaw] : poses)
+      for (double sx : {-0.5, 0.5})
+        for (double sy : {-0.5, 0.5}) {
+          const double cx = x + std::cos(yaw) * sx * o.size[0] - std::sin(yaw) * sy * o.size[1];
+          const double cy = y + std::sin(yaw) * sx * o.size[0] + std::cos(yaw) * sy * o.size[1];
+          if (std::abs(cx) > 0.5 * t->top_size[0] + 1e-9 || std::abs(cy) > 0.5 * t->top_size[1] + 1e-9)
+            throw ConfigError(fmt::format(
+                "{}: objects.{}: at pos [{:.3f}, {:.3f}], yaw {:.3f} (nominal or a corner of `randomize`) a corner "
+                "({:.3f}, {:.3f}) is off the top of table '{}' (expected |x| <= {:.3f}, |y| <= {:.3f} m in its frame)",
+                where, o.name, x, y, yaw, cx, cy, t->name, 0.5 * t->top_size[0], 0.5 * t->top_size[1]));
+        }
+  }
+}
+
+TaskScene loadTaskScene(const std::string& path) {
+  TaskScene s = yaml::loadYamlFile<TaskScene>(path);
+  s.source = path;
+  s.check();
+  return s;
+}
+
+TaskScene drawTaskTrial(const TaskScene& scene, std::uint64_t seed) {
+  TaskScene s = scene;
+  std::mt19937_64 rng(seed);
+  auto draw = [&](const std::optional<std::array<double, 2>>& r, double nominal) {
+    if (!r) return nominal;
+    return std::uniform_real_distribution<double>((*r)[0], (*r)[1])(rng);
+  };
+  for (auto& o : s.objects) {
+    if (!o.randomize) continue;
+    o.pos[0] = draw(o.randomize->x, o.pos[0]);
+    o.pos[1] = draw(o.randomize->y, o.pos[1]);
+    o.yaw = draw(o.randomize->yaw, o.yaw);
+    o.randomize.reset();
+  }
+  return s;
+}
+
+std::string taskSceneBodies(const TaskScene& scene) {
+  std::ostringstream x;
+  x.precision(9);
+  for (const auto& t : scene.tables) {
+    const double h = 0.5 * t.height;
+    x << "    <body name=\"task_" << t.name << "\" pos=\"" << t.pos[0] << " " << t.pos[1] << " " << h
+      << "\" euler=\"0 0 " << t.yaw << "\">\n"
+      << "      <geom name=\"task_" << t.name << "_geom\" type=\"box\" size=\"" << 0.5 * t.top_size[0] << " "
+      << 0.5 * t.top_size[1] << " " << h << "\" friction=\"" << t.friction
+      << " 0.005 0.0001\" rgba=\"0.55 0.42 0.3 1\"/>\n"
+      << "    </body>\n";
+  }
+  for (const auto& o : scene.objects) {
+    const TaskTable& t = scene.table(o.on);
+    const double c = std::cos(t.yaw), s = std::sin(t.yaw);
+    const double xw = t.pos[0] + c * o.pos[0] - s * o.pos[1];
+    const double yw = t.pos[1] + s * o.pos[0] + c * o.pos[1];
+    const double zw = t.height + 0.5 * o.size[2] + 0.001;
+    const char* rgba = o.kind == TaskObjectKind::kTowel ? "0.2 0.45 0.8 1" : "0.8 0.6 0.3 1";
+    x << "    <body name=\"task_" << o.name << "\" pos=\"" << xw << " " << yw << " " << zw << "\" euler=\"0 0 "
+      << t.yaw + o.yaw << "\">\n"
+      << "      <joint name=\"task_" << o.name << "_free\" type=\"free\" armature=\"0\" damping=\"0\" frictionloss=\"0\"/>\n"
+      << "      <geom name=\"task_" << o.name << "_geom\" type=\"box\" size=\"" << 0.5 * o.size[0] << " " << 0.5 * o.size[1]
+      << " " << 0.5 * o.size[2] << "\" mass=\"" << o.mass << "\" friction=\"" << o.friction
+      << " 0.005 0.0001\" rgba=\"" << rgba << "\"/>\n"
+      << "    </body>\n";
+  }
+  return x.str();
+}
+
+RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene, const std::string& out_mjcf_path) {
+  std::ifstream in(robot.mjcf_path);
+  if (!in) throw ConfigError(robot.mjcf_path + ": cannot read the robot MJCF");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string xml = ss.str();
+  // The robot's meshdir, made absolute, so the composed model loads from any folder.
+  const std::string dir = fs::absolute(fs::path(robot.mjcf_path)).parent_path().string();
+  std::smatch m;
+  const std::regex compiler_re(R"(<compiler([^>]*?)(/?)>)");
+  if (!std::regex_search(xml, m, compiler_re)) throw ConfigError(robot.mjcf_path + ": the MJCF has no <compiler> element");
+  std::string attrs = m[1].str();
+  std::string meshdir = dir;
+  std::smatch md;
+  if (std::regex_search(attrs, md, std::regex(R"(meshdir=\"([^\"]*)\")"))) {
+    const fs::path p(md[1].str());
+    meshdir = (p.is_absolute() ? p : fs::path(dir) / p).lexically_normal().string();
+    attrs = std::regex_replace(attrs, std::regex(R"(\s*meshdir=\"[^\"]*\")"), "");
+  }
+  xml = xml.substr(0, static_cast<std::size_t>(m.position(0))) + "<compiler" + attrs + " meshdir=\"" + meshdir + "\"" +
+        m[2].str() + ">" + xml.substr(static_cast<std::size_t>(m.position(0) + m.length(0)));
+  const auto end = xml.rfind("</worldbody>");
+  if (end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no </worldbody>");
+  xml.insert(end, "    <!-- task scene" + (scene.source.empty() ? std::string() : " " + scene.source) + " (pmg) -->\n" +
+                      taskSceneBodies(scene) + "  ");
+  {
+    std::ofstream out(out_mjcf_path);
+    if (!out) throw ConfigError(out_mjcf_path + ": cannot write the composed scene MJCF");
+    out << xml;
+  }
+  RobotConfig r = robot;
+  r.mjcf_path = fs::absolute(out_mjcf_path).string();
+  return r;
+}
+
+TaskObjectState taskObjectState(const mjModel* model, const mjData* data, const std::string& name) {
+  const int b = mj_name2id(model, mjOBJ_BODY, ("task_" + name).c_str());
+  if (b < 0) throw std::out_of_range("no task object '" + name + "' (body task_" + name + ") in the model");
+  TaskObjectState s;
+  s.p_W = Eigen::Vector3d(data->xpos[3 * b], data->xpos[3 * b + 1], data->xpos[3 * b + 2]);
+  s.q_W = Eigen::Quaterniond(data->xquat[4 * b], data->xquat[4 * b + 1], data->xquat[4 * b + 2], data->xquat[4 * b + 3]);
+  // The free joint's linear velocity (qvel[0..2] of a free joint: the body origin's, in W).
+  const int j = model->body_jntadr[b];
+  if (j >= 0 && model->jnt_type[j] == mjJNT_FREE) {
+    const int v = model->jnt_dofadr[j];
+    s.v_W = Eigen::Vector3d(data->qvel[v], data->qvel[v + 1], data->qvel[v + 2]);
+  }
+  return s;
+}
+
+}  // namespace pmg

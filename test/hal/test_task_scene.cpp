@@ -1,0 +1,131 @@
+// Task scenes (issue 14): the shipped wiping and box scenes compose with the G1 MJCF, their objects
+// rest where the file puts them once the simulation runs (the robot standing beside them), trials
+// are drawn inside the ranges and reproducibly, and bad scene files are refused with the file, the
+// object and the field named.
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "g1_fixture.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/task_scene.hpp"
+#include "temp_dir.hpp"
+
+namespace pmg {
+namespace {
+
+// Runs the composed scene with the robot standing (free, no gantry) on its default pose for @p
+// cycles HAL cycles of 2 ms.
+void stand(MujocoBackend& sim, const RobotConfig& robot, int cycles) {
+  LowCommand cmd;
+  cmd.num_motors = static_cast<int>(robot.numJoints());
+  for (std::size_t i = 0; i < robot.numJoints(); ++i)
+    cmd.motors[i] = MotorCommand{robot.joints[i].default_position, 0.0, robot.joints[i].kp, robot.joints[i].kd, 0.0};
+  LowState state;
+  for (int c = 0; c < cycles; ++c) sim.exchange(cmd, state);
+}
+
+MujocoBackendOptions free_standing() {
+  MujocoBackendOptions o;
+  o.gantry.enabled = false;
+  return o;
+}
+
+// Each shipped scene, drawn for a trial, loads with the robot; after 1 s every object rests on its
+// table top at the drawn place (x, y within 2 mm, height = top + half its thickness within 2 mm,
+// still), and the robot still stands.
+TEST(TaskScene, ShippedScenesRestOnTheirTablesBesideTheStandingRobot) {
+  for (const char* file : {"config/tasks/wipe_scene.yaml", "config/tasks/box_scene.yaml"}) {
+    SCOPED_TRACE(file);
+    const TaskScene scene = loadTaskScene(test::sourcePath(file));
+    const TaskScene trial = drawTaskTrial(scene, 7);
+    const test::TempDir dir;
+    const RobotConfig robot = robotWithTaskScene(test::g1Robot(), trial, dir.file("scene.xml"));
+    MujocoBackend sim(robot, free_standing());
+    stand(sim, robot, 500);
+    for (const auto& o : trial.objects) {
+      const TaskTable& t = trial.table(o.on);
+      const TaskObjectState s = taskObjectState(sim.model(), sim.data(), o.name);
+      const double xw = t.pos[0] + std::cos(t.yaw) * o.pos[0] - std::sin(t.yaw) * o.pos[1];
+      const double yw = t.pos[1] + std::sin(t.yaw) * o.pos[0] + std::cos(t.yaw) * o.pos[1];
+      EXPECT_NEAR(s.p_W.x(), xw, 0.002) << o.name;
+      EXPECT_NEAR(s.p_W.y(), yw, 0.002) << o.name;
+      EXPECT_NEAR(s.p_W.z(), t.height + 0.5 * o.size[2], 0.002) << o.name;
+      EXPECT_LT(s.v_W.norm(), 0.005) << o.name;
+      const double yaw = 2.0 * std::atan2(s.q_W.z(), s.q_W.w());
+      EXPECT_NEAR(yaw, t.yaw + o.yaw, 0.01) << o.name;
+    }
+    const double pelvis_z = sim.data()->xpos[3 * sim.pelvisBody() + 2];
+    EXPECT_GT(pelvis_z, 0.7);
+  }
+}
+
+// Trials: inside the ranges, the same seed gives the same scene, other seeds other scenes, and 20
+// trials of the wiping scene put the towel on both sides of the robot.
+TEST(TaskScene, TrialsAreDrawnInsideTheRangesAndReproducibly) {
+  const TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/wipe_scene.yaml"));
+  const auto& r = *scene.objects.at(0).randomize;
+  double y_min = 1e9, y_max = -1e9;
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    const TaskObject o = drawTaskTrial(scene, seed).objects.at(0);
+    EXPECT_FALSE(o.randomize.has_value());
+    EXPECT_GE(o.pos[0], (*r.x)[0]);
+    EXPECT_LE(o.pos[0], (*r.x)[1]);
+    EXPECT_GE(o.pos[1], (*r.y)[0]);
+    EXPECT_LE(o.pos[1], (*r.y)[1]);
+    EXPECT_GE(o.yaw, (*r.yaw)[0]);
+    EXPECT_LE(o.yaw, (*r.yaw)[1]);
+    y_min = std::min(y_min, o.pos[1]);
+    y_max = std::max(y_max, o.pos[1]);
+    const TaskObject again = drawTaskTrial(scene, seed).objects.at(0);
+    EXPECT_EQ(again.pos, o.pos);
+    EXPECT_EQ(again.yaw, o.yaw);
+  }
+  EXPECT_LT(y_min, -0.3);
+  EXPECT_GT(y_max, 0.3);
+  EXPECT_NE(drawTaskTrial(scene, 1).objects[0].pos, drawTaskTrial(scene, 2).objects[0].pos);
+}
+
+// Bad scene files name the file and what is wrong.
+TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
+  const std::string table = "tables:\n  - {name: t, top_size: [0.6, 1.0], height: 0.76, pos: [0.6, 0.0]}\n";
+  const std::string obj = "objects:\n  - {name: towel, kind: towel, size: [0.3, 0.3, 0.006], mass: 0.1, on: t";
+  const struct {
+    const char* name;
+    std::string text;
+    std::string message;
+  } bad[] = {
+      {"unknown_key", table + obj + ", colour: red}\n", "unknown key 'colour'"},
+      {"bad_kind", table + "objects:\n  - {name: x, kind: ball, size: [0.1, 0.1, 0.1], mass: 0.1, on: t}\n", "ball"},
+      {"no_table", table + "objects:\n  - {name: x, kind: box, size: [0.1, 0.1, 0.1], mass: 0.1, on: desk}\n",
+       "objects.x.on = 'desk': no table of that name"},
+      {"negative_mass", table + "objects:\n  - {name: x, kind: box, size: [0.1, 0.1, 0.1], mass: -1, on: t}\n",
+       "mass = -1: expected > 0 kg"},
+      {"off_the_top", table + obj + ", pos: [0.0, 0.45]}\n", "is off the top of table 't'"},
+      {"randomized_off_the_top", table + obj + ", randomize: {y: [-0.6, 0.0]}}\n", "is off the top of table 't'"},
+      {"reversed_range", table + obj + ", randomize: {x: [0.1, -0.1]}}\n", "x = [0.1, -0.1]: expected [lo, hi]"},
+      {"duplicate_name", table + "objects:\n  - {name: t, kind: box, size: [0.1, 0.1, 0.1], mass: 0.1, on: t}\n",
+       "objects.t: the name is used twice"},
+  };
+  const test::TempDir dir;
+  for (const auto& b : bad) {
+    const std::string path = dir.write(std::string(b.name) + ".yaml", b.text);
+    try {
+      loadTaskScene(path);
+      ADD_FAILURE() << b.name << ": accepted";
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << b.name << ": " << what;
+      EXPECT_NE(what.find(b.message), std::string::npos) << b.name << ": " << what;
+    }
+  }
+  const TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  const RobotConfig robot = robotWithTaskScene(test::g1Robot(), scene, dir.file("box.xml"));
+  MujocoBackend sim(robot, free_standing());
+  EXPECT_THROW(taskObjectState(sim.model(), sim.data(), "towel"), std::out_of_range);
+  EXPECT_NO_THROW(taskObjectState(sim.model(), sim.data(), "box"));
+}
+
+}  // namespace
+}  // namespace pmg
