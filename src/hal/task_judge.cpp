@@ -39,15 +39,22 @@ TaskVerdict judgeWipe(const TaskScene& scene, const std::string& object, const s
   if (traj.empty()) throw std::invalid_argument("judgeWipe: empty trajectory");
   const TaskObject& o = findObject(scene, object);
   const TaskTable& t = findTable(scene, o.on);
-  const double y0 = inTable(t, traj.front().state.p_W).y();
+  double anchor = inTable(t, traj.front().state.p_W).y(), span_lo = anchor, span_hi = anchor;
   TaskVerdict v;
   double left_at = -1.0;
   for (const auto& s : traj) {
     const Eigen::Vector2d p = inTable(t, s.state.p_W);
-    v.measure = std::max(v.measure, std::abs(p.y() - y0));
+    // Lateral path length, counted in steps of at least step_m: jitter below it does not add up.
+    if (std::abs(p.y() - anchor) >= c.step_m) {
+      v.measure += std::abs(p.y() - anchor);
+      anchor = p.y();
+    }
+    span_lo = std::min(span_lo, p.y());
+    span_hi = std::max(span_hi, p.y());
     if (left_at < 0 && (!overTop(t, p) || s.state.p_W.z() < t.height - 0.01)) left_at = s.t;
   }
-  v.detail = fmt::format("largest lateral travel {:.3f} m (needs > {:.2f} m)", v.measure, c.min_travel_m);
+  v.detail = fmt::format("lateral path {:.3f} m (needs > {:.2f} m) over y in [{:.3f}, {:.3f}] m of the table",
+                         v.measure, c.min_travel_m, span_lo, span_hi);
   if (robot_fell) {
     v.failure = "loss_of_balance";
   } else if (left_at >= 0) {

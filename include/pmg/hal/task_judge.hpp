@@ -7,8 +7,9 @@
 /// Frames: W (task_scene.hpp); T = a table's top frame. SI units.
 ///
 ///  * Wiping (paper: success rate 0.95): the towel moves laterally across the tabletop by more
-///    than 1 m: the largest |y_T(t) − y_T(0)| along the table's y axis exceeds `min_travel_m`, and
-///    the towel stays on the top throughout (centre inside the top, not below it).
+///    than 1 m: its path along the table's y axis (back and forth counts, as wiping does; counted
+///    in steps of at least `step_m`, so that jitter does not add up) exceeds `min_travel_m`, and the
+///    towel stays on the top throughout (centre inside the top, not below it).
 ///  * Box picking (paper: 0.80): the box is lifted from its table (bottom at least `min_lift_m`
 ///    above the pick table's top at some time), carried (final centre at least `min_carry_m` from
 ///    its start, horizontally), and placed on the place table without dropping: at the end it rests
@@ -36,11 +37,12 @@ struct TaskVerdict {
   /// "too_short" (wipe), "dropped", "not_lifted", "not_carried", "tipped", "not_placed" (box), in this order of precedence.
   std::string failure;
   std::string detail;    ///< the measured numbers behind the verdict, for the report
-  double measure = 0.0;  ///< wipe: largest lateral travel [m]; box: largest lift of the bottom [m]
+  double measure = 0.0;  ///< wipe: lateral path length [m]; box: largest lift of the bottom [m]
 };
 
 struct WipeCriteria {
   double min_travel_m = 1.0;  ///< the paper's "more than 1 m"
+  double step_m = 0.01;       ///< path counted in steps of at least this [m]
 };
 
 /// Judges a wiping trial of the towel @p object (its samples @p traj, the first one the start) on
