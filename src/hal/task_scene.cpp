@@ -162,13 +162,22 @@ std::string taskSceneBodies(const TaskScene& scene) {
   std::ostringstream x;
   x.precision(9);
   for (const auto& t : scene.tables) {
-    const double h = 0.5 * t.height;
-    x << "    <body name=\"task_" << t.name << "\" pos=\"" << t.pos[0] << " " << t.pos[1] << " " << h
+    // A 4 cm top on four 4 cm legs inset 3 cm from the corners (a robot can stand with its knees
+    // and feet under the top, as at a real table). Body origin: the top's surface centre.
+    const double top = 0.02, leg_h = 0.5 * (t.height - 2.0 * top);
+    const double lx = 0.5 * t.top_size[0] - 0.05, ly = 0.5 * t.top_size[1] - 0.05;
+    x << "    <body name=\"task_" << t.name << "\" pos=\"" << t.pos[0] << " " << t.pos[1] << " " << t.height
       << "\" euler=\"0 0 " << t.yaw << "\">\n"
-      << "      <geom name=\"task_" << t.name << "_geom\" type=\"box\" size=\"" << 0.5 * t.top_size[0] << " "
-      << 0.5 * t.top_size[1] << " " << h << "\" friction=\"" << t.friction
-      << " 0.005 0.0001\" rgba=\"0.55 0.42 0.3 1\"/>\n"
-      << "    </body>\n";
+      << "      <geom name=\"task_" << t.name << "_geom\" type=\"box\" pos=\"0 0 " << -top << "\" size=\""
+      << 0.5 * t.top_size[0] << " " << 0.5 * t.top_size[1] << " " << top << "\" friction=\"" << t.friction
+      << " 0.005 0.0001\" rgba=\"0.55 0.42 0.3 1\"/>\n";
+    int leg = 0;
+    for (double sx : {-1.0, 1.0})
+      for (double sy : {-1.0, 1.0})
+        x << "      <geom name=\"task_" << t.name << "_leg" << leg++ << "\" type=\"box\" pos=\"" << sx * lx << " "
+          << sy * ly << " " << -(2.0 * top + leg_h) << "\" size=\"0.02 0.02 " << leg_h
+          << "\" rgba=\"0.45 0.34 0.24 1\"/>\n";
+    x << "    </body>\n";
   }
   for (const auto& o : scene.objects) {
     const TaskTable& t = scene.table(o.on);

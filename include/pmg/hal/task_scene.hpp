@@ -9,7 +9,7 @@
 ///
 /// Scene file (config/tasks/*.yaml):
 /// ```yaml
-/// tables:                          # static boxes from the floor to `height`
+/// tables:                          # static: a 4 cm top at `height` on four legs
 ///   - {name: table, top_size: [0.6, 1.6], height: 0.76, pos: [0.62, 0.0], yaw: 0.0, friction: 0.8}
 /// objects:                         # free bodies resting on a table's top at the start
 ///   - name: towel
@@ -40,7 +40,7 @@
 
 namespace pmg {
 
-/// A static table: a box from the floor to `height`.
+/// A static table: a 4 cm top at `height` on four legs (room for a robot's knees and feet under it).
 struct TaskTable {
   std::string name;
   std::array<double, 2> top_size{0.6, 1.2};  ///< top extents along its x and y [m], > 0
@@ -101,7 +101,7 @@ TaskScene loadTaskScene(const std::string& path);
 /// randomisation is then cleared. Objects without `randomize` keep their pose.
 TaskScene drawTaskTrial(const TaskScene& scene, std::uint64_t seed);
 
-/// The MJCF `<body>` elements of the scene (tables as static bodies, objects with a free joint
+/// The MJCF `<body>` elements of the scene (tables as static bodies: top and legs; objects with a free joint
 /// that has no armature, damping or friction of its own), object centres at their start pose
 /// resting on the top (1 mm above, to settle). Object poses use the nominal pos / yaw: draw a
 /// trial first for randomised scenes.

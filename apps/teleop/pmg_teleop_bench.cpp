@@ -1,0 +1,402 @@
+// pmg_teleop_bench: teleoperated tasks in the SIL, scored like the paper's Table III (issue 14).
+// Each trial draws the task scene (config/tasks/<task>_scene.yaml, include/pmg/hal/task_scene.hpp),
+// runs pmg_controller's composition root (ControllerApp: teleop mode with arm IK, shaper, PMG + GCO,
+// the arms policy, the HAL supervisor) over the MuJoCo 2.2 SIL of the robot in that scene, in
+// lockstep, and a scripted operator drives it only through the VR stream a headset would send
+// (headset and controller poses, grips, buttons: pmg::teleop::VrSample, as the LCM receiver
+// decodes it). The operator sees what a person in the headset sees: the objects' and the robot
+// hand's poses relative to the robot's torso, and the robot's place in the room, with noise and
+// latency (config/tasks/<task>_operator.yaml); it never reads anything else of the simulator. The
+// object's trajectory is judged by include/pmg/hal/task_judge.hpp.
+//
+//   pmg_teleop_bench --task wipe --trials 20 [--seed S] --out DIR [--controller CONFIG] [--operator FILE]
+//
+// Writes DIR/summary.json = {"task", "trials", "successes", "success_rate", "paper_success_rate",
+// "failures": [{"trial", "reason", "detail"}], "trial_results": [...]} and DIR/trial_<k>.csv (t,
+// phase of the operator, pelvis, right hand and object positions in W, the object's measure).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "pmg/common/data_paths.hpp"
+#include "pmg/common/yaml_archive.hpp"
+#include "pmg/controller/controller_app.hpp"
+#include "pmg/controller/sil_eval.hpp"
+#include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/task_judge.hpp"
+#include "pmg/hal/task_scene.hpp"
+#include "pmg/teleop/teleop_mode.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Eigen::Vector3d;
+
+// ---- The operator's parameters (config/tasks/wipe_operator.yaml) -------------------------------
+struct OperatorConfig {
+  double view_noise_m = 0.005;      ///< std. dev. of every position the operator sees [m]
+  double view_latency_s = 0.1;      ///< what the operator sees is this old [s] (video + reaction)
+  double settle_s = 1.0;            ///< standing before engaging [s]
+  double stand_off_m = 0.22;        ///< pelvis distance from the table's near edge when working [m]
+  double hand_lateral_m = 0.15;     ///< the working hand's lateral offset from the pelvis [m]
+  double walk_gain = 1.0;           ///< commanded speed per metre of position error [1/s]
+  double max_speed = 0.15;          ///< [m/s]
+  double min_speed = 0.06;          ///< commanded at least this while not arrived [m/s]
+  double walk_integral_gain = 0.5;  ///< integral action on the place error [1/s^2]
+  double arrive_tol_m = 0.03;       ///< approach ends within this [m]
+  double hover_m = 0.06;            ///< hand above the towel before pressing [m]
+  double press_m = 0.015;           ///< hand target below the towel's top [m]
+  double hand_gain = 0.5;           ///< fraction of the seen hand error corrected per second [1/s]
+  double wipe_speed = 0.10;         ///< lateral walking speed while wiping [m/s]
+  double wipe_margin_m = 0.20;      ///< turn back this far from the table's end [m]
+  double wipe_path_m = 1.15;        ///< the operator stops once the towel has moved this far (seen) [m]
+  double look_down_rad = 0.0;       ///< headset pitch while working (beyond 0.25 rad dead band: the torso bends)
+  double crouch_m = 0.0;            ///< headset lowered this much while working (beyond 0.03 m: the robot squats)
+  double grab_inset_m = 0.08;       ///< the hand aims this far short of the towel's centre (its near part)
+  double max_trial_s = 45.0;        ///< the trial ends here [s]
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("view_noise_m", &view_noise_m, "[m]");
+    a->Visit("view_latency_s", &view_latency_s, "[s]");
+    a->Visit("settle_s", &settle_s, "[s]");
+    a->Visit("stand_off_m", &stand_off_m, "[m]");
+    a->Visit("hand_lateral_m", &hand_lateral_m, "[m]");
+    a->Visit("walk_gain", &walk_gain, "[1/s]");
+    a->Visit("max_speed", &max_speed, "[m/s]");
+    a->Visit("min_speed", &min_speed, "[m/s]");
+    a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
+    a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
+    a->Visit("hover_m", &hover_m, "[m]");
+    a->Visit("press_m", &press_m, "[m]");
+    a->Visit("hand_gain", &hand_gain, "[1/s]");
+    a->Visit("wipe_speed", &wipe_speed, "[m/s]");
+    a->Visit("wipe_margin_m", &wipe_margin_m, "[m]");
+    a->Visit("wipe_path_m", &wipe_path_m, "[m]");
+    a->Visit("look_down_rad", &look_down_rad, "[rad]");
+    a->Visit("crouch_m", &crouch_m, "[m]");
+    a->Visit("grab_inset_m", &grab_inset_m, "[m]");
+    a->Visit("max_trial_s", &max_trial_s, "[s]");
+  }
+  std::string validate() const {
+    if (!(view_noise_m >= 0 && view_noise_m < 0.05)) return "view_noise_m: expected [0, 0.05) m";
+    if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
+    if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
+    if (!(wipe_speed > 0 && wipe_speed <= 0.4)) return "wipe_speed: expected (0, 0.4] m/s";
+    if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
+    return "";
+  }
+};
+
+// What the operator sees: a delayed, noisy copy of a position.
+class View {
+ public:
+  View(double latency, double noise, std::mt19937_64& rng) : latency_(latency), noise_(noise), rng_(rng) {}
+  void push(double t, const Vector3d& p) { buf_.push_back({t, p}); }
+  Vector3d seen(double t) {
+    while (buf_.size() > 1 && buf_[1].first <= t - latency_) buf_.pop_front();
+    std::normal_distribution<double> n(0.0, noise_);
+    return buf_.front().second + (noise_ > 0 ? Vector3d(n(rng_), n(rng_), n(rng_)) : Vector3d::Zero());
+  }
+
+ private:
+  double latency_, noise_;
+  std::mt19937_64& rng_;
+  std::deque<std::pair<double, Vector3d>> buf_;
+};
+
+double yawOf(const Eigen::Quaterniond& q) {
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+
+// The headset displacement that makes teleop command velocity v (body frame, 2D), given its
+// dead band and gain (the inverse of TeleopMode's mapping).
+Eigen::Vector2d headFor(const Eigen::Vector2d& v, double deadband, double gain) {
+  const double s = v.norm();
+  if (s < 1e-4) return Eigen::Vector2d::Zero();
+  return (s / gain + deadband) * v / s;
+}
+
+struct TrialResult {
+  int trial = 0;
+  pmg::TaskVerdict verdict;
+  bool fell = false;
+  double seconds = 0.0;
+};
+
+// One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
+// grip and bring the robot's right hand onto the towel (closing the loop on the hand it sees), then
+// walk sideways along the table pressing the towel down, turning back near each end, until it has
+// seen the towel move far enough; then lift the hand and let go.
+TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_scene, const pmg::ControllerConfig& base_config,
+                    const OperatorConfig& op, const fs::path& out_dir) {
+  const pmg::TaskScene scene = pmg::drawTaskTrial(base_scene, seed);
+  const pmg::TaskObject& towel = scene.objects.at(0);
+  const pmg::TaskTable& table = scene.table(towel.on);
+  pmg::ControllerConfig config = base_config;
+  config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
+  pmg::ControllerApp app(config);
+  auto* sim = dynamic_cast<pmg::MujocoBackend*>(&app.backend());
+  if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
+  const pmg::teleop::TeleopConfig& tc = config.teleop;
+  const mjModel* m = sim->model();
+  const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+  // The working hand: the one on the table's middle side of the towel, so that the robot stands
+  // nearer the middle of the table.
+  const bool use_left = towel.pos[1] > 0.0;
+  const int side = use_left ? pmg::teleop::kLeftHand : pmg::teleop::kRightHand;
+  const double lateral = use_left ? -op.hand_lateral_m : op.hand_lateral_m;  // pelvis y - towel y
+  const int hand = mj_name2id(m, mjOBJ_BODY, use_left ? "left_wrist_yaw_link" : "right_wrist_yaw_link");
+  if (torso < 0 || hand < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / *_wrist_yaw_link");
+  const int shoulder_l = mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link");
+  const int shoulder_r = mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link");
+  if (shoulder_l < 0 || shoulder_r < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the shoulder pitch links");
+  bool aligned = false;  // the controller put where the robot hand is, before the grip is squeezed
+
+  std::mt19937_64 rng(seed * 7919 + 17);
+  View see_towel(op.view_latency_s, op.view_noise_m, rng), see_hand(op.view_latency_s, op.view_noise_m, rng),
+      see_pelvis(op.view_latency_s, op.view_noise_m, rng);
+  std::deque<std::pair<double, double>> yaw_buf;
+  Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
+  double work_y = 0.0;  // the pelvis' lateral working place
+
+  pmg::teleop::VrSample vr;
+  const double head_z = 1.6;
+  vr.head_position = {0.0, 0.0, head_z};
+  vr.hand_valid = {true, true};
+  // Operator's hands at rest, relative to the head (frame H = V at the origin, yaw 0).
+  const Vector3d rest_left(0.30, 0.20, -0.45), rest_right(0.30, -0.20, -0.45);
+  Vector3d work_H = use_left ? rest_left : rest_right;
+  vr.hand_position = {{{rest_left.x(), rest_left.y(), head_z + rest_left.z()}, {rest_right.x(), rest_right.y(), head_z + rest_right.z()}}};
+  pmg::CommandSample sample;
+
+  enum Phase { kSettle, kEngage, kApproach, kReach, kPress, kWipe, kRelease, kDone };
+  const char* phase_names[] = {"settle", "engage", "approach", "reach", "press", "wipe", "release", "done"};
+  Phase phase = kSettle;
+  double phase_t0 = 0.0;
+  int wipe_dir = towel.pos[1] > 0 ? -1 : 1;  // wipe towards the far end first
+  double seen_path = 0.0, last_seen_y = 0.0;
+  bool first_seen = true;
+
+  std::vector<pmg::TaskObjectSample> traj;
+  std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
+  csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch\n";
+  bool fell = false;
+  const double dt = 0.01;
+  const long ticks = std::lround(op.max_trial_s / dt);
+  for (long k = 0; k < ticks && phase != kDone; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    const mjData* d = sim->data();
+    const pmg::TaskObjectState obj = pmg::taskObjectState(m, d, towel.name);
+    const Vector3d torso_p(d->xpos[3 * torso], d->xpos[3 * torso + 1], d->xpos[3 * torso + 2]);
+    const Eigen::Quaterniond torso_q(d->xquat[4 * torso], d->xquat[4 * torso + 1], d->xquat[4 * torso + 2], d->xquat[4 * torso + 3]);
+    const Vector3d hand_p(d->xpos[3 * hand], d->xpos[3 * hand + 1], d->xpos[3 * hand + 2]);
+    const auto& base = app.controller().lastState().base_position;
+    const Vector3d pelvis(base[0], base[1], base[2]);
+    traj.push_back({t, obj});
+    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}\n", t,
+                       phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p.x(), hand_p.y(), hand_p.z(),
+                       obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1],
+                       app.controller().teleop()->status().engaged ? 1 : 0, app.controller().teleop()->status().command.vx,
+                       app.controller().teleop()->status().command.vy, app.controller().teleop()->status().command.wz,
+                       app.controller().teleop()->status().command.pitch);
+    // What the operator sees: object and hand relative to the torso (head camera), the robot's
+    // place in the room, with latency and noise.
+    const double yaw = yawOf(torso_q);
+    const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
+    see_towel.push(t, unyaw * (obj.p_W - torso_p));
+    see_hand.push(t, unyaw * (hand_p - torso_p));
+    see_pelvis.push(t, pelvis);
+    yaw_buf.push_back({t, yaw});
+    while (yaw_buf.size() > 1 && yaw_buf[1].first <= t - op.view_latency_s) yaw_buf.pop_front();
+    const Vector3d towel_R = see_towel.seen(t), hand_R = see_hand.seen(t), pelvis_W = see_pelvis.seen(t);
+    const double yaw_seen = yaw_buf.front().second;
+
+    // Locomotion: a P controller on the robot's place, expressed as headset displacement.
+    Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
+    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
+      Eigen::Vector2d e = target_W - pelvis_W.head<2>();
+      // The operator leans further while the robot does not get there (integral action, bounded).
+      walk_integral += e * dt;
+      const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
+      if (walk_integral.norm() > imax) walk_integral *= imax / walk_integral.norm();
+      Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * walk_integral;
+      if (v.norm() > max_speed) v *= max_speed / v.norm();
+      // Small steps are not walked: below min_speed the operator leans a little more.
+      if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
+      v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
+      return e.norm();
+    };
+    const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
+    // The towel's lateral place on the table, in W (seen through the robot: torso + R(yaw) towel_R).
+    const Vector3d towel_W_seen = torso_p + Eigen::AngleAxisd(yaw_seen, Vector3d::UnitZ()) * towel_R;
+    bool grip = false;
+    Vector3d hand_target_R = Vector3d::Zero();
+    bool have_hand_target = false;
+    switch (phase) {
+      case kSettle:
+        if (t >= op.settle_s) phase = kEngage, phase_t0 = t;
+        break;
+      case kEngage:
+        if (t - phase_t0 < 0.05) vr.buttons[pmg::teleop::kRightHand] = pmg::teleop::kVrButtonLower;
+        else vr.buttons[pmg::teleop::kRightHand] = 0;
+        if (t - phase_t0 >= 0.15) phase = kApproach, phase_t0 = t;
+        break;
+      case kApproach: {
+        const Eigen::Vector2d target(table_near_x - op.stand_off_m, towel_W_seen.y() + lateral);
+        work_y = target.y();
+        if (walkTo(target, op.max_speed) < op.arrive_tol_m && t - phase_t0 > 1.0)
+          phase = kReach, phase_t0 = t, walk_integral.setZero();
+        if (t - phase_t0 > 20.0) phase = kRelease, phase_t0 = t;
+        break;
+      }
+      case kReach:
+      case kPress:
+      case kWipe: {
+        grip = true;
+        have_hand_target = true;
+        const double top_z_R = table.height - torso_p.z();  // the table top relative to the torso (seen as a plane)
+        hand_target_R = towel_R;
+        hand_target_R.x() -= op.grab_inset_m;  // the towel's near part: within reach
+        hand_target_R.z() = top_z_R + (phase == kReach ? op.hover_m : -op.press_m);
+        // Hold the working place while reaching and pressing (the wipe phase walks on its own).
+        if (phase != kWipe)
+          walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed);
+        if (phase == kReach && (hand_R - hand_target_R).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
+        if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
+        if (phase == kPress && t - phase_t0 > 1.5) phase = kWipe, phase_t0 = t, first_seen = true;
+        if (phase == kWipe) {
+          // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
+          const double half_len = 0.5 * table.top_size[1];
+          const double y_T = towel_W_seen.y() - table.pos[1];
+          if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
+          if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
+          const Eigen::Vector2d target(table_near_x - op.stand_off_m, pelvis_W.y() + wipe_dir * 0.5);
+          walkTo(Eigen::Vector2d(target.x(), pelvis_W.y()), op.max_speed);  // hold the distance to the table
+          v_body += Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(0.0, wipe_dir * op.wipe_speed);
+          if (first_seen) last_seen_y = towel_W_seen.y(), first_seen = false;
+          if (std::abs(towel_W_seen.y() - last_seen_y) > 0.02) {
+            seen_path += std::abs(towel_W_seen.y() - last_seen_y);
+            last_seen_y = towel_W_seen.y();
+          }
+          if (seen_path >= op.wipe_path_m) phase = kRelease, phase_t0 = t;
+        }
+        break;
+      }
+      case kRelease:
+        grip = t - phase_t0 < 1.0;
+        if (grip) {
+          have_hand_target = true;
+          hand_target_R = hand_R + Vector3d(0, 0, 0.1);
+        }
+        if (t - phase_t0 > 2.5) phase = kDone;
+        break;
+      case kDone:
+        break;
+    }
+    // Headset: displacement for the locomotion command, pitch for looking down.
+    const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
+    const bool working = phase >= kReach && phase <= kWipe;
+    vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
+    const double pitch = working ? op.look_down_rad : 0.0;
+    vr.head_quat = {std::cos(0.5 * pitch), 0.0, std::sin(0.5 * pitch), 0.0};
+    // Right controller: closes the loop on the hand it sees (operator hand moves by the robot-hand
+    // error over the arm scale).
+    if (have_hand_target && !aligned) {
+      // Before squeezing, the operator holds the controller where the mapping puts the robot's hand
+      // (p_T = c_T + s (p_H - c_H)), so that the arm does not jump when it starts to follow.
+      const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
+                                 Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
+      const Vector3d c_R = unyaw * (sh - torso_p);
+      const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
+      work_H = c_H + (hand_R - c_R) / tc.arm_scale;
+      aligned = true;
+    }
+    if (have_hand_target) work_H += op.hand_gain * dt * (hand_target_R - hand_R) / tc.arm_scale;
+    const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
+    const Vector3d wh = head + work_H, lh = head + rest_left, rh = head + rest_right;
+    vr.hand_position = {{{lh.x(), lh.y(), lh.z()}, {rh.x(), rh.y(), rh.z()}}};
+    vr.hand_position[static_cast<std::size_t>(side)] = {wh.x(), wh.y(), wh.z()};
+    vr.grip = {0.0, 0.0};
+    vr.grip[static_cast<std::size_t>(side)] = grip ? 1.0 : 0.0;
+    vr.frame = k;
+    sample.vr = vr;
+    sample.vr_time = t;
+    const pmg::TickStatus st = app.stepLockstep(sample);
+    if (pmg::silRobotFell(app.controller().lastState(), st)) {
+      fell = true;
+      break;
+    }
+  }
+  TrialResult r;
+  r.trial = trial;
+  r.fell = fell;
+  r.seconds = traj.empty() ? 0.0 : traj.back().t;
+  r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pmg_teleop_bench: teleoperated tasks in the SIL, scored like the paper's Table III"};
+  std::string task = "wipe", out_dir, controller_path = pmg::resolveData("config/controller/g1_sil_teleop.yaml").string();
+  std::string operator_path, scene_path;
+  int trials = 20;
+  std::uint64_t seed = 0;
+  app.add_option("--task", task, "wipe (box: not built yet)")->check(CLI::IsMember({"wipe"}));
+  app.add_option("--trials", trials, "randomised trials")->check(CLI::Range(1, 1000));
+  app.add_option("--seed", seed, "first trial's seed (trial k draws seed + k)");
+  app.add_option("--out", out_dir, "output folder (created)")->required();
+  app.add_option("--controller", controller_path, "controller config with teleop enabled")->check(CLI::ExistingFile);
+  app.add_option("--operator", operator_path, "operator parameters (default config/tasks/<task>_operator.yaml)");
+  app.add_option("--scene", scene_path, "task scene (default config/tasks/<task>_scene.yaml)");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (operator_path.empty()) operator_path = pmg::resolveData("config/tasks/" + task + "_operator.yaml").string();
+    if (scene_path.empty()) scene_path = pmg::resolveData("config/tasks/" + task + "_scene.yaml").string();
+    const OperatorConfig op = pmg::yaml::loadYamlFile<OperatorConfig>(operator_path);
+    const pmg::TaskScene scene = pmg::loadTaskScene(scene_path);
+    pmg::ControllerConfig config = pmg::loadControllerConfig(controller_path);
+    config.makeOffline();
+    if (!config.teleop.enabled) throw pmg::ConfigError(controller_path + ": teleop.enabled must be true for the task bench");
+    fs::create_directories(out_dir);
+    nlohmann::json summary = {{"task", task}, {"trials", trials}, {"seed", seed}, {"scene", scene_path},
+                              {"operator", operator_path}, {"controller", controller_path},
+                              {"paper_success_rate", task == "wipe" ? 0.95 : 0.80}};
+    int successes = 0;
+    summary["failures"] = nlohmann::json::array();
+    summary["trial_results"] = nlohmann::json::array();
+    for (int k = 0; k < trials; ++k) {
+      const TrialResult r = runWipe(k, seed + static_cast<std::uint64_t>(k), scene, config, op, out_dir);
+      successes += r.verdict.success ? 1 : 0;
+      fmt::print("trial {:2d}: {} {} ({:.1f} s) {}\n", k, r.verdict.success ? "success" : "FAILED ",
+                 r.verdict.failure, r.seconds, r.verdict.detail);
+      std::fflush(stdout);
+      summary["trial_results"].push_back({{"trial", k}, {"success", r.verdict.success}, {"measure", r.verdict.measure},
+                                          {"fell", r.fell}, {"seconds", r.seconds}, {"detail", r.verdict.detail}});
+      if (!r.verdict.success)
+        summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
+    }
+    summary["successes"] = successes;
+    summary["success_rate"] = static_cast<double>(successes) / trials;
+    std::ofstream(fs::path(out_dir) / "summary.json") << summary.dump(1) << "\n";
+    fmt::print("{}: {}/{} successes ({:.2f}; paper {:.2f})\n", task, successes, trials,
+               static_cast<double>(successes) / trials, summary["paper_success_rate"].get<double>());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pmg_teleop_bench: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# pmg_teleop_bench (issue 14) runs 2 randomised wiping trials end to end (scene drawn, ControllerApp
+# in lockstep, scripted operator through the VR stream, object judged) and reports truthfully:
+# summary.json has the issue's keys, each trial's verdict agrees with the object trajectory in its
+# CSV (the lateral path recomputed here from the CSV, 1 cm steps, and the on-table check), every
+# failure carries a known class, the two trials drew different towel places, and a bad --operator
+# file is refused naming the file and key. (The trials do not succeed yet: docs/teleop.md says why.)
+#   teleop_bench_test.sh BIN_DIR
+set -euo pipefail
+bin="${1:?usage: teleop_bench_test.sh BIN_DIR}"
+d="$(mktemp -d)"
+trap 'rm -rf "$d"' EXIT
+"$bin/pmg_teleop_bench" --task wipe --trials 2 --seed 4 --out "$d/out" > "$d/log.txt"
+cat "$d/log.txt"
+python3 - "$d/out" <<'PY'
+import csv, json, os, sys
+out = sys.argv[1]
+s = json.load(open(os.path.join(out, "summary.json")))
+fail = []
+for k in ("task", "trials", "successes", "success_rate", "failures", "paper_success_rate"):
+    if k not in s:
+        fail.append(f"summary.json lacks {k}")
+if s["trials"] != 2 or len(s["trial_results"]) != 2 or s["successes"] + len(s["failures"]) != 2:
+    fail.append(f"trial counts: {s['trials']}, {len(s['trial_results'])}, {s['successes']} + {len(s['failures'])}")
+known = {"loss_of_balance", "left_the_table", "too_short"}
+for f in s["failures"]:
+    if f["reason"] not in known:
+        fail.append(f"unknown failure class {f['reason']}")
+starts = []
+for r in s["trial_results"]:
+    rows = list(csv.DictReader(open(os.path.join(out, f"trial_{r['trial']}.csv"))))
+    ys = [float(x["obj_y"]) for x in rows]   # the table is not rotated: y in W = y along the table
+    starts.append(ys[0])
+    anchor, path = ys[0], 0.0
+    for y in ys:
+        if abs(y - anchor) >= 0.01:
+            path += abs(y - anchor)
+            anchor = y
+    if abs(path - r["measure"]) > 0.02:
+        fail.append(f"trial {r['trial']}: judged path {r['measure']:.3f} m, CSV path {path:.3f} m")
+    if r["success"] != (path > 1.0 and not r["fell"] and min(float(x["obj_z"]) for x in rows) > 0.75):
+        fail.append(f"trial {r['trial']}: verdict {r['success']} disagrees with the trajectory (path {path:.3f} m)")
+if abs(starts[0] - starts[1]) < 1e-3:
+    fail.append("both trials drew the same towel place")
+print("\n".join("FAIL: " + f for f in fail) if fail else
+      f"pmg_teleop_bench: 2 trials judged consistently with their trajectories ({s['successes']} successes)")
+sys.exit(1 if fail else 0)
+PY
+printf 'view_noise_m: 0.005\nwalk_speed: 1\n' > "$d/bad.yaml"
+if "$bin/pmg_teleop_bench" --task wipe --trials 1 --operator "$d/bad.yaml" --out "$d/bad" > "$d/bad.txt" 2>&1; then
+  echo "FAIL: a bad operator file was accepted"; exit 1
+fi
+grep -q "bad.yaml" "$d/bad.txt" && grep -q "walk_speed" "$d/bad.txt" || { cat "$d/bad.txt"; exit 1; }
