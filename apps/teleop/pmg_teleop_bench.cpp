@@ -64,6 +64,9 @@ struct OperatorConfig {
   double wipe_path_m = 1.15;        ///< the operator stops once the towel has moved this far (seen) [m]
   double look_down_rad = 0.0;       ///< headset pitch while working (beyond 0.25 rad dead band: the torso bends)
   double crouch_m = 0.0;            ///< headset lowered this much while working (beyond 0.03 m: the robot squats)
+  double yaw_gain = 0.0;            ///< commanded yaw rate per radian of heading away from the table [1/s] (0: off)
+  double stand_off_far_m = 0.30;    ///< pelvis distance from the table's edge while raising the hand [m]
+  double clearance_m = 0.05;        ///< the raised hand this much above the hover height [m]
   double grab_inset_m = 0.08;       ///< the hand aims this far short of the towel's centre (its near part)
   double max_trial_s = 45.0;        ///< the trial ends here [s]
   template <class A>
@@ -86,6 +89,9 @@ struct OperatorConfig {
     a->Visit("wipe_path_m", &wipe_path_m, "[m]");
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
     a->Visit("crouch_m", &crouch_m, "[m]");
+    a->Visit("yaw_gain", &yaw_gain, "[1/s]");
+    a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
+    a->Visit("clearance_m", &clearance_m, "[m]");
     a->Visit("grab_inset_m", &grab_inset_m, "[m]");
     a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
@@ -170,6 +176,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   std::deque<std::pair<double, double>> yaw_buf;
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
   double work_y = 0.0;  // the pelvis' lateral working place
+  double raise_x = 0.0;  // the hand's forward place while it is raised
+  Vector3d work_hand = Vector3d::Zero();  // the working hand's place relative to the torso (frame R)
 
   pmg::teleop::VrSample vr;
   const double head_z = 1.6;
@@ -181,8 +189,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   vr.hand_position = {{{rest_left.x(), rest_left.y(), head_z + rest_left.z()}, {rest_right.x(), rest_right.y(), head_z + rest_right.z()}}};
   pmg::CommandSample sample;
 
-  enum Phase { kSettle, kEngage, kApproach, kReach, kPress, kWipe, kRelease, kDone };
-  const char* phase_names[] = {"settle", "engage", "approach", "reach", "press", "wipe", "release", "done"};
+  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kReach, kPress, kWipe, kRelease, kDone };
+  const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "reach", "press", "wipe", "release", "done"};
   Phase phase = kSettle;
   double phase_t0 = 0.0;
   int wipe_dir = towel.pos[1] > 0 ? -1 : 1;  // wipe towards the far end first
@@ -213,7 +221,11 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
                        app.controller().teleop()->status().command.pitch);
     // What the operator sees: object and hand relative to the torso (head camera), the robot's
     // place in the room, with latency and noise.
-    const double yaw = yawOf(torso_q);
+    // Frame R: the torso's position, yawed with the pelvis (the robot's heading: the waist may turn
+    // the torso relative to it).
+    const int pb = sim->pelvisBody();
+    const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
+    (void)torso_q;
     const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
     see_towel.push(t, unyaw * (obj.p_W - torso_p));
     see_hand.push(t, unyaw * (hand_p - torso_p));
@@ -254,11 +266,34 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         if (t - phase_t0 >= 0.15) phase = kApproach, phase_t0 = t;
         break;
       case kApproach: {
-        const Eigen::Vector2d target(table_near_x - op.stand_off_m, towel_W_seen.y() + lateral);
+        // Stop short of the table: the hands hang at about the top's height and would catch its edge.
+        const Eigen::Vector2d target(table_near_x - op.stand_off_far_m, towel_W_seen.y() + lateral);
         work_y = target.y();
         if (walkTo(target, op.max_speed) < op.arrive_tol_m && t - phase_t0 > 1.0)
-          phase = kReach, phase_t0 = t, walk_integral.setZero();
+          phase = kRaise, phase_t0 = t, walk_integral.setZero();
         if (t - phase_t0 > 20.0) phase = kRelease, phase_t0 = t;
+        break;
+      }
+      case kRaise:
+      case kCloseIn: {
+        // Raise the working hand above the top (crouching and looking down meanwhile), then walk in
+        // with it hovering over the towel's near part.
+        grip = true;
+        have_hand_target = true;
+        const double top_z_R = table.height - torso_p.z();
+        hand_target_R = Vector3d(phase == kRaise ? raise_x : towel_R.x() - op.grab_inset_m, towel_R.y(),
+                                 top_z_R + op.hover_m + op.clearance_m);
+        if (phase == kRaise) {
+          if (t - phase_t0 < dt) raise_x = hand_R.x();
+          walkTo(Eigen::Vector2d(table_near_x - op.stand_off_far_m, work_y), op.max_speed);
+          if (t - phase_t0 > 1.0 && (hand_R.z() > top_z_R + op.hover_m || t - phase_t0 > 6.0))
+            phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
+        } else {
+          if (walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed) < op.arrive_tol_m &&
+              t - phase_t0 > 1.0)
+            phase = kReach, phase_t0 = t, walk_integral.setZero();
+          if (t - phase_t0 > 15.0) phase = kReach, phase_t0 = t, walk_integral.setZero();
+        }
         break;
       }
       case kReach:
@@ -267,8 +302,12 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         grip = true;
         have_hand_target = true;
         const double top_z_R = table.height - torso_p.z();  // the table top relative to the torso (seen as a plane)
-        hand_target_R = towel_R;
-        hand_target_R.x() -= op.grab_inset_m;  // the towel's near part: within reach
+        // Aim at the towel's near part once, when the reach starts: chasing the towel with a hand
+        // that touches it pushes it away. While wiping the hand stays where it is on the robot, so
+        // that walking sideways drags the towel.
+        if (phase == kReach && t - phase_t0 < dt) work_hand = towel_R - Vector3d(op.grab_inset_m, 0.0, 0.0);
+        if (phase == kReach) work_hand.y() = towel_R.y();
+        hand_target_R = work_hand;
         hand_target_R.z() = top_z_R + (phase == kReach ? op.hover_m : -op.press_m);
         // Hold the working place while reaching and pressing (the wipe phase walks on its own).
         if (phase != kWipe)
@@ -282,9 +321,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           const double y_T = towel_W_seen.y() - table.pos[1];
           if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
           if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
-          const Eigen::Vector2d target(table_near_x - op.stand_off_m, pelvis_W.y() + wipe_dir * 0.5);
-          walkTo(Eigen::Vector2d(target.x(), pelvis_W.y()), op.max_speed);  // hold the distance to the table
-          v_body += Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(0.0, wipe_dir * op.wipe_speed);
+          // Sideways only: the distance to the table stays as it is when the wipe starts.
+          v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(0.0, wipe_dir * op.wipe_speed);
           if (first_seen) last_seen_y = towel_W_seen.y(), first_seen = false;
           if (std::abs(towel_W_seen.y() - last_seen_y) > 0.02) {
             seen_path += std::abs(towel_W_seen.y() - last_seen_y);
@@ -307,10 +345,19 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     }
     // Headset: displacement for the locomotion command, pitch for looking down.
     const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
-    const bool working = phase >= kReach && phase <= kWipe;
+    const bool working = phase >= kRaise && phase <= kWipe;
     vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
     const double pitch = working ? op.look_down_rad : 0.0;
-    vr.head_quat = {std::cos(0.5 * pitch), 0.0, std::sin(0.5 * pitch), 0.0};
+    // Keep the robot facing the table: turn the head against the heading it sees (yaw rate
+    // = gain (psi beyond the dead band)), once engaged. Off by default (yaw_gain 0): with gain 1
+    // the robot stalled in the approach (docs/teleop.md).
+    double psi = 0.0;
+    if (op.yaw_gain > 0 && phase > kEngage && phase < kRelease && std::abs(yaw_seen) > 0.03) {
+      const double w = std::clamp(-op.yaw_gain * yaw_seen, -0.5, 0.5);
+      psi = (w > 0 ? 1.0 : -1.0) * (std::abs(w) / tc.velocity_gain[2] + tc.yaw_deadband_rad);
+    }
+    const Eigen::Quaterniond hq = Eigen::AngleAxisd(psi, Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Vector3d::UnitY());
+    vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
     // Right controller: closes the loop on the hand it sees (operator hand moves by the robot-hand
     // error over the arm scale).
     if (have_hand_target && !aligned) {

@@ -56,8 +56,10 @@ TEST(TaskScene, ShippedScenesRestOnTheirTablesBesideTheStandingRobot) {
       const double yaw = 2.0 * std::atan2(s.q_W.z(), s.q_W.w());
       EXPECT_NEAR(yaw, t.yaw + o.yaw, 0.01) << o.name;
     }
+    // Nothing in the scene knocked the robot over (held by the bare PD it sags to about 0.70 m;
+    // fallen is below 0.4 m, silRobotFell).
     const double pelvis_z = sim.data()->xpos[3 * sim.pelvisBody() + 2];
-    EXPECT_GT(pelvis_z, 0.7);
+    EXPECT_GT(pelvis_z, 0.6);
   }
 }
 
