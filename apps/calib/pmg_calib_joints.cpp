@@ -23,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
@@ -42,29 +43,13 @@ std::string shellQuote(const std::string& s) {
   return out + "'";
 }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw pmg::ConfigError(path + ": cannot read");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The robot config text with `actuator:` blocks on the calibrated joints (flow-style joint lines, as
 // the shipped configs have them) and its model paths absolute.
 // Each calibrated joint also gets `actuator_uncertainty:` (RobotFitModel::uncertainty), from which
 // training sizes its domain randomisation.
 std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<std::string, std::string>& blocks,
                                 const std::map<std::string, std::string>& uncertainties) {
-  std::string text = readText(robot.source_file);
-  const std::string dir = std::filesystem::path(robot.source_file).parent_path().string();
-  for (const char* key : {"urdf", "mjcf"}) {
-    const std::regex re(std::string("(\\n\\s*") + key + ":\\s*)([^\\s#]+)");
-    std::smatch m;
-    if (std::regex_search(text, m, re) && !std::filesystem::path(m[2].str()).is_absolute())
-      text = m.prefix().str() + m[1].str() + (std::filesystem::path(dir) / m[2].str()).lexically_normal().string() +
-             m.suffix().str();
-  }
+  std::string text = pmg::robotConfigTextWithModelPaths(robot);
   for (const auto& [joint, block] : blocks) {
     const std::regex line("(\\{\\s*name:\\s*" + joint + "\\s*,[^\\n]*?)(,\\s*actuator:\\s*\\{[^}]*\\})?"
                           "(,\\s*actuator_uncertainty:\\s*\\{[^}]*\\})?\\}");
@@ -83,6 +68,13 @@ std::string calibratedRobotText(const pmg::RobotConfig& robot, const std::map<st
 double trainResidual(const pmg::calib::JointCapture& robot, const pmg::calib::JointCapture& sim) {
   const auto sse = pmg::calib::logSquaredErrors(robot, sim);
   return std::sqrt((sse[0].first + sse[1].first) / static_cast<double>(sse[0].second + sse[1].second));
+}
+
+// "key: value" per uncertainty, 4 significant digits (the flow map of `actuator_uncertainty:`).
+std::vector<std::string> uncertaintyEntries(const std::map<std::string, double>& u) {
+  std::vector<std::string> out;
+  for (const auto& [key, v] : u) out.push_back(fmt::format("{}: {:.4g}", key, v));
+  return out;
 }
 
 std::string flowBlock(const pmg::calib::ActuatorBlock& b) {
@@ -269,14 +261,7 @@ int main(int argc, char** argv) {
                                         : "named: the entries that make the whole-robot model reproduce the response";
       if (!fit.causes.empty()) {
         blocks[name] = flowBlock(fit.block);
-        {
-          YAML::Emitter em;
-          em.SetDoublePrecision(3);
-          YAML::Node n(YAML::NodeType::Map);
-          for (const auto& [key, v] : fit.extended.uncertainty) n[key] = v;
-          em << YAML::Flow << n;
-          uncertainties[name] = em.c_str();
-        }
+        uncertainties[name] = fmt::format("{{{}}}", fmt::join(uncertaintyEntries(fit.extended.uncertainty), ", "));
         model.joints[static_cast<std::size_t>(i)].actuator_yaml = blocks[name];
         model.joints[static_cast<std::size_t>(i)].actuator_source = "pmg_calib_joints: " + name;
       }

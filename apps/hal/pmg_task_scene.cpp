@@ -8,8 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
-#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -41,11 +39,7 @@ int main(int argc, char** argv) {
     const std::string xml = (fs::absolute(out_dir) / "scene.xml").string();
     const pmg::RobotConfig composed = pmg::robotWithTaskScene(robot, trial, xml);
     // The robot config with its model paths absolute and the MJCF replaced by the composed one.
-    std::ifstream in(robot_path);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string yaml = std::regex_replace(text.str(), std::regex(R"((\n\s*urdf:\s*)[^\s#]+)"), "$1" + robot.urdf_path);
-    yaml = std::regex_replace(yaml, std::regex(R"((\n\s*mjcf:\s*)[^\s#]+)"), "$1" + composed.mjcf_path);
+    const std::string yaml = pmg::robotConfigTextWithModelPaths(composed);
     const std::string robot_out = (fs::absolute(out_dir) / "robot.yaml").string();
     {
       std::ofstream out(robot_out);

@@ -208,7 +208,6 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     const mjData* d = sim->data();
     const pmg::TaskObjectState obj = pmg::taskObjectState(m, d, towel.name);
     const Vector3d torso_p(d->xpos[3 * torso], d->xpos[3 * torso + 1], d->xpos[3 * torso + 2]);
-    const Eigen::Quaterniond torso_q(d->xquat[4 * torso], d->xquat[4 * torso + 1], d->xquat[4 * torso + 2], d->xquat[4 * torso + 3]);
     const Vector3d hand_p(d->xpos[3 * hand], d->xpos[3 * hand + 1], d->xpos[3 * hand + 2]);
     const auto& base = app.controller().lastState().base_position;
     const Vector3d pelvis(base[0], base[1], base[2]);
@@ -225,7 +224,6 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // the torso relative to it).
     const int pb = sim->pelvisBody();
     const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
-    (void)torso_q;
     const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
     see_towel.push(t, unyaw * (obj.p_W - torso_p));
     see_hand.push(t, unyaw * (hand_p - torso_p));

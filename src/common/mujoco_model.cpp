@@ -12,16 +12,10 @@
 namespace pmg {
 namespace fs = std::filesystem;
 
-std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string& mjcf_dir,
-                                 const Mujoco22Options& o) {
-  if (!(o.timestep > 0 && o.timestep <= 0.01))
-    throw std::runtime_error("Mujoco22Options.timestep = " + std::to_string(o.timestep) + ": expected (0, 0.01] s");
-  // 1. attributes unknown to 2.2.
-  std::string xml = std::regex_replace(mjcf_text, std::regex(R"(\s+actuatorfrc(range|limited)=\"[^\"]*\")"), "");
-  // 2. compiler: autolimits + absolute meshdir.
-  const std::regex compiler_re(R"(<compiler([^>]*?)/?>)");
+std::string withAbsoluteMeshdir(const std::string& mjcf_text, const std::string& mjcf_dir) {
+  const std::regex compiler_re(R"(<compiler([^>]*?)(/?)>)");
   std::smatch m;
-  if (!std::regex_search(xml, m, compiler_re)) throw std::runtime_error("MJCF has no <compiler> element");
+  if (!std::regex_search(mjcf_text, m, compiler_re)) throw std::runtime_error("MJCF has no <compiler> element");
   std::string attrs = m[1].str();
   std::smatch md;
   std::string meshdir = mjcf_dir;
@@ -30,9 +24,24 @@ std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string
     meshdir = (p.is_absolute() ? p : fs::path(mjcf_dir) / p).lexically_normal().string();
     attrs = std::regex_replace(attrs, std::regex(R"(\s*meshdir=\"[^\"]*\")"), "");
   }
-  attrs = std::regex_replace(attrs, std::regex(R"(\s*autolimits=\"[^\"]*\")"), "");
+  return mjcf_text.substr(0, static_cast<std::size_t>(m.position(0))) + "<compiler" + attrs + " meshdir=\"" + meshdir +
+         "\"" + m[2].str() + ">" + mjcf_text.substr(static_cast<std::size_t>(m.position(0) + m.length(0)));
+}
+
+std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string& mjcf_dir,
+                                 const Mujoco22Options& o) {
+  if (!(o.timestep > 0 && o.timestep <= 0.01))
+    throw std::runtime_error("Mujoco22Options.timestep = " + std::to_string(o.timestep) + ": expected (0, 0.01] s");
+  // 1. attributes unknown to 2.2.
+  std::string xml = std::regex_replace(mjcf_text, std::regex(R"(\s+actuatorfrc(range|limited)=\"[^\"]*\")"), "");
+  // 2. compiler: absolute meshdir + autolimits.
+  xml = withAbsoluteMeshdir(xml, mjcf_dir);
+  const std::regex compiler_re(R"(<compiler([^>]*?)/?>)");
+  std::smatch m;
+  std::regex_search(xml, m, compiler_re);  // present: withAbsoluteMeshdir checked it
+  std::string attrs = std::regex_replace(m[1].str(), std::regex(R"(\s*autolimits=\"[^\"]*\")"), "");
   std::ostringstream head;
-  head << "<compiler" << attrs << " autolimits=\"true\" meshdir=\"" << meshdir << "\"/>\n"
+  head << "<compiler" << attrs << " autolimits=\"true\"/>\n"
        << "  <option timestep=\"" << o.timestep << "\"/>\n"
        << "  <size nconmax=\"500\" njmax=\"2000\"/>\n"
        << "  <default><joint armature=\"" << o.armature << "\" damping=\"" << o.damping << "\" frictionloss=\""

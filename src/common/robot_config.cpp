@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
+#include <regex>
 #include <set>
 #include <sstream>
 
@@ -244,6 +246,17 @@ void validate(const RobotConfig& c) {
 
 std::vector<double> loadZeroOffsetFile(const std::string& path, const RobotConfig& robot) {
   return readZeroOffsetDocument(yaml::loadYamlDocument(path), robot);
+}
+
+std::string robotConfigTextWithModelPaths(const RobotConfig& robot) {
+  std::ifstream in(robot.source_file);
+  if (!in) throw ConfigError(robot.source_file + ": cannot read the robot config");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  for (const auto& [key, path] : {std::pair{"urdf", robot.urdf_path}, std::pair{"mjcf", robot.mjcf_path}})
+    text = std::regex_replace(text, std::regex(std::string(R"((\n\s*)") + key + R"(:\s*)[^\s#]+)"), "$1" + path);
+  return text;
 }
 
 RobotConfig loadRobotConfig(const std::string& yaml_path) {

@@ -9,18 +9,6 @@
 namespace pmg {
 namespace {
 
-const TaskObject& findObject(const TaskScene& scene, const std::string& name) {
-  for (const auto& o : scene.objects)
-    if (o.name == name) return o;
-  throw std::invalid_argument("no object '" + name + "' in the task scene");
-}
-
-const TaskTable& findTable(const TaskScene& scene, const std::string& name) {
-  for (const auto& t : scene.tables)
-    if (t.name == name) return t;
-  throw std::invalid_argument("no table '" + name + "' in the task scene");
-}
-
 // A point of W in table frame T (x, y on the top, relative to its centre).
 Eigen::Vector2d inTable(const TaskTable& t, const Eigen::Vector3d& p_W) {
   const double dx = p_W.x() - t.pos[0], dy = p_W.y() - t.pos[1];
@@ -37,8 +25,8 @@ bool overTop(const TaskTable& t, const Eigen::Vector2d& p_T) {
 TaskVerdict judgeWipe(const TaskScene& scene, const std::string& object, const std::vector<TaskObjectSample>& traj,
                       bool robot_fell, const WipeCriteria& c) {
   if (traj.empty()) throw std::invalid_argument("judgeWipe: empty trajectory");
-  const TaskObject& o = findObject(scene, object);
-  const TaskTable& t = findTable(scene, o.on);
+  const TaskObject& o = scene.object(object);
+  const TaskTable& t = scene.table(o.on);
   double anchor = inTable(t, traj.front().state.p_W).y(), span_lo = anchor, span_hi = anchor;
   TaskVerdict v;
   double left_at = -1.0;
@@ -70,9 +58,9 @@ TaskVerdict judgeWipe(const TaskScene& scene, const std::string& object, const s
 TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const std::string& pick, const std::string& place,
                      const std::vector<TaskObjectSample>& traj, bool robot_fell, const BoxCriteria& c) {
   if (traj.empty()) throw std::invalid_argument("judgeBox: empty trajectory");
-  const TaskObject& o = findObject(scene, object);
-  const TaskTable& tp = findTable(scene, pick);
-  const TaskTable& tq = findTable(scene, place);
+  const TaskObject& o = scene.object(object);
+  const TaskTable& tp = scene.table(pick);
+  const TaskTable& tq = scene.table(place);
   const double half = 0.5 * o.size[2];
   TaskVerdict v;
   double dropped_at = -1.0, lift = -1e9;

@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -12,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "pmg/common/config_error.hpp"
+#include "pmg/common/mujoco_model.hpp"
 #include "pmg/common/yaml_archive.hpp"
 
 namespace pmg {
@@ -94,7 +94,18 @@ void TaskScene::Serialize(A* a) {
 const TaskTable& TaskScene::table(const std::string& name) const {
   for (const auto& t : tables)
     if (t.name == name) return t;
-  throw std::out_of_range("no table '" + name + "'");
+  throw std::invalid_argument("no table '" + name + "' in the task scene");
+}
+
+const TaskObject& TaskScene::object(const std::string& name) const {
+  for (const auto& o : objects)
+    if (o.name == name) return o;
+  throw std::invalid_argument("no object '" + name + "' in the task scene");
+}
+
+Eigen::Vector2d tablePointInWorld(const TaskTable& t, const std::array<double, 2>& p_T) {
+  const double c = std::cos(t.yaw), s = std::sin(t.yaw);
+  return {t.pos[0] + c * p_T[0] - s * p_T[1], t.pos[1] + s * p_T[0] + c * p_T[1]};
 }
 
 void TaskScene::check() const {
@@ -181,9 +192,8 @@ std::string taskSceneBodies(const TaskScene& scene) {
   }
   for (const auto& o : scene.objects) {
     const TaskTable& t = scene.table(o.on);
-    const double c = std::cos(t.yaw), s = std::sin(t.yaw);
-    const double xw = t.pos[0] + c * o.pos[0] - s * o.pos[1];
-    const double yw = t.pos[1] + s * o.pos[0] + c * o.pos[1];
+    const Eigen::Vector2d p_W = tablePointInWorld(t, o.pos);
+    const double xw = p_W.x(), yw = p_W.y();
     const double zw = t.height + 0.5 * o.size[2] + 0.001;
     const char* rgba = o.kind == TaskObjectKind::kTowel ? "0.2 0.45 0.8 1" : "0.8 0.6 0.3 1";
     x << "    <body name=\"task_" << o.name << "\" pos=\"" << xw << " " << yw << " " << zw << "\" euler=\"0 0 "
@@ -204,20 +214,11 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
   ss << in.rdbuf();
   std::string xml = ss.str();
   // The robot's meshdir, made absolute, so the composed model loads from any folder.
-  const std::string dir = fs::absolute(fs::path(robot.mjcf_path)).parent_path().string();
-  std::smatch m;
-  const std::regex compiler_re(R"(<compiler([^>]*?)(/?)>)");
-  if (!std::regex_search(xml, m, compiler_re)) throw ConfigError(robot.mjcf_path + ": the MJCF has no <compiler> element");
-  std::string attrs = m[1].str();
-  std::string meshdir = dir;
-  std::smatch md;
-  if (std::regex_search(attrs, md, std::regex(R"(meshdir=\"([^\"]*)\")"))) {
-    const fs::path p(md[1].str());
-    meshdir = (p.is_absolute() ? p : fs::path(dir) / p).lexically_normal().string();
-    attrs = std::regex_replace(attrs, std::regex(R"(\s*meshdir=\"[^\"]*\")"), "");
+  try {
+    xml = withAbsoluteMeshdir(xml, fs::absolute(fs::path(robot.mjcf_path)).parent_path().string());
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(robot.mjcf_path + ": " + e.what());
   }
-  xml = xml.substr(0, static_cast<std::size_t>(m.position(0))) + "<compiler" + attrs + " meshdir=\"" + meshdir + "\"" +
-        m[2].str() + ">" + xml.substr(static_cast<std::size_t>(m.position(0) + m.length(0)));
   const auto end = xml.rfind("</worldbody>");
   if (end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no </worldbody>");
   xml.insert(end, "    <!-- task scene" + (scene.source.empty() ? std::string() : " " + scene.source) + " (pmg) -->\n" +

@@ -47,10 +47,9 @@ TEST(TaskScene, ShippedScenesRestOnTheirTablesBesideTheStandingRobot) {
     for (const auto& o : trial.objects) {
       const TaskTable& t = trial.table(o.on);
       const TaskObjectState s = taskObjectState(sim.model(), sim.data(), o.name);
-      const double xw = t.pos[0] + std::cos(t.yaw) * o.pos[0] - std::sin(t.yaw) * o.pos[1];
-      const double yw = t.pos[1] + std::sin(t.yaw) * o.pos[0] + std::cos(t.yaw) * o.pos[1];
-      EXPECT_NEAR(s.p_W.x(), xw, 0.002) << o.name;
-      EXPECT_NEAR(s.p_W.y(), yw, 0.002) << o.name;
+      const Eigen::Vector2d p_W = tablePointInWorld(t, o.pos);
+      EXPECT_NEAR(s.p_W.x(), p_W.x(), 0.002) << o.name;
+      EXPECT_NEAR(s.p_W.y(), p_W.y(), 0.002) << o.name;
       EXPECT_NEAR(s.p_W.z(), t.height + 0.5 * o.size[2], 0.002) << o.name;
       EXPECT_LT(s.v_W.norm(), 0.005) << o.name;
       const double yaw = 2.0 * std::atan2(s.q_W.z(), s.q_W.w());

@@ -42,6 +42,11 @@ struct Mujoco22Options {
   std::string imu_site = "imu_in_pelvis";  ///< site that gets the framequat sensor "<site>-orientation"
 };
 
+/// @p mjcf_text with its `<compiler meshdir>` made absolute against @p mjcf_dir (the folder of the
+/// file it came from; a missing meshdir becomes that folder), so the text can be written and loaded
+/// from any folder. @throws std::runtime_error if the text has no `<compiler>` element.
+std::string withAbsoluteMeshdir(const std::string& mjcf_text, const std::string& mjcf_dir);
+
 /// Returns the MJCF text adapted for MuJoCo 2.2 (see file comment). @p mjcf_dir is the folder of
 /// the original file, used to make `meshdir` absolute. @throws std::runtime_error if the text has
 /// no `<compiler>` or `<sensor>`/`</mujoco>` element to anchor the edits.

@@ -94,6 +94,12 @@ struct RobotConfig {
 /// duplicate joint; mirror map not an involution; duplicate motor id on a bus; model file missing).
 RobotConfig loadRobotConfig(const std::string& yaml_path);
 
+/// The text of @p robot's config file (robot.source_file) with its `urdf:` and `mjcf:` values
+/// replaced by robot.urdf_path / robot.mjcf_path (absolute after loading), so that a copy written
+/// elsewhere, edited or pointing at another model file (a composed scene), loads like the original.
+/// @throws ConfigError if the file cannot be read.
+std::string robotConfigTextWithModelPaths(const RobotConfig& robot);
+
 /// Validates an already-filled config. @throws ConfigError "<source_file>: <config.validate()>".
 void validate(const RobotConfig& config);
 

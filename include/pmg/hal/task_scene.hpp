@@ -90,8 +90,12 @@ struct TaskScene {
   /// Cross-checks: unique names, `on` names a table, footprints on the top (nominal and at the
   /// randomisation's corners). @throws pmg::ConfigError naming the source, the object and the field.
   void check() const;
-  const TaskTable& table(const std::string& name) const;  ///< @throws std::out_of_range
+  const TaskTable& table(const std::string& name) const;    ///< @throws std::invalid_argument naming it
+  const TaskObject& object(const std::string& name) const;  ///< @throws std::invalid_argument naming it
 };
+
+/// A point of table @p t's top frame T (x, y relative to the top's centre) in the world frame W [m].
+Eigen::Vector2d tablePointInWorld(const TaskTable& t, const std::array<double, 2>& p_T);
 
 /// Reads and checks a scene file. @throws pmg::ConfigError "<file>:<line>: <key>: <what>".
 TaskScene loadTaskScene(const std::string& path);
