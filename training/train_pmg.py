@@ -162,7 +162,12 @@ def parse_args(argv=None):
     ap.add_argument("--actuator-dr-z", type=float, default=None,
                     help="a parameter with a calibrated uncertainty u (`actuator_uncertainty:`) is drawn within +- z u "
                          "(default: EnvConfig.actuator_dr_z)")
+    ap.add_argument("--hand-forces", type=float, default=None, metavar="P",
+                    help="external hand forces in the domain randomisation (issue 14): probability per teleoperated hand "
+                         "and segment (EnvConfig.p_hand_force; default 0 = off); needs --arms teleop")
     args = ap.parse_args(argv)
+    if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
+        ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
         ap.error(f"--actuator-dr = {args.actuator_dr}: expected a relative half-width in [0, 1)")
     if args.actuators:
@@ -253,6 +258,8 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     if args.actuator_dr_z is not None:
         cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
+    if args.hand_forces is not None:
+        cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:

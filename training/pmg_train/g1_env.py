@@ -97,6 +97,16 @@ Observation (actor, 62 values, order = policy contract terms):
   joint_pos_rel (12)  joint_vel (12)  last_action (12)  pmg_ref_q_rel (12)  pmg_phase (2: sin, cos)
 Raw values are SI; the contract's per-term scales are applied here exactly as the C++
 ObservationAssembler does (scale, then clip to +-obs_clip).
+External hand forces (EnvConfig.p_hand_force > 0, issue 14; `--hand-forces`): in teleop segments a
+teleoperated hand gets, with probability p_hand_force per hand and segment, a constant world-frame
+force at its wrist_yaw_link body (xfrc_applied): vertical U(hand_force_z) N (positive up: the table
+pushing back on a pressing hand), horizontal of uniform direction and magnitude U(0, hand_force_xy) N
+(friction of a hand dragged over a surface, an object pushed or held). The applied force follows the
+target times the arm's teleop blend weight at hand_force_rate N/s per component, so it is continuous,
+and is zero again when the episode ends. The actor does not observe it (it must read it from its own
+state, as on the robot); the critic neither (its input stays as before, so runs restore earlier
+checkpoints).
+
 Privileged critic observation: the actor's terms without noise, plus base linear velocity in the
 heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay,
 the 14 arm joint targets (relative to the default pose) and the two hand payloads [kg] (90 values).
@@ -278,6 +288,16 @@ class EnvConfig:
     teleop_blend_rate: float = 1.0
     hand_payload: tuple = (0.0, 1.5)   # kg added to each hand (wrist_yaw_link)
     p_payload: float = 0.5             # share of environments with a payload, per hand
+    # External hand forces (issue 14: wiping presses a hand on a table and drags it along, pushing or
+    # holding an object loads the hands; module docstring "External hand forces"): in a teleop segment
+    # each teleoperated hand gets, with probability p_hand_force, a constant world-frame force at its
+    # body (wrist_yaw_link): vertical in hand_force_z [N] (up = a surface pushing back), horizontal of
+    # uniform direction and magnitude up to hand_force_xy [N]; scaled by the arm's teleop blend weight
+    # and slewed at hand_force_rate [N/s] per component (contact forces build up, never jump).
+    p_hand_force: float = 0.0
+    hand_force_z: tuple = (-20.0, 40.0)
+    hand_force_xy: float = 25.0
+    hand_force_rate: float = 100.0
     noise: dict = dataclasses.field(default_factory=lambda: {"gyro": 0.1, "gravity": 0.03, "q": 0.01, "qd": 0.5})
     deterministic_reset: bool = False  # evaluation: default pose, phase 0, nominal motors, no latency
     # Reward weights (per control step).
@@ -646,6 +666,18 @@ class G1PmgEnv(Env):
         arms = jnp.logical_and(on, jax.random.uniform(k[1], (2,)) < self.cfg.p_teleop_arm)
         return arms.astype(jnp.float32)
 
+    def _hand_forces(self, rng, arms_on):
+        """Target external forces of both hands for the next segment (2, 3) [N], world frame
+        (EnvConfig.p_hand_force, hand_force_z, hand_force_xy); zero for a hand teleop does not drive."""
+        c = self.cfg
+        k = jax.random.split(rng, 4)
+        on = jnp.logical_and(arms_on > 0, jax.random.uniform(k[0], (2,)) < c.p_hand_force)
+        ang = jax.random.uniform(k[1], (2,), minval=0.0, maxval=2 * math.pi)
+        mag = jax.random.uniform(k[2], (2,), minval=0.0, maxval=c.hand_force_xy)
+        fz = jax.random.uniform(k[3], (2,), minval=c.hand_force_z[0], maxval=c.hand_force_z[1])
+        f = jnp.stack([mag * jnp.cos(ang), mag * jnp.sin(ang), fz], axis=1)
+        return jnp.where(on[:, None], f, 0.0)
+
     def _teleop_advance(self, info, rng):
         """One control period of the teleop arm targets: waypoint timer, straight-line motion at
         the waypoint's speed (largest joint speed), PMG/teleop blend weights. Updates info."""
@@ -701,7 +733,11 @@ class G1PmgEnv(Env):
             "tp_on": self._teleop_flags(k[12]),
             "tp_w": jnp.zeros(2),
             "push_timer": self._push_interval(k[13]),
+            "hf_tgt": jnp.zeros((2, 3)),   # external hand forces (target, applied) [N], world frame (below)
+            "hf": jnp.zeros((2, 3)),
         }
+        if c.p_hand_force > 0:
+            info["hf_tgt"] = self._hand_forces(k[15], info["tp_on"])
         if self.act_idx.size:
             info["act"] = self._draw_actuators(k[14])
             info["act_line"] = self._act_line_reset()
@@ -770,6 +806,12 @@ class G1PmgEnv(Env):
             return (mjx.step(sys_k, data), line), tau
 
         data = state.pipeline_state
+        if c.p_hand_force > 0:
+            rate = c.hand_force_rate * c.control_dt
+            goal = info["hf_tgt"] * info["tp_w"][:, None]
+            info["hf"] = info["hf"] + jnp.clip(goal - info["hf"], -rate, rate)
+            xfrc = jnp.zeros_like(data.xfrc_applied).at[jnp.asarray(self.hand_bodies), :3].set(info["hf"])
+            data = data.replace(xfrc_applied=xfrc)
         if not c.deterministic_reset and c.push_vel[1] > 0:
             data, info["push_timer"] = self._push(data, info["push_timer"], k_push)
         (data, line), taus = jax.lax.scan(substep, (data, info.get("act_line")), None, length=self.n_substeps)
@@ -785,6 +827,9 @@ class G1PmgEnv(Env):
         user_prev = info["command"]  # the user's command u when the actor chose this action
         info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
+        if c.p_hand_force > 0:
+            info["hf_tgt"] = jnp.where(resample, self._hand_forces(jax.random.fold_in(k_seg, 1), info["tp_on"]),
+                                       info["hf_tgt"])
         ref_prev_contact = info["ref_contact"]
         ref, tracked, info["gco"] = self._reference(phase, info["command"], info["gco"])
         info["phase"] = phase
@@ -839,6 +884,8 @@ class G1PmgEnv(Env):
         info["tp_tgt"] = jnp.where(done, jnp.asarray(self.arm_default), info["tp_tgt"])
         info["tp_vel"] = jnp.where(done, 0.0, info["tp_vel"])
         info["tp_w"] = jnp.where(done, 0.0, info["tp_w"])
+        info["hf"] = jnp.where(done, 0.0, info["hf"])
+        info["hf_tgt"] = jnp.where(done, 0.0, info["hf_tgt"])
         if ident:  # the restarted episode's motors have no command history
             info["act_line"] = dict(info["act_line"], count=jnp.where(done, 0, info["act_line"]["count"]))
         obs = self._obs(data, info, k_noise)

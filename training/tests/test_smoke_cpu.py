@@ -35,6 +35,10 @@ training_smoke_ppo) so that they compile in parallel.
    between 5 ms substeps; kt 0.9, 60 N m saturation) and differ from the nominal PD, the implicit
    damping, armature and the knee's friction row (1 N m) are the model's; PIG kp / kd equal
    config/robots/g1/g1_pig.yaml and the armature is the reflected inertia.
+1c. External hand forces (issue 14, EnvConfig.p_hand_force = 1, teleop on every arm, segments of
+   25 steps, one env, 50 steps): xfrc_applied at the two hand bodies equals the env's slewed force,
+   nothing elsewhere; per-step change within hand_force_rate x dt; targets within their ranges and
+   redrawn per segment; the same episode without forces ends in a different state.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -478,6 +482,49 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     rollout(pig, "physically informed gains env")
 
 
+def hand_force_checks(check, n_steps=50):
+    """External hand forces (docstring 1c)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    from pmg_train import g1_env
+
+    clips = sorted(glob.glob("config/clips/g1/*.yaml"))
+    base = dict(p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25)
+    env = g1_env.G1PmgEnv(g1_env.EnvConfig(p_hand_force=1.0, **base), clips)
+    twin = g1_env.G1PmgEnv(g1_env.EnvConfig(p_hand_force=0.0, **base), clips)
+    c = env.cfg
+    hands = env.hand_bodies
+    others = [b for b in range(env.mj_model.nbody) if b not in hands]
+    step, step0 = jax.jit(env.step), jax.jit(twin.step)
+    st, st0 = jax.jit(env.reset)(jax.random.PRNGKey(3)), jax.jit(twin.reset)(jax.random.PRNGKey(3))
+    prev = np.zeros((2, 3))
+    applied_ok, slew, bounds_ok, largest, targets = True, 0.0, True, 0.0, set()
+    for _ in range(n_steps):
+        tgt = np.asarray(st.info["hf_tgt"], np.float64)
+        st, st0 = step(st, jnp.zeros(env.action_size)), step0(st0, jnp.zeros(twin.action_size))
+        hf = np.asarray(st.info["hf"], np.float64)
+        xf = np.asarray(st.pipeline_state.xfrc_applied, np.float64)
+        applied_ok &= bool(np.allclose(xf[hands, :3], hf, atol=1e-4) and np.all(xf[hands, 3:] == 0.0) and
+                           np.all(xf[others] == 0.0))
+        slew = max(slew, float(np.abs(hf - prev).max()))
+        bounds_ok &= bool(np.all(np.hypot(tgt[:, 0], tgt[:, 1]) <= c.hand_force_xy + 1e-4) and
+                          np.all(tgt[:, 2] >= c.hand_force_z[0] - 1e-4) and np.all(tgt[:, 2] <= c.hand_force_z[1] + 1e-4))
+        targets.add(tuple(np.round(tgt.ravel(), 3)))
+        largest = max(largest, float(np.abs(hf).max()))
+        prev = hf
+    q, q0 = np.asarray(st.pipeline_state.qpos), np.asarray(st0.pipeline_state.qpos)
+    check(applied_ok and largest > 1.0,
+          f"hand forces: xfrc_applied on the two wrist_yaw_link bodies = the env's applied force (largest "
+          f"{largest:.1f} N after {n_steps} steps), zero torque, zero on every other body")
+    check(slew <= c.hand_force_rate * c.control_dt + 1e-4 and bounds_ok and len(targets) >= 2,
+          f"hand forces continuous (largest step {slew:.2f} N <= {c.hand_force_rate * c.control_dt:.2f}), targets "
+          f"within |F_xy| <= {c.hand_force_xy} N and F_z in {c.hand_force_z}, redrawn with the segment "
+          f"({len(targets)} targets)")
+    check(float(np.abs(q - q0).max()) > 1e-3 and np.isfinite(q).all(),
+          f"hand forces act: the same episode without them differs by {float(np.abs(q - q0).max()):.4f} in qpos")
+
+
 def ppo_checks(check, workdir, obs):
     import jax
     import numpy as np
@@ -556,6 +603,7 @@ def main():
     if args.part in ("env", "all"):
         actuator_port_jax_checks(check)
         actuator_env_checks(check, workdir)
+        hand_force_checks(check)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")
