@@ -68,6 +68,11 @@ struct OperatorConfig {
   double stand_off_far_m = 0.30;    ///< pelvis distance from the table's edge while raising the hand [m]
   double clearance_m = 0.05;        ///< the raised hand this much above the hover height [m]
   double grab_inset_m = 0.08;       ///< the hand aims this far short of the towel's centre (its near part)
+  double lift_s = 0.8;              ///< placing the hand again: lift it straight up this long first [s]
+  double press_s = 1.5;             ///< pressing before walking [s]
+  double keep_from_edge_m = 0.27;   ///< while wiping, keep the towel's centre this far from the table's near edge [m]
+  double keep_gain = 1.0;           ///< hand forward speed per metre of that error [1/s] (at most 0.05 m/s)
+  double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
   double max_trial_s = 45.0;        ///< the trial ends here [s]
   template <class A>
   void Serialize(A* a) {
@@ -93,6 +98,11 @@ struct OperatorConfig {
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("clearance_m", &clearance_m, "[m]");
     a->Visit("grab_inset_m", &grab_inset_m, "[m]");
+    a->Visit("regrab_offset_m", &regrab_offset_m, "[m]");
+    a->Visit("lift_s", &lift_s, "[s]");
+    a->Visit("press_s", &press_s, "[s]");
+    a->Visit("keep_from_edge_m", &keep_from_edge_m, "[m]");
+    a->Visit("keep_gain", &keep_gain, "[1/s]");
     a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
   std::string validate() const {
@@ -101,6 +111,11 @@ struct OperatorConfig {
     if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
     if (!(wipe_speed > 0 && wipe_speed <= 0.4)) return "wipe_speed: expected (0, 0.4] m/s";
     if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
+    if (!(regrab_offset_m > 0 && regrab_offset_m <= 0.5)) return "regrab_offset_m: expected (0, 0.5] m";
+    if (!(lift_s >= 0 && lift_s <= 5)) return "lift_s: expected [0, 5] s";
+    if (!(press_s >= 0 && press_s <= 10)) return "press_s: expected [0, 10] s";
+    if (!(keep_from_edge_m >= 0.15 && keep_from_edge_m <= 1.0)) return "keep_from_edge_m: expected [0.15, 1] m (half the towel at least)";
+    if (!(keep_gain >= 0 && keep_gain <= 10)) return "keep_gain: expected [0, 10] 1/s";
     return "";
   }
 };
@@ -139,6 +154,7 @@ struct TrialResult {
   pmg::TaskVerdict verdict;
   bool fell = false;
   double seconds = 0.0;
+  int regrabs = 0;  ///< times the operator placed the hand again after it slipped off the towel
 };
 
 // One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
@@ -172,7 +188,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_towel(op.view_latency_s, op.view_noise_m, rng), see_hand(op.view_latency_s, op.view_noise_m, rng),
-      see_pelvis(op.view_latency_s, op.view_noise_m, rng);
+      see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_towel_room(op.view_latency_s, op.view_noise_m, rng);
   std::deque<std::pair<double, double>> yaw_buf;
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
   double work_y = 0.0;  // the pelvis' lateral working place
@@ -192,10 +208,14 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kReach, kPress, kWipe, kRelease, kDone };
   const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "reach", "press", "wipe", "release", "done"};
   Phase phase = kSettle;
+  Phase last_phase = kDone;
   double phase_t0 = 0.0;
   int wipe_dir = towel.pos[1] > 0 ? -1 : 1;  // wipe towards the far end first
   double seen_path = 0.0, last_seen_y = 0.0;
   bool first_seen = true;
+  int regrabs = 0;  // times the hand was placed again after slipping off the towel
+  bool regrabbing = false;  // the reach in progress follows a slip
+  Vector3d lift_from = Vector3d::Zero();  // where the hand was when it started lifting (frame R)
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
@@ -228,9 +248,11 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     see_towel.push(t, unyaw * (obj.p_W - torso_p));
     see_hand.push(t, unyaw * (hand_p - torso_p));
     see_pelvis.push(t, pelvis);
+    see_towel_room.push(t, obj.p_W);  // the towel on the table, as the operator sees it in the room
     yaw_buf.push_back({t, yaw});
     while (yaw_buf.size() > 1 && yaw_buf[1].first <= t - op.view_latency_s) yaw_buf.pop_front();
     const Vector3d towel_R = see_towel.seen(t), hand_R = see_hand.seen(t), pelvis_W = see_pelvis.seen(t);
+    const Vector3d towel_room = see_towel_room.seen(t);
     const double yaw_seen = yaw_buf.front().second;
 
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
@@ -252,6 +274,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // The towel's lateral place on the table, in W (seen through the robot: torso + R(yaw) towel_R).
     const Vector3d towel_W_seen = torso_p + Eigen::AngleAxisd(yaw_seen, Vector3d::UnitZ()) * towel_R;
     bool grip = false;
+    const bool entered = phase != last_phase;  // first tick of this phase
+    last_phase = phase;
     Vector3d hand_target_R = Vector3d::Zero();
     bool have_hand_target = false;
     switch (phase) {
@@ -282,7 +306,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         hand_target_R = Vector3d(phase == kRaise ? raise_x : towel_R.x() - op.grab_inset_m, towel_R.y(),
                                  top_z_R + op.hover_m + op.clearance_m);
         if (phase == kRaise) {
-          if (t - phase_t0 < dt) raise_x = hand_R.x();
+          if (entered) raise_x = hand_R.x();
           walkTo(Eigen::Vector2d(table_near_x - op.stand_off_far_m, work_y), op.max_speed);
           if (t - phase_t0 > 1.0 && (hand_R.z() > top_z_R + op.hover_m || t - phase_t0 > 6.0))
             phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
@@ -303,38 +327,65 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         // Aim at the towel's near part once, when the reach starts: chasing the towel with a hand
         // that touches it pushes it away. While wiping the hand stays where it is on the robot, so
         // that walking sideways drags the towel.
-        if (phase == kReach && t - phase_t0 < dt) work_hand = towel_R - Vector3d(op.grab_inset_m, 0.0, 0.0);
+        if (phase == kReach && entered) work_hand = towel_R - Vector3d(op.grab_inset_m, 0.0, 0.0);
         if (phase == kReach) work_hand.y() = towel_R.y();
         hand_target_R = work_hand;
         hand_target_R.z() = top_z_R + (phase == kReach ? op.hover_m : -op.press_m);
+        // Placing the hand again after a slip: lift it straight up first (moving it sideways while it
+        // still presses drags the towel, and the push shoves the robot back).
+        if (phase == kReach && regrabbing && t - phase_t0 < op.lift_s) {
+          if (entered) lift_from = hand_R;
+          hand_target_R = lift_from;
+          hand_target_R.z() = top_z_R + op.hover_m;
+        }
+        // Keep the towel on the top: while wiping, the hand (and the towel under it) goes forward when
+        // the towel is seen nearer the table's near edge than keep_from_edge_m, back when farther.
+        if (phase == kWipe) {
+          const double x_goal = table_near_x + op.keep_from_edge_m;
+          work_hand.x() += std::clamp(op.keep_gain * (x_goal - towel_room.x()), -0.05, 0.05) * dt;
+          hand_target_R.x() = work_hand.x();
+        }
         // Hold the working place while reaching and pressing (the wipe phase walks on its own).
         if (phase != kWipe)
           walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed);
         if (phase == kReach && (hand_R - hand_target_R).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
         if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
-        if (phase == kPress && t - phase_t0 > 1.5) phase = kWipe, phase_t0 = t, first_seen = true;
+        if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, first_seen = true, regrabbing = false;
         if (phase == kWipe) {
           // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
           const double half_len = 0.5 * table.top_size[1];
-          const double y_T = towel_W_seen.y() - table.pos[1];
+          // Where the towel is along the table, and how far it went: seen against the table (the room),
+          // not through the swaying robot.
+          const double y_T = towel_room.y() - table.pos[1];
           if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
           if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
-          // Sideways only: the distance to the table stays as it is when the wipe starts.
-          v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(0.0, wipe_dir * op.wipe_speed);
-          if (first_seen) last_seen_y = towel_W_seen.y(), first_seen = false;
-          if (std::abs(towel_W_seen.y() - last_seen_y) > 0.02) {
-            seen_path += std::abs(towel_W_seen.y() - last_seen_y);
-            last_seen_y = towel_W_seen.y();
+          // Sideways, holding the working distance to the table (a P term on the seen place).
+          const double vx_hold = std::clamp(op.walk_gain * (table_near_x - op.stand_off_m - pelvis_W.x()), -0.1, 0.1);
+          v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(vx_hold, wipe_dir * op.wipe_speed);
+          // The hand slipped off (seen beside the towel's centre): stop, lift it and place it again
+          // from where the robot is now (reach, press, wipe on in the same direction).
+          if (std::abs(hand_R.y() - towel_R.y()) > op.regrab_offset_m) {
+            phase = kReach, phase_t0 = t, work_y = pelvis_W.y(), walk_integral.setZero();
+            regrabbing = true;
+            ++regrabs;
+          }
+          if (first_seen) last_seen_y = towel_room.y(), first_seen = false;
+          if (std::abs(towel_room.y() - last_seen_y) > 0.02) {
+            seen_path += std::abs(towel_room.y() - last_seen_y);
+            last_seen_y = towel_room.y();
           }
           if (seen_path >= op.wipe_path_m) phase = kRelease, phase_t0 = t;
         }
         break;
       }
       case kRelease:
-        grip = t - phase_t0 < 1.0;
+        // Lift the hand off the towel straight up, still crouched and bent (standing up first would
+        // drag the towel towards the robot), then let go and stand.
+        grip = t - phase_t0 < 1.5;
         if (grip) {
           have_hand_target = true;
-          hand_target_R = hand_R + Vector3d(0, 0, 0.1);
+          if (entered) lift_from = hand_R;
+          hand_target_R = lift_from + Vector3d(0, 0, 0.15);
         }
         if (t - phase_t0 > 2.5) phase = kDone;
         break;
@@ -343,7 +394,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     }
     // Headset: displacement for the locomotion command, pitch for looking down.
     const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
-    const bool working = phase >= kRaise && phase <= kWipe;
+    const bool working = (phase >= kRaise && phase <= kWipe) || (phase == kRelease && t - phase_t0 < 1.5);
     vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
     const double pitch = working ? op.look_down_rad : 0.0;
     // Keep the robot facing the table: turn the head against the heading it sees (yaw rate
@@ -388,6 +439,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   r.trial = trial;
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
+  r.regrabs = regrabs;
   r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
   return r;
 }
@@ -430,7 +482,7 @@ int main(int argc, char** argv) {
                  r.verdict.failure, r.seconds, r.verdict.detail);
       std::fflush(stdout);
       summary["trial_results"].push_back({{"trial", k}, {"success", r.verdict.success}, {"measure", r.verdict.measure},
-                                          {"fell", r.fell}, {"seconds", r.seconds}, {"detail", r.verdict.detail}});
+                                          {"fell", r.fell}, {"seconds", r.seconds}, {"regrabs", r.regrabs}, {"detail", r.verdict.detail}});
       if (!r.verdict.success)
         summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
     }
