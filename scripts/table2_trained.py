@@ -27,9 +27,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from sim2real_table import PAPER  # noqa: E402  (the paper's Table II values; same folder)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PAPER = {"Baseline": (0.0571, 0.0781), "Physically Informed Gains": (0.0747, 0.0656),
-         "Dynamic Calibration": (0.0682, 0.0562), "Dynamic + Zero-point": (0.0562, 0.0414)}
 ROWS = list(PAPER)
 
 

@@ -1,7 +1,7 @@
 // pmg_teleop_bench: teleoperated tasks in the SIL, scored like the paper's Table III (issue 14).
 // Each trial draws the task scene (config/tasks/<task>_scene.yaml, include/pmg/hal/task_scene.hpp),
 // runs pmg_controller's composition root (ControllerApp: teleop mode with arm IK, shaper, PMG + GCO,
-// the arms policy, the HAL supervisor) over the MuJoCo 2.2 SIL of the robot in that scene, in
+// the teleop policy, the HAL supervisor) over the MuJoCo 2.2 SIL of the robot in that scene, in
 // lockstep, and a scripted operator drives it only through the VR stream a headset would send
 // (headset and controller poses, grips, buttons: pmg::teleop::VrSample, as the LCM receiver
 // decodes it). The operator sees what a person in the headset sees: the objects' and the robot
@@ -13,7 +13,7 @@
 //
 // Writes DIR/summary.json = {"task", "trials", "successes", "success_rate", "paper_success_rate",
 // "failures": [{"trial", "reason", "detail"}], "trial_results": [...]} and DIR/trial_<k>.csv (t,
-// phase of the operator, pelvis, right hand and object positions in W, the object's measure).
+// phase of the operator, pelvis, working hand and object positions in W, headset, teleop command).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -189,7 +189,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_towel(op.view_latency_s, op.view_noise_m, rng), see_hand(op.view_latency_s, op.view_noise_m, rng),
       see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_towel_room(op.view_latency_s, op.view_noise_m, rng);
-  std::deque<std::pair<double, double>> yaw_buf;
+  View see_yaw(op.view_latency_s, 0.0, rng);  // the robot's heading (x: yaw [rad]), late, without noise
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
   double work_y = 0.0;  // the pelvis' lateral working place
   double raise_x = 0.0;  // the hand's forward place while it is raised
@@ -249,11 +249,10 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     see_hand.push(t, unyaw * (hand_p - torso_p));
     see_pelvis.push(t, pelvis);
     see_towel_room.push(t, obj.p_W);  // the towel on the table, as the operator sees it in the room
-    yaw_buf.push_back({t, yaw});
-    while (yaw_buf.size() > 1 && yaw_buf[1].first <= t - op.view_latency_s) yaw_buf.pop_front();
+    see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     const Vector3d towel_R = see_towel.seen(t), hand_R = see_hand.seen(t), pelvis_W = see_pelvis.seen(t);
     const Vector3d towel_room = see_towel_room.seen(t);
-    const double yaw_seen = yaw_buf.front().second;
+    const double yaw_seen = see_yaw.seen(t).x();
 
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
