@@ -19,6 +19,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/render/gl_context.hpp"
 #include "pmg/render/image.hpp"
+#include "pmg/render/object_track.hpp"
 #include "pmg/render/scene_renderer.hpp"
 #include "pmg/render/state_track.hpp"
 
@@ -78,6 +79,13 @@ int main(int argc, char** argv) {
   app.add_option("--font-scale", options.font_scale, "label font scale [%]: 50, 100, 150, 200, 250 or 300")
       ->capture_default_str();
   app.add_option("--shadow-size", options.shadow_size, "shadow map size [px]")->capture_default_str();
+  std::string mjcf_path, objects_path;
+  app.add_option("--mjcf", mjcf_path, "draw this MuJoCo model instead of the robot config's (a task scene that "
+                                      "composes the robot: pmg_teleop_bench's trial_<k>_scene.xml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--objects", objects_path, "object track CSV (t,body,x,y,z,qw,qx,qy,qz; W frame): poses of the "
+                                            "model's free objects, zero-order hold (include/pmg/render/object_track.hpp)")
+      ->check(CLI::ExistingFile);
   app.add_flag("--no-labels", no_labels, "no time/command label on the frames");
   app.add_flag("--no-shadows", no_shadows, "no shadows (faster on software OpenGL)");
   app.add_flag("--no-reflections", no_reflections, "no floor reflection (faster on software OpenGL)");
@@ -110,10 +118,23 @@ int main(int argc, char** argv) {
                     start, end, track.startTime(), track.endTime());
       throw std::invalid_argument(buf);
     }
+    pmg::render::ObjectTrack objects;
+    if (!objects_path.empty()) objects = pmg::render::readObjectTrack(objects_path);
     fs::create_directories(out_dir);
 
     const auto gl = pmg::render::GlContext::create();
-    pmg::render::SceneRenderer renderer(pmg::loadMujocoModel(robot.mjcf_path), robot, options);
+    pmg::render::SceneRenderer renderer(pmg::loadMujocoModel(mjcf_path.empty() ? robot.mjcf_path : mjcf_path), robot, options);
+    // Places the objects at time t (before each render; an unknown body fails here, naming it).
+    auto placeObjects = [&](double t) {
+      for (const auto& [body, poses] : objects.bodies) {
+        const pmg::render::ObjectPose& p = objects.at(body, t);
+        try {
+          renderer.setFreeBodyPose(body, p.p_W, p.quat_W);
+        } catch (const std::invalid_argument& e) {
+          throw std::invalid_argument(objects_path + ": " + e.what());
+        }
+      }
+    };
     std::printf("pmg_render_log: %s: %zu %s samples, t = %.2f..%.2f s; OpenGL %s (%s)\n", log_path.c_str(),
                 track.samples.size(), channel.c_str(), track.startTime(), track.endTime(), gl->version().c_str(),
                 gl->renderer().c_str());
@@ -124,6 +145,7 @@ int main(int argc, char** argv) {
     const std::vector<double> times = pmg::render::evenlySpacedTimes(start, end, frames);
     double first_s = 0.0;
     for (std::size_t i = 0; i < times.size(); ++i) {
+      placeObjects(times[i]);
       renderer.render(track.at(times[i]), images[i]);
       if (i == 0) {
         first_s = secondsSince(t_render);
@@ -149,6 +171,7 @@ int main(int argc, char** argv) {
       double render_s = 0.0, png_s = 0.0;
       for (int k = 0; k < count; ++k) {
         const auto t_frame = Clock::now();
+        placeObjects(start + k / video_fps);
         renderer.render(track.at(start + k / video_fps), image);
         const auto t_write = Clock::now();
         render_s += std::chrono::duration<double>(t_write - t_frame).count();

@@ -9,12 +9,22 @@
 // latency (config/tasks/<task>_operator.yaml); it never reads anything else of the simulator. The
 // object's trajectory is judged by include/pmg/hal/task_judge.hpp.
 //
-//   pmg_teleop_bench --task wipe --trials 20 [--seed S] --out DIR [--controller CONFIG] [--operator FILE]
+// Two operators: wiping (runWipe, config/tasks/wipe_operator.yaml) and box carrying (runBox,
+// config/tasks/box_operator.yaml), each a small state machine.
+//
+//   pmg_teleop_bench --task wipe|box --trials 20 [--seed S] --out DIR [--controller CONFIG] [--operator FILE] [--no-figures]
 //
 // Writes DIR/summary.json = {"task", "trials", "successes", "success_rate", "paper_success_rate",
-// "failures": [{"trial", "reason", "detail"}], "trial_results": [...]} and DIR/trial_<k>.csv (t,
-// phase of the operator, pelvis, working hand and object positions in W, headset, teleop command).
+// "failures": [{"trial", "reason", "detail"}], "trial_results": [...], "figures": {"success"|"failure":
+// {"trial", "log", "objects", "scene", "strip", "trace"}}} and DIR/trial_<k>.csv (t, phase of the
+// operator, pelvis, working hand and object positions in W, headset, teleop command), the scene
+// DIR/trial_<k>_scene.xml, and for the first success and the first failure the controller's event log
+// trial_<k>.lcmlog, the object track trial_<k>_objects.csv, a frame strip <success|failure>_trial_<k>_strip.png
+// (pmg_render_log, through scripts/render_task_trial.py: it starts Xvfb when there is no display)
+// and a trace plot <success|failure>_trial_<k>_trace.png (scripts/plot_teleop_trial.py).
 #include <algorithm>
+#include <cstdlib>
+#include <utility>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -168,6 +178,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   const pmg::TaskTable& table = scene.table(towel.on);
   pmg::ControllerConfig config = base_config;
   config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
+  // The controller's telemetry (PMG_STATE) to an event log, for pmg_render_log's frame strips.
+  config.log_file = (out_dir / fmt::format("trial_{}.lcmlog", trial)).string();
   pmg::ControllerApp app(config);
   auto* sim = dynamic_cast<pmg::MujocoBackend*>(&app.backend());
   if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
@@ -219,6 +231,9 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
+  // The object's pose for pmg_render_log --objects (include/pmg/render/object_track.hpp), at 50 Hz.
+  std::ofstream objects_csv(out_dir / fmt::format("trial_{}_objects.csv", trial));
+  objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch\n";
   bool fell = false;
   const double dt = 0.01;
@@ -232,6 +247,9 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     const auto& base = app.controller().lastState().base_position;
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
+    if (k % 2 == 0)
+      objects_csv << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, towel.name, obj.p_W.x(),
+                                 obj.p_W.y(), obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
     csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}\n", t,
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p.x(), hand_p.y(), hand_p.z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1],
@@ -434,12 +452,337 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       break;
     }
   }
+  app.finish();  // closes the event log
   TrialResult r;
   r.trial = trial;
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
   r.regrabs = regrabs;
   r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
+  return r;
+}
+
+// ---- Box carrying (the paper's Table III "box picking") -----------------------------------------
+// The operator's parameters (config/tasks/box_operator.yaml). Frames as in the wiping operator: R =
+// the torso's position yawed with the pelvis (what the head camera sees), W = the room.
+struct BoxOperatorConfig {
+  double view_noise_m = 0.005;     ///< std. dev. of every position the operator sees [m]
+  double view_latency_s = 0.1;     ///< what the operator sees is this old [s]
+  double settle_s = 1.0;           ///< standing before engaging [s]
+  double stand_off_far_m = 0.35;   ///< pelvis distance from the pick table's near edge while raising the hands [m]
+  double stand_off_m = 0.10;       ///< ... while grasping [m]
+  double place_stand_off_m = 0.10; ///< pelvis distance from the place table's near edge while placing [m]
+  double walk_gain = 1.0;          ///< commanded speed per metre of position error [1/s]
+  double max_speed = 0.30;         ///< [m/s]
+  double min_speed = 0.10;         ///< commanded at least this while not arrived [m/s]
+  double walk_integral_gain = 0.5; ///< integral action on the place error [1/s^2]
+  double arrive_tol_m = 0.03;      ///< a walk ends within this [m]
+  double carry_speed = 0.15;       ///< walking speed with the box [m/s]
+  double crouch_m = 0.18;          ///< headset lowered this much while grasping (beyond 0.03 m: the robot squats)
+  double look_down_rad = 0.70;     ///< headset pitch while grasping (beyond 0.25 rad: the torso bends)
+  double grasp_below_top_m = 0.06; ///< the hands' height: this far below the box's top [m]
+  double grasp_in_m = 0.06;        ///< the wrists this far behind the box's near side (the hands reach forward of the wrist) [m]
+  double spread_m = 0.08;          ///< the wrists this far outside the box's sides before closing [m]
+  double squeeze_m = 0.03;         ///< ... and this far inside them when squeezing [m]
+  double squeeze_s = 1.5;          ///< closing the hands [s]
+  double lift_speed = 0.10;        ///< hands' lifting and lowering speed [m/s]
+  double carry_clearance_m = 0.08; ///< the box's bottom this far above the place table's top while carrying [m]
+  double place_press_m = 0.01;     ///< lowering aims the box's bottom this far below the place top [m]
+  double hand_gain = 1.0;          ///< fraction of the seen hand error corrected per second [1/s]
+  double max_trial_s = 60.0;       ///< the trial ends here [s]
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("view_noise_m", &view_noise_m, "[m]");
+    a->Visit("view_latency_s", &view_latency_s, "[s]");
+    a->Visit("settle_s", &settle_s, "[s]");
+    a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
+    a->Visit("stand_off_m", &stand_off_m, "[m]");
+    a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
+    a->Visit("walk_gain", &walk_gain, "[1/s]");
+    a->Visit("max_speed", &max_speed, "[m/s]");
+    a->Visit("min_speed", &min_speed, "[m/s]");
+    a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
+    a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
+    a->Visit("carry_speed", &carry_speed, "[m/s]");
+    a->Visit("crouch_m", &crouch_m, "[m]");
+    a->Visit("look_down_rad", &look_down_rad, "[rad]");
+    a->Visit("grasp_below_top_m", &grasp_below_top_m, "[m]");
+    a->Visit("grasp_in_m", &grasp_in_m, "[m]");
+    a->Visit("spread_m", &spread_m, "[m]");
+    a->Visit("squeeze_m", &squeeze_m, "[m]");
+    a->Visit("squeeze_s", &squeeze_s, "[s]");
+    a->Visit("lift_speed", &lift_speed, "[m/s]");
+    a->Visit("carry_clearance_m", &carry_clearance_m, "[m]");
+    a->Visit("place_press_m", &place_press_m, "[m]");
+    a->Visit("hand_gain", &hand_gain, "[1/s]");
+    a->Visit("max_trial_s", &max_trial_s, "[s]");
+  }
+  std::string validate() const {
+    if (!(view_noise_m >= 0 && view_noise_m < 0.05)) return "view_noise_m: expected [0, 0.05) m";
+    if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
+    if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
+    if (!(carry_speed > 0 && carry_speed <= 0.4)) return "carry_speed: expected (0, 0.4] m/s";
+    if (!(spread_m > 0 && spread_m <= 0.2)) return "spread_m: expected (0, 0.2] m";
+    if (!(squeeze_m >= 0 && squeeze_m <= 0.1)) return "squeeze_m: expected [0, 0.1] m";
+    if (!(lift_speed > 0 && lift_speed <= 0.5)) return "lift_speed: expected (0, 0.5] m/s";
+    if (!(hand_gain > 0 && hand_gain <= 10)) return "hand_gain: expected (0, 10] 1/s";
+    if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
+    return "";
+  }
+};
+
+// One box trial. The operator: settle, engage (A), walk up to the pick table (stopping short), squeeze
+// both grips and bring the robot's hands beside the box (crouching and looking down), walk in, close
+// the hands on the box's sides, lift it above the place table's height (standing up), walk sideways
+// to the place table, lower the box onto it, open the hands and lift them away, and wait.
+TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_scene, const pmg::ControllerConfig& base_config,
+                   const BoxOperatorConfig& op, const fs::path& out_dir) {
+  const pmg::TaskScene scene = pmg::drawTaskTrial(base_scene, seed);
+  const pmg::TaskObject& box = scene.objects.at(0);
+  const pmg::TaskTable& pick = scene.table(box.on);
+  const pmg::TaskTable* place_ptr = nullptr;
+  for (const pmg::TaskTable& tb : scene.tables)
+    if (tb.name != pick.name) place_ptr = &tb;
+  if (place_ptr == nullptr) throw std::runtime_error("pmg_teleop_bench: the box scene needs a second (place) table");
+  const pmg::TaskTable& place = *place_ptr;
+  pmg::ControllerConfig config = base_config;
+  config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
+  config.log_file = (out_dir / fmt::format("trial_{}.lcmlog", trial)).string();
+  pmg::ControllerApp app(config);
+  auto* sim = dynamic_cast<pmg::MujocoBackend*>(&app.backend());
+  if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
+  const pmg::teleop::TeleopConfig& tc = config.teleop;
+  const mjModel* m = sim->model();
+  const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+  const std::array<int, 2> hand_body{mj_name2id(m, mjOBJ_BODY, "left_wrist_yaw_link"), mj_name2id(m, mjOBJ_BODY, "right_wrist_yaw_link")};
+  const int shoulder_l = mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link");
+  const int shoulder_r = mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link");
+  if (torso < 0 || hand_body[0] < 0 || hand_body[1] < 0 || shoulder_l < 0 || shoulder_r < 0)
+    throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / *_wrist_yaw_link / *_shoulder_pitch_link");
+  const double half_w = 0.5 * box.size[1], box_h = box.size[2];
+
+  std::mt19937_64 rng(seed * 7919 + 17);
+  View see_box(op.view_latency_s, op.view_noise_m, rng), see_box_room(op.view_latency_s, op.view_noise_m, rng),
+      see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_yaw(op.view_latency_s, 0.0, rng),
+      see_box_yaw(op.view_latency_s, 0.0, rng);  // the box's yaw relative to the robot's heading (x) [rad]
+  std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
+  Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
+
+  pmg::teleop::VrSample vr;
+  const double head_z = 1.6;
+  vr.head_position = {0.0, 0.0, head_z};
+  vr.hand_valid = {true, true};
+  const std::array<Vector3d, 2> rest{Vector3d(0.30, 0.20, -0.45), Vector3d(0.30, -0.20, -0.45)};  // frame H
+  std::array<Vector3d, 2> hand_H = rest;
+  bool aligned = false;
+  pmg::CommandSample sample;
+
+  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kSqueeze, kLift, kCarry, kLower, kOpen, kWait, kDone };
+  const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "squeeze", "lift", "carry", "lower", "open", "wait", "done"};
+  Phase phase = kSettle, last_phase = kDone;
+  double phase_t0 = 0.0;
+  double lift_z = 0.0;     // the hands' height target while lifting / lowering (frame R, ramps) [m]
+  double carry_x = 0.0;    // the hands' forward place while carrying (frame R) [m]
+  double squeeze_y = 0.0;  // half the distance between the wrists' targets (ramps) [m]
+  double working_y = 0.0;  // the pelvis' lateral place at the pick table (W) [m]
+
+  std::vector<pmg::TaskObjectSample> traj;
+  std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
+  csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
+         "left_hand_x,left_hand_y,left_hand_z\n";
+  std::ofstream objects_csv(out_dir / fmt::format("trial_{}_objects.csv", trial));
+  objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
+  bool fell = false;
+  const double dt = 0.01;
+  const long ticks = std::lround(op.max_trial_s / dt);
+  for (long k = 0; k < ticks && phase != kDone; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    const mjData* d = sim->data();
+    const pmg::TaskObjectState obj = pmg::taskObjectState(m, d, box.name);
+    const Vector3d torso_p(d->xpos[3 * torso], d->xpos[3 * torso + 1], d->xpos[3 * torso + 2]);
+    std::array<Vector3d, 2> hand_p;
+    for (int h = 0; h < 2; ++h)
+      hand_p[static_cast<std::size_t>(h)] = Vector3d(d->xpos[3 * hand_body[static_cast<std::size_t>(h)]], d->xpos[3 * hand_body[static_cast<std::size_t>(h)] + 1],
+                                                     d->xpos[3 * hand_body[static_cast<std::size_t>(h)] + 2]);
+    const auto& base = app.controller().lastState().base_position;
+    const Vector3d pelvis(base[0], base[1], base[2]);
+    traj.push_back({t, obj});
+    const auto& ts = app.controller().teleop()->status();
+    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f}\n", t,
+                       phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p[1].x(), hand_p[1].y(), hand_p[1].z(),
+                       obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
+                       ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
+    if (k % 2 == 0)
+      objects_csv << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, box.name, obj.p_W.x(),
+                                 obj.p_W.y(), obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
+    const int pb = sim->pelvisBody();
+    const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
+    const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
+    see_box.push(t, unyaw * (obj.p_W - torso_p));
+    see_box_room.push(t, obj.p_W);
+    see_pelvis.push(t, pelvis);
+    see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
+    see_box_yaw.push(t, Vector3d(std::remainder(yawOf(obj.q_W) - yaw, 2.0 * M_PI), 0.0, 0.0));
+    for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
+    const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
+    const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
+    const double yaw_seen = see_yaw.seen(t).x();
+    const Eigen::AngleAxisd box_turn(see_box_yaw.seen(t).x(), Vector3d::UnitZ());  // box frame -> R
+
+    Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
+    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
+      Eigen::Vector2d e = target_W - pelvis_W.head<2>();
+      walk_integral += e * dt;
+      const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
+      if (walk_integral.norm() > imax) walk_integral *= imax / walk_integral.norm();
+      Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * walk_integral;
+      if (v.norm() > max_speed) v *= max_speed / v.norm();
+      if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
+      v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
+      return e.norm();
+    };
+    const double pick_near_x = pick.pos[0] - 0.5 * pick.top_size[0];
+    const double place_near_x = place.pos[0] - 0.5 * place.top_size[0];
+    const double torso_z = torso_p.z();  // the operator sees the tables' tops relative to the head camera
+    const double grasp_z_R = box_R.z() + 0.5 * box_h - op.grasp_below_top_m;  // the hands' height at the box
+    const double carry_z_R = place.height + op.carry_clearance_m + box_h - op.grasp_below_top_m - torso_z;
+    const double place_z_R = place.height - op.place_press_m + box_h - op.grasp_below_top_m - torso_z;
+    const bool entered = phase != last_phase;
+    last_phase = phase;
+    bool grip = false, working = false;
+    std::array<Vector3d, 2> target{hand_R[0], hand_R[1]};
+    // The wrists' targets beside the box: centre c (frame R), half distance w across the box (its
+    // sides' normal, as the operator sees the box turned).
+    auto beside = [&](const Vector3d& c, double w) {
+      target[0] = c + box_turn * Vector3d(0, w, 0);
+      target[1] = c - box_turn * Vector3d(0, w, 0);
+    };
+    // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
+    const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + op.grasp_in_m, 0, 0);
+    switch (phase) {
+      case kSettle:
+        if (t >= op.settle_s) phase = kEngage, phase_t0 = t;
+        break;
+      case kEngage:
+        if (t - phase_t0 < 0.05) vr.buttons[pmg::teleop::kRightHand] = pmg::teleop::kVrButtonLower;
+        else vr.buttons[pmg::teleop::kRightHand] = 0;
+        if (t - phase_t0 >= 0.15) phase = kApproach, phase_t0 = t;
+        break;
+      case kApproach: {
+        const Vector3d box_W = torso_p + Eigen::AngleAxisd(yaw_seen, Vector3d::UnitZ()) * box_R;
+        working_y = box_W.y();
+        if (walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_far_m, working_y), op.max_speed) < op.arrive_tol_m && t - phase_t0 > 1.0)
+          phase = kRaise, phase_t0 = t, walk_integral.setZero();
+        if (t - phase_t0 > 20.0) phase = kDone;
+        break;
+      }
+      case kRaise:
+      case kCloseIn: {
+        // Hands open beside the box at the grasp height (crouching, looking down), then walk in.
+        grip = working = true;
+        beside(Vector3d(phase == kRaise ? std::min(hand_R[0].x(), hand_R[1].x()) : grasp_c.x(), grasp_c.y(), grasp_z_R), half_w + op.spread_m);
+        const double err = std::max((hand_R[0] - target[0]).norm(), (hand_R[1] - target[1]).norm());
+        if (phase == kRaise) {
+          walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_far_m, working_y), op.max_speed);
+          if (t - phase_t0 > 1.5 && (err < 0.04 || t - phase_t0 > 6.0)) phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
+        } else {
+          const bool there = walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed) < op.arrive_tol_m;
+          if ((there && err < 0.04 && t - phase_t0 > 1.0) || t - phase_t0 > 12.0) phase = kSqueeze, phase_t0 = t, walk_integral.setZero();
+        }
+        break;
+      }
+      case kSqueeze:
+        grip = working = true;
+        if (entered) squeeze_y = half_w + op.spread_m;
+        squeeze_y = std::max(half_w - op.squeeze_m, squeeze_y - (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
+        beside(Vector3d(grasp_c.x(), grasp_c.y(), grasp_z_R), squeeze_y);
+        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
+        if (t - phase_t0 > op.squeeze_s + 0.5) phase = kLift, phase_t0 = t, lift_z = 0.5 * (hand_R[0].z() + hand_R[1].z());
+        break;
+      case kLift:
+        // Up to the carrying height, standing up meanwhile (the head rises at once; the robot's
+        // posture follows at the shaper's rate).
+        grip = true;
+        if (entered) carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
+        lift_z = std::min(carry_z_R, lift_z + op.lift_speed * dt);
+        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
+        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m - 0.10, working_y), op.max_speed);
+        if (box_room.z() - 0.5 * box_h > place.height + 0.5 * op.carry_clearance_m && t - phase_t0 > 2.0)
+          phase = kCarry, phase_t0 = t, walk_integral.setZero();
+        if (t - phase_t0 > 12.0) phase = kCarry, phase_t0 = t, walk_integral.setZero();
+        break;
+      case kCarry: {
+        grip = true;
+        lift_z = carry_z_R;
+        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
+        const bool there = walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.carry_speed) < op.arrive_tol_m;
+        if ((there && t - phase_t0 > 1.0) || t - phase_t0 > 25.0) phase = kLower, phase_t0 = t, walk_integral.setZero();
+        break;
+      }
+      case kLower: {
+        // Forward until the box is over the place top, then down onto it.
+        grip = true;
+        const double x_goal = place_near_x + 0.04 - torso_p.x() + op.grasp_in_m;
+        carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
+        if (std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
+        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
+        walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.max_speed);
+        if ((lift_z <= place_z_R && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
+        break;
+      }
+      case kOpen:
+        grip = true;
+        if (entered) squeeze_y = half_w - op.squeeze_m;
+        squeeze_y = std::min(half_w + op.spread_m, squeeze_y + (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
+        if (t - phase_t0 > op.squeeze_s) lift_z += op.lift_speed * dt;  // then up, away from the box
+        beside(Vector3d(carry_x, box_R.y(), lift_z), squeeze_y);
+        if (t - phase_t0 > op.squeeze_s + 1.0) phase = kWait, phase_t0 = t;
+        break;
+      case kWait:
+        if (t - phase_t0 > 2.0) phase = kDone;
+        break;
+      case kDone:
+        break;
+    }
+    // Headset: displacement for walking, crouch and look-down while grasping.
+    const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
+    vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
+    const Eigen::Quaterniond hq(Eigen::AngleAxisd(working ? op.look_down_rad : 0.0, Vector3d::UnitY()));
+    vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
+    if (grip && !aligned) {
+      // Before squeezing, each controller is held where the mapping puts that robot hand.
+      const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
+                                 Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
+      const Vector3d c_R = unyaw * (sh - torso_p);
+      const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
+      for (std::size_t h = 0; h < 2; ++h) hand_H[h] = c_H + (hand_R[h] - c_R) / tc.arm_scale;
+      aligned = true;
+    }
+    if (grip)
+      for (std::size_t h = 0; h < 2; ++h) hand_H[h] += op.hand_gain * dt * (target[h] - hand_R[h]) / tc.arm_scale;
+    const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
+    for (std::size_t h = 0; h < 2; ++h) {
+      const Vector3d p = head + (aligned ? hand_H[h] : rest[h]);
+      vr.hand_position[h] = {p.x(), p.y(), p.z()};
+      vr.grip[h] = grip ? 1.0 : 0.0;
+    }
+    vr.frame = k;
+    sample.vr = vr;
+    sample.vr_time = t;
+    const pmg::TickStatus st = app.stepLockstep(sample);
+    if (pmg::silRobotFell(app.controller().lastState(), st)) {
+      fell = true;
+      break;
+    }
+    // A box seen below the pick table's top has fallen: nothing left to do.
+    if (phase > kSqueeze && box_room.z() < pick.height - 0.05) phase = kDone;
+  }
+  app.finish();
+  TrialResult r;
+  r.trial = trial;
+  r.fell = fell;
+  r.seconds = traj.empty() ? 0.0 : traj.back().t;
+  r.verdict = pmg::judgeBox(scene, box.name, pick.name, place.name, traj, fell);
   return r;
 }
 
@@ -451,18 +794,25 @@ int main(int argc, char** argv) {
   std::string operator_path, scene_path;
   int trials = 20;
   std::uint64_t seed = 0;
-  app.add_option("--task", task, "wipe (box: not built yet)")->check(CLI::IsMember({"wipe"}));
+  app.add_option("--task", task, "wipe | box")->check(CLI::IsMember({"wipe", "box"}));
   app.add_option("--trials", trials, "randomised trials")->check(CLI::Range(1, 1000));
   app.add_option("--seed", seed, "first trial's seed (trial k draws seed + k)");
   app.add_option("--out", out_dir, "output folder (created)")->required();
   app.add_option("--controller", controller_path, "controller config with teleop enabled")->check(CLI::ExistingFile);
   app.add_option("--operator", operator_path, "operator parameters (default config/tasks/<task>_operator.yaml)");
   app.add_option("--scene", scene_path, "task scene (default config/tasks/<task>_scene.yaml)");
+  bool no_figures = false;
+  app.add_flag("--no-figures", no_figures, "no frame strips and trace plots (the event logs are still kept)");
   CLI11_PARSE(app, argc, argv);
+  const bool figures = !no_figures;
   try {
     if (operator_path.empty()) operator_path = pmg::resolveData("config/tasks/" + task + "_operator.yaml").string();
     if (scene_path.empty()) scene_path = pmg::resolveData("config/tasks/" + task + "_scene.yaml").string();
-    const OperatorConfig op = pmg::yaml::loadYamlFile<OperatorConfig>(operator_path);
+    // Each task's operator has its own parameters (unknown keys are refused naming the file).
+    OperatorConfig wipe_op;
+    BoxOperatorConfig box_op;
+    if (task == "wipe") wipe_op = pmg::yaml::loadYamlFile<OperatorConfig>(operator_path);
+    else box_op = pmg::yaml::loadYamlFile<BoxOperatorConfig>(operator_path);
     const pmg::TaskScene scene = pmg::loadTaskScene(scene_path);
     pmg::ControllerConfig config = pmg::loadControllerConfig(controller_path);
     config.makeOffline();
@@ -472,10 +822,13 @@ int main(int argc, char** argv) {
                               {"operator", operator_path}, {"controller", controller_path},
                               {"paper_success_rate", task == "wipe" ? 0.95 : 0.80}};
     int successes = 0;
+    int shown_success = -1, shown_failure = -1;  // the trials whose event logs are kept for the frame strips
     summary["failures"] = nlohmann::json::array();
     summary["trial_results"] = nlohmann::json::array();
     for (int k = 0; k < trials; ++k) {
-      const TrialResult r = runWipe(k, seed + static_cast<std::uint64_t>(k), scene, config, op, out_dir);
+      const std::uint64_t trial_seed = seed + static_cast<std::uint64_t>(k);
+      const TrialResult r = task == "wipe" ? runWipe(k, trial_seed, scene, config, wipe_op, out_dir)
+                                           : runBox(k, trial_seed, scene, config, box_op, out_dir);
       successes += r.verdict.success ? 1 : 0;
       fmt::print("trial {:2d}: {} {} ({:.1f} s) {}\n", k, r.verdict.success ? "success" : "FAILED ",
                  r.verdict.failure, r.seconds, r.verdict.detail);
@@ -484,9 +837,43 @@ int main(int argc, char** argv) {
                                           {"fell", r.fell}, {"seconds", r.seconds}, {"regrabs", r.regrabs}, {"detail", r.verdict.detail}});
       if (!r.verdict.success)
         summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
+      // Keep the event log and object track of the first success and the first failure; drop the rest
+      // (about 10 MB per trial).
+      int& shown = r.verdict.success ? shown_success : shown_failure;
+      if (shown < 0) {
+        shown = k;
+      } else {
+        fs::remove(fs::path(out_dir) / fmt::format("trial_{}.lcmlog", k));
+        fs::remove(fs::path(out_dir) / fmt::format("trial_{}_objects.csv", k));
+      }
     }
     summary["successes"] = successes;
     summary["success_rate"] = static_cast<double>(successes) / trials;
+    // Figures of the first success and the first failure: a frame strip (pmg_render_log over the
+    // trial's scene, the object placed from its track) and a trace plot (scripts/plot_teleop_trial.py).
+    summary["figures"] = nlohmann::json::object();
+    for (const auto& [label, k] : {std::pair<const char*, int>{"success", shown_success}, {"failure", shown_failure}}) {
+      if (k < 0) continue;
+      nlohmann::json f = {{"trial", k}, {"log", fmt::format("trial_{}.lcmlog", k)}, {"objects", fmt::format("trial_{}_objects.csv", k)},
+                          {"scene", fmt::format("trial_{}_scene.xml", k)}};
+      if (figures) {
+        const fs::path dir(out_dir);
+        const std::string strip = fmt::format("{}_trial_{}_strip.png", label, k), trace = fmt::format("{}_trial_{}_trace.png", label, k);
+        const std::string render_cmd = fmt::format(
+            "python3 '{}' --exe '{}' --log '{}' --mjcf '{}' --objects '{}' --out '{}' --frames 8 --t0 1",
+            pmg::resolveData("scripts/render_task_trial.py").string(), (pmg::executableDir() / "pmg_render_log").string(),
+            (dir / f["log"].get<std::string>()).string(), (dir / f["scene"].get<std::string>()).string(),
+            (dir / f["objects"].get<std::string>()).string(), (dir / strip).string());
+        const std::string trace_cmd = fmt::format("python3 '{}' '{}' --out '{}'", pmg::resolveData("scripts/plot_teleop_trial.py").string(),
+                                                  (dir / fmt::format("trial_{}.csv", k)).string(), (dir / trace).string());
+        // A missing display or renderer costs the picture, not the trials' results.
+        f["strip"] = std::system(render_cmd.c_str()) == 0 ? nlohmann::json(strip) : nlohmann::json(nullptr);
+        f["trace"] = std::system(trace_cmd.c_str()) == 0 ? nlohmann::json(trace) : nlohmann::json(nullptr);
+        if (f["strip"].is_null()) fmt::print(stderr, "pmg_teleop_bench: warning: no frame strip: {}\n", render_cmd);
+        if (f["trace"].is_null()) fmt::print(stderr, "pmg_teleop_bench: warning: no trace plot: {}\n", trace_cmd);
+      }
+      summary["figures"][label] = f;
+    }
     std::ofstream(fs::path(out_dir) / "summary.json") << summary.dump(1) << "\n";
     fmt::print("{}: {}/{} successes ({:.2f}; paper {:.2f})\n", task, successes, trials,
                static_cast<double>(successes) / trials, summary["paper_success_rate"].get<double>());

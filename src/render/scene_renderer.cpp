@@ -1,5 +1,6 @@
 #include "pmg/render/scene_renderer.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -131,9 +132,30 @@ void SceneRenderer::setPose(const StateSample& sample) {
   for (int a = 0; a < 3; ++a) qpos[base_qpos_ + a] = sample.p_WB[a];
   for (int a = 0; a < 4; ++a) qpos[base_qpos_ + 3 + a] = sample.quat_WB[a];
   for (std::size_t i = 0; i < qpos_index_.size(); ++i) qpos[qpos_index_[i]] = sample.q[static_cast<Eigen::Index>(i)];
+  for (const auto& [adr, pose] : free_bodies_)
+    for (int a = 0; a < 7; ++a) qpos[adr + a] = pose[static_cast<std::size_t>(a)];
   mj_kinematics(model_.get(), data_.get());
   mj_comPos(model_.get(), data_.get());
   mj_camlight(model_.get(), data_.get());
+}
+
+void SceneRenderer::setFreeBodyPose(const std::string& body, const Eigen::Vector3d& p_W, const Eigen::Vector4d& quat_W) {
+  const mjModel* m = model_.get();
+  const int id = mj_name2id(m, mjOBJ_BODY, body.c_str());
+  check(id > 0, "SceneRenderer::setFreeBodyPose: '" + body + "' is not a body of the MuJoCo model");
+  check(id != base_body_, "SceneRenderer::setFreeBodyPose: '" + body + "' is the robot's base (its pose comes from the samples)");
+  const int jnt = m->body_jntadr[id];
+  check(jnt >= 0 && m->jnt_type[jnt] == mjJNT_FREE, "SceneRenderer::setFreeBodyPose: body '" + body + "' has no free joint");
+  check(p_W.allFinite() && quat_W.allFinite() && std::abs(quat_W.norm() - 1.0) < 1e-3,
+        "SceneRenderer::setFreeBodyPose: body '" + body + "': position must be finite and the quaternion unit (w x y z)");
+  std::array<double, 7> pose{p_W.x(), p_W.y(), p_W.z(), quat_W[0], quat_W[1], quat_W[2], quat_W[3]};
+  const int adr = m->jnt_qposadr[jnt];
+  for (auto& fb : free_bodies_)
+    if (fb.first == adr) {
+      fb.second = pose;
+      return;
+    }
+  free_bodies_.emplace_back(adr, pose);
 }
 
 void SceneRenderer::addTether() {

@@ -1,7 +1,7 @@
 // pmg::render with OpenGL (label sil): renders the G1 with MuJoCo 2.2 and checks what the pixels
 // must show: a robot (not a blank frame), deterministic output, leg joints moving pixels below the
 // arms' and on the correct side, a camera that follows the pelvis, labels confined to their
-// corner, and pmg_render_log's strip layout. Without $DISPLAY the suite starts its own Xvfb; it
+// corner, pmg_render_log's strip layout, and a task scene's free object placed where its track says. Without $DISPLAY the suite starts its own Xvfb; it
 // skips (GTEST_SKIP, with the reason) when no OpenGL context can be made (no Xvfb, no GLX).
 #include <cstdlib>
 #include <memory>
@@ -13,7 +13,9 @@
 
 #include "g1_fixture.hpp"
 #include "pmg/common/mujoco_model.hpp"
+#include "pmg/common/data_paths.hpp"
 #include "pmg/common/robot_config.hpp"
+#include "pmg/hal/task_scene.hpp"
 #include "pmg/render/gl_context.hpp"
 #include "pmg/render/scene_renderer.hpp"
 #include "render_test_util.hpp"
@@ -143,6 +145,35 @@ TEST_F(RenderFrames, LabelsStayInTheTopLeftCorner) {
   EXPECT_GT(d.count, 50);
   EXPECT_LT(d.max_x, 3 * plain.width / 4);
   EXPECT_LT(d.max_y, plain.height / 3);
+}
+
+TEST_F(RenderFrames, PlacesATaskScenesObjectWhereItsPoseSays) {
+  // The wiping scene (robot + table + towel) composed as pmg_teleop_bench does, towel moved 0.4 m
+  // along the table: the changed pixels are the towel's (on the table, below the look-at point), and
+  // they move the way the camera sees +y (to the right of the image from the front-right quarter).
+  const std::string dir = test::tempDir("task_scene");
+  const TaskScene scene = loadTaskScene(resolveData("config/tasks/wipe_scene.yaml").string());
+  const RobotConfig composed = robotWithTaskScene(*robot_, scene, dir + "/scene.xml");
+  RenderOptions fast = renderer_->options();
+  SceneRenderer r(loadMujocoModel(composed.mjcf_path), composed, fast);
+  Image none, a, b;
+  r.render(standing(), none);
+  const Eigen::Vector4d upright(1, 0, 0, 0);
+  r.setFreeBodyPose("task_towel", Eigen::Vector3d(0.45, -0.2, 0.673), upright);
+  r.render(standing(), a);
+  r.setFreeBodyPose("task_towel", Eigen::Vector3d(0.45, 0.2, 0.673), upright);
+  r.render(standing(), b);
+  const test::Difference moved = difference(a, b);
+  ASSERT_GT(moved.count, 200) << "moving the towel 0.4 m changed too few pixels";
+  EXPECT_GT(moved.centroid_y, 0.4 * a.height);  // on the table, in front of the robot's hips
+  const test::Difference from_a = difference(none, a), from_b = difference(none, b);
+  EXPECT_GT(from_a.count, 100);
+  EXPECT_GT(from_b.count, 100);
+  // Camera from the front-right (azimuth 130): the robot's +y (its left) is on the image's right.
+  EXPECT_GT(from_b.centroid_x, from_a.centroid_x + 10.0);
+  EXPECT_THROW(r.setFreeBodyPose("task_cup", Eigen::Vector3d::Zero(), upright), std::invalid_argument);
+  EXPECT_THROW(r.setFreeBodyPose("pelvis", Eigen::Vector3d::Zero(), upright), std::invalid_argument);
+  EXPECT_THROW(r.setFreeBodyPose("task_towel", Eigen::Vector3d::Zero(), Eigen::Vector4d(2, 0, 0, 0)), std::invalid_argument);
 }
 
 TEST_F(RenderFrames, CliWritesAStripOfDistinctFrames) {

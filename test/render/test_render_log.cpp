@@ -1,5 +1,6 @@
-// pmg::render without OpenGL: reading PMG_STATE event logs, frame times, PNG output, strip
-// layout, and pmg_render_log's error messages (no display, log of another robot).
+// pmg::render without OpenGL: reading PMG_STATE event logs and object tracks, frame times, PNG
+// output, strip layout, and pmg_render_log's error messages (no display, log of another robot, a bad
+// object track).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include <pmg_lcm/controller_state_t.hpp>
 
 #include "pmg/render/image.hpp"
+#include "pmg/render/object_track.hpp"
 #include "pmg/render/state_track.hpp"
 #include "render_test_util.hpp"
 
@@ -200,6 +202,62 @@ TEST(RenderLogCli, ALogOfAnotherRobotExitsWith1BeforeAnyRendering) {
   const std::string err = runCli("env -u DISPLAY", "--log " + dir + "/run.lcmlog --out-dir " + dir + "/out", &code);
   EXPECT_EQ(code, 1) << err;
   EXPECT_NE(err.find("num_joints = 12, expected 29"), std::string::npos) << err;
+}
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+TEST(ObjectTrack, ReadsPosesPerBodyAndHoldsTheLastOne) {
+  const std::string dir = tempDir("objects_ok");
+  writeText(dir + "/o.csv",
+            "t,body,x,y,z,qw,qx,qy,qz\n"
+            "0.00,task_towel,0.5,-0.2,0.67,1,0,0,0\n"
+            "0.00,task_box,0.6,0.0,0.60,0,0,0,1.05\n"   // rounded, not unit: normalised
+            "0.02,task_towel,0.5,-0.1,0.67,0.7071068,0,0,0.7071068\n"
+            "0.04,task_towel,0.5,0.0,0.67,1,0,0,0\n");
+  const ObjectTrack track = readObjectTrack(dir + "/o.csv");
+  ASSERT_EQ(track.bodies.size(), 2u);
+  EXPECT_EQ(track.bodies.at("task_towel").size(), 3u);
+  EXPECT_DOUBLE_EQ(track.at("task_towel", 0.01).p_W.y(), -0.2);   // zero-order hold
+  EXPECT_DOUBLE_EQ(track.at("task_towel", 0.02).p_W.y(), -0.1);
+  EXPECT_DOUBLE_EQ(track.at("task_towel", -1.0).p_W.y(), -0.2);   // clamped before the start
+  EXPECT_DOUBLE_EQ(track.at("task_towel", 9.0).p_W.y(), 0.0);     // and after the end
+  EXPECT_NEAR(track.at("task_box", 5.0).quat_W[3], 1.0, 1e-12);
+  EXPECT_THROW(track.at("task_cup", 0.0), std::out_of_range);
+}
+
+TEST(ObjectTrack, NamesFileLineAndFieldOfEveryBadInput) {
+  const std::string dir = tempDir("objects_bad");
+  const std::string h = "t,body,x,y,z,qw,qx,qy,qz\n";
+  const struct {
+    std::string text, expect;
+  } cases[] = {
+      {"t,body,x,y,z\n0,a,0,0,0\n", ":1: header 't,body,x,y,z'"},
+      {h + "0,a,0,0,0,1,0,0\n", ":2: 8 columns, expected 9"},
+      {h + "0,a,0,zero,0,1,0,0,0\n", ":2: field y = 'zero'"},
+      {h + "0,a,0,0,nan,1,0,0,0\n", ":2: field z = 'nan'"},
+      {h + "0,a,0,0,0,0.5,0,0,0\n", ":2: quaternion (qw, qx, qy, qz) of 'a' has norm 0.5"},
+      {h + "0,a,0,0,0,1,0,0,0\n0,a,0,0,0,1,0,0,0\n", ":3: field t = 0 of 'a': expected greater"},
+      {h + "0,,0,0,0,1,0,0,0\n", ":2: field body is empty"},
+      {h, "no rows after the header"},
+  };
+  for (const auto& c : cases) {
+    writeText(dir + "/bad.csv", c.text);
+    const std::string msg = messageOf([&] { readObjectTrack(dir + "/bad.csv"); });
+    EXPECT_NE(msg.find(dir + "/bad.csv"), std::string::npos) << msg;
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in: " << msg;
+  }
+  EXPECT_NE(messageOf([&] { readObjectTrack(dir + "/missing.csv"); }).find("cannot open"), std::string::npos);
+}
+
+TEST(RenderLogCli, ABadObjectTrackExitsWith1BeforeAnyRendering) {
+  const std::string dir = tempDir("cli_objects");
+  writeStateLog(dir + "/run.lcmlog", {sampleAt(0.0, 29, 0.0)});
+  writeText(dir + "/o.csv", "t,body,x,y,z,qw,qx,qy,qz\n0,task_towel,0,0,0,2,0,0,0\n");
+  int code = 0;
+  const std::string err =
+      runCli("env -u DISPLAY", "--log " + dir + "/run.lcmlog --objects " + dir + "/o.csv --out-dir " + dir + "/out", &code);
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_NE(err.find("o.csv:2: quaternion"), std::string::npos) << err;
 }
 
 }  // namespace

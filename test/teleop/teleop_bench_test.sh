@@ -4,7 +4,8 @@
 # summary.json has the issue's keys, each trial's verdict agrees with the object trajectory in its
 # CSV (the lateral path recomputed here from the CSV, 1 cm steps, and the on-table check), every
 # failure carries a known class, the two trials drew different towel places, both trials meet the
-# paper's criterion (the towel moved laterally more than 1 m on the top, the robot standing), and a bad
+# paper's criterion (the towel moved laterally more than 1 m on the top, the robot standing), the first
+# success gets its frame strip and trace plot (only its event log is kept), and a bad
 # --operator file is refused naming the file and key. (20 trials succeed at the rate docs/teleop.md
 # reports; these two, seeds 4 and 5, are among the successes.)
 #   teleop_bench_test.sh BIN_DIR
@@ -45,6 +46,22 @@ for r in s["trial_results"]:
         fail.append(f"trial {r['trial']}: verdict {r['success']} disagrees with the trajectory (path {path:.3f} m)")
 if s["successes"] != 2:
     fail.append(f"{s['successes']} of 2 trials met the criterion: {[f['reason'] for f in s['failures']]}")
+# Figures of the first success (both trials succeed: no failure figure): a frame strip rendered by
+# pmg_render_log over the trial's scene with the towel from its track, and a trace plot; only that
+# trial's event log and object track are kept.
+fig = s.get("figures", {})
+if set(fig) != ({"success"} if s["successes"] == 2 else set(fig)):
+    fail.append(f"figures {sorted(fig)}, expected ['success']")
+for label, f in fig.items():
+    for key in ("log", "objects", "scene", "strip", "trace"):
+        p = f.get(key)
+        if not p or not os.path.isfile(os.path.join(out, p)) or os.path.getsize(os.path.join(out, p)) < 1000:
+            fail.append(f"figures.{label}.{key} = {p}: missing or empty")
+    if f.get("strip") and open(os.path.join(out, f["strip"]), "rb").read(8) != b"\x89PNG\r\n\x1a\n":
+        fail.append(f"figures.{label}.strip is not a PNG")
+kept = sorted(n for n in os.listdir(out) if n.endswith(".lcmlog"))
+if kept != sorted(f["log"] for f in fig.values()):
+    fail.append(f"event logs kept: {kept}, expected only the figures' trials")
 if abs(starts[0] - starts[1]) < 1e-3:
     fail.append("both trials drew the same towel place")
 print("\n".join("FAIL: " + f for f in fail) if fail else

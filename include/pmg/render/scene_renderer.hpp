@@ -6,7 +6,9 @@
 /// (mjFB_OFFSCREEN) and mjr_readPixels reads it back. The camera follows the pelvis.
 /// Offline tool code, not a real-time path: the constructor and render() may allocate and throw.
 
+#include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <mujoco/mujoco.h>
@@ -72,6 +74,13 @@ class SceneRenderer {
   void render(const StateSample& sample, const std::string& label_left, const std::string& label_right,
               Image& out);
 
+  /// Places a free body of the model other than the robot (a task scene's towel or box) for the
+  /// following render() calls: @p p_W its position [m] and @p quat_W its orientation (w x y z, unit)
+  /// in the world frame W. Until first set, a body stays at the model's qpos0.
+  /// @throws std::invalid_argument if @p body is not a body of the model with a free joint, is the
+  ///   robot's base, or the pose is not finite.
+  void setFreeBodyPose(const std::string& body, const Eigen::Vector3d& p_W, const Eigen::Vector4d& quat_W);
+
   const RenderOptions& options() const { return options_; }
   const mjModel& model() const { return *model_; }
 
@@ -90,6 +99,7 @@ class SceneRenderer {
   mjvOption vis_options_{};
   mjrContext context_{};
   std::vector<unsigned char> buffer_;  // bottom-up rows from mjr_readPixels
+  std::vector<std::pair<int, std::array<double, 7>>> free_bodies_;  // (qpos address, x y z w x y z) set by setFreeBodyPose
 };
 
 }  // namespace pmg::render
