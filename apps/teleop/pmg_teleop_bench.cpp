@@ -480,6 +480,7 @@ struct BoxOperatorConfig {
   double carry_speed = 0.15;       ///< walking speed with the box [m/s]
   double crouch_m = 0.18;          ///< headset lowered this much while grasping (beyond 0.03 m: the robot squats)
   double look_down_rad = 0.70;     ///< headset pitch while grasping (beyond 0.25 rad: the torso bends)
+  double hover_m = 0.06;           ///< the open hands this far above the box's top while walking in [m]
   double grasp_below_top_m = 0.06; ///< the hands' height: this far below the box's top [m]
   double grasp_in_m = 0.06;        ///< the wrists this far behind the box's near side (the hands reach forward of the wrist) [m]
   double spread_m = 0.08;          ///< the wrists this far outside the box's sides before closing [m]
@@ -506,6 +507,7 @@ struct BoxOperatorConfig {
     a->Visit("carry_speed", &carry_speed, "[m/s]");
     a->Visit("crouch_m", &crouch_m, "[m]");
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
+    a->Visit("hover_m", &hover_m, "[m]");
     a->Visit("grasp_below_top_m", &grasp_below_top_m, "[m]");
     a->Visit("grasp_in_m", &grasp_in_m, "[m]");
     a->Visit("spread_m", &spread_m, "[m]");
@@ -577,8 +579,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   bool aligned = false;
   pmg::CommandSample sample;
 
-  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kSqueeze, kLift, kCarry, kLower, kOpen, kWait, kDone };
-  const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "squeeze", "lift", "carry", "lower", "open", "wait", "done"};
+  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kDescend, kSqueeze, kLift, kCarry, kLower, kOpen, kWait, kDone };
+  const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "descend", "squeeze", "lift", "carry", "lower", "open", "wait", "done"};
   Phase phase = kSettle, last_phase = kDone;
   double phase_t0 = 0.0;
   double lift_z = 0.0;     // the hands' height target while lifting / lowering (frame R, ramps) [m]
@@ -678,17 +680,28 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       }
       case kRaise:
       case kCloseIn: {
-        // Hands open beside the box at the grasp height (crouching, looking down), then walk in.
-        grip = working = true;
-        beside(Vector3d(phase == kRaise ? std::min(hand_R[0].x(), hand_R[1].x()) : grasp_c.x(), grasp_c.y(), grasp_z_R), half_w + op.spread_m);
+        // Standing upright, hands open beside the box and above its top; then walk in. (Walking in
+        // crouched and bent with both arms forward tipped the robot onto the table.)
+        grip = true;
+        const double hover_z_R = box_R.z() + 0.5 * box_h + op.hover_m;
+        beside(Vector3d(phase == kRaise ? std::min(hand_R[0].x(), hand_R[1].x()) : grasp_c.x(), grasp_c.y(), hover_z_R), half_w + op.spread_m);
         const double err = std::max((hand_R[0] - target[0]).norm(), (hand_R[1] - target[1]).norm());
         if (phase == kRaise) {
           walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_far_m, working_y), op.max_speed);
           if (t - phase_t0 > 1.5 && (err < 0.04 || t - phase_t0 > 6.0)) phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
         } else {
           const bool there = walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed) < op.arrive_tol_m;
-          if ((there && err < 0.04 && t - phase_t0 > 1.0) || t - phase_t0 > 12.0) phase = kSqueeze, phase_t0 = t, walk_integral.setZero();
+          if ((there && t - phase_t0 > 1.0) || t - phase_t0 > 12.0) phase = kDescend, phase_t0 = t, walk_integral.setZero();
         }
+        break;
+      }
+      case kDescend: {
+        // In place: crouch and bend, the open hands going down beside the box to the grasp height.
+        grip = working = true;
+        beside(Vector3d(grasp_c.x(), grasp_c.y(), grasp_z_R), half_w + op.spread_m);
+        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
+        const double err = std::max((hand_R[0] - target[0]).norm(), (hand_R[1] - target[1]).norm());
+        if ((err < 0.04 && t - phase_t0 > 1.5) || t - phase_t0 > 6.0) phase = kSqueeze, phase_t0 = t;
         break;
       }
       case kSqueeze:
