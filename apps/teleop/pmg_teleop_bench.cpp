@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <ostream>
 #include <fstream>
 #include <random>
 #include <string>
@@ -54,24 +55,53 @@ namespace {
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
-// ---- The operator's parameters (config/tasks/wipe_operator.yaml) -------------------------------
-struct OperatorConfig {
+// ---- The operators' parameters -------------------------------------------------------------------
+// What every scripted operator has: what it sees, how it walks the robot (leaning: walkCommand), how
+// fast it corrects a hand, how long a trial may last.
+struct OperatorCommon {
   double view_noise_m = 0.005;      ///< std. dev. of every position the operator sees [m]
   double view_latency_s = 0.1;      ///< what the operator sees is this old [s] (video + reaction)
   double settle_s = 1.0;            ///< standing before engaging [s]
-  double stand_off_m = 0.22;        ///< pelvis distance from the table's near edge when working [m]
-  double hand_lateral_m = 0.15;     ///< the working hand's lateral offset from the pelvis [m]
   double walk_gain = 1.0;           ///< commanded speed per metre of position error [1/s]
   double max_speed = 0.15;          ///< [m/s]
   double min_speed = 0.06;          ///< commanded at least this while not arrived [m/s]
   double walk_integral_gain = 0.5;  ///< integral action on the place error [1/s^2]
-  double arrive_tol_m = 0.03;       ///< approach ends within this [m]
+  double arrive_tol_m = 0.03;       ///< a walk ends within this [m]
+  double hand_gain = 0.5;           ///< fraction of the seen hand error corrected per second [1/s]
+  double max_trial_s = 45.0;        ///< the trial ends here [s]
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("view_noise_m", &view_noise_m, "[m]");
+    a->Visit("view_latency_s", &view_latency_s, "[s]");
+    a->Visit("settle_s", &settle_s, "[s]");
+    a->Visit("walk_gain", &walk_gain, "[1/s]");
+    a->Visit("max_speed", &max_speed, "[m/s]");
+    a->Visit("min_speed", &min_speed, "[m/s]");
+    a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
+    a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
+    a->Visit("hand_gain", &hand_gain, "[1/s]");
+    a->Visit("max_trial_s", &max_trial_s, "[s]");
+  }
+  std::string validate() const {
+    if (!(view_noise_m >= 0 && view_noise_m < 0.05)) return "view_noise_m: expected [0, 0.05) m";
+    if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
+    if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
+    if (!(hand_gain > 0 && hand_gain <= 10)) return "hand_gain: expected (0, 10] 1/s";
+    if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
+    return "";
+  }
+};
+
+// The wiping operator (config/tasks/wipe_operator.yaml).
+struct OperatorConfig : OperatorCommon {
+  double stand_off_m = 0.22;        ///< pelvis distance from the table's near edge when working [m]
+  double hand_lateral_m = 0.15;     ///< the working hand's lateral offset from the pelvis [m]
   double hover_m = 0.06;            ///< hand above the towel before pressing [m]
   double press_m = 0.015;           ///< hand target below the towel's top [m]
-  double hand_gain = 0.5;           ///< fraction of the seen hand error corrected per second [1/s]
   double wipe_speed = 0.10;         ///< lateral walking speed while wiping [m/s]
   double wipe_margin_m = 0.20;      ///< turn back this far from the table's end [m]
   double wipe_path_m = 1.15;        ///< the operator stops once the towel has moved this far (seen) [m]
+  double path_smoothing_s = 0.3;    ///< the operator judges the towel's travel by eye: its seen position averaged over this long [s]
   double look_down_rad = 0.0;       ///< headset pitch while working (beyond 0.25 rad dead band: the torso bends)
   double crouch_m = 0.0;            ///< headset lowered this much while working (beyond 0.03 m: the robot squats)
   double yaw_gain = 0.0;            ///< commanded yaw rate per radian of heading away from the table [1/s] (0: off)
@@ -83,25 +113,17 @@ struct OperatorConfig {
   double keep_from_edge_m = 0.27;   ///< while wiping, keep the towel's centre this far from the table's near edge [m]
   double keep_gain = 1.0;           ///< hand forward speed per metre of that error [1/s] (at most 0.05 m/s)
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
-  double max_trial_s = 45.0;        ///< the trial ends here [s]
   template <class A>
   void Serialize(A* a) {
-    a->Visit("view_noise_m", &view_noise_m, "[m]");
-    a->Visit("view_latency_s", &view_latency_s, "[s]");
-    a->Visit("settle_s", &settle_s, "[s]");
+    OperatorCommon::Serialize(a);
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("hand_lateral_m", &hand_lateral_m, "[m]");
-    a->Visit("walk_gain", &walk_gain, "[1/s]");
-    a->Visit("max_speed", &max_speed, "[m/s]");
-    a->Visit("min_speed", &min_speed, "[m/s]");
-    a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
-    a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
     a->Visit("hover_m", &hover_m, "[m]");
     a->Visit("press_m", &press_m, "[m]");
-    a->Visit("hand_gain", &hand_gain, "[1/s]");
     a->Visit("wipe_speed", &wipe_speed, "[m/s]");
     a->Visit("wipe_margin_m", &wipe_margin_m, "[m]");
     a->Visit("wipe_path_m", &wipe_path_m, "[m]");
+    a->Visit("path_smoothing_s", &path_smoothing_s, "[s]");
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
     a->Visit("crouch_m", &crouch_m, "[m]");
     a->Visit("yaw_gain", &yaw_gain, "[1/s]");
@@ -113,14 +135,11 @@ struct OperatorConfig {
     a->Visit("press_s", &press_s, "[s]");
     a->Visit("keep_from_edge_m", &keep_from_edge_m, "[m]");
     a->Visit("keep_gain", &keep_gain, "[1/s]");
-    a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
   std::string validate() const {
-    if (!(view_noise_m >= 0 && view_noise_m < 0.05)) return "view_noise_m: expected [0, 0.05) m";
-    if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
-    if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
+    if (std::string e = OperatorCommon::validate(); !e.empty()) return e;
     if (!(wipe_speed > 0 && wipe_speed <= 0.4)) return "wipe_speed: expected (0, 0.4] m/s";
-    if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
+    if (!(path_smoothing_s > 0 && path_smoothing_s <= 5)) return "path_smoothing_s: expected (0, 5] s";
     if (!(regrab_offset_m > 0 && regrab_offset_m <= 0.5)) return "regrab_offset_m: expected (0, 0.5] m";
     if (!(lift_s >= 0 && lift_s <= 5)) return "lift_s: expected [0, 5] s";
     if (!(press_s >= 0 && press_s <= 10)) return "press_s: expected [0, 10] s";
@@ -157,6 +176,43 @@ Eigen::Vector2d headFor(const Eigen::Vector2d& v, double deadband, double gain) 
   const double s = v.norm();
   if (s < 1e-4) return Eigen::Vector2d::Zero();
   return (s / gain + deadband) * v / s;
+}
+
+// Locomotion by leaning: a P controller on the robot's place (W), with integral action (the operator
+// leans further while the robot does not get there, bounded) and a minimum speed (small steps are not
+// walked); the result is the body-frame velocity the headset displacement must command. Returns the
+// distance left [m]. Op: an operator config with walk_gain, walk_integral_gain, max_speed, min_speed,
+// arrive_tol_m.
+template <class Op>
+double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, double yaw_seen, double max_speed,
+                   double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body) {
+  Eigen::Vector2d e = target_W - pelvis_W.head<2>();
+  *walk_integral += e * dt;
+  const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
+  if (walk_integral->norm() > imax) *walk_integral *= imax / walk_integral->norm();
+  Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * *walk_integral;
+  if (v.norm() > max_speed) v *= max_speed / v.norm();
+  if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
+  *v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
+  return e.norm();
+}
+
+// Where the operator holds a controller before squeezing its grip: where the teleop mapping
+// (p_T = c_T + s (p_H - c_H)) puts the robot hand now (seen at hand_R, frame R), so that the arm does
+// not jump when it starts to follow. c_T: the robot's shoulder centre; frame H: the headset's.
+Vector3d controllerAtRobotHand(const mjData* d, int shoulder_l, int shoulder_r, const Vector3d& torso_p,
+                               const Eigen::AngleAxisd& unyaw, const pmg::teleop::TeleopConfig& tc, const Vector3d& hand_R) {
+  const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
+                             Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
+  const Vector3d c_R = unyaw * (sh - torso_p);
+  const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
+  return c_H + (hand_R - c_R) / tc.arm_scale;
+}
+
+// One line of an object track (include/pmg/render/object_track.hpp).
+void writeObjectPose(std::ostream& out, double t, const std::string& name, const pmg::TaskObjectState& obj) {
+  out << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, name, obj.p_W.x(), obj.p_W.y(),
+                     obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
 }
 
 struct TrialResult {
@@ -224,7 +280,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   double phase_t0 = 0.0;
   int wipe_dir = towel.pos[1] > 0 ? -1 : 1;  // wipe towards the far end first
   double seen_path = 0.0, last_seen_y = 0.0;
-  bool first_seen = true;
+  bool counting = false;  // the towel's travel is counted from the first stroke on
+  double towel_y_eye = 0.0;  // the towel's seen place along the table, as judged by eye (smoothed) [m]
   int regrabs = 0;  // times the hand was placed again after slipping off the towel
   bool regrabbing = false;  // the reach in progress follows a slip
   Vector3d lift_from = Vector3d::Zero();  // where the hand was when it started lifting (frame R)
@@ -247,9 +304,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     const auto& base = app.controller().lastState().base_position;
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
-    if (k % 2 == 0)
-      objects_csv << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, towel.name, obj.p_W.x(),
-                                 obj.p_W.y(), obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
+    if (k % 2 == 0) writeObjectPose(objects_csv, t, towel.name, obj);
     csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}\n", t,
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p.x(), hand_p.y(), hand_p.z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1],
@@ -270,22 +325,13 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     const Vector3d towel_R = see_towel.seen(t), hand_R = see_hand.seen(t), pelvis_W = see_pelvis.seen(t);
     const Vector3d towel_room = see_towel_room.seen(t);
+    towel_y_eye = k == 0 ? towel_room.y() : towel_y_eye + std::min(1.0, dt / op.path_smoothing_s) * (towel_room.y() - towel_y_eye);
     const double yaw_seen = see_yaw.seen(t).x();
 
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      Eigen::Vector2d e = target_W - pelvis_W.head<2>();
-      // The operator leans further while the robot does not get there (integral action, bounded).
-      walk_integral += e * dt;
-      const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
-      if (walk_integral.norm() > imax) walk_integral *= imax / walk_integral.norm();
-      Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * walk_integral;
-      if (v.norm() > max_speed) v *= max_speed / v.norm();
-      // Small steps are not walked: below min_speed the operator leans a little more.
-      if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
-      v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
-      return e.norm();
+      return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
     // The towel's lateral place on the table, in W (seen through the robot: torso + R(yaw) towel_R).
@@ -367,7 +413,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed);
         if (phase == kReach && (hand_R - hand_target_R).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
         if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
-        if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, first_seen = true, regrabbing = false;
+        if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, regrabbing = false;
         if (phase == kWipe) {
           // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
           const double half_len = 0.5 * table.top_size[1];
@@ -386,13 +432,16 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
             regrabbing = true;
             ++regrabs;
           }
-          if (first_seen) last_seen_y = towel_room.y(), first_seen = false;
-          if (std::abs(towel_room.y() - last_seen_y) > 0.02) {
-            seen_path += std::abs(towel_room.y() - last_seen_y);
-            last_seen_y = towel_room.y();
-          }
-          if (seen_path >= op.wipe_path_m) phase = kRelease, phase_t0 = t;
+          if (!counting) last_seen_y = towel_y_eye, counting = true;
         }
+        // The towel's travel along the table as the operator judges it (by eye: smoothed, in 1 cm
+        // steps as the judge counts), from the first stroke on, also while the hand is placed again (a dragged towel
+        // travels too). Unsmoothed, the 5 mm view noise alone counted about 1 cm/s.
+        if (counting && std::abs(towel_y_eye - last_seen_y) >= 0.01) {
+          seen_path += std::abs(towel_y_eye - last_seen_y);
+          last_seen_y = towel_y_eye;
+        }
+        if (counting && seen_path >= op.wipe_path_m) phase = kRelease, phase_t0 = t;
         break;
       }
       case kRelease:
@@ -427,13 +476,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // Right controller: closes the loop on the hand it sees (operator hand moves by the robot-hand
     // error over the arm scale).
     if (have_hand_target && !aligned) {
-      // Before squeezing, the operator holds the controller where the mapping puts the robot's hand
-      // (p_T = c_T + s (p_H - c_H)), so that the arm does not jump when it starts to follow.
-      const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
-                                 Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
-      const Vector3d c_R = unyaw * (sh - torso_p);
-      const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
-      work_H = c_H + (hand_R - c_R) / tc.arm_scale;
+      work_H = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R);
       aligned = true;
     }
     if (have_hand_target) work_H += op.hand_gain * dt * (hand_target_R - hand_R) / tc.arm_scale;
@@ -465,18 +508,10 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 // ---- Box carrying (the paper's Table III "box picking") -----------------------------------------
 // The operator's parameters (config/tasks/box_operator.yaml). Frames as in the wiping operator: R =
 // the torso's position yawed with the pelvis (what the head camera sees), W = the room.
-struct BoxOperatorConfig {
-  double view_noise_m = 0.005;     ///< std. dev. of every position the operator sees [m]
-  double view_latency_s = 0.1;     ///< what the operator sees is this old [s]
-  double settle_s = 1.0;           ///< standing before engaging [s]
+struct BoxOperatorConfig : OperatorCommon {
   double stand_off_far_m = 0.35;   ///< pelvis distance from the pick table's near edge while raising the hands [m]
   double stand_off_m = 0.10;       ///< ... while grasping [m]
   double place_stand_off_m = 0.10; ///< pelvis distance from the place table's near edge while placing [m]
-  double walk_gain = 1.0;          ///< commanded speed per metre of position error [1/s]
-  double max_speed = 0.30;         ///< [m/s]
-  double min_speed = 0.10;         ///< commanded at least this while not arrived [m/s]
-  double walk_integral_gain = 0.5; ///< integral action on the place error [1/s^2]
-  double arrive_tol_m = 0.03;      ///< a walk ends within this [m]
   double carry_speed = 0.15;       ///< walking speed with the box [m/s]
   double crouch_m = 0.18;          ///< headset lowered this much while grasping (beyond 0.03 m: the robot squats)
   double look_down_rad = 0.70;     ///< headset pitch while grasping (beyond 0.25 rad: the torso bends)
@@ -489,21 +524,12 @@ struct BoxOperatorConfig {
   double lift_speed = 0.10;        ///< hands' lifting and lowering speed [m/s]
   double carry_clearance_m = 0.08; ///< the box's bottom this far above the place table's top while carrying [m]
   double place_press_m = 0.01;     ///< lowering aims the box's bottom this far below the place top [m]
-  double hand_gain = 1.0;          ///< fraction of the seen hand error corrected per second [1/s]
-  double max_trial_s = 60.0;       ///< the trial ends here [s]
   template <class A>
   void Serialize(A* a) {
-    a->Visit("view_noise_m", &view_noise_m, "[m]");
-    a->Visit("view_latency_s", &view_latency_s, "[s]");
-    a->Visit("settle_s", &settle_s, "[s]");
+    OperatorCommon::Serialize(a);
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
-    a->Visit("walk_gain", &walk_gain, "[1/s]");
-    a->Visit("max_speed", &max_speed, "[m/s]");
-    a->Visit("min_speed", &min_speed, "[m/s]");
-    a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
-    a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
     a->Visit("carry_speed", &carry_speed, "[m/s]");
     a->Visit("crouch_m", &crouch_m, "[m]");
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
@@ -516,19 +542,13 @@ struct BoxOperatorConfig {
     a->Visit("lift_speed", &lift_speed, "[m/s]");
     a->Visit("carry_clearance_m", &carry_clearance_m, "[m]");
     a->Visit("place_press_m", &place_press_m, "[m]");
-    a->Visit("hand_gain", &hand_gain, "[1/s]");
-    a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
   std::string validate() const {
-    if (!(view_noise_m >= 0 && view_noise_m < 0.05)) return "view_noise_m: expected [0, 0.05) m";
-    if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
-    if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
+    if (std::string e = OperatorCommon::validate(); !e.empty()) return e;
     if (!(carry_speed > 0 && carry_speed <= 0.4)) return "carry_speed: expected (0, 0.4] m/s";
     if (!(spread_m > 0 && spread_m <= 0.2)) return "spread_m: expected (0, 0.2] m";
     if (!(squeeze_m >= 0 && squeeze_m <= 0.1)) return "squeeze_m: expected [0, 0.1] m";
     if (!(lift_speed > 0 && lift_speed <= 0.5)) return "lift_speed: expected (0, 0.5] m/s";
-    if (!(hand_gain > 0 && hand_gain <= 10)) return "hand_gain: expected (0, 10] 1/s";
-    if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
     return "";
   }
 };
@@ -614,9 +634,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p[1].x(), hand_p[1].y(), hand_p[1].z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
                        ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
-    if (k % 2 == 0)
-      objects_csv << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, box.name, obj.p_W.x(),
-                                 obj.p_W.y(), obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
+    if (k % 2 == 0) writeObjectPose(objects_csv, t, box.name, obj);
     const int pb = sim->pelvisBody();
     const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
     const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
@@ -633,15 +651,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
 
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      Eigen::Vector2d e = target_W - pelvis_W.head<2>();
-      walk_integral += e * dt;
-      const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
-      if (walk_integral.norm() > imax) walk_integral *= imax / walk_integral.norm();
-      Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * walk_integral;
-      if (v.norm() > max_speed) v *= max_speed / v.norm();
-      if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
-      v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
-      return e.norm();
+      return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double pick_near_x = pick.pos[0] - 0.5 * pick.top_size[0];
     const double place_near_x = place.pos[0] - 0.5 * place.top_size[0];
@@ -763,12 +773,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const Eigen::Quaterniond hq(Eigen::AngleAxisd(working ? op.look_down_rad : 0.0, Vector3d::UnitY()));
     vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
     if (grip && !aligned) {
-      // Before squeezing, each controller is held where the mapping puts that robot hand.
-      const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
-                                 Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
-      const Vector3d c_R = unyaw * (sh - torso_p);
-      const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
-      for (std::size_t h = 0; h < 2; ++h) hand_H[h] = c_H + (hand_R[h] - c_R) / tc.arm_scale;
+      for (std::size_t h = 0; h < 2; ++h) hand_H[h] = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R[h]);
       aligned = true;
     }
     if (grip)
