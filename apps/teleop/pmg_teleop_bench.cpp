@@ -112,6 +112,7 @@ struct OperatorConfig : OperatorCommon {
   double press_s = 1.5;             ///< pressing before walking [s]
   double keep_from_edge_m = 0.27;   ///< while wiping, keep the towel's centre this far from the table's near edge [m]
   double keep_gain = 1.0;           ///< hand forward speed per metre of that error [1/s] (at most 0.05 m/s)
+  double max_lead_m = 1.0;          ///< the operator's hand leads the robot hand it sees by at most this (robot scale) [m]
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
   template <class A>
   void Serialize(A* a) {
@@ -135,6 +136,7 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("press_s", &press_s, "[s]");
     a->Visit("keep_from_edge_m", &keep_from_edge_m, "[m]");
     a->Visit("keep_gain", &keep_gain, "[1/s]");
+    a->Visit("max_lead_m", &max_lead_m, "[m]");
   }
   std::string validate() const {
     if (std::string e = OperatorCommon::validate(); !e.empty()) return e;
@@ -145,6 +147,7 @@ struct OperatorConfig : OperatorCommon {
     if (!(press_s >= 0 && press_s <= 10)) return "press_s: expected [0, 10] s";
     if (!(keep_from_edge_m >= 0.15 && keep_from_edge_m <= 1.0)) return "keep_from_edge_m: expected [0.15, 1] m (half the towel at least)";
     if (!(keep_gain >= 0 && keep_gain <= 10)) return "keep_gain: expected [0, 10] 1/s";
+    if (!(max_lead_m > 0 && max_lead_m <= 1.0)) return "max_lead_m: expected (0, 1] m";
     return "";
   }
 };
@@ -479,7 +482,15 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       work_H = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R);
       aligned = true;
     }
-    if (have_hand_target) work_H += op.hand_gain * dt * (hand_target_R - hand_R) / tc.arm_scale;
+    if (have_hand_target) {
+      work_H += op.hand_gain * dt * (hand_target_R - hand_R) / tc.arm_scale;
+      // A person's hand leads the robot hand it sees by a few centimetres at most: it does not keep
+      // pushing the controller down while the robot hand rests on the table (that wound-up lead made
+      // a lift drag the towel back over the table's edge).
+      const Vector3d at = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R);
+      const double lead_max = op.max_lead_m / tc.arm_scale;
+      if ((work_H - at).norm() > lead_max) work_H = at + lead_max * (work_H - at).normalized();
+    }
     const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
     const Vector3d wh = head + work_H, lh = head + rest_left, rh = head + rest_right;
     vr.hand_position = {{{lh.x(), lh.y(), lh.z()}, {rh.x(), rh.y(), rh.z()}}};
