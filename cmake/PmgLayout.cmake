@@ -34,7 +34,7 @@ set(PMG_HELPER_SCRIPTS
   ${PMG_SOURCE_DIR}/scripts/motion_plot_clips.py
   ${PMG_SOURCE_DIR}/scripts/motion_plot_retarget.py
   ${PMG_SOURCE_DIR}/scripts/plot_teleop_trial.py
-  ${PMG_SOURCE_DIR}/scripts/render_task_trial.py
+  ${PMG_SOURCE_DIR}/scripts/render_sil.sh
   ${PMG_SOURCE_DIR}/apps/calib/pmg_plot_zero.py
   ${PMG_SOURCE_DIR}/apps/hal/plot_bus_plan.py
   ${PMG_SOURCE_DIR}/apps/hal/plot_jitter.py

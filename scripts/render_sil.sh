@@ -7,7 +7,9 @@
 # MuJoCo's renderer needs an OpenGL context on an X display: when $DISPLAY is unset, this script
 # starts a private Xvfb (Mesa llvmpipe renders in software) on a free display number and stops it
 # again at exit.
-# Environment: PMG_BUILD_DIR (default build) picks the build folder.
+# Environment: PMG_BUILD_DIR (default build) picks the build folder; PMG_RENDER_LOG, the executable
+# itself (pmg_teleop_bench sets it to the pmg_render_log beside it: this script is also installed
+# into share/pmg/scripts).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [ $# -lt 2 ]; then
@@ -18,7 +20,7 @@ log="$(realpath "$1")"              # absolute: the renderer runs in the reposit
 mkdir -p "$2"
 out="$(realpath "$2")"
 shift 2
-exe="${PMG_BUILD_DIR:-$root/build}/bin/pmg_render_log"
+exe="${PMG_RENDER_LOG:-${PMG_BUILD_DIR:-$root/build}/bin/pmg_render_log}"
 if [ ! -x "$exe" ]; then
   echo "render_sil.sh: $exe not found: build it first (ninja -C build pmg_render_log)" >&2
   exit 1

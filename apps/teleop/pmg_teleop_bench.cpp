@@ -20,20 +20,21 @@
 // operator, pelvis, working hand and object positions in W, headset, teleop command), the scene
 // DIR/trial_<k>_scene.xml, and for the first success and the first failure the controller's event log
 // trial_<k>.lcmlog, the object track trial_<k>_objects.csv, a frame strip <success|failure>_trial_<k>_strip.png
-// (pmg_render_log, through scripts/render_task_trial.py: it starts Xvfb when there is no display)
+// (pmg_render_log, through scripts/render_sil.sh: it starts Xvfb when there is no display)
 // and a trace plot <success|failure>_trial_<k>_trace.png (scripts/plot_teleop_trial.py).
 #include <algorithm>
-#include <cstdlib>
-#include <utility>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <filesystem>
-#include <ostream>
 #include <fstream>
+#include <memory>
+#include <ostream>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -200,13 +201,15 @@ double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d
   return e.norm();
 }
 
+// A body's position in the world frame W [m] (mjData::xpos).
+Vector3d bodyPos(const mjData* d, int body) { return Vector3d(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2]); }
+
 // Where the operator holds a controller before squeezing its grip: where the teleop mapping
 // (p_T = c_T + s (p_H - c_H)) puts the robot hand now (seen at hand_R, frame R), so that the arm does
 // not jump when it starts to follow. c_T: the robot's shoulder centre; frame H: the headset's.
 Vector3d controllerAtRobotHand(const mjData* d, int shoulder_l, int shoulder_r, const Vector3d& torso_p,
                                const Eigen::AngleAxisd& unyaw, const pmg::teleop::TeleopConfig& tc, const Vector3d& hand_R) {
-  const Vector3d sh = 0.5 * (Vector3d(d->xpos[3 * shoulder_l], d->xpos[3 * shoulder_l + 1], d->xpos[3 * shoulder_l + 2]) +
-                             Vector3d(d->xpos[3 * shoulder_r], d->xpos[3 * shoulder_r + 1], d->xpos[3 * shoulder_r + 2]));
+  const Vector3d sh = 0.5 * (bodyPos(d, shoulder_l) + bodyPos(d, shoulder_r));
   const Vector3d c_R = unyaw * (sh - torso_p);
   const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
   return c_H + (hand_R - c_R) / tc.arm_scale;
@@ -217,6 +220,36 @@ void writeObjectPose(std::ostream& out, double t, const std::string& name, const
   out << fmt::format("{:.2f},task_{},{:.5f},{:.5f},{:.5f},{:.6f},{:.6f},{:.6f},{:.6f}\n", t, name, obj.p_W.x(), obj.p_W.y(),
                      obj.p_W.z(), obj.q_W.w(), obj.q_W.x(), obj.q_W.y(), obj.q_W.z());
 }
+
+// What every trial sets up: the drawn scene composed with the robot (trial_<k>_scene.xml), the
+// controller over its MuJoCo SIL with its telemetry logged (trial_<k>.lcmlog, for the frame strips),
+// the bodies the operator looks at, and the object track (trial_<k>_objects.csv).
+struct TrialRig {
+  pmg::TaskScene scene;
+  pmg::ControllerConfig config;
+  std::unique_ptr<pmg::ControllerApp> app;
+  pmg::MujocoBackend* sim = nullptr;
+  int torso = -1, shoulder_l = -1, shoulder_r = -1;
+  std::ofstream objects_csv;
+
+  TrialRig(int trial, std::uint64_t seed, const pmg::TaskScene& base_scene, const pmg::ControllerConfig& base_config,
+           const fs::path& out_dir)
+      : scene(pmg::drawTaskTrial(base_scene, seed)), config(base_config) {
+    config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
+    config.log_file = (out_dir / fmt::format("trial_{}.lcmlog", trial)).string();
+    app = std::make_unique<pmg::ControllerApp>(config);
+    sim = dynamic_cast<pmg::MujocoBackend*>(&app->backend());
+    if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
+    const mjModel* m = sim->model();
+    torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+    shoulder_l = mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link");
+    shoulder_r = mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link");
+    if (torso < 0 || shoulder_l < 0 || shoulder_r < 0)
+      throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / the shoulder pitch links");
+    objects_csv.open(out_dir / fmt::format("trial_{}_objects.csv", trial));
+    objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
+  }
+};
 
 struct TrialResult {
   int trial = 0;
@@ -232,29 +265,22 @@ struct TrialResult {
 // seen the towel move far enough; then lift the hand and let go.
 TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_scene, const pmg::ControllerConfig& base_config,
                     const OperatorConfig& op, const fs::path& out_dir) {
-  const pmg::TaskScene scene = pmg::drawTaskTrial(base_scene, seed);
+  TrialRig rig(trial, seed, base_scene, base_config, out_dir);
+  const pmg::TaskScene& scene = rig.scene;
   const pmg::TaskObject& towel = scene.objects.at(0);
   const pmg::TaskTable& table = scene.table(towel.on);
-  pmg::ControllerConfig config = base_config;
-  config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
-  // The controller's telemetry (PMG_STATE) to an event log, for pmg_render_log's frame strips.
-  config.log_file = (out_dir / fmt::format("trial_{}.lcmlog", trial)).string();
-  pmg::ControllerApp app(config);
-  auto* sim = dynamic_cast<pmg::MujocoBackend*>(&app.backend());
-  if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
-  const pmg::teleop::TeleopConfig& tc = config.teleop;
+  pmg::ControllerApp& app = *rig.app;
+  pmg::MujocoBackend* sim = rig.sim;
+  const pmg::teleop::TeleopConfig& tc = rig.config.teleop;
   const mjModel* m = sim->model();
-  const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+  const int torso = rig.torso, shoulder_l = rig.shoulder_l, shoulder_r = rig.shoulder_r;
   // The working hand: the one on the table's middle side of the towel, so that the robot stands
   // nearer the middle of the table.
   const bool use_left = towel.pos[1] > 0.0;
   const int side = use_left ? pmg::teleop::kLeftHand : pmg::teleop::kRightHand;
   const double lateral = use_left ? -op.hand_lateral_m : op.hand_lateral_m;  // pelvis y - towel y
   const int hand = mj_name2id(m, mjOBJ_BODY, use_left ? "left_wrist_yaw_link" : "right_wrist_yaw_link");
-  if (torso < 0 || hand < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / *_wrist_yaw_link");
-  const int shoulder_l = mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link");
-  const int shoulder_r = mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link");
-  if (shoulder_l < 0 || shoulder_r < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the shoulder pitch links");
+  if (hand < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks *_wrist_yaw_link");
   bool aligned = false;  // the controller put where the robot hand is, before the grip is squeezed
 
   std::mt19937_64 rng(seed * 7919 + 17);
@@ -291,9 +317,6 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
-  // The object's pose for pmg_render_log --objects (include/pmg/render/object_track.hpp), at 50 Hz.
-  std::ofstream objects_csv(out_dir / fmt::format("trial_{}_objects.csv", trial));
-  objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch\n";
   bool fell = false;
   const double dt = 0.01;
@@ -302,12 +325,11 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     const double t = static_cast<double>(k) * dt;
     const mjData* d = sim->data();
     const pmg::TaskObjectState obj = pmg::taskObjectState(m, d, towel.name);
-    const Vector3d torso_p(d->xpos[3 * torso], d->xpos[3 * torso + 1], d->xpos[3 * torso + 2]);
-    const Vector3d hand_p(d->xpos[3 * hand], d->xpos[3 * hand + 1], d->xpos[3 * hand + 2]);
+    const Vector3d torso_p = bodyPos(d, torso), hand_p = bodyPos(d, hand);
     const auto& base = app.controller().lastState().base_position;
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
-    if (k % 2 == 0) writeObjectPose(objects_csv, t, towel.name, obj);
+    if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, towel.name, obj);  // 50 Hz
     csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}\n", t,
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p.x(), hand_p.y(), hand_p.z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1],
@@ -570,7 +592,8 @@ struct BoxOperatorConfig : OperatorCommon {
 // to the place table, lower the box onto it, open the hands and lift them away, and wait.
 TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_scene, const pmg::ControllerConfig& base_config,
                    const BoxOperatorConfig& op, const fs::path& out_dir) {
-  const pmg::TaskScene scene = pmg::drawTaskTrial(base_scene, seed);
+  TrialRig rig(trial, seed, base_scene, base_config, out_dir);
+  const pmg::TaskScene& scene = rig.scene;
   const pmg::TaskObject& box = scene.objects.at(0);
   const pmg::TaskTable& pick = scene.table(box.on);
   const pmg::TaskTable* place_ptr = nullptr;
@@ -578,20 +601,13 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     if (tb.name != pick.name) place_ptr = &tb;
   if (place_ptr == nullptr) throw std::runtime_error("pmg_teleop_bench: the box scene needs a second (place) table");
   const pmg::TaskTable& place = *place_ptr;
-  pmg::ControllerConfig config = base_config;
-  config.robot = pmg::robotWithTaskScene(config.robot, scene, (out_dir / fmt::format("trial_{}_scene.xml", trial)).string());
-  config.log_file = (out_dir / fmt::format("trial_{}.lcmlog", trial)).string();
-  pmg::ControllerApp app(config);
-  auto* sim = dynamic_cast<pmg::MujocoBackend*>(&app.backend());
-  if (sim == nullptr) throw std::runtime_error("pmg_teleop_bench: the controller config's backend is not the MuJoCo SIL");
-  const pmg::teleop::TeleopConfig& tc = config.teleop;
+  pmg::ControllerApp& app = *rig.app;
+  pmg::MujocoBackend* sim = rig.sim;
+  const pmg::teleop::TeleopConfig& tc = rig.config.teleop;
   const mjModel* m = sim->model();
-  const int torso = mj_name2id(m, mjOBJ_BODY, "torso_link");
+  const int torso = rig.torso, shoulder_l = rig.shoulder_l, shoulder_r = rig.shoulder_r;
   const std::array<int, 2> hand_body{mj_name2id(m, mjOBJ_BODY, "left_wrist_yaw_link"), mj_name2id(m, mjOBJ_BODY, "right_wrist_yaw_link")};
-  const int shoulder_l = mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link");
-  const int shoulder_r = mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link");
-  if (torso < 0 || hand_body[0] < 0 || hand_body[1] < 0 || shoulder_l < 0 || shoulder_r < 0)
-    throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / *_wrist_yaw_link / *_shoulder_pitch_link");
+  if (hand_body[0] < 0 || hand_body[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks *_wrist_yaw_link");
   const double half_w = 0.5 * box.size[1], box_h = box.size[2];
 
   std::mt19937_64 rng(seed * 7919 + 17);
@@ -623,8 +639,6 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
          "left_hand_x,left_hand_y,left_hand_z\n";
-  std::ofstream objects_csv(out_dir / fmt::format("trial_{}_objects.csv", trial));
-  objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -632,11 +646,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const double t = static_cast<double>(k) * dt;
     const mjData* d = sim->data();
     const pmg::TaskObjectState obj = pmg::taskObjectState(m, d, box.name);
-    const Vector3d torso_p(d->xpos[3 * torso], d->xpos[3 * torso + 1], d->xpos[3 * torso + 2]);
-    std::array<Vector3d, 2> hand_p;
-    for (int h = 0; h < 2; ++h)
-      hand_p[static_cast<std::size_t>(h)] = Vector3d(d->xpos[3 * hand_body[static_cast<std::size_t>(h)]], d->xpos[3 * hand_body[static_cast<std::size_t>(h)] + 1],
-                                                     d->xpos[3 * hand_body[static_cast<std::size_t>(h)] + 2]);
+    const Vector3d torso_p = bodyPos(d, torso);
+    const std::array<Vector3d, 2> hand_p{bodyPos(d, hand_body[0]), bodyPos(d, hand_body[1])};
     const auto& base = app.controller().lastState().base_position;
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
@@ -645,7 +656,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p[1].x(), hand_p[1].y(), hand_p[1].z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
                        ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
-    if (k % 2 == 0) writeObjectPose(objects_csv, t, box.name, obj);
+    if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, box.name, obj);  // 50 Hz
     const int pb = sim->pelvisBody();
     const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
     const Eigen::AngleAxisd unyaw(-yaw, Vector3d::UnitZ());
@@ -886,13 +897,15 @@ int main(int argc, char** argv) {
       nlohmann::json f = {{"trial", k}, {"log", fmt::format("trial_{}.lcmlog", k)}, {"objects", fmt::format("trial_{}_objects.csv", k)},
                           {"scene", fmt::format("trial_{}_scene.xml", k)}};
       if (figures) {
-        const fs::path dir(out_dir);
+        const fs::path dir = fs::absolute(out_dir);  // render_sil.sh runs from its own folder
         const std::string strip = fmt::format("{}_trial_{}_strip.png", label, k), trace = fmt::format("{}_trial_{}_trace.png", label, k);
+        // scripts/render_sil.sh starts Xvfb when there is no display and runs this build's pmg_render_log.
         const std::string render_cmd = fmt::format(
-            "python3 '{}' --exe '{}' --log '{}' --mjcf '{}' --objects '{}' --out '{}' --frames 8 --t0 1",
-            pmg::resolveData("scripts/render_task_trial.py").string(), (pmg::executableDir() / "pmg_render_log").string(),
-            (dir / f["log"].get<std::string>()).string(), (dir / f["scene"].get<std::string>()).string(),
-            (dir / f["objects"].get<std::string>()).string(), (dir / strip).string());
+            "PMG_RENDER_LOG='{}' bash '{}' '{}' '{}' --mjcf '{}' --objects '{}' --strip '{}' --frames 8 --t0 1 --width 320 --height 420 "
+            "--azimuth 145 --elevation -20 --distance 2.6 --lookat-dz -0.15 --no-reflections --samples 2",
+            (pmg::executableDir() / "pmg_render_log").string(), pmg::resolveData("scripts/render_sil.sh").string(),
+            (dir / f["log"].get<std::string>()).string(), dir.string(), (dir / f["scene"].get<std::string>()).string(),
+            (dir / f["objects"].get<std::string>()).string(), strip);
         const std::string trace_cmd = fmt::format("python3 '{}' '{}' --out '{}'", pmg::resolveData("scripts/plot_teleop_trial.py").string(),
                                                   (dir / fmt::format("trial_{}.csv", k)).string(), (dir / trace).string());
         // A missing display or renderer costs the picture, not the trials' results.
