@@ -153,6 +153,9 @@ def parse_args(argv=None):
                     help="PD gains: nominal = the robot config's kp/kd (Baseline); physically_informed = kp = I w_n^2, "
                          "kd = 2 zeta I w_n with the reflected rotor inertia I (also the armature; "
                          "pmg_train/gains.py, config/robots/g1/g1_pig.yaml, which the ONNX contract then carries)")
+    ap.add_argument("--action-scale", default="motion", choices=["motion", "torque_matched"],
+                    help="leg action scale: motion = from the clips' joint ranges; torque_matched = that x kp_nominal/kp, "
+                         "the same PD torque per unit action whatever --gains (EnvConfig.action_scale_rule)")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -253,7 +256,7 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, episode_length=args.episode_length)
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
-    cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators)
+    cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
     if args.actuator_dr is not None:
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     if args.actuator_dr_z is not None:

@@ -268,6 +268,15 @@ class EnvConfig:
     # PD gains: "nominal" (robot config kp/kd, armature 0.01) or "physically_informed" (kp = I w_n^2,
     # kd = 2 zeta I w_n, armature I: pmg_train/gains.py, config/robots/g1/g1_pig.yaml).
     gains: str = "nominal"
+    # Action scale (rad per unit action, per leg joint): "motion" = 1.2 x the clips' largest deviation
+    # from the standing pose, clipped to [0.25, 1.2] rad; "torque_matched" = that x kp_nominal / kp, so
+    # that an action commands the same PD torque offset whatever the gains (with physically informed
+    # gains, 1.5-3.7x softer, the motion scale leaves the hip pitch 19 of the nominal 70 N m; issue 15).
+    # With nominal gains both rules are the same. The ONNX contract carries the scale.
+    action_scale_rule: str = "motion"
+    # Leg position targets clamped to the joint limits, as the deployed HAL supervisor clamps every
+    # setpoint (src/hal/safety/envelope.cpp, clampSetpoint); matters where kp x scale reaches past a limit.
+    clamp_targets: bool = True
     # Pushes (robustness; issue 12: falls): every push_interval [s] (uniform) the base gets a
     # horizontal velocity change of uniform direction and magnitude in push_vel [m/s] (world frame),
     # as a shove of a few hundred N for a few control periods would; none with deterministic_reset.
@@ -430,6 +439,8 @@ class G1PmgEnv(Env):
             self.kd = np.array([j["kd"] for j in joints], np.float32)
             self.armature = np.full(len(joints), NOMINAL_ARMATURE, np.float64)
         self.tau_max = np.array([j["torque_limit"] for j in joints], np.float32)
+        self.q_lower = np.array([j["lower"] for j in joints], np.float32)
+        self.q_upper = np.array([j["upper"] for j in joints], np.float32)
         self._setup_actuators(cfg)
         self.q_default = np.asarray(self.js.q_stand, np.float32)
         # Single gait: the generator always runs the forward clip at its nominal speed.
@@ -444,6 +455,12 @@ class G1PmgEnv(Env):
                     dev = np.maximum(dev, np.abs(d.q[:, :LEG] - self.js.q_stand[None, :LEG]).max(0))
             dev = np.maximum(dev, dev[[6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]])  # left/right symmetric
             action_scale = np.clip(1.2 * dev, 0.25, 1.2)
+            if cfg.action_scale_rule == "torque_matched":
+                kp_nominal = np.array([j["kp"] for j in joints[:LEG]], np.float64)
+                action_scale = action_scale * kp_nominal / self.kp[:LEG]
+            elif cfg.action_scale_rule != "motion":
+                raise ValueError(f"EnvConfig.action_scale_rule = {cfg.action_scale_rule!r}: expected 'motion' or "
+                                 "'torque_matched'")
         self.action_scale = np.asarray(action_scale, np.float32)
 
         mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf, leg_collisions=cfg.leg_collisions))
@@ -768,6 +785,8 @@ class G1PmgEnv(Env):
         applied = jnp.where(info["delay"] > 0, info["last_action"], a)  # one period of latency
         q_des = jnp.asarray(self.q_default)
         q_des = q_des.at[:LEG].set(jnp.asarray(self.q_default[:LEG]) + jnp.asarray(self.action_scale) * applied)
+        if c.clamp_targets:
+            q_des = q_des.at[:LEG].set(jnp.clip(q_des[:LEG], self.q_lower[:LEG], self.q_upper[:LEG]))
         t = info["step"].astype(jnp.float32) * c.control_dt
         arm_pert = info["arm_amp"] * jnp.sin(2 * math.pi * info["arm_freq"] * t + info["arm_off"])
         q_des = q_des.at[LEG:].set(info["ref_q"][LEG:])

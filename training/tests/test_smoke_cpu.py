@@ -480,6 +480,12 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     check(ratio.min() >= 0.8 - 1e-6 and ratio.max() <= 1.5 + 1e-6,
           f"PIG armature DR = I x U(0.8, 1.5) (ratios {ratio.min():.3f}..{ratio.max():.3f})")
     rollout(pig, "physically informed gains env")
+    pig_tm = g1_env.G1PmgEnv(g1_env.EnvConfig(gains="physically_informed", action_scale_rule="torque_matched"), clips)
+    nominal_kp = np.array([j["kp"] for j in yaml.safe_load(open("config/robots/g1/g1.yaml"))["joints"]][:12])
+    authority_tm, authority_nom = pig_tm.action_scale * pig_tm.kp[:12], pig.action_scale * nominal_kp
+    check(np.allclose(authority_tm, authority_nom, rtol=1e-5) and pig_tm.action_scale[0] > 3 * pig.action_scale[0],
+          f"torque-matched action scale: kp x scale = the nominal's per leg joint (hip pitch "
+          f"{authority_tm[0]:.1f} vs {authority_nom[0]:.1f} N m/unit action; motion rule {pig.action_scale[0] * pig.kp[0]:.1f})")
 
 
 def hand_force_checks(check, n_steps=50):
