@@ -426,6 +426,7 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
         q = np.asarray(st.pipeline_state.qpos[7:], np.float64)
         dq = np.asarray(st.pipeline_state.qvel[6:], np.float64)
         q_des = probe.q_default[:12].astype(np.float64) + probe.action_scale.astype(np.float64) * a
+        q_des = np.clip(q_des, probe.q_lower[:12], probe.q_upper[:12])  # EnvConfig.clamp_targets (k >= 4: the knee's)
         ps, o = act.step(p, ps, {"q_des_rad": q_des[[knee, hip]], "dq_des_rad_per_s": np.zeros(2),
                                  "kp_Nm_per_rad": kp_e, "kd_Nms_per_rad": kd_e, "tau_ff_Nm": np.zeros(2),
                                  "enabled": np.ones(2, bool)},
