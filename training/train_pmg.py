@@ -156,6 +156,9 @@ def parse_args(argv=None):
     ap.add_argument("--action-scale", default="motion", choices=["motion", "torque_matched"],
                     help="leg action scale: motion = from the clips' joint ranges; torque_matched = that x kp_nominal/kp, "
                          "the same PD torque per unit action whatever --gains (EnvConfig.action_scale_rule)")
+    ap.add_argument("--tracking-sigma", type=float, default=None, metavar="S",
+                    help="width of both velocity-tracking rewards exp(-err^2/S) (EnvConfig.lin_vel_sigma, yaw_rate_sigma; "
+                         "default 0.25)")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -169,6 +172,8 @@ def parse_args(argv=None):
                     help="external hand forces in the domain randomisation (issue 14): probability per teleoperated hand "
                          "and segment (EnvConfig.p_hand_force; default 0 = off); needs --arms teleop")
     args = ap.parse_args(argv)
+    if args.tracking_sigma is not None and not args.tracking_sigma > 0:
+        ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
@@ -257,6 +262,8 @@ def main(argv=None):
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
+    if args.tracking_sigma is not None:
+        cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
     if args.actuator_dr is not None:
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     if args.actuator_dr_z is not None:
