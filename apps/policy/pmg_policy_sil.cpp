@@ -39,8 +39,10 @@
 //              vx, vy, wz the base motion that holds its stance feet still
 //              (pmg::gco::stanceImpliedVelocity on q_ref/qd_ref of the legs and the contact
 //              schedule; mean over ticks with a stance foot), pitch/roll of torso_link in the
-//              reference pose with a level pelvis (KDL, pelvis -> torso_link), height the
-//              template's GeneratorOutput::base_height
+//              reference pose as the robot stands on it: the pelvis tilted so that the stance
+//              soles lie flat (the rotation that maps their mean normal onto z, as
+//              pmg::motion::PostureProbe measures the static clips; level when no foot is in
+//              stance; KDL, pelvis -> torso_link), height the template's GeneratorOutput::base_height
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
 //              |command| >= 0.05 (m/s or rad/s), else null
@@ -259,6 +261,7 @@ int main(int argc, char** argv) {
     pmg::ChainFkWorkspace torso_fk(torso_chain);
     pmg::gco::GcoInput ref_in;
     Eigen::Isometry3d X_BT = Eigen::Isometry3d::Identity();
+    Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
 
     for (int seed = 0; seed < seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
@@ -390,8 +393,17 @@ int main(int argc, char** argv) {
             pmg::gco::fillFromGenerator(r, leg_idx, pmg::VelocityCommand{}, pmg::PostureCommand{}, &ref_in);
             const pmg::gco::ImpliedBaseVelocity iv = pmg::gco::stanceImpliedVelocity(leg_kin, ref_in);
             if (iv.valid) ref = {iv.v_x, iv.v_y, iv.yaw_rate, kNaN, kNaN, kNaN};
-            if (torso_fk.tipPose(r.q_ref, X_BT)) {  // level pelvis: R_WT = R_BT
-              const Eigen::Matrix3d& R = X_BT.linear();
+            if (torso_fk.tipPose(r.q_ref, X_BT)) {
+              // The pelvis tilt the stance legs imply (the generator plays a level pelvis; a robot
+              // standing on flat soles takes this tilt): R_WT = R_WB R_BT.
+              Eigen::Vector3d n_B = Eigen::Vector3d::Zero();
+              for (const pmg::Foot f : {pmg::Foot::kLeft, pmg::Foot::kRight}) {
+                const auto i = static_cast<std::size_t>(f);
+                if (ref_in.contact[i] && leg_kin.forward(f, ref_in.q_leg[i], &X_BS)) n_B += X_BS.linear().col(2);
+              }
+              Eigen::Matrix3d R_WB = Eigen::Matrix3d::Identity();
+              if (n_B.norm() > 1e-9) R_WB = Eigen::Quaterniond::FromTwoVectors(n_B, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+              const Eigen::Matrix3d R = R_WB * X_BT.linear();
               ref[3] = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
               ref[4] = std::atan2(R(2, 1), R(2, 2));
             }

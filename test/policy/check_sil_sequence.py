@@ -91,6 +91,12 @@ def check_segments(out, summary, seeds):
                 got = s[rb][a]
                 checks[f"{name}: {rb}.{a}"] = (got is None) if want is None else (
                     got is not None and abs(got - want) < 1e-4 * max(1.0, abs(want)))
+    # The reference posture is measured as the robot stands on it (stance soles flat): the bend
+    # template (command 0.30 rad) then carries 0.236 rad; the level pelvis the generator plays gave 0.174.
+    bend = next((s for s in segs if s.get("name") == "bend"), None)
+    if bend is not None and bend.get("seeds"):
+        v = bend["reference"]["pitch"]
+        checks[f"bend reference pitch {v:.3f} (soles flat) in [0.2, 0.3]"] = 0.2 <= v <= 0.3
     fwd = next((s for s in segs if s.get("name") == "forward"), None)
     checks["forward segment present"] = fwd is not None
     if fwd is not None and fwd.get("seeds"):
