@@ -222,7 +222,7 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
   EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
 }
 
-// pmg_controller with the shipped policy and no gantry (config/controller/g1_sil_policy.yaml):
+// pmg_controller with the default policy and no gantry (config/controller/g1_sil_policy.yaml):
 // the actor keeps the G1 upright and walks it forward on command; the tick allocates nothing.
 TEST(ControllerApp, PolicyWalksTheG1WithoutGantry) {
   ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));

@@ -1,7 +1,7 @@
 // bench_teleop_arms: does a policy keep the G1 balanced while VR teleoperation holds its arms in
 // a pose? Product path: ControllerApp (shaper, generator, GCO, teleop stage with arm IK,
 // reference limiter, policy stage, supervisor) on the MuJoCo 2.2 SIL in lockstep, from
-// config/controller/g1_sil_policy.yaml with the policy file replaced and the teleop stage on
+// config/controller/g1_sil_policy_table1.yaml (the Table I policy's clips and blending) with the policy file replaced and the teleop stage on
 // (pmg::teleop::TeleopConfig defaults, the values of config/controller/g1_sil_teleop.yaml).
 //
 // The synthetic operator (frame V: x forward, y left, z up [m]; headset at (0, 0, 1.6), level):
@@ -200,7 +200,7 @@ Result runOne(const pmg::ControllerConfig& base, const std::string& model, const
 
 int main(int argc, char** argv) {
   CLI::App app{"bench_teleop_arms: balance with teleoperated arm poses, per policy (lockstep MuJoCo SIL, product path)"};
-  std::string controller_path = pmg::resolveData("config/controller/g1_sil_policy.yaml").string();
+  std::string controller_path = pmg::resolveData("config/controller/g1_sil_policy_table1.yaml").string();
   std::vector<std::string> models;
   std::vector<std::string> poses{"none", "chest", "low", "side", "up"};
   std::vector<double> speeds{0.0, 0.3};
