@@ -121,6 +121,31 @@ PostureCheck checkPosture(const StaticClip& clip, PostureProbe& probe) {
   return c;
 }
 
+/// Relabels a pitch template by the torso pitch its rows give where the generator plays them: the
+/// row's offset from the neutral row added to the standing pose @p q_stand (PMG eq. 10), measured with
+/// the feet flat, minus the standing pose's own. The capture's values are absolute (its upright
+/// frame already leans 0.065 rad), so a command p used to bend the reference by p − 0.065 only.
+/// Returns the largest change of a value [rad]. @throws std::runtime_error if the measured values
+/// are not strictly increasing (the clip's rows must stay ordered by their command).
+double relabelOnStandingPose(StaticClip& clip, PostureProbe& probe, const Eigen::VectorXd& q_stand) {
+  Eigen::Index neutral_row = 0;
+  (clip.values.array() - clip.neutral).abs().minCoeff(&neutral_row);
+  const double stand = probe.measure(q_stand).torso_pitch;
+  const Eigen::VectorXd q0 = clip.q.row(neutral_row).transpose();
+  Eigen::VectorXd v(clip.values.size());
+  for (Eigen::Index i = 0; i < clip.q.rows(); ++i) {
+    const Eigen::VectorXd q = q_stand + (clip.q.row(i).transpose() - q0);
+    v(i) = probe.measure(q).torso_pitch - stand;
+    if (i > 0 && !(v(i) > v(i - 1)))
+      throw std::runtime_error(fmt::format("static clip '{}': torso pitch on the standing pose not increasing at row {} ({:.4f} after {:.4f})",
+                                           clip.name, i, v(i), v(i - 1)));
+  }
+  const double change = (v - clip.values).cwiseAbs().maxCoeff();
+  clip.neutral = v(neutral_row);
+  clip.values = v;
+  return change;
+}
+
 std::string postureLine(const StaticClip& clip, const PostureCheck& c) {
   return fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.1f} | {:.1f} |\n", clip.name, toString(clip.axis), c.torso_pitch,
                      c.torso_roll, c.pelvis_pitch, 1000.0 * c.height, 1000.0 * c.com_margin);
@@ -266,6 +291,10 @@ int main(int argc, char** argv) {
   app.add_option("--out", out_dir, "output directory for the clip files and report.md (default: the shipped set)")
       ->capture_default_str();
   app.add_option("--csv-dir", csv_dir, "also write per-clip retargeting keypoint CSVs here");
+  bool bend_on_standing_pose = false;
+  app.add_flag("--bend-on-standing-pose", bend_on_standing_pose,
+               "label the bend template's rows by the torso pitch they give added to the standing pose (feet flat), "
+               "not by the capture's absolute torso pitch (docs/motion.md; not the shipped set)");
   std::string tracks_dir;
   app.add_option("--sole-tracks-dir", tracks_dir, "also write per-clip sole height/speed CSVs (phase, labels) here");
   CLI11_PARSE(app, argc, argv);
@@ -475,6 +504,15 @@ int main(int argc, char** argv) {
             before.torso_pitch, after.torso_pitch, residual, 1000.0 * before.com_margin, 1000.0 * after.com_margin);
         std::printf("%-20s torso pitch coupling %.3f -> %.3f rad, CoM margin %.0f -> %.0f mm\n", spec.name.c_str(), before.torso_pitch,
                     after.torso_pitch, 1000.0 * before.com_margin, 1000.0 * after.com_margin);
+      }
+      if (spec.axis == PostureAxis::kPitch && bend_on_standing_pose) {
+        const double n_before = clip.neutral;
+        const double change = relabelOnStandingPose(clip, probe, robot.defaultPose());
+        decoupling += fmt::format(
+            "; values relabelled by the torso pitch each row gives added to the standing pose (feet flat), relative to the "
+            "standing pose's (capture's upright row {:.3f} -> {:.3f} rad; largest change {:.3f} rad)", n_before, clip.neutral, change);
+        std::printf("%-20s values on the standing pose: neutral %.3f -> %.3f rad, largest change %.3f rad\n", spec.name.c_str(),
+                    n_before, clip.neutral, change);
       }
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin += offset;
