@@ -14,6 +14,8 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/clips/clip_io.hpp"
+#include "pmg/common/kinematics.hpp"
+#include "pmg/motion/posture_synthesis.hpp"
 #include "temp_dir.hpp"
 
 #ifndef PMG_MAKE_CLIPS_EXE
@@ -67,6 +69,44 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
     }
   }
   EXPECT_GE(files, 11);  // 9 clips + consistency_map.yaml + report.md
+}
+
+// Torso pitch (feet flat) of the standing pose plus the bend template's offset at command p
+// (linear between the rows bracketing p, as the generator interpolates; PMG eq. 10), relative to the
+// standing pose's own: what the reference carries for a pitch command p.
+double pitchOnStandingPose(const pmg::StaticClip& c, double p, pmg::motion::PostureProbe& probe, const Eigen::VectorXd& q_stand) {
+  auto rowAt = [&](double v) {
+    Eigen::Index k = 0;
+    while (k + 2 < c.values.size() && c.values(k + 1) < v) ++k;
+    const double t = std::clamp((v - c.values(k)) / (c.values(k + 1) - c.values(k)), 0.0, 1.0);
+    return Eigen::VectorXd((1.0 - t) * c.q.row(k).transpose() + t * c.q.row(k + 1).transpose());
+  };
+  const Eigen::VectorXd q = q_stand + rowAt(p) - rowAt(c.neutral);
+  return probe.measure(q).torso_pitch - probe.measure(q_stand).torso_pitch;
+}
+
+// --bend-on-standing-pose (not the shipped set, docs/motion.md): a pitch command p bends the
+// reference by p, between the rows too; the shipped bend, labelled by the capture's absolute pitch
+// (upright row 0.065 rad), bends it by about p - 0.065. Both runs write a valid, complete set.
+TEST(MakeClips, BendOnStandingPoseCarriesTheCommandedTorsoPitch) {
+  const pmg::test::TempDir tmp_dir;
+  const fs::path out = tmp_dir.path() / "opt";
+  fs::create_directories(out);
+  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --bend-on-standing-pose --out " + out.string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
+  const pmg::StaticClip relabelled = pmg::readStaticClip((out / "bend.yaml").string(), robot);
+  const pmg::StaticClip shipped = pmg::readStaticClip((fs::path(pmg::test::g1ClipDir()) / "bend.yaml").string(), robot);
+  EXPECT_NEAR(relabelled.neutral, 0.0, 1e-9);
+  EXPECT_LT((relabelled.q - shipped.q).cwiseAbs().maxCoeff(), 1e-9) << "only the values change";
+  const pmg::KinematicModel model(robot);
+  pmg::motion::PostureProbe probe(model);
+  const Eigen::VectorXd q_stand = robot.defaultPose();
+  for (const double p : {0.1, 0.3, 0.45, 0.8}) {
+    SCOPED_TRACE(p);
+    EXPECT_NEAR(pitchOnStandingPose(relabelled, p, probe, q_stand), p, 0.01);
+    EXPECT_NEAR(pitchOnStandingPose(shipped, p, probe, q_stand), p - shipped.neutral, 0.02);
+  }
 }
 
 }  // namespace
