@@ -401,9 +401,7 @@ int main(int argc, char** argv) {
                 const auto i = static_cast<std::size_t>(f);
                 if (ref_in.contact[i] && leg_kin.forward(f, ref_in.q_leg[i], &X_BS)) n_B += X_BS.linear().col(2);
               }
-              Eigen::Matrix3d R_WB = Eigen::Matrix3d::Identity();
-              if (n_B.norm() > 1e-9) R_WB = Eigen::Quaterniond::FromTwoVectors(n_B, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-              const Eigen::Matrix3d R = R_WB * X_BT.linear();
+              const Eigen::Matrix3d R = pmg::soleLevelingRotation(n_B) * X_BT.linear();
               ref[3] = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
               ref[4] = std::atan2(R(2, 1), R(2, 2));
             }

@@ -89,14 +89,15 @@ Spec spec_for(const std::string& p, const RigConfig& rig, const Scales& sc) {
   throw std::invalid_argument("unknown calibration parameter '" + p + "'");
 }
 
-/// The value at which a catalogue parameter has no effect (clamped into its range): zero for
-/// friction, gap, delay and offset terms, 1 for kt_scale, the range's top for torque limits.
+/// The value at which a catalogue entry's parameter has no effect (clamped into its range): zero for
+/// friction, gap, delay and offset terms, 1 for kt_scale, the range's top for torque limits; the
+/// Stribeck velocity has none (its start value).
 double neutral_value(const Spec& s) {
   const std::string& p = s.name;
   double v = 0.0;
-  if (p == "kt_scale" || p == "kp_scale" || p == "kd_scale") v = 1.0;
+  if (p == "kt_scale") v = 1.0;
   else if (p == "tau_max_Nm" || p == "tau_stall_Nm" || p == "w_max_rad_per_s") v = s.hi;
-  else if (p == "vs_rad_per_s" || p == "armature") v = s.init;
+  else if (p == "vs_rad_per_s") v = s.init;
   return std::clamp(v, s.lo, s.hi);
 }
 

@@ -1,9 +1,26 @@
 #include "pmg/common/kinematics.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <kdl_parser/kdl_parser.hpp>
 #include <urdf_parser/urdf_parser.h>
 
 namespace pmg {
+
+Eigen::Matrix3d soleLevelingRotation(const Eigen::Vector3d& n_B, double* pitch, double* roll) noexcept {
+  double p = 0.0, r = 0.0;
+  const double len = n_B.norm();
+  if (len > 0.0 && std::isfinite(len)) {
+    // With R = Ry(p)·Rx(r): Rᵀ e_z = (−sin p, cos p sin r, cos p cos r) = n̂.
+    const Eigen::Vector3d n = n_B / len;
+    p = std::asin(std::clamp(-n.x(), -1.0, 1.0));
+    r = std::atan2(n.y(), n.z());
+  }
+  if (pitch) *pitch = p;
+  if (roll) *roll = r;
+  return (Eigen::AngleAxisd(p, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(r, Eigen::Vector3d::UnitX())).toRotationMatrix();
+}
 
 KDL::Tree kdlTreeFromUrdfFile(const std::string& urdf_path) {
   const urdf::ModelInterfaceSharedPtr model = urdf::parseURDFFile(urdf_path);

@@ -142,13 +142,7 @@ FlatFootPosture PostureProbe::measure(const Eigen::VectorXd& q) {
     n_sum += X_BF[f].linear().col(2);
   }
   // Least squares over both feet: min Σ |R n_f − e_z|² ⇔ R maps the mean sole normal onto e_z.
-  // With R = Ry(p)·Rx(r): Rᵀ e_z = (−sin p, cos p sin r, cos p cos r).
-  const Eigen::Vector3d n = n_sum.normalized();
-  out.pelvis_pitch = std::asin(std::clamp(-n.x(), -1.0, 1.0));
-  out.pelvis_roll = std::atan2(n.y(), n.z());
-  const Eigen::Matrix3d R_WB = (Eigen::AngleAxisd(out.pelvis_pitch, Eigen::Vector3d::UnitY()) *
-                                Eigen::AngleAxisd(out.pelvis_roll, Eigen::Vector3d::UnitX()))
-                                   .toRotationMatrix();
+  const Eigen::Matrix3d R_WB = soleLevelingRotation(n_sum, &out.pelvis_pitch, &out.pelvis_roll);
   out.R_WB = Eigen::Quaterniond(R_WB);
   double z_min = std::numeric_limits<double>::infinity();
   for (int f = 0; f < 2; ++f) {

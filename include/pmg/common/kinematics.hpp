@@ -30,6 +30,12 @@ struct LimbChain {
   std::vector<int> joint_index;    ///< (chain.getNrOfJoints()) index of each chain joint in RobotConfig::joints
 };
 
+/// Pelvis tilt without yaw, R_WB = Ry(pitch)·Rx(roll), that maps the sole normal @p n_B (pelvis
+/// frame B; e.g. the sum of the flat-standing feet's z axes, need not be unit) onto the world z axis:
+/// the least-squares tilt that puts those soles flat (Rᵀ e_z = n̂). Writes pitch (positive = pelvis
+/// forward) and roll [rad] when given. Identity for a zero or non-finite normal. noexcept, no allocation.
+Eigen::Matrix3d soleLevelingRotation(const Eigen::Vector3d& n_B, double* pitch = nullptr, double* roll = nullptr) noexcept;
+
 /// Preallocated workspace for forward kinematics on one LimbChain (Model/Data split).
 class ChainFkWorkspace {
  public:
