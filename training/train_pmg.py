@@ -159,6 +159,8 @@ def parse_args(argv=None):
     ap.add_argument("--tracking-sigma", type=float, default=None, metavar="S",
                     help="width of both velocity-tracking rewards exp(-err^2/S) (EnvConfig.lin_vel_sigma, yaw_rate_sigma; "
                          "default 0.25)")
+    ap.add_argument("--yaw-rate-weight", type=float, default=None, metavar="W",
+                    help="weight of the yaw-rate tracking reward (EnvConfig.w['yaw_rate']; default 0.8, lin_vel 1.5)")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -174,6 +176,8 @@ def parse_args(argv=None):
     args = ap.parse_args(argv)
     if args.tracking_sigma is not None and not args.tracking_sigma > 0:
         ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
+    if args.yaw_rate_weight is not None and not args.yaw_rate_weight >= 0:
+        ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
@@ -264,6 +268,8 @@ def main(argv=None):
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
     if args.tracking_sigma is not None:
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
+    if args.yaw_rate_weight is not None:
+        cfg = dataclasses.replace(cfg, w={**cfg.w, "yaw_rate": args.yaw_rate_weight})
     if args.actuator_dr is not None:
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     if args.actuator_dr_z is not None:
