@@ -108,6 +108,9 @@ struct OperatorConfig : OperatorCommon {
   double yaw_gain = 0.0;            ///< commanded yaw rate per radian of heading away from the table [1/s] (0: off)
   double stand_off_far_m = 0.30;    ///< pelvis distance from the table's edge while raising the hand [m]
   double clearance_m = 0.05;        ///< the raised hand this much above the hover height [m]
+  double raise_margin_m = 0.03;     ///< walk in once the hand is seen within this of its raised height (hover + clearance) [m]
+  double transit_height_m = 0.18;   ///< reaching: the travelling hand's height above the top [m]
+  double transit_tol_m = 0.0;       ///< reaching: a hand seen farther than this (horizontally) from its aim travels at the raised height, then descends (0: off) [m]
   double grab_inset_m = 0.08;       ///< the hand aims this far short of the towel's centre (its near part)
   double lift_s = 0.8;              ///< placing the hand again: lift it straight up this long first [s]
   double press_s = 1.5;             ///< pressing before walking [s]
@@ -131,6 +134,9 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("yaw_gain", &yaw_gain, "[1/s]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("clearance_m", &clearance_m, "[m]");
+    a->Visit("raise_margin_m", &raise_margin_m, "[m]");
+    a->Visit("transit_tol_m", &transit_tol_m, "[m]");
+    a->Visit("transit_height_m", &transit_height_m, "[m]");
     a->Visit("grab_inset_m", &grab_inset_m, "[m]");
     a->Visit("regrab_offset_m", &regrab_offset_m, "[m]");
     a->Visit("lift_s", &lift_s, "[s]");
@@ -149,6 +155,11 @@ struct OperatorConfig : OperatorCommon {
     if (!(keep_from_edge_m >= 0.15 && keep_from_edge_m <= 1.0)) return "keep_from_edge_m: expected [0.15, 1] m (half the towel at least)";
     if (!(keep_gain >= 0 && keep_gain <= 10)) return "keep_gain: expected [0, 10] 1/s";
     if (!(max_lead_m > 0 && max_lead_m <= 1.0)) return "max_lead_m: expected (0, 1] m";
+    if (!(clearance_m >= 0 && clearance_m <= 0.5)) return "clearance_m: expected [0, 0.5] m";
+    if (!(raise_margin_m >= 0 && raise_margin_m <= hover_m + clearance_m))
+      return "raise_margin_m: expected [0, hover_m + clearance_m] m";
+    if (!(transit_tol_m >= 0 && transit_tol_m <= 0.5)) return "transit_tol_m: expected [0, 0.5] m (0: off)";
+    if (!(transit_height_m >= hover_m && transit_height_m <= 0.5)) return "transit_height_m: expected [hover_m, 0.5] m";
     return "";
   }
 };
@@ -313,6 +324,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   double towel_y_eye = 0.0;  // the towel's seen place along the table, as judged by eye (smoothed) [m]
   int regrabs = 0;  // times the hand was placed again after slipping off the towel
   bool regrabbing = false;  // the reach in progress follows a slip
+  bool descending = false;  // the reaching hand is over its aim and goes down to the hover height
   Vector3d lift_from = Vector3d::Zero();  // where the hand was when it started lifting (frame R)
 
   std::vector<pmg::TaskObjectSample> traj;
@@ -396,7 +408,10 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         if (phase == kRaise) {
           if (entered) raise_x = hand_R.x();
           walkTo(Eigen::Vector2d(table_near_x - op.stand_off_far_m, work_y), op.max_speed);
-          if (t - phase_t0 > 1.0 && (hand_R.z() > top_z_R + op.hover_m || t - phase_t0 > 6.0))
+          // Walk in only with the hand high above the top: a hand that walks in at hover height
+          // (the wrist; the rubber hand hangs below it) sweeps the towel out of reach.
+          if (t - phase_t0 > 1.0 &&
+              (hand_R.z() > top_z_R + op.hover_m + op.clearance_m - op.raise_margin_m || t - phase_t0 > 6.0))
             phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
         } else {
           if (walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed) < op.arrive_tol_m &&
@@ -419,12 +434,23 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         if (phase == kReach) work_hand.y() = towel_R.y();
         hand_target_R = work_hand;
         hand_target_R.z() = top_z_R + (phase == kReach ? op.hover_m : -op.press_m);
+        const Vector3d reach_aim = hand_target_R;  // where the reach ends (the press starts)
+        // Travel high, then go down: the rubber hand hangs below the wrist, and a hand that moves at
+        // the hover height over the towel drags it (towards the robot, off the near edge).
+        const double transit_z = top_z_R + op.transit_height_m;
+        if (phase == kReach && op.transit_tol_m > 0) {
+          if (entered) descending = false;
+          const double off = (hand_R - hand_target_R).head<2>().norm();
+          if (off < op.transit_tol_m) descending = true;
+          if (off > 2.0 * op.transit_tol_m) descending = false;
+          if (!descending) hand_target_R.z() = transit_z;
+        }
         // Placing the hand again after a slip: lift it straight up first (moving it sideways while it
         // still presses drags the towel, and the push shoves the robot back).
         if (phase == kReach && regrabbing && t - phase_t0 < op.lift_s) {
           if (entered) lift_from = hand_R;
           hand_target_R = lift_from;
-          hand_target_R.z() = top_z_R + op.hover_m;
+          hand_target_R.z() = op.transit_tol_m > 0 ? transit_z : top_z_R + op.hover_m;
         }
         // Keep the towel on the top: while wiping, the hand (and the towel under it) goes forward when
         // the towel is seen nearer the table's near edge than keep_from_edge_m, back when farther.
@@ -436,7 +462,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         // Hold the working place while reaching and pressing (the wipe phase walks on its own).
         if (phase != kWipe)
           walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed);
-        if (phase == kReach && (hand_R - hand_target_R).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
+        if (phase == kReach && (hand_R - reach_aim).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
         if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
         if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, regrabbing = false;
         if (phase == kWipe) {
