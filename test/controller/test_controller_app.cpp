@@ -222,10 +222,13 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
   EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
 }
 
-// pmg_controller with the default policy and no gantry (config/controller/g1_sil_policy.yaml):
-// the actor keeps the G1 upright and walks it forward on command; the tick allocates nothing.
-TEST(ControllerApp, PolicyWalksTheG1WithoutGantry) {
-  ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+// pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
+// the default, and g1_sil_policy_sigma005.yaml, its sigma-0.05 fine-tune): the actor keeps the G1
+// upright and walks it forward on command; the tick allocates nothing.
+class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
+  ControllerConfig config = silConfig(test::sourcePath(std::string("config/controller/") + GetParam()));
   ASSERT_FALSE(config.mujoco.gantry.enabled);
   ControllerApp app(config);
   ASSERT_NE(app.controller().policy(), nullptr);
@@ -248,9 +251,12 @@ TEST(ControllerApp, PolicyWalksTheG1WithoutGantry) {
   EXPECT_GT(min_height, 0.6) << "the robot fell";
   EXPECT_GT(app.controller().lastState().base_position[0], 0.5) << "the robot did not walk forward";
   EXPECT_EQ(allocations, 0u);
-  std::printf("[ SIL ] policy: walked %.2f m forward in 5.5 s, lowest pelvis %.2f m\n",
+  std::printf("[ SIL ] %s: walked %.2f m forward in 5.5 s, lowest pelvis %.2f m\n", GetParam(),
               app.controller().lastState().base_position[0], min_height);
 }
+
+INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_sigma005.yaml"));
 
 }  // namespace
 }  // namespace pmg
