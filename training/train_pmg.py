@@ -161,6 +161,9 @@ def parse_args(argv=None):
                          "default 0.25)")
     ap.add_argument("--yaw-rate-weight", type=float, default=None, metavar="W",
                     help="weight of the yaw-rate tracking reward (EnvConfig.w['yaw_rate']; default 0.8, lin_vel 1.5)")
+    ap.add_argument("--reward-weight", action="append", default=[], metavar="NAME=W",
+                    help="set one reward term's weight (EnvConfig.w: lin_vel, yaw_rate, orientation, height, ref_q, "
+                         "ref_qd, contact, energy, action_rate, alive, termination); repeatable; an unknown NAME is an error")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -178,6 +181,16 @@ def parse_args(argv=None):
         ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
     if args.yaw_rate_weight is not None and not args.yaw_rate_weight >= 0:
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
+    weights = {}
+    for item in args.reward_weight:
+        name, sep, value = item.partition("=")
+        try:
+            weights[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep or not math.isfinite(weights.get(name.strip(), math.nan)):
+            ap.error(f"--reward-weight {item!r}: expected NAME=W with a finite number W")
+    args.reward_weight = weights
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
@@ -270,6 +283,12 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
     if args.yaw_rate_weight is not None:
         cfg = dataclasses.replace(cfg, w={**cfg.w, "yaw_rate": args.yaw_rate_weight})
+    unknown = sorted(set(args.reward_weight) - set(cfg.w))
+    if unknown:
+        raise SystemExit(f"pmg-train: --reward-weight {unknown}: unknown reward term(s); known: {sorted(cfg.w)}")
+    if args.reward_weight:
+        cfg = dataclasses.replace(cfg, w={**cfg.w, **args.reward_weight})
+        log("reward weights:", cfg.w)
     if args.actuator_dr is not None:
         cfg = dataclasses.replace(cfg, actuator_dr=args.actuator_dr)
     if args.actuator_dr_z is not None:

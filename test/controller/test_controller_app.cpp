@@ -223,8 +223,9 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
 }
 
 // pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
-// the default, and g1_sil_policy_sigma005.yaml, its sigma-0.05 fine-tune): the actor keeps the G1
-// upright and walks it forward on command; the tick allocates nothing.
+// the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
+// also drives teleoperation): the actor keeps the G1 upright and walks it forward on command; the
+// tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
@@ -256,7 +257,7 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
-                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_sigma005.yaml"));
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml"));
 
 }  // namespace
 }  // namespace pmg
