@@ -160,7 +160,7 @@ def parse_args(argv=None):
                     help="width of both velocity-tracking rewards exp(-err^2/S) (EnvConfig.lin_vel_sigma, yaw_rate_sigma; "
                          "default 0.25)")
     ap.add_argument("--yaw-rate-weight", type=float, default=None, metavar="W",
-                    help="weight of the yaw-rate tracking reward (EnvConfig.w['yaw_rate']; default 0.8, lin_vel 1.5)")
+                    help="weight of the yaw-rate tracking reward (EnvConfig.w['yaw_rate']; default 0.8, lin_vel 1.5); the same as --reward-weight yaw_rate=W")
     ap.add_argument("--reward-weight", action="append", default=[], metavar="NAME=W",
                     help="set one reward term's weight (EnvConfig.w: lin_vel, yaw_rate, orientation, height, ref_q, "
                          "ref_qd, contact, energy, action_rate, alive, termination); repeatable; an unknown NAME is an error")
@@ -183,13 +183,16 @@ def parse_args(argv=None):
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
     weights = {}
     for item in args.reward_weight:
-        name, sep, value = item.partition("=")
+        name, _, value = item.partition("=")
         try:
-            weights[name.strip()] = float(value)
+            w = float(value)
         except ValueError:
-            sep = ""
-        if not sep or not math.isfinite(weights.get(name.strip(), math.nan)):
+            w = math.nan
+        if not name.strip() or not math.isfinite(w):
             ap.error(f"--reward-weight {item!r}: expected NAME=W with a finite number W")
+        weights[name.strip()] = w
+    if args.yaw_rate_weight is not None:  # the older spelling of --reward-weight yaw_rate=W
+        weights["yaw_rate"] = args.yaw_rate_weight
     args.reward_weight = weights
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
@@ -281,8 +284,6 @@ def main(argv=None):
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
     if args.tracking_sigma is not None:
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
-    if args.yaw_rate_weight is not None:
-        cfg = dataclasses.replace(cfg, w={**cfg.w, "yaw_rate": args.yaw_rate_weight})
     unknown = sorted(set(args.reward_weight) - set(cfg.w))
     if unknown:
         raise SystemExit(f"pmg-train: --reward-weight {unknown}: unknown reward term(s); known: {sorted(cfg.w)}")
