@@ -215,6 +215,29 @@ double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d
 // A body's position in the world frame W [m] (mjData::xpos).
 Vector3d bodyPos(const mjData* d, int body) { return Vector3d(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2]); }
 
+// The contact normal force [N] that each of two bodies' subtrees (e.g. the left and the right hand
+// from the wrist roll link on) exerts on `body` now: the grip's squeeze, for the trace. MuJoCo's
+// mj_contactForce gives the force in the contact frame, whose first axis is the normal.
+std::array<double, 2> contactNormalForce(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root) {
+  std::array<double, 2> n{0.0, 0.0};
+  auto inSubtree = [&](int b, int root) {
+    for (; b > 0; b = m->body_parentid[b])
+      if (b == root) return true;
+    return false;
+  };
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    const int b1 = m->geom_bodyid[c.geom1], b2 = m->geom_bodyid[c.geom2];
+    const int other = b1 == body ? b2 : (b2 == body ? b1 : -1);
+    if (other < 0) continue;
+    mjtNum f[6];
+    mj_contactForce(m, d, i, f);
+    for (std::size_t h = 0; h < 2; ++h)
+      if (inSubtree(other, subtree_root[h])) n[h] += std::abs(f[0]);
+  }
+  return n;
+}
+
 // Where the operator holds a controller before squeezing its grip: where the teleop mapping
 // (p_T = c_T + s (p_H - c_H)) puts the robot hand now (seen at hand_R, frame R), so that the arm does
 // not jump when it starts to follow. c_T: the robot's shoulder centre; frame H: the headset's.
@@ -224,6 +247,18 @@ Vector3d controllerAtRobotHand(const mjData* d, int shoulder_l, int shoulder_r, 
   const Vector3d c_R = unyaw * (sh - torso_p);
   const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
   return c_H + (hand_R - c_R) / tc.arm_scale;
+}
+
+// As controllerAtRobotHand, for a robot whose torso is bent or leaning: the mapping's frame T is the
+// torso link with its pitch and roll (which the operator sees), not only its yaw. hand_R: the seen
+// robot hand (frame R); unyaw: W -> R.
+Vector3d controllerAtRobotHandBent(const mjData* d, int torso, int shoulder_l, int shoulder_r, const Eigen::AngleAxisd& unyaw,
+                                  const pmg::teleop::TeleopConfig& tc, const Vector3d& hand_R) {
+  const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> R_WT(d->xmat + 9 * torso);
+  const Eigen::Matrix3d R_TR = R_WT.transpose() * unyaw.inverse().toRotationMatrix();  // R -> T
+  const Vector3d c_T = R_WT.transpose() * (0.5 * (bodyPos(d, shoulder_l) + bodyPos(d, shoulder_r)) - bodyPos(d, torso));
+  const Vector3d c_H(tc.operator_shoulder_center_m[0], tc.operator_shoulder_center_m[1], tc.operator_shoulder_center_m[2]);
+  return c_H + (R_TR * hand_R - c_T) / tc.arm_scale;
 }
 
 // One line of an object track (include/pmg/render/object_track.hpp).
@@ -583,9 +618,23 @@ struct BoxOperatorConfig : OperatorCommon {
   double lift_speed = 0.10;        ///< hands' lifting and lowering speed [m/s]
   double carry_clearance_m = 0.08; ///< the box's bottom this far above the place table's top while carrying [m]
   double place_press_m = 0.01;     ///< lowering aims the box's bottom this far below the place top [m]
+  double max_lead_m = 0.10;        ///< the controller at most this far (robot scale) beyond the seen hand (anti-windup); 0 = no limit [m]
+  double hand_pitch_rad = 0.0;     ///< the controllers are turned so that the hands point forward, this far below horizontal (frame T) [rad]
+  double turn_s = 1.0;             ///< ... over this long after the grips are squeezed [s]
+  double stand_s = 3.0;            ///< lifting: stand up from the crouch and the bend over this long [s]
+  bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
+  double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
+  double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
   template <class A>
   void Serialize(A* a) {
     OperatorCommon::Serialize(a);
+    a->Visit("max_lead_m", &max_lead_m, "[m]");
+    a->Visit("hand_pitch_rad", &hand_pitch_rad, "[rad]");
+    a->Visit("turn_s", &turn_s, "[s]");
+    a->Visit("stand_s", &stand_s, "[s]");
+    a->Visit("lift_in_place", &lift_in_place, "true | false");
+    a->Visit("side_tol_m", &side_tol_m, "[m]");
+    a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
@@ -608,6 +657,12 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(spread_m > 0 && spread_m <= 0.2)) return "spread_m: expected (0, 0.2] m";
     if (!(squeeze_m >= 0 && squeeze_m <= 0.1)) return "squeeze_m: expected [0, 0.1] m";
     if (!(lift_speed > 0 && lift_speed <= 0.5)) return "lift_speed: expected (0, 0.5] m/s";
+    if (!(max_lead_m >= 0 && max_lead_m <= 1.0)) return "max_lead_m: expected [0, 1] m (0: no limit)";
+    if (!(std::abs(hand_pitch_rad) <= 0.8)) return "hand_pitch_rad: expected [-0.8, 0.8] rad";
+    if (!(turn_s > 0 && turn_s <= 10)) return "turn_s: expected (0, 10] s";
+    if (!(stand_s >= 0 && stand_s <= 10)) return "stand_s: expected [0, 10] s (0: at once)";
+    if (!(max_raise_m >= 0 && max_raise_m <= 0.3)) return "max_raise_m: expected [0, 0.3] m";
+    if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     return "";
   }
 };
@@ -635,6 +690,9 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   const std::array<int, 2> hand_body{mj_name2id(m, mjOBJ_BODY, "left_wrist_yaw_link"), mj_name2id(m, mjOBJ_BODY, "right_wrist_yaw_link")};
   if (hand_body[0] < 0 || hand_body[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks *_wrist_yaw_link");
   const double half_w = 0.5 * box.size[1], box_h = box.size[2];
+  const int box_body = mj_name2id(m, mjOBJ_BODY, ("task_" + box.name).c_str());
+  const std::array<int, 2> hand_subtree{mj_name2id(m, mjOBJ_BODY, "left_wrist_roll_link"), mj_name2id(m, mjOBJ_BODY, "right_wrist_roll_link")};
+  if (box_body < 0 || hand_subtree[0] < 0 || hand_subtree[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the box body or *_wrist_roll_link");
 
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_box(op.view_latency_s, op.view_noise_m, rng), see_box_room(op.view_latency_s, op.view_noise_m, rng),
@@ -650,6 +708,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   const std::array<Vector3d, 2> rest{Vector3d(0.30, 0.20, -0.45), Vector3d(0.30, -0.20, -0.45)};  // frame H
   std::array<Vector3d, 2> hand_H = rest;
   bool aligned = false;
+  std::array<Eigen::Quaterniond, 2> turn_H{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
+  double turn_t0 = 0.0;
   pmg::CommandSample sample;
 
   enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kDescend, kSqueeze, kLift, kCarry, kLower, kOpen, kWait, kDone };
@@ -660,11 +720,13 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   double carry_x = 0.0;    // the hands' forward place while carrying (frame R) [m]
   double squeeze_y = 0.0;  // half the distance between the wrists' targets (ramps) [m]
   double working_y = 0.0;  // the pelvis' lateral place at the pick table (W) [m]
+  double carry_y = 0.0;    // the hands' lateral centre while holding the box (frame R) [m]
+  double held_yaw = 0.0;   // the box's seen yaw (relative to the robot) when it was gripped [rad]
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
-         "left_hand_x,left_hand_y,left_hand_z\n";
+         "left_hand_x,left_hand_y,left_hand_z,grip_left_n,grip_right_n\n";
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -678,10 +740,25 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
     const auto& ts = app.controller().teleop()->status();
-    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f}\n", t,
+    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f}", t,
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p[1].x(), hand_p[1].y(), hand_p[1].z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
                        ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
+    {
+      const std::array<double, 2> grip_n = contactNormalForce(m, d, box_body, hand_subtree);
+      csv << fmt::format(",{:.2f},{:.2f}", grip_n[0], grip_n[1]);
+    }
+    csv << "\n";
+    if (std::getenv("PMG_DEBUG_CONTACTS") && k % 10 == 0) {  // DEBUG
+      for (int i = 0; i < d->ncon; ++i) {
+        const mjContact& c = d->contact[i];
+        const int b1 = m->geom_bodyid[c.geom1], b2 = m->geom_bodyid[c.geom2];
+        if (b1 != box_body && b2 != box_body) continue;
+        mjtNum f[6];
+        mj_contactForce(m, d, i, f);
+        fmt::print("DBG {:.2f} {} {} {} n={:.1f} frame_n=({:.2f},{:.2f},{:.2f})\n", t, phase_names[phase], mj_id2name(m, mjOBJ_BODY, b1), mj_id2name(m, mjOBJ_BODY, b2), f[0], c.frame[0], c.frame[1], c.frame[2]);
+      }
+    }
     if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, box.name, obj);  // 50 Hz
     const int pb = sim->pelvisBody();
     const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
@@ -710,12 +787,30 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const bool entered = phase != last_phase;
     last_phase = phase;
     bool grip = false, working = false;
+    double work_f = -1.0;  // crouch and look-down fraction when not all or nothing (standing up slowly)
     std::array<Vector3d, 2> target{hand_R[0], hand_R[1]};
     // The wrists' targets beside the box: centre c (frame R), half distance w across the box (its
     // sides' normal, as the operator sees the box turned).
     auto beside = [&](const Vector3d& c, double w) {
       target[0] = c + box_turn * Vector3d(0, w, 0);
       target[1] = c - box_turn * Vector3d(0, w, 0);
+    };
+    // Holding the box: the hands keep the grip's frame (centre and turn as when it was gripped)
+    // instead of following the box they hold: following it, a box that turned or slid in the grip
+    // turned or pushed the hands' targets further the same way, and slipped out.
+    auto holding = [&](double x, double z, double w) {
+      const Eigen::AngleAxisd turn(held_yaw, Vector3d::UnitZ());
+      target[0] = Vector3d(x, carry_y, z) + turn * Vector3d(0, w, 0);
+      target[1] = Vector3d(x, carry_y, z) - turn * Vector3d(0, w, 0);
+    };
+    // Lifting and carrying, the operator watches the box, not its own hands: the hands go up (or
+    // down) at most lift_speed until the box's bottom is seen carry_clearance_m above the place
+    // table's top, however far the box has sagged in the grip; at most max_raise_m above the
+    // nominal carrying height.
+    auto raiseBox = [&]() {
+      const double want = place.height + op.carry_clearance_m, bottom = box_room.z() - 0.5 * box_h;
+      const double rate = std::clamp(2.0 * (want - bottom), -op.lift_speed, op.lift_speed);
+      lift_z = std::min(carry_z_R + op.max_raise_m, lift_z + rate * dt);
     };
     // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
     const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + op.grasp_in_m, 0, 0);
@@ -757,6 +852,13 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         // In place: crouch and bend, the open hands going down beside the box to the grasp height.
         grip = working = true;
         beside(Vector3d(grasp_c.x(), grasp_c.y(), grasp_z_R), half_w + op.spread_m);
+        // A hand not yet seen beside the box (across it, within side_tol_m of its place) stays above
+        // the box's top: lowered early it lands on the box and shoves it away.
+        for (std::size_t h = 0; h < 2; ++h) {
+          const Vector3d off = box_turn.inverse() * (hand_R[h] - target[h]);
+          if (op.side_tol_m > 0 && std::hypot(off.x(), off.y()) > op.side_tol_m)
+            target[h].z() = std::max(target[h].z(), box_R.z() + 0.5 * box_h + op.hover_m);
+        }
         walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
         const double err = std::max((hand_R[0] - target[0]).norm(), (hand_R[1] - target[1]).norm());
         if ((err < 0.04 && t - phase_t0 > 1.5) || t - phase_t0 > 6.0) phase = kSqueeze, phase_t0 = t;
@@ -774,18 +876,23 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         // Up to the carrying height, standing up meanwhile (the head rises at once; the robot's
         // posture follows at the shaper's rate).
         grip = true;
-        if (entered) carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
-        lift_z = std::min(carry_z_R, lift_z + op.lift_speed * dt);
-        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
-        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m - 0.10, working_y), op.max_speed);
+        if (entered) {
+          carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
+          carry_y = 0.5 * (hand_R[0].y() + hand_R[1].y());
+          held_yaw = see_box_yaw.seen(t).x();
+        }
+        work_f = op.stand_s > 0 ? std::max(0.0, 1.0 - (t - phase_t0) / op.stand_s) : 0.0;
+        raiseBox();
+        holding(carry_x, lift_z, half_w - op.squeeze_m);
+        if (!op.lift_in_place) walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m - 0.10, working_y), op.max_speed);
         if (box_room.z() - 0.5 * box_h > place.height + 0.5 * op.carry_clearance_m && t - phase_t0 > 2.0)
           phase = kCarry, phase_t0 = t, walk_integral.setZero();
         if (t - phase_t0 > 12.0) phase = kCarry, phase_t0 = t, walk_integral.setZero();
         break;
       case kCarry: {
         grip = true;
-        lift_z = carry_z_R;
-        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
+        raiseBox();
+        holding(carry_x, lift_z, half_w - op.squeeze_m);
         const bool there = walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.carry_speed) < op.arrive_tol_m;
         if ((there && t - phase_t0 > 1.0) || t - phase_t0 > 25.0) phase = kLower, phase_t0 = t, walk_integral.setZero();
         break;
@@ -796,7 +903,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         const double x_goal = place_near_x + 0.04 - torso_p.x() + op.grasp_in_m;
         carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
         if (std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
-        beside(Vector3d(carry_x, box_R.y(), lift_z), half_w - op.squeeze_m);
+        holding(carry_x, lift_z, half_w - op.squeeze_m);
         walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.max_speed);
         if ((lift_z <= place_z_R && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
         break;
@@ -806,7 +913,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         if (entered) squeeze_y = half_w - op.squeeze_m;
         squeeze_y = std::min(half_w + op.spread_m, squeeze_y + (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
         if (t - phase_t0 > op.squeeze_s) lift_z += op.lift_speed * dt;  // then up, away from the box
-        beside(Vector3d(carry_x, box_R.y(), lift_z), squeeze_y);
+        holding(carry_x, lift_z, squeeze_y);
         if (t - phase_t0 > op.squeeze_s + 1.0) phase = kWait, phase_t0 = t;
         break;
       case kWait:
@@ -817,15 +924,43 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     }
     // Headset: displacement for walking, crouch and look-down while grasping.
     const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
-    vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
-    const Eigen::Quaterniond hq(Eigen::AngleAxisd(working ? op.look_down_rad : 0.0, Vector3d::UnitY()));
+    const double wf = work_f >= 0.0 ? work_f : (working ? 1.0 : 0.0);
+    vr.head_position = {disp.x(), disp.y(), head_z - wf * op.crouch_m};
+    const Eigen::Quaterniond hq(Eigen::AngleAxisd(wf * op.look_down_rad, Vector3d::UnitY()));
     vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
     if (grip && !aligned) {
-      for (std::size_t h = 0; h < 2; ++h) hand_H[h] = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R[h]);
+      for (std::size_t h = 0; h < 2; ++h) {
+        hand_H[h] = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R[h]);
+        // The hand's pointing direction (its x axis, along the forearm) in T when the grip is
+        // squeezed: the operator turns the controller so that the hand points forward (fingers
+        // along the box's side), the palm kept facing in.
+        const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> R_WT(d->xmat + 9 * torso), R_WHd(d->xmat + 9 * hand_body[h]);
+        const Vector3d x0 = (R_WT.transpose() * R_WHd).col(0);
+        const Vector3d want = Vector3d(std::cos(op.hand_pitch_rad), 0.0, -std::sin(op.hand_pitch_rad));
+        turn_H[h] = Eigen::Quaterniond::FromTwoVectors(x0, want);
+      }
       aligned = true;
+      turn_t0 = t;
+    }
+    if (aligned) {
+      const double f = std::clamp((t - turn_t0) / op.turn_s, 0.0, 1.0);
+      for (std::size_t h = 0; h < 2; ++h) {
+        const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity().slerp(f, turn_H[h]);
+        vr.hand_quat[h] = {qh.w(), qh.x(), qh.y(), qh.z()};
+      }
     }
     if (grip)
-      for (std::size_t h = 0; h < 2; ++h) hand_H[h] += op.hand_gain * dt * (target[h] - hand_R[h]) / tc.arm_scale;
+      for (std::size_t h = 0; h < 2; ++h) {
+        hand_H[h] += op.hand_gain * dt * (target[h] - hand_R[h]) / tc.arm_scale;
+        // Anti-windup: an operator does not hold the controller further than max_lead_m (robot
+        // scale) beyond where the robot's hand is seen: a hand that stalls is not pushed on.
+        if (op.max_lead_m > 0) {
+          const Vector3d at = controllerAtRobotHandBent(d, torso, shoulder_l, shoulder_r, unyaw, tc, hand_R[h]);
+          const Vector3d lead = hand_H[h] - at;
+          const double lim = op.max_lead_m / tc.arm_scale;
+          if (lead.norm() > lim) hand_H[h] = at + lead * (lim / lead.norm());
+        }
+      }
     const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
     for (std::size_t h = 0; h < 2; ++h) {
       const Vector3d p = head + (aligned ? hand_H[h] : rest[h]);

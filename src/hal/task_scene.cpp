@@ -89,6 +89,9 @@ template <class A>
 void TaskScene::Serialize(A* a) {
   a->Visit("tables", &tables, "static tables", yaml::kRequired);
   a->Visit("objects", &objects, "free objects on the tables", yaml::kRequired);
+  a->Visit("hand_collision", &hand_collision, "the robot's rubber hands get collision geoms (true | false)");
+  a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
+  a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
 }
 
 const TaskTable& TaskScene::table(const std::string& name) const {
@@ -110,6 +113,9 @@ Eigen::Vector2d tablePointInWorld(const TaskTable& t, const std::array<double, 2
 
 void TaskScene::check() const {
   const std::string where = source.empty() ? std::string("task scene") : source;
+  if (!(impratio >= 1.0 && impratio <= 100.0)) throw ConfigError(fmt::format("{}: impratio = {}: expected [1, 100]", where, impratio));
+  if (cone != "pyramidal" && cone != "elliptic")
+    throw ConfigError(fmt::format("{}: cone = '{}': expected pyramidal | elliptic", where, cone));
   std::set<std::string> names;
   for (const auto& t : tables)
     if (!names.insert(t.name).second) throw ConfigError(fmt::format("{}: tables.{}: the name is used twice", where, t.name));
@@ -218,6 +224,33 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
     xml = withAbsoluteMeshdir(xml, fs::absolute(fs::path(robot.mjcf_path)).parent_path().string());
   } catch (const std::runtime_error& e) {
     throw ConfigError(robot.mjcf_path + ": " + e.what());
+  }
+  if (scene.hand_collision) {
+    // A collision copy of each rubber hand's visual geom: the same mesh and pose, default contact
+    // classes, no mass (the visual geom has density 0 too, so the model's inertias are unchanged).
+    const std::string visual_attrs = "contype=\"0\" conaffinity=\"0\" group=\"1\" density=\"0\" ";
+    for (const char* side : {"left", "right"}) {
+      const std::string key = std::string("mesh=\"") + side + "_rubber_hand\"/>";
+      const auto at = xml.find(key);
+      const auto open = at == std::string::npos ? std::string::npos : xml.rfind("<geom", at);
+      std::string geom = open == std::string::npos ? std::string() : xml.substr(open, at + key.size() - open);
+      const auto attrs = geom.find(visual_attrs);
+      if (attrs == std::string::npos)
+        throw ConfigError(robot.mjcf_path + ": hand_collision: no visual <geom " + visual_attrs + "mesh=\"" + side +
+                          "_rubber_hand\"/> to copy (scene " + scene.source + ")");
+      geom.erase(attrs, visual_attrs.size());
+      geom.insert(5, " name=\"task_" + std::string(side) + "_hand_collision\" mass=\"0\" friction=\"1.0 0.005 0.0001\"");
+      xml.insert(at + key.size(), "\n" + geom);
+    }
+  }
+  if (scene.impratio != 1.0 || scene.cone != "pyramidal") {
+    // The scene's contact options, written after <compiler> (the robot's MJCF has no <option> of its own).
+    if (xml.find("<option") != std::string::npos)
+      throw ConfigError(robot.mjcf_path + ": impratio/cone: the robot MJCF has an <option> already (scene " + scene.source + ")");
+    const auto comp = xml.find("<compiler");
+    const auto comp_end = comp == std::string::npos ? std::string::npos : xml.find('>', comp);
+    if (comp_end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no <compiler> to put <option> after");
+    xml.insert(comp_end + 1, fmt::format("\n  <option impratio=\"{}\" cone=\"{}\"/>", scene.impratio, scene.cone));
   }
   const auto end = xml.rfind("</worldbody>");
   if (end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no </worldbody>");

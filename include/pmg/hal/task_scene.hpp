@@ -85,6 +85,20 @@ struct TaskScene {
   std::string source;  ///< the file it was read from ("" if built in code)
   std::vector<TaskTable> tables;
   std::vector<TaskObject> objects;
+  /// Give the robot's rubber hands contact: a collision copy of each `*_rubber_hand` visual mesh
+  /// (MuJoCo collides its convex hull; mass 0, friction 1.0). The public G1 MJCF renders the hands
+  /// without contact, so the wrist links (0.13 m behind the finger tips) were all that touched an
+  /// object. Off by default (the wiping operator was tuned and measured without it).
+  bool hand_collision = false;
+  /// MuJoCo's `option/impratio` for the composed model, [1, 100]: the ratio of the frictional to the
+  /// normal constraints' impedance. MuJoCo's default 1 lets an object held by friction creep out of a
+  /// squeeze (soft friction constraints slide under a steady load); MuJoCo's documentation
+  /// recommends a larger value with elliptic cones for grasping. It applies to every contact of the
+  /// composed model, the feet's too. Default 1 (the robot's own model, no `<option>` written).
+  double impratio = 1.0;
+  /// MuJoCo's `option/cone`: "pyramidal" (MuJoCo's default, the model the policies were trained
+  /// with) or "elliptic".
+  std::string cone = "pyramidal";
   template <class A>
   void Serialize(A* a);
   /// Cross-checks: unique names, `on` names a table, footprints on the top (nominal and at the
