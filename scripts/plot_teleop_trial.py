@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Trace plot of one pmg_teleop_bench trial (issue 14): pelvis, working hand and object over time,
-with the operator's phases shaded.
+with the operator's phases shaded; a box trial adds the left hand and the grip (the contact normal
+force of each hand on the box).
 
     python3 scripts/plot_teleop_trial.py out/bench_wipe/trial_0.csv [--out trial_0.png]
 """
@@ -21,10 +22,13 @@ def main():
     rows = list(csv.DictReader(open(a.csv)))
     t = [float(r["t"]) for r in rows]
     col = lambda k: [float(r[k]) for r in rows]  # noqa: E731
-    fig, ax = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    grip = "grip_left_n" in rows[0]
+    fig, ax = plt.subplots(4 if grip else 3, 1, figsize=(10, 10 if grip else 8), sharex=True)
     for i, axis in enumerate("xyz"):
         ax[i].plot(t, col("pelvis_" + axis), label="pelvis")
-        ax[i].plot(t, col("hand_" + axis), label="working hand (wrist)")
+        ax[i].plot(t, col("hand_" + axis), label="right hand (wrist)" if grip else "working hand (wrist)")
+        if grip:
+            ax[i].plot(t, col("left_hand_" + axis), label="left hand (wrist)")
         ax[i].plot(t, col("obj_" + axis), label="object")
         ax[i].set_ylabel(f"{axis} in W [m]")
         ax[i].grid(alpha=0.3)
@@ -35,8 +39,14 @@ def main():
                 x.axvspan(t[start], t[k - 1], alpha=0.06 * (1 + (start % 2)), color="gray")
             ax[0].text(t[start], ax[0].get_ylim()[1], rows[start]["phase"], fontsize=8, va="top")
             start = k
+    if grip:
+        ax[3].plot(t, col("grip_left_n"), label="left hand on the box")
+        ax[3].plot(t, col("grip_right_n"), label="right hand on the box")
+        ax[3].set_ylabel("contact normal force [N]")
+        ax[3].grid(alpha=0.3)
+        ax[3].legend(fontsize=8, loc="upper right")
     ax[0].legend(fontsize=8, loc="lower right")
-    ax[2].set_xlabel("t [s]")
+    ax[-1].set_xlabel("t [s]")
     fig.suptitle(a.csv)
     fig.tight_layout()
     out = a.out or a.csv.replace(".csv", ".png")

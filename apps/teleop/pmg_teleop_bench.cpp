@@ -623,6 +623,7 @@ struct BoxOperatorConfig : OperatorCommon {
   double turn_s = 1.0;             ///< ... over this long after the grips are squeezed [s]
   double stand_s = 3.0;            ///< lifting: stand up from the crouch and the bend over this long [s]
   bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
+  bool feedforward = false;        ///< the controllers held where the mapping puts the hands at their targets (torso pose as now), plus the seen error's integral (at most max_lead_m)
   double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
   template <class A>
@@ -635,6 +636,7 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("lift_in_place", &lift_in_place, "true | false");
     a->Visit("side_tol_m", &side_tol_m, "[m]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
+    a->Visit("feedforward", &feedforward, "true | false");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
@@ -707,6 +709,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   vr.hand_valid = {true, true};
   const std::array<Vector3d, 2> rest{Vector3d(0.30, 0.20, -0.45), Vector3d(0.30, -0.20, -0.45)};  // frame H
   std::array<Vector3d, 2> hand_H = rest;
+  std::array<Vector3d, 2> hand_bias{Vector3d::Zero(), Vector3d::Zero()};  // feedforward: the seen error's integral (frame H)
   bool aligned = false;
   std::array<Eigen::Quaterniond, 2> turn_H{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
   double turn_t0 = 0.0;
@@ -749,16 +752,6 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[0], grip_n[1]);
     }
     csv << "\n";
-    if (std::getenv("PMG_DEBUG_CONTACTS") && k % 10 == 0) {  // DEBUG
-      for (int i = 0; i < d->ncon; ++i) {
-        const mjContact& c = d->contact[i];
-        const int b1 = m->geom_bodyid[c.geom1], b2 = m->geom_bodyid[c.geom2];
-        if (b1 != box_body && b2 != box_body) continue;
-        mjtNum f[6];
-        mj_contactForce(m, d, i, f);
-        fmt::print("DBG {:.2f} {} {} {} n={:.1f} frame_n=({:.2f},{:.2f},{:.2f})\n", t, phase_names[phase], mj_id2name(m, mjOBJ_BODY, b1), mj_id2name(m, mjOBJ_BODY, b2), f[0], c.frame[0], c.frame[1], c.frame[2]);
-      }
-    }
     if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, box.name, obj);  // 50 Hz
     const int pb = sim->pelvisBody();
     const double yaw = yawOf(Eigen::Quaterniond(d->xquat[4 * pb], d->xquat[4 * pb + 1], d->xquat[4 * pb + 2], d->xquat[4 * pb + 3]));
@@ -951,6 +944,15 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     }
     if (grip)
       for (std::size_t h = 0; h < 2; ++h) {
+        if (op.feedforward) {
+          // The operator holds the controller where the mapping puts the robot hand at its target,
+          // for the torso's pitch and roll as they are now (as a person keeps a held box in front of
+          // them while standing up), plus a correction of what it sees still off.
+          hand_bias[h] += op.hand_gain * dt * (target[h] - hand_R[h]) / tc.arm_scale;
+          if (hand_bias[h].norm() > op.max_lead_m / tc.arm_scale) hand_bias[h] *= op.max_lead_m / tc.arm_scale / hand_bias[h].norm();
+          hand_H[h] = controllerAtRobotHandBent(d, torso, shoulder_l, shoulder_r, unyaw, tc, target[h]) + hand_bias[h];
+          continue;
+        }
         hand_H[h] += op.hand_gain * dt * (target[h] - hand_R[h]) / tc.arm_scale;
         // Anti-windup: an operator does not hold the controller further than max_lead_m (robot
         // scale) beyond where the robot's hand is seen: a hand that stalls is not pushed on.

@@ -90,6 +90,7 @@ void TaskScene::Serialize(A* a) {
   a->Visit("tables", &tables, "static tables", yaml::kRequired);
   a->Visit("objects", &objects, "free objects on the tables", yaml::kRequired);
   a->Visit("hand_collision", &hand_collision, "the robot's rubber hands get collision geoms (true | false)");
+  a->Visit("hand_torsional_friction", &hand_torsional_friction, "the rubber hands' torsional friction [m], [0, 0.1]");
   a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
   a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
 }
@@ -113,6 +114,10 @@ Eigen::Vector2d tablePointInWorld(const TaskTable& t, const std::array<double, 2
 
 void TaskScene::check() const {
   const std::string where = source.empty() ? std::string("task scene") : source;
+  if (!(hand_torsional_friction >= 0.0 && hand_torsional_friction <= 0.1))
+    throw ConfigError(fmt::format("{}: hand_torsional_friction = {}: expected [0, 0.1] m", where, hand_torsional_friction));
+  if (hand_torsional_friction > 0.0 && !hand_collision)
+    throw ConfigError(fmt::format("{}: hand_torsional_friction needs hand_collision: true", where));
   if (!(impratio >= 1.0 && impratio <= 100.0)) throw ConfigError(fmt::format("{}: impratio = {}: expected [1, 100]", where, impratio));
   if (cone != "pyramidal" && cone != "elliptic")
     throw ConfigError(fmt::format("{}: cone = '{}': expected pyramidal | elliptic", where, cone));
@@ -239,7 +244,9 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
         throw ConfigError(robot.mjcf_path + ": hand_collision: no visual <geom " + visual_attrs + "mesh=\"" + side +
                           "_rubber_hand\"/> to copy (scene " + scene.source + ")");
       geom.erase(attrs, visual_attrs.size());
-      geom.insert(5, " name=\"task_" + std::string(side) + "_hand_collision\" mass=\"0\" friction=\"1.0 0.005 0.0001\"");
+      const double torsional = scene.hand_torsional_friction;
+      geom.insert(5, fmt::format(" name=\"task_{}_hand_collision\" mass=\"0\" friction=\"1.0 {} 0.0001\" condim=\"{}\"", side,
+                                 torsional > 0 ? torsional : 0.005, torsional > 0 ? 4 : 3));
       xml.insert(at + key.size(), "\n" + geom);
     }
   }

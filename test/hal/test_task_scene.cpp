@@ -108,6 +108,12 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
       {"reversed_range", table + obj + ", randomize: {x: [0.1, -0.1]}}\n", "x = [0.1, -0.1]: expected [lo, hi]"},
       {"duplicate_name", table + "objects:\n  - {name: t, kind: box, size: [0.1, 0.1, 0.1], mass: 0.1, on: t}\n",
        "objects.t: the name is used twice"},
+      {"impratio_low", "impratio: 0.5\n" + table + obj + "}\n", "impratio = 0.5: expected [1, 100]"},
+      {"bad_cone", "cone: round\n" + table + obj + "}\n", "cone = 'round': expected pyramidal | elliptic"},
+      {"torsional_range", "hand_collision: true\nhand_torsional_friction: 0.3\n" + table + obj + "}\n",
+       "hand_torsional_friction = 0.3: expected [0, 0.1] m"},
+      {"torsional_without_hands", "hand_torsional_friction: 0.05\n" + table + obj + "}\n",
+       "hand_torsional_friction needs hand_collision: true"},
   };
   const test::TempDir dir;
   for (const auto& b : bad) {
@@ -126,6 +132,42 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
   MujocoBackend sim(robot, free_standing());
   EXPECT_THROW(taskObjectState(sim.model(), sim.data(), "towel"), std::out_of_range);
   EXPECT_NO_THROW(taskObjectState(sim.model(), sim.data(), "box"));
+}
+
+// The box scene's contact for a grasp without fingers: the composed model has the rubber hands'
+// collision copies (contact on, massless: the model's total mass is the robot's plus the objects'),
+// with torsional friction (condim 4), and MuJoCo's elliptic cones with impratio 10; the wiping
+// scene keeps the robot's own contact model (no hand collision, pyramidal, impratio 1).
+TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {
+  const test::TempDir dir;
+  const TaskScene box = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  const RobotConfig with_box = robotWithTaskScene(test::g1Robot(), box, dir.file("box.xml"));
+  MujocoBackend sim(with_box, free_standing());
+  const mjModel* m = sim.model();
+  EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
+  EXPECT_DOUBLE_EQ(m->opt.impratio, 10.0);
+  double objects_mass = 0.0;
+  for (const auto& o : box.objects) objects_mass += o.mass;
+  for (const char* side : {"left", "right"}) {
+    const int g = mj_name2id(m, mjOBJ_GEOM, (std::string("task_") + side + "_hand_collision").c_str());
+    ASSERT_GE(g, 0) << side;
+    EXPECT_EQ(m->geom_contype[g], 1) << side;
+    EXPECT_EQ(m->geom_conaffinity[g], 1) << side;
+    EXPECT_EQ(m->geom_condim[g], 4) << side;
+    EXPECT_DOUBLE_EQ(m->geom_friction[3 * g + 1], 0.05) << side;
+    EXPECT_STREQ(mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[g]), (std::string(side) + "_wrist_yaw_link").c_str());
+  }
+  const TaskScene wipe = loadTaskScene(test::sourcePath("config/tasks/wipe_scene.yaml"));
+  const RobotConfig with_towel = robotWithTaskScene(test::g1Robot(), wipe, dir.file("wipe.xml"));
+  MujocoBackend sim_wipe(with_towel, free_standing());
+  const mjModel* mw = sim_wipe.model();
+  EXPECT_EQ(mw->opt.cone, mjCONE_PYRAMIDAL);
+  EXPECT_DOUBLE_EQ(mw->opt.impratio, 1.0);
+  EXPECT_LT(mj_name2id(mw, mjOBJ_GEOM, "task_left_hand_collision"), 0);
+  // The hands' copies add no mass: both composed models weigh the robot plus their objects.
+  double wipe_objects = 0.0;
+  for (const auto& o : wipe.objects) wipe_objects += o.mass;
+  EXPECT_NEAR(mj_getTotalmass(const_cast<mjModel*>(m)) - objects_mass, mj_getTotalmass(const_cast<mjModel*>(mw)) - wipe_objects, 1e-9);
 }
 
 }  // namespace

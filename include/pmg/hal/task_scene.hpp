@@ -90,6 +90,12 @@ struct TaskScene {
   /// without contact, so the wrist links (0.13 m behind the finger tips) were all that touched an
   /// object. Off by default (the wiping operator was tuned and measured without it).
   bool hand_collision = false;
+  /// With hand_collision: the rubber hands' torsional friction coefficient [m], [0, 0.1] (MuJoCo's
+  /// second friction coefficient, with condim 4). A rubber pad touches over a patch of a few
+  /// centimetres and resists turning about the contact normal; MuJoCo's point contact (condim 3)
+  /// does not, so a box squeezed between two hands pivots freely about the line through the two
+  /// contacts. 0 (default): condim 3, MuJoCo's default torsional coefficient 0.005 unused.
+  double hand_torsional_friction = 0.0;
   /// MuJoCo's `option/impratio` for the composed model, [1, 100]: the ratio of the frictional to the
   /// normal constraints' impedance. MuJoCo's default 1 lets an object held by friction creep out of a
   /// squeeze (soft friction constraints slide under a steady load); MuJoCo's documentation
