@@ -302,7 +302,7 @@ struct TrialResult {
   pmg::TaskVerdict verdict;
   bool fell = false;
   double seconds = 0.0;
-  int regrabs = 0;  ///< times the operator placed the hand again after it slipped off the towel
+  int regrabs = 0;  ///< times the operator placed the hand again after it slipped off the towel (wipe) / gripped the box again (box)
 };
 
 // One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
@@ -623,6 +623,8 @@ struct BoxOperatorConfig : OperatorCommon {
   double turn_s = 1.0;             ///< ... over this long after the grips are squeezed [s]
   double stand_s = 3.0;            ///< lifting: stand up from the crouch and the bend over this long [s]
   bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
+  double stand_after_lift_m = 0.0; ///< lifting: stay crouched and bent until the box's bottom is seen this far above the pick top, then stand up over stand_s; 0 = at once [m]
+  int max_regrabs = 0;             ///< a box seen back on the pick table, upright, after a lift: open, lower the hands beside it and grip it again, at most this often
   bool feedforward = false;        ///< the controllers held where the mapping puts the hands at their targets (torso pose as now), plus the seen error's integral (at most max_lead_m)
   double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
@@ -637,6 +639,8 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("side_tol_m", &side_tol_m, "[m]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
+    a->Visit("stand_after_lift_m", &stand_after_lift_m, "[m]");
+    a->Visit("max_regrabs", &max_regrabs, "[0, 5]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
@@ -664,6 +668,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(turn_s > 0 && turn_s <= 10)) return "turn_s: expected (0, 10] s";
     if (!(stand_s >= 0 && stand_s <= 10)) return "stand_s: expected [0, 10] s (0: at once)";
     if (!(max_raise_m >= 0 && max_raise_m <= 0.3)) return "max_raise_m: expected [0, 0.3] m";
+    if (!(stand_after_lift_m >= 0 && stand_after_lift_m <= 0.3)) return "stand_after_lift_m: expected [0, 0.3] m (0: at once)";
+    if (!(max_regrabs >= 0 && max_regrabs <= 5)) return "max_regrabs: expected [0, 5]";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     return "";
   }
@@ -699,7 +705,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_box(op.view_latency_s, op.view_noise_m, rng), see_box_room(op.view_latency_s, op.view_noise_m, rng),
       see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_yaw(op.view_latency_s, 0.0, rng),
-      see_box_yaw(op.view_latency_s, 0.0, rng);  // the box's yaw relative to the robot's heading (x) [rad]
+      see_box_yaw(op.view_latency_s, 0.0, rng),  // the box's yaw relative to the robot's heading (x) [rad]
+      see_box_up(op.view_latency_s, 0.0, rng);   // the box's z axis in W (upright: (0, 0, 1))
   std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
 
@@ -725,6 +732,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   double working_y = 0.0;  // the pelvis' lateral place at the pick table (W) [m]
   double carry_y = 0.0;    // the hands' lateral centre while holding the box (frame R) [m]
   double held_yaw = 0.0;   // the box's seen yaw (relative to the robot) when it was gripped [rad]
+  double stand_t0 = -1.0;  // lifting: when standing up began (< 0: not yet) [s]
+  int regrabs = 0;         // times the box was gripped again after it stayed on (or fell back onto) the pick table
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
@@ -761,6 +770,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     see_pelvis.push(t, pelvis);
     see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     see_box_yaw.push(t, Vector3d(std::remainder(yawOf(obj.q_W) - yaw, 2.0 * M_PI), 0.0, 0.0));
+    see_box_up.push(t, obj.q_W * Vector3d::UnitZ());
     for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
     const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
@@ -870,15 +880,23 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         // posture follows at the shaper's rate).
         grip = true;
         if (entered) {
+          stand_t0 = -1.0;
           carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
           carry_y = 0.5 * (hand_R[0].y() + hand_R[1].y());
           held_yaw = see_box_yaw.seen(t).x();
         }
-        work_f = op.stand_s > 0 ? std::max(0.0, 1.0 - (t - phase_t0) / op.stand_s) : 0.0;
+        // Stand up only once the box is seen clear of the pick top (standing up swings the hands
+        // back with the torso and drags a box still on the table out of a grip at its near part).
+        if (stand_t0 < 0 && op.stand_after_lift_m <= 0) stand_t0 = phase_t0;
+        if (stand_t0 < 0 && (box_room.z() - 0.5 * box_h > pick.height + op.stand_after_lift_m || t - phase_t0 > 4.0)) stand_t0 = t;
+        work_f = stand_t0 < 0 ? 1.0 : (op.stand_s > 0 ? std::max(0.0, 1.0 - (t - stand_t0) / op.stand_s) : 0.0);
         raiseBox();
         holding(carry_x, lift_z, half_w - op.squeeze_m);
         if (!op.lift_in_place) walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m - 0.10, working_y), op.max_speed);
-        if (box_room.z() - 0.5 * box_h > place.height + 0.5 * op.carry_clearance_m && t - phase_t0 > 2.0)
+        // Walk off with the box once it is up and, with stand_after_lift_m, once the robot has stood
+        // up (standing up while stepping off swung the box out of the hands).
+        if (box_room.z() - 0.5 * box_h > place.height + 0.5 * op.carry_clearance_m && t - phase_t0 > 2.0 &&
+            (op.stand_after_lift_m <= 0 || (stand_t0 >= 0 && t - stand_t0 > op.stand_s + 0.5)))
           phase = kCarry, phase_t0 = t, walk_integral.setZero();
         if (t - phase_t0 > 12.0) phase = kCarry, phase_t0 = t, walk_integral.setZero();
         break;
@@ -977,6 +995,14 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       fell = true;
       break;
     }
+    // A box seen back on the pick table, upright, while lifting or carrying: it slipped out of the
+    // hands. Open them and lower them beside it again (kDescend keeps a hand above the box's top
+    // until it is beside the box).
+    if ((phase == kLift || phase == kCarry) && t - phase_t0 > 2.0 && regrabs < op.max_regrabs) {
+      const double bottom = box_room.z() - 0.5 * box_h;
+      const Eigen::Vector3d up = see_box_up.seen(t);
+      if (std::abs(bottom - pick.height) < 0.02 && up.z() > std::cos(0.2)) phase = kDescend, phase_t0 = t, ++regrabs;
+    }
     // A box seen below the pick table's top has fallen: nothing left to do.
     if (phase > kSqueeze && box_room.z() < pick.height - 0.05) phase = kDone;
   }
@@ -986,6 +1012,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
   r.verdict = pmg::judgeBox(scene, box.name, pick.name, place.name, traj, fell);
+  r.regrabs = regrabs;
   return r;
 }
 
