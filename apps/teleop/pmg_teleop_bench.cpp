@@ -623,6 +623,8 @@ struct BoxOperatorConfig : OperatorCommon {
   double turn_s = 1.0;             ///< ... over this long after the grips are squeezed [s]
   double stand_s = 3.0;            ///< lifting: stand up from the crouch and the bend over this long [s]
   bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
+  double slide_to_m = -2.0;        ///< gripped, a box whose near side lies further beyond the pick top's edge than this is slid towards the robot to it and gripped again; < -1 = never [m]
+  double slide_speed = 0.05;       ///< ... at this speed [m/s]
   double stand_after_lift_m = 0.0; ///< lifting: stay crouched and bent until the box's bottom is seen this far above the pick top, then stand up over stand_s; 0 = at once [m]
   int max_regrabs = 0;             ///< a box seen back on the pick table, upright, after a lift: open, lower the hands beside it and grip it again, at most this often
   bool feedforward = false;        ///< the controllers held where the mapping puts the hands at their targets (torso pose as now), plus the seen error's integral (at most max_lead_m)
@@ -640,6 +642,8 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
     a->Visit("stand_after_lift_m", &stand_after_lift_m, "[m]");
+    a->Visit("slide_to_m", &slide_to_m, "[m]");
+    a->Visit("slide_speed", &slide_speed, "[m/s]");
     a->Visit("max_regrabs", &max_regrabs, "[0, 5]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
@@ -670,6 +674,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(max_raise_m >= 0 && max_raise_m <= 0.3)) return "max_raise_m: expected [0, 0.3] m";
     if (!(stand_after_lift_m >= 0 && stand_after_lift_m <= 0.3)) return "stand_after_lift_m: expected [0, 0.3] m (0: at once)";
     if (!(max_regrabs >= 0 && max_regrabs <= 5)) return "max_regrabs: expected [0, 5]";
+    if (!(slide_to_m >= -2.0 && slide_to_m <= 0.3)) return "slide_to_m: expected [-2, 0.3] m (< -1: never)";
+    if (!(slide_speed > 0 && slide_speed <= 0.2)) return "slide_speed: expected (0, 0.2] m/s";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     return "";
   }
@@ -722,8 +728,11 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   double turn_t0 = 0.0;
   pmg::CommandSample sample;
 
-  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kDescend, kSqueeze, kLift, kCarry, kLower, kOpen, kWait, kDone };
-  const char* phase_names[] = {"settle", "engage", "approach", "raise", "close_in", "descend", "squeeze", "lift", "carry", "lower", "open", "wait", "done"};
+  enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kDescend, kSqueeze, kSlide, kRelease, kLift, kCarry, kLower, kOpen, kWait, kDone };
+  const char* phase_names[] = {"settle",  "engage", "approach", "raise", "close_in", "descend", "squeeze", "slide",
+                               "release", "lift",   "carry",    "lower", "open",     "wait",    "done"};
+  bool slid = false;     // the box was slid towards the robot and gripped again
+  double slide_x = 0.0;  // sliding: the hands' forward place (frame R, ramps back) [m]
   Phase phase = kSettle, last_phase = kDone;
   double phase_t0 = 0.0;
   double lift_z = 0.0;     // the hands' height target while lifting / lowering (frame R, ramps) [m]
@@ -815,6 +824,9 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       const double rate = std::clamp(2.0 * (want - bottom), -op.lift_speed, op.lift_speed);
       lift_z = std::min(carry_z_R + op.max_raise_m, lift_z + rate * dt);
     };
+    // The box's near side as the operator sees it (W x; the tables face the robot's start) [m].
+    auto boxNearSide = [&]() { return box_room.x() - 0.5 * box.size[0] * std::abs(std::cos(see_box_yaw.seen(t).x() + yaw_seen)) -
+                                      0.5 * box.size[1] * std::abs(std::sin(see_box_yaw.seen(t).x() + yaw_seen)); };
     // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
     const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + op.grasp_in_m, 0, 0);
     switch (phase) {
@@ -856,10 +868,12 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         grip = working = true;
         beside(Vector3d(grasp_c.x(), grasp_c.y(), grasp_z_R), half_w + op.spread_m);
         // A hand not yet seen beside the box (across it, within side_tol_m of its place) stays above
-        // the box's top: lowered early it lands on the box and shoves it away.
+        // the box's top: lowered early it lands on the box and shoves it away. After a slide the
+        // open hands are beside the box already and move along its sides at the grasp height
+        // (raised over it, they dragged it forward again).
         for (std::size_t h = 0; h < 2; ++h) {
           const Vector3d off = box_turn.inverse() * (hand_R[h] - target[h]);
-          if (op.side_tol_m > 0 && std::hypot(off.x(), off.y()) > op.side_tol_m)
+          if (op.side_tol_m > 0 && !slid && std::hypot(off.x(), off.y()) > op.side_tol_m)
             target[h].z() = std::max(target[h].z(), box_R.z() + 0.5 * box_h + op.hover_m);
         }
         walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
@@ -873,7 +887,32 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         squeeze_y = std::max(half_w - op.squeeze_m, squeeze_y - (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
         beside(Vector3d(grasp_c.x(), grasp_c.y(), grasp_z_R), squeeze_y);
         walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
-        if (t - phase_t0 > op.squeeze_s + 0.5) phase = kLift, phase_t0 = t, lift_z = 0.5 * (hand_R[0].z() + hand_R[1].z());
+        if (t - phase_t0 > op.squeeze_s + 0.5) {
+          // A box whose near side is further beyond the pick top's edge than slide_to_m is first slid
+          // towards the robot and gripped again, nearer its centre of mass.
+          if (op.slide_to_m > -1.0 && !slid && boxNearSide() - pick_near_x > op.slide_to_m + 0.01)
+            phase = kSlide, phase_t0 = t, slide_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
+          else
+            phase = kLift, phase_t0 = t, lift_z = 0.5 * (hand_R[0].z() + hand_R[1].z());
+        }
+        break;
+      case kSlide:
+        // Gripped, the hands draw back at slide_speed along the table until the box's near side is
+        // seen slide_to_m beyond the pick top's edge.
+        grip = working = true;
+        slide_x -= op.slide_speed * dt;
+        beside(Vector3d(slide_x, grasp_c.y(), grasp_z_R), half_w - op.squeeze_m);
+        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
+        if (boxNearSide() - pick_near_x <= op.slide_to_m || t - phase_t0 > 6.0) phase = kRelease, phase_t0 = t;
+        break;
+      case kRelease:
+        // Open the hands beside the box; then lower them beside it again (kDescend) and squeeze.
+        grip = working = true;
+        if (entered) squeeze_y = half_w - op.squeeze_m;
+        squeeze_y = std::min(half_w + op.spread_m, squeeze_y + (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
+        beside(Vector3d(std::min(grasp_c.x(), 0.5 * (hand_R[0].x() + hand_R[1].x())), grasp_c.y(), grasp_z_R), squeeze_y);
+        walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
+        if (t - phase_t0 > op.squeeze_s + 0.3) phase = kDescend, phase_t0 = t, slid = true;
         break;
       case kLift:
         // Up to the carrying height, standing up meanwhile (the head rises at once; the robot's
