@@ -784,7 +784,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
     const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
     const double yaw_seen = see_yaw.seen(t).x();
-    const Eigen::AngleAxisd box_turn(see_box_yaw.seen(t).x(), Vector3d::UnitZ());  // box frame -> R
+    const double box_yaw_R = see_box_yaw.seen(t).x();  // the box's seen yaw relative to the robot's heading [rad]
+    const Eigen::AngleAxisd box_turn(box_yaw_R, Vector3d::UnitZ());  // box frame -> R
 
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
@@ -825,8 +826,10 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       lift_z = std::min(carry_z_R + op.max_raise_m, lift_z + rate * dt);
     };
     // The box's near side as the operator sees it (W x; the tables face the robot's start) [m].
-    auto boxNearSide = [&]() { return box_room.x() - 0.5 * box.size[0] * std::abs(std::cos(see_box_yaw.seen(t).x() + yaw_seen)) -
-                                      0.5 * box.size[1] * std::abs(std::sin(see_box_yaw.seen(t).x() + yaw_seen)); };
+    auto boxNearSide = [&]() {
+      const double yaw_W = box_yaw_R + yaw_seen;
+      return box_room.x() - 0.5 * box.size[0] * std::abs(std::cos(yaw_W)) - 0.5 * box.size[1] * std::abs(std::sin(yaw_W));
+    };
     // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
     const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + op.grasp_in_m, 0, 0);
     switch (phase) {
@@ -922,7 +925,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
           stand_t0 = -1.0;
           carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
           carry_y = 0.5 * (hand_R[0].y() + hand_R[1].y());
-          held_yaw = see_box_yaw.seen(t).x();
+          held_yaw = box_yaw_R;
         }
         // Stand up only once the box is seen clear of the pick top (standing up swings the hands
         // back with the torso and drags a box still on the table out of a grip at its near part).
