@@ -40,8 +40,16 @@ def main():
             ax[0].text(t[start], ax[0].get_ylim()[1], rows[start]["phase"], fontsize=8, va="top")
             start = k
     if grip:
-        ax[3].plot(t, col("grip_left_n"), label="left hand on the box")
-        ax[3].plot(t, col("grip_right_n"), label="right hand on the box")
+        ax[3].plot(t, col("grip_left_n"), label="left arm (wrist links and hand) on the box")
+        ax[3].plot(t, col("grip_right_n"), label="right arm (wrist links and hand) on the box")
+        if "grip_left_hand_n" in rows[0]:
+            ax[3].plot(t, col("grip_left_hand_n"), "--", color="C0", label="left rubber hand alone")
+            ax[3].plot(t, col("grip_right_hand_n"), "--", color="C1", label="right rubber hand alone")
+        if "box_tilt" in rows[0]:
+            tw = ax[3].twinx()
+            tw.plot(t, col("box_tilt"), ":", color="k", label="box tilt")
+            tw.set_ylabel("box tilt [rad]")
+            tw.legend(fontsize=8, loc="upper left")
         ax[3].set_ylabel("contact normal force [N]")
         ax[3].grid(alpha=0.3)
         ax[3].legend(fontsize=8, loc="upper right")

@@ -218,8 +218,11 @@ Vector3d bodyPos(const mjData* d, int body) { return Vector3d(d->xpos[3 * body],
 // The contact normal force [N] that each of two bodies' subtrees (e.g. the left and the right hand
 // from the wrist roll link on) exerts on `body` now: the grip's squeeze, for the trace. MuJoCo's
 // mj_contactForce gives the force in the contact frame, whose first axis is the normal.
-std::array<double, 2> contactNormalForce(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root) {
-  std::array<double, 2> n{0.0, 0.0};
+// Each hand's contact normal force on @p body [N]: [0, 1] through every geom of the left / right
+// hand's subtree (rooted at subtree_root), [2, 3] through its geom pad[h] alone (-1: none).
+std::array<double, 4> contactNormalForce(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root,
+                                         const std::array<int, 2>& pad = {-1, -1}) {
+  std::array<double, 4> n{0.0, 0.0, 0.0, 0.0};
   auto inSubtree = [&](int b, int root) {
     for (; b > 0; b = m->body_parentid[b])
       if (b == root) return true;
@@ -232,8 +235,10 @@ std::array<double, 2> contactNormalForce(const mjModel* m, const mjData* d, int 
     if (other < 0) continue;
     mjtNum f[6];
     mj_contactForce(m, d, i, f);
-    for (std::size_t h = 0; h < 2; ++h)
+    for (std::size_t h = 0; h < 2; ++h) {
       if (inSubtree(other, subtree_root[h])) n[h] += std::abs(f[0]);
+      if (pad[h] >= 0 && (c.geom1 == pad[h] || c.geom2 == pad[h])) n[2 + h] += std::abs(f[0]);
+    }
   }
   return n;
 }
@@ -625,10 +630,13 @@ struct BoxOperatorConfig : OperatorCommon {
   bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
   double slide_to_m = -2.0;        ///< gripped, a box whose near side lies further beyond the pick top's edge than this is slid towards the robot to it and gripped again; < -1 = never [m]
   double slide_speed = 0.05;       ///< ... at this speed [m/s]
+  double regrip_in_m = 0.0;        ///< after a slide, grip again with the wrists this far behind the box's near side (nearer its centre of mass); 0 = grasp_in_m [m]
   double stand_after_lift_m = 0.0; ///< lifting: stay crouched and bent until the box's bottom is seen this far above the pick top, then stand up over stand_s; 0 = at once [m]
   int max_regrabs = 0;             ///< a box seen back on the pick table, upright, after a lift: open, lower the hands beside it and grip it again, at most this often
   bool feedforward = false;        ///< the controllers held where the mapping puts the hands at their targets (torso pose as now), plus the seen error's integral (at most max_lead_m)
   double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
+  bool hands_along_box = false;    ///< the controllers turned so that the hands point along the box's sides (its seen yaw), not straight ahead: the palms lie flat on a turned box
+  double hand_toe_in_rad = 0.0;    ///< ... and each hand turned in by this much (fingers towards the box's centre line) [rad]
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
   template <class A>
   void Serialize(A* a) {
@@ -639,11 +647,14 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("stand_s", &stand_s, "[s]");
     a->Visit("lift_in_place", &lift_in_place, "true | false");
     a->Visit("side_tol_m", &side_tol_m, "[m]");
+    a->Visit("hands_along_box", &hands_along_box, "true | false");
+    a->Visit("hand_toe_in_rad", &hand_toe_in_rad, "[rad]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
     a->Visit("stand_after_lift_m", &stand_after_lift_m, "[m]");
     a->Visit("slide_to_m", &slide_to_m, "[m]");
     a->Visit("slide_speed", &slide_speed, "[m/s]");
+    a->Visit("regrip_in_m", &regrip_in_m, "[m]");
     a->Visit("max_regrabs", &max_regrabs, "[0, 5]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
@@ -676,6 +687,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(max_regrabs >= 0 && max_regrabs <= 5)) return "max_regrabs: expected [0, 5]";
     if (!(slide_to_m >= -2.0 && slide_to_m <= 0.3)) return "slide_to_m: expected [-2, 0.3] m (< -1: never)";
     if (!(slide_speed > 0 && slide_speed <= 0.2)) return "slide_speed: expected (0, 0.2] m/s";
+    if (!(regrip_in_m >= 0 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [0, 0.3] m (0: grasp_in_m)";
+    if (!(std::abs(hand_toe_in_rad) <= 0.5)) return "hand_toe_in_rad: expected [-0.5, 0.5] rad";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     return "";
   }
@@ -706,6 +719,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   const double half_w = 0.5 * box.size[1], box_h = box.size[2];
   const int box_body = mj_name2id(m, mjOBJ_BODY, ("task_" + box.name).c_str());
   const std::array<int, 2> hand_subtree{mj_name2id(m, mjOBJ_BODY, "left_wrist_roll_link"), mj_name2id(m, mjOBJ_BODY, "right_wrist_roll_link")};
+  // The rubber hands' collision geoms (scene hand_collision; -1 without): the grip through the palms.
+  const std::array<int, 2> hand_geom{mj_name2id(m, mjOBJ_GEOM, "task_left_hand_collision"), mj_name2id(m, mjOBJ_GEOM, "task_right_hand_collision")};
   if (box_body < 0 || hand_subtree[0] < 0 || hand_subtree[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the box body or *_wrist_roll_link");
 
   std::mt19937_64 rng(seed * 7919 + 17);
@@ -747,7 +762,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
-         "left_hand_x,left_hand_y,left_hand_z,grip_left_n,grip_right_n\n";
+         "left_hand_x,left_hand_y,left_hand_z,grip_left_n,grip_right_n,box_tilt,left_hand_pitch,right_hand_pitch,"
+         "grip_left_hand_n,grip_right_hand_n\n";
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -766,8 +782,14 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
                        ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
     {
-      const std::array<double, 2> grip_n = contactNormalForce(m, d, box_body, hand_subtree);
+      const std::array<double, 4> grip_n = contactNormalForce(m, d, box_body, hand_subtree, hand_geom);
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[0], grip_n[1]);
+      // The box's tilt (angle of its z axis from W's) and each hand's pitch (elevation of its x
+      // axis, along the fingers, above the horizontal; negative: pointing down) [rad].
+      const Vector3d up = obj.q_W * Vector3d::UnitZ();
+      csv << fmt::format(",{:.4f}", std::acos(std::clamp(up.z(), -1.0, 1.0)));
+      for (std::size_t h = 0; h < 2; ++h) csv << fmt::format(",{:.4f}", std::asin(std::clamp(d->xmat[9 * hand_body[h] + 6], -1.0, 1.0)));
+      csv << fmt::format(",{:.2f},{:.2f}", grip_n[2], grip_n[3]);  // through the rubber hands' own geoms
     }
     csv << "\n";
     if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, box.name, obj);  // 50 Hz
@@ -831,7 +853,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       return box_room.x() - 0.5 * box.size[0] * std::abs(std::cos(yaw_W)) - 0.5 * box.size[1] * std::abs(std::sin(yaw_W));
     };
     // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
-    const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + op.grasp_in_m, 0, 0);
+    const double grasp_in = slid && op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m;
+    const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + grasp_in, 0, 0);
     switch (phase) {
       case kSettle:
         if (t >= op.settle_s) phase = kEngage, phase_t0 = t;
@@ -953,7 +976,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       case kLower: {
         // Forward until the box is over the place top, then down onto it.
         grip = true;
-        const double x_goal = place_near_x + 0.04 - torso_p.x() + op.grasp_in_m;
+        const double x_goal = place_near_x + 0.04 - torso_p.x() + grasp_in;
         carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
         if (std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
@@ -989,7 +1012,11 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         // along the box's side), the palm kept facing in.
         const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> R_WT(d->xmat + 9 * torso), R_WHd(d->xmat + 9 * hand_body[h]);
         const Vector3d x0 = (R_WT.transpose() * R_WHd).col(0);
-        const Vector3d want = Vector3d(std::cos(op.hand_pitch_rad), 0.0, -std::sin(op.hand_pitch_rad));
+        // Along the box's sides when the operator turns its hands to the box's seen yaw; toe-in
+        // turns the left hand's fingers right (-z) and the right hand's left.
+        const double yaw_h = (op.hands_along_box ? box_yaw_R : 0.0) + (h == 0 ? -1.0 : 1.0) * op.hand_toe_in_rad;
+        const Vector3d want =
+            Eigen::AngleAxisd(yaw_h, Vector3d::UnitZ()) * Vector3d(std::cos(op.hand_pitch_rad), 0.0, -std::sin(op.hand_pitch_rad));
         turn_H[h] = Eigen::Quaterniond::FromTwoVectors(x0, want);
       }
       aligned = true;

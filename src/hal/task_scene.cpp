@@ -1,5 +1,6 @@
 #include "pmg/hal/task_scene.hpp"
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include "pmg/common/config_error.hpp"
@@ -90,6 +92,7 @@ void TaskScene::Serialize(A* a) {
   a->Visit("tables", &tables, "static tables", yaml::kRequired);
   a->Visit("objects", &objects, "free objects on the tables", yaml::kRequired);
   a->Visit("hand_collision", &hand_collision, "the robot's rubber hands get collision geoms (true | false)");
+  a->Visit("hand_collision_shape", &hand_collision_shape, "the rubber hands' collision geoms: mesh | box");
   a->Visit("hand_torsional_friction", &hand_torsional_friction, "the rubber hands' torsional friction [m], [0, 0.1]");
   a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
   a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
@@ -118,6 +121,10 @@ void TaskScene::check() const {
     throw ConfigError(fmt::format("{}: hand_torsional_friction = {}: expected [0, 0.1] m", where, hand_torsional_friction));
   if (hand_torsional_friction > 0.0 && !hand_collision)
     throw ConfigError(fmt::format("{}: hand_torsional_friction needs hand_collision: true", where));
+  if (hand_collision_shape != "mesh" && hand_collision_shape != "box")
+    throw ConfigError(fmt::format("{}: hand_collision_shape = '{}': expected mesh | box", where, hand_collision_shape));
+  if (hand_collision_shape != "mesh" && !hand_collision)
+    throw ConfigError(fmt::format("{}: hand_collision_shape needs hand_collision: true", where));
   if (!(impratio >= 1.0 && impratio <= 100.0)) throw ConfigError(fmt::format("{}: impratio = {}: expected [1, 100]", where, impratio));
   if (cone != "pyramidal" && cone != "elliptic")
     throw ConfigError(fmt::format("{}: cone = '{}': expected pyramidal | elliptic", where, cone));
@@ -234,8 +241,13 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
     // A collision copy of each rubber hand's visual geom: the same mesh and pose, default contact
     // classes, no mass (the visual geom has density 0 too, so the model's inertias are unchanged).
     const std::string visual_attrs = "contype=\"0\" conaffinity=\"0\" group=\"1\" density=\"0\" ";
-    for (const char* side : {"left", "right"}) {
-      const std::string key = std::string("mesh=\"") + side + "_rubber_hand\"/>";
+    const double torsional = scene.hand_torsional_friction;
+    const std::string contact_attrs = fmt::format("mass=\"0\" friction=\"1.0 {} 0.0001\" condim=\"{}\"",
+                                                  torsional > 0 ? torsional : 0.005, torsional > 0 ? 4 : 3);
+    std::array<std::pair<std::size_t, std::size_t>, 2> copies{};  // where each copy sits in xml (offset, length)
+    for (int i = 0; i < 2; ++i) {
+      const std::string side = i == 0 ? "left" : "right";
+      const std::string key = "mesh=\"" + side + "_rubber_hand\"/>";
       const auto at = xml.find(key);
       const auto open = at == std::string::npos ? std::string::npos : xml.rfind("<geom", at);
       std::string geom = open == std::string::npos ? std::string() : xml.substr(open, at + key.size() - open);
@@ -244,10 +256,54 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
         throw ConfigError(robot.mjcf_path + ": hand_collision: no visual <geom " + visual_attrs + "mesh=\"" + side +
                           "_rubber_hand\"/> to copy (scene " + scene.source + ")");
       geom.erase(attrs, visual_attrs.size());
-      const double torsional = scene.hand_torsional_friction;
-      geom.insert(5, fmt::format(" name=\"task_{}_hand_collision\" mass=\"0\" friction=\"1.0 {} 0.0001\" condim=\"{}\"", side,
-                                 torsional > 0 ? torsional : 0.005, torsional > 0 ? 4 : 3));
+      geom.insert(5, fmt::format(" name=\"task_{}_hand_collision\" {}", side, contact_attrs));
       xml.insert(at + key.size(), "\n" + geom);
+      copies[i] = {at + key.size() + 1, geom.size()};
+      if (i == 1 && copies[0].first > copies[1].first) copies[0].first += geom.size() + 1;  // the right copy went in before the left
+    }
+    if (scene.hand_collision_shape == "box") {
+      // A pad: the box that bounds the hand's mesh in its principal frame (where MuJoCo puts the
+      // compiled mesh's vertices and the geom's pose). MuJoCo's own fitting of a primitive to a
+      // mesh gives the equivalent-inertia box (too thin: 0.029 m against the hand's 0.052 m), and
+      // 2.2's `fitaabb` mislocates the box's centre, so the bounds are taken from the compiled mesh.
+      // The pads sit in geom group 3, which MuJoCo does not draw by default: renders show the hands.
+      const std::string probe = out_mjcf_path + ".hands.xml";
+      {
+        std::ofstream out(probe);
+        if (!out) throw ConfigError(probe + ": cannot write the hands' probe MJCF");
+        out << xml;
+      }
+      MjModelPtr m;
+      try {
+        m = loadMujocoModel(probe);
+      } catch (const std::runtime_error& e) {
+        fs::remove(probe);
+        throw ConfigError(robot.mjcf_path + ": hand_collision_shape: box: " + e.what());
+      }
+      fs::remove(probe);
+      const int first = copies[0].first > copies[1].first ? 0 : 1;  // the later copy first: the earlier one's offset holds
+      for (int i : {first, 1 - first}) {
+        const std::string side = i == 0 ? "left" : "right";
+        const int g = mj_name2id(m.get(), mjOBJ_GEOM, ("task_" + side + "_hand_collision").c_str());
+        const int mesh = g < 0 ? -1 : m->geom_dataid[g];
+        if (mesh < 0) throw ConfigError(robot.mjcf_path + ": hand_collision_shape: no compiled " + side + " hand mesh");
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+        for (int v = 0; v < m->mesh_vertnum[mesh]; ++v) {
+          const float* p = m->mesh_vert + 3 * (m->mesh_vertadr[mesh] + v);
+          const Eigen::Vector3d q(p[0], p[1], p[2]);
+          lo = lo.cwiseMin(q);
+          hi = hi.cwiseMax(q);
+        }
+        const Eigen::Quaterniond q_BG(m->geom_quat[4 * g], m->geom_quat[4 * g + 1], m->geom_quat[4 * g + 2], m->geom_quat[4 * g + 3]);
+        const Eigen::Vector3d c_B = Eigen::Vector3d(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]) +
+                                    q_BG * (0.5 * (lo + hi));
+        const Eigen::Vector3d h = 0.5 * (hi - lo);
+        const std::string pad = fmt::format(
+            "<geom name=\"task_{}_hand_collision\" {} type=\"box\" pos=\"{:.6f} {:.6f} {:.6f}\" quat=\"{:.6f} {:.6f} {:.6f} {:.6f}\" "
+            "size=\"{:.6f} {:.6f} {:.6f}\" group=\"3\" rgba=\"0.7 0.7 0.7 1\"/>",
+            side, contact_attrs, c_B.x(), c_B.y(), c_B.z(), q_BG.w(), q_BG.x(), q_BG.y(), q_BG.z(), h.x(), h.y(), h.z());
+        xml.replace(copies[i].first, copies[i].second, pad);
+      }
     }
   }
   if (scene.impratio != 1.0 || scene.cone != "pyramidal") {

@@ -2,8 +2,10 @@
 // rest where the file puts them once the simulation runs (the robot standing beside them), trials
 // are drawn inside the ranges and reproducibly, and bad scene files are refused with the file, the
 // object and the field named.
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -112,6 +114,10 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
       {"bad_cone", "cone: round\n" + table + obj + "}\n", "cone = 'round': expected pyramidal | elliptic"},
       {"torsional_range", "hand_collision: true\nhand_torsional_friction: 0.3\n" + table + obj + "}\n",
        "hand_torsional_friction = 0.3: expected [0, 0.1] m"},
+      {"bad_hand_shape", "hand_collision: true\nhand_collision_shape: sphere\n" + table + obj + "}\n",
+       "hand_collision_shape = 'sphere': expected mesh | box"},
+      {"hand_shape_without_hands", "hand_collision_shape: box\n" + table + obj + "}\n",
+       "hand_collision_shape needs hand_collision: true"},
       {"torsional_without_hands", "hand_torsional_friction: 0.05\n" + table + obj + "}\n",
        "hand_torsional_friction needs hand_collision: true"},
   };
@@ -154,6 +160,13 @@ TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {
     EXPECT_EQ(m->geom_condim[g], 4) << side;
     EXPECT_DOUBLE_EQ(m->geom_friction[3 * g + 1], 0.05) << side;
     EXPECT_STREQ(mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[g]), (std::string(side) + "_wrist_yaw_link").c_str());
+    // A pad bounding the rubber hand's mesh: a few centimetres thick, palm-sized.
+    EXPECT_EQ(m->geom_type[g], mjGEOM_BOX) << side;
+    const double* h = m->geom_size + 3 * g;
+    EXPECT_GT(std::min({h[0], h[1], h[2]}), 0.005) << side;
+    EXPECT_LT(std::min({h[0], h[1], h[2]}), 0.03) << side;
+    EXPECT_GT(std::max({h[0], h[1], h[2]}), 0.04) << side;
+    EXPECT_LT(std::max({h[0], h[1], h[2]}), 0.08) << side;
   }
   const TaskScene wipe = loadTaskScene(test::sourcePath("config/tasks/wipe_scene.yaml"));
   const RobotConfig with_towel = robotWithTaskScene(test::g1Robot(), wipe, dir.file("wipe.xml"));
@@ -170,6 +183,57 @@ TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {
     EXPECT_DOUBLE_EQ(m->body_mass[b], mw->body_mass[bw]) << body;
     for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(m->body_inertia[3 * b + i], mw->body_inertia[3 * bw + i]) << body;
   }
+}
+
+// Why the box scene's hands are fitted boxes: pressed flat on the box's side, the right hand's pad
+// touches it at several points (MuJoCo's box-box collider: a contact patch that resists the box
+// turning in the grip), the hand's mesh at one (MuJoCo 2.2's convex collider, libccd), about which a
+// squeezed box pivots. Same robot pose, same box pose (its side 2 mm into the pad's palm face).
+TEST(TaskScene, HandPadsTouchAFlatSideAtSeveralPointsTheMeshAtOne) {
+  const test::TempDir dir;
+  TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  ASSERT_EQ(scene.hand_collision_shape, "box");
+  const RobotConfig with_pads = robotWithTaskScene(test::g1Robot(), scene, dir.file("pads.xml"));
+  scene.hand_collision_shape = "mesh";
+  const RobotConfig with_meshes = robotWithTaskScene(test::g1Robot(), scene, dir.file("meshes.xml"));
+  MujocoBackend pads(with_pads, free_standing()), meshes(with_meshes, free_standing());
+  std::vector<double> qpos;
+  int contacts[2] = {0, 0};
+  for (int v = 0; v < 2; ++v) {
+    const mjModel* m = (v == 0 ? pads : meshes).model();
+    mjData* d = mj_makeData(m);
+    if (v == 0) {
+      // Place the box against the pad: its axes along the pad's, its side 2 mm into the pad's
+      // palm face (the pad's thinnest axis).
+      mju_copy(d->qpos, pads.data()->qpos, m->nq);
+      mj_kinematics(m, d);
+      const int g = mj_name2id(m, mjOBJ_GEOM, "task_right_hand_collision");
+      const int box = mj_name2id(m, mjOBJ_GEOM, "task_box_geom");
+      ASSERT_GE(g, 0);
+      ASSERT_GE(box, 0);
+      const double* h = m->geom_size + 3 * g;
+      const int k = h[0] < h[1] ? (h[0] < h[2] ? 0 : 2) : (h[1] < h[2] ? 1 : 2);
+      const double* R = d->geom_xmat + 9 * g;  // columns: the pad's axes in W
+      const double offset = h[k] + m->geom_size[3 * box + k] - 0.002;
+      const int adr = m->jnt_qposadr[m->body_jntadr[m->geom_bodyid[box]]];
+      for (int i = 0; i < 3; ++i) d->qpos[adr + i] = d->geom_xpos[3 * g + i] + offset * R[3 * i + k];
+      mju_mat2Quat(d->qpos + adr + 3, R);
+      qpos.assign(d->qpos, d->qpos + m->nq);
+    } else {
+      ASSERT_EQ(static_cast<int>(qpos.size()), m->nq);
+      mju_copy(d->qpos, qpos.data(), m->nq);
+    }
+    mj_forward(m, d);
+    const int hand = mj_name2id(m, mjOBJ_GEOM, "task_right_hand_collision");
+    const int box = mj_name2id(m, mjOBJ_GEOM, "task_box_geom");
+    for (int c = 0; c < d->ncon; ++c) {
+      const mjContact& con = d->contact[c];
+      if ((con.geom1 == hand && con.geom2 == box) || (con.geom1 == box && con.geom2 == hand)) ++contacts[v];
+    }
+    mj_deleteData(d);
+  }
+  EXPECT_GE(contacts[0], 3) << "pad";
+  EXPECT_EQ(contacts[1], 1) << "mesh";
 }
 
 }  // namespace

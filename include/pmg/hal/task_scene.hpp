@@ -90,6 +90,17 @@ struct TaskScene {
   /// without contact, so the wrist links (0.13 m behind the finger tips) were all that touched an
   /// object. Off by default (the wiping operator was tuned and measured without it).
   bool hand_collision = false;
+  /// With hand_collision: the shape of each hand's collision geom. "mesh" (default): the visual
+  /// mesh itself (MuJoCo collides its convex hull). MuJoCo 2.2's general convex collider (libccd,
+  /// used for mesh-box pairs) returns ONE contact point per geom pair, so a box squeezed between two
+  /// mesh hands touches at two points and pivots about the line through them, resisted only by
+  /// torsional friction. "box": a pad, the box bounding the same mesh in its principal frame
+  /// (about 0.05 x 0.12 x 0.15 m for the G1 rubber hand, its thin axis across the palm; taken from
+  /// the compiled mesh, since MuJoCo's own primitive fitting gives the thinner equivalent-inertia
+  /// box). Box-box pairs use MuJoCo's dedicated collider, which returns up to 8 points: a pad pressed
+  /// flat on the box's side touches over a patch, as a rubber palm does, and resists the box turning
+  /// in the grip. @throws ConfigError from robotWithTaskScene if the mesh cannot be compiled.
+  std::string hand_collision_shape = "mesh";
   /// With hand_collision: the rubber hands' torsional friction coefficient [m], [0, 0.1] (MuJoCo's
   /// second friction coefficient, with condim 4). A rubber pad touches over a patch of a few
   /// centimetres and resists turning about the contact normal; MuJoCo's point contact (condim 3)
