@@ -140,8 +140,8 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
   EXPECT_NO_THROW(taskObjectState(sim.model(), sim.data(), "box"));
 }
 
-// The box scene's contact for a grasp without fingers: the composed model has the rubber hands'
-// collision copies (contact on, massless: the model's total mass is the robot's plus the objects'),
+// The box scene's contact for a grasp without fingers: the composed model has collision pads for
+// the rubber hands (boxes bounding their meshes; contact on, massless: the wrist links' inertias stay),
 // with torsional friction (condim 4), and MuJoCo's elliptic cones with impratio 10; the wiping
 // scene keeps the robot's own contact model (no hand collision, pyramidal, impratio 1).
 TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {

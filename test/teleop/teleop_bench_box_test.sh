@@ -76,18 +76,8 @@ print("\n".join("FAIL: " + f for f in fail) if fail else
       "pmg_teleop_bench --task box: 2 trials judged consistently with their trajectories; both meet the paper's criterion")
 sys.exit(1 if fail else 0)
 PY
-printf 'view_noise_m: 0.005\nsqueeze_force: 1\n' > "$d/bad.yaml"
-if "$bin/pmg_teleop_bench" --task box --trials 1 --operator "$d/bad.yaml" --out "$d/bad" > "$d/bad.txt" 2>&1; then
-  echo "FAIL: a bad box operator file was accepted"; exit 1
-fi
-grep -q "bad.yaml" "$d/bad.txt" && grep -q "squeeze_force" "$d/bad.txt" || { cat "$d/bad.txt"; exit 1; }
-printf 'view_noise_m: 0.005\nside_tol_m: 0.5\n' > "$d/range.yaml"
-if "$bin/pmg_teleop_bench" --task box --trials 1 --operator "$d/range.yaml" --out "$d/range" > "$d/range.txt" 2>&1; then
-  echo "FAIL: side_tol_m = 0.5 was accepted"; exit 1
-fi
-grep -q "side_tol_m" "$d/range.txt" && grep -q "0.2" "$d/range.txt" || { cat "$d/range.txt"; exit 1; }
-printf 'view_noise_m: 0.005\nregrip_in_m: 0.5\n' > "$d/range2.yaml"
-if "$bin/pmg_teleop_bench" --task box --trials 1 --operator "$d/range2.yaml" --out "$d/range2" > "$d/range2.txt" 2>&1; then
-  echo "FAIL: regrip_in_m = 0.5 was accepted"; exit 1
-fi
-grep -q "regrip_in_m" "$d/range2.txt" && grep -q "0.3" "$d/range2.txt" || { cat "$d/range2.txt"; exit 1; }
+# shellcheck source=bench_refuses.sh
+. "$(dirname "${BASH_SOURCE[0]}")/bench_refuses.sh"
+expect_refused "$bin" box "$d" bad 'view_noise_m: 0.005\nsqueeze_force: 1\n' bad.yaml squeeze_force
+expect_refused "$bin" box "$d" range 'view_noise_m: 0.005\nside_tol_m: 0.5\n' range.yaml side_tol_m 0.2
+expect_refused "$bin" box "$d" range2 'view_noise_m: 0.005\nregrip_in_m: 0.5\n' range2.yaml regrip_in_m 0.3

@@ -68,15 +68,10 @@ print("\n".join("FAIL: " + f for f in fail) if fail else
       f"pmg_teleop_bench: 2 trials judged consistently with their trajectories ({s['successes']} successes)")
 sys.exit(1 if fail else 0)
 PY
-printf 'view_noise_m: 0.005\nwalk_speed: 1\n' > "$d/bad.yaml"
-if "$bin/pmg_teleop_bench" --task wipe --trials 1 --operator "$d/bad.yaml" --out "$d/bad" > "$d/bad.txt" 2>&1; then
-  echo "FAIL: a bad operator file was accepted"; exit 1
-fi
-grep -q "bad.yaml" "$d/bad.txt" && grep -q "walk_speed" "$d/bad.txt" || { cat "$d/bad.txt"; exit 1; }
+# shellcheck source=bench_refuses.sh
+. "$(dirname "${BASH_SOURCE[0]}")/bench_refuses.sh"
+expect_refused "$bin" wipe "$d" bad 'view_noise_m: 0.005\nwalk_speed: 1\n' bad.yaml walk_speed
 # A value out of its range is refused naming the file, the field and the range (the raised hand
 # walks in only within raise_margin_m of hover_m + clearance_m).
-printf 'hover_m: 0.06\nclearance_m: 0.12\nraise_margin_m: 0.5\n' > "$d/range.yaml"
-if "$bin/pmg_teleop_bench" --task wipe --trials 1 --operator "$d/range.yaml" --out "$d/range" > "$d/range.txt" 2>&1; then
-  echo "FAIL: raise_margin_m 0.5 was accepted"; exit 1
-fi
-grep -q "range.yaml" "$d/range.txt" && grep -q "raise_margin_m: expected \[0, hover_m + clearance_m\]" "$d/range.txt" || { cat "$d/range.txt"; exit 1; }
+expect_refused "$bin" wipe "$d" range 'hover_m: 0.06\nclearance_m: 0.12\nraise_margin_m: 0.5\n' range.yaml \
+  'raise_margin_m: expected \[0, hover_m + clearance_m\]'
