@@ -690,6 +690,17 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(regrip_in_m >= 0 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [0, 0.3] m (0: grasp_in_m)";
     if (!(std::abs(hand_toe_in_rad) <= 0.5)) return "hand_toe_in_rad: expected [-0.5, 0.5] rad";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
+    if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
+    if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
+    if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
+    if (!(crouch_m >= 0 && crouch_m <= 0.4)) return "crouch_m: expected [0, 0.4] m";
+    if (!(look_down_rad >= 0 && look_down_rad <= 1.2)) return "look_down_rad: expected [0, 1.2] rad";
+    if (!(hover_m >= 0 && hover_m <= 0.3)) return "hover_m: expected [0, 0.3] m";
+    if (!(grasp_below_top_m >= -0.1 && grasp_below_top_m <= 0.3)) return "grasp_below_top_m: expected [-0.1, 0.3] m";
+    if (!(grasp_in_m >= 0 && grasp_in_m <= 0.3)) return "grasp_in_m: expected [0, 0.3] m";
+    if (!(squeeze_s > 0 && squeeze_s <= 10)) return "squeeze_s: expected (0, 10] s";
+    if (!(carry_clearance_m >= 0 && carry_clearance_m <= 0.3)) return "carry_clearance_m: expected [0, 0.3] m";
+    if (!(place_press_m >= 0 && place_press_m <= 0.1)) return "place_press_m: expected [0, 0.1] m";
     return "";
   }
 };
