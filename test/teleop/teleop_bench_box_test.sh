@@ -17,8 +17,9 @@ for seed in 1 18; do
   "$bin/pmg_teleop_bench" --task box --trials 1 --seed "$seed" --out "$d/out_$seed" > "$d/log_$seed.txt"
   cat "$d/log_$seed.txt"
 done
-python3 - "$d/out_1" "$d/out_18" <<'PY'
+PYTHONPATH="$(dirname "${BASH_SOURCE[0]}")" python3 - "$d/out_1" "$d/out_18" <<'PY'
 import csv, json, math, os, sys
+from bench_figures import missing_figure_files
 fail = []
 known = {"loss_of_balance", "dropped", "not_lifted", "not_carried", "tipped", "not_placed"}
 # config/tasks/box_scene.yaml: pick top 0.50 m, place top 0.76 m; the box is 0.20 m tall.
@@ -65,11 +66,7 @@ for out in sys.argv[1:]:
     fig = s.get("figures", {})
     if "success" not in fig:
         fail.append(f"{out}: no figures of the success")
-    for label, f in fig.items():
-        for key in ("log", "objects", "scene", "strip", "trace"):
-            p = f.get(key)
-            if not p or not os.path.isfile(os.path.join(out, p)) or os.path.getsize(os.path.join(out, p)) < 1000:
-                fail.append(f"{out}: figures.{label}.{key} = {p}: missing or empty")
+    fail += [f"{out}: {m}" for m in missing_figure_files(out, fig)]
 if abs(starts[0][0] - starts[1][0]) + abs(starts[0][1] - starts[1][1]) < 1e-3:
     fail.append("both trials drew the same box place")
 print("\n".join("FAIL: " + f for f in fail) if fail else

@@ -15,8 +15,9 @@ d="$(mktemp -d)"
 trap 'rm -rf "$d"' EXIT
 "$bin/pmg_teleop_bench" --task wipe --trials 2 --seed 2 --out "$d/out" > "$d/log.txt"
 cat "$d/log.txt"
-python3 - "$d/out" <<'PY'
+PYTHONPATH="$(dirname "${BASH_SOURCE[0]}")" python3 - "$d/out" <<'PY'
 import csv, json, os, sys
+from bench_figures import missing_figure_files
 out = sys.argv[1]
 s = json.load(open(os.path.join(out, "summary.json")))
 fail = []
@@ -52,11 +53,8 @@ if s["successes"] != 2:
 fig = s.get("figures", {})
 if set(fig) != ({"success"} if s["successes"] == 2 else set(fig)):
     fail.append(f"figures {sorted(fig)}, expected ['success']")
+fail += missing_figure_files(out, fig)
 for label, f in fig.items():
-    for key in ("log", "objects", "scene", "strip", "trace"):
-        p = f.get(key)
-        if not p or not os.path.isfile(os.path.join(out, p)) or os.path.getsize(os.path.join(out, p)) < 1000:
-            fail.append(f"figures.{label}.{key} = {p}: missing or empty")
     if f.get("strip") and open(os.path.join(out, f["strip"]), "rb").read(8) != b"\x89PNG\r\n\x1a\n":
         fail.append(f"figures.{label}.strip is not a PNG")
 kept = sorted(n for n in os.listdir(out) if n.endswith(".lcmlog"))
