@@ -215,11 +215,10 @@ double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d
 // A body's position in the world frame W [m] (mjData::xpos).
 Vector3d bodyPos(const mjData* d, int body) { return Vector3d(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2]); }
 
-// The contact normal force [N] that each of two bodies' subtrees (e.g. the left and the right hand
-// from the wrist roll link on) exerts on `body` now: the grip's squeeze, for the trace. MuJoCo's
-// mj_contactForce gives the force in the contact frame, whose first axis is the normal.
-// Each hand's contact normal force on @p body [N]: [0, 1] through every geom of the left / right
-// hand's subtree (rooted at subtree_root), [2, 3] through its geom pad[h] alone (-1: none).
+// Each hand's contact normal force on @p body now [N], the grip's squeeze for the trace: [0, 1]
+// through every geom of the left / right hand's subtree (rooted at subtree_root, e.g. the wrist roll
+// link), [2, 3] through its geom pad[h] alone (-1: none). MuJoCo's mj_contactForce gives the force
+// in the contact frame, whose first axis is the normal.
 std::array<double, 4> contactNormalForce(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root,
                                          const std::array<int, 2>& pad = {-1, -1}) {
   std::array<double, 4> n{0.0, 0.0, 0.0, 0.0};
@@ -797,8 +796,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[0], grip_n[1]);
       // The box's tilt (angle of its z axis from W's) and each hand's pitch (elevation of its x
       // axis, along the fingers, above the horizontal; negative: pointing down) [rad].
-      const Vector3d up = obj.q_W * Vector3d::UnitZ();
-      csv << fmt::format(",{:.4f}", std::acos(std::clamp(up.z(), -1.0, 1.0)));
+      csv << fmt::format(",{:.4f}", pmg::tiltAngle(obj.q_W));
       for (std::size_t h = 0; h < 2; ++h) csv << fmt::format(",{:.4f}", std::asin(std::clamp(d->xmat[9 * hand_body[h] + 6], -1.0, 1.0)));
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[2], grip_n[3]);  // through the rubber hands' own geoms
     }

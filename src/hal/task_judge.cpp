@@ -55,6 +55,10 @@ TaskVerdict judgeWipe(const TaskScene& scene, const std::string& object, const s
   return v;
 }
 
+double tiltAngle(const Eigen::Quaterniond& q_W) {
+  return std::acos(std::clamp(q_W.normalized().toRotationMatrix()(2, 2), -1.0, 1.0));
+}
+
 TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const std::string& pick, const std::string& place,
                      const std::vector<TaskObjectSample>& traj, bool robot_fell, const BoxCriteria& c) {
   if (traj.empty()) throw std::invalid_argument("judgeBox: empty trajectory");
@@ -75,7 +79,7 @@ TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const st
   const double carry = (end.p_W - start.p_W).head<2>().norm();
   const double bottom_end = end.p_W.z() - half;
   const bool over_place = overTop(tq, inTable(tq, end.p_W));
-  const double tilt = std::acos(std::clamp(end.q_W.normalized().toRotationMatrix()(2, 2), -1.0, 1.0));
+  const double tilt = tiltAngle(end.q_W);
   v.detail = fmt::format(
       "lift {:.3f} m (needs >= {:.2f}), carried {:.3f} m (>= {:.2f}), end: bottom {:+.3f} m from the place top, "
       "{} it, speed {:.3f} m/s, tilt {:.3f} rad",

@@ -1,6 +1,5 @@
 #include "pmg/hal/task_scene.hpp"
 
-#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -244,9 +243,7 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
     const double torsional = scene.hand_torsional_friction;
     const std::string contact_attrs = fmt::format("mass=\"0\" friction=\"1.0 {} 0.0001\" condim=\"{}\"",
                                                   torsional > 0 ? torsional : 0.005, torsional > 0 ? 4 : 3);
-    std::array<std::pair<std::size_t, std::size_t>, 2> copies{};  // where each copy sits in xml (offset, length)
-    for (int i = 0; i < 2; ++i) {
-      const std::string side = i == 0 ? "left" : "right";
+    for (const std::string side : {"left", "right"}) {
       const std::string key = "mesh=\"" + side + "_rubber_hand\"/>";
       const auto at = xml.find(key);
       const auto open = at == std::string::npos ? std::string::npos : xml.rfind("<geom", at);
@@ -258,13 +255,11 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
       geom.erase(attrs, visual_attrs.size());
       geom.insert(5, fmt::format(" name=\"task_{}_hand_collision\" {}", side, contact_attrs));
       xml.insert(at + key.size(), "\n" + geom);
-      copies[i] = {at + key.size() + 1, geom.size()};
-      if (i == 1 && copies[0].first > copies[1].first) copies[0].first += geom.size() + 1;  // the right copy went in before the left
     }
     if (scene.hand_collision_shape == "box") {
       // A pad: the box that bounds the hand's mesh in its principal frame (where MuJoCo puts the
       // compiled mesh's vertices and the geom's pose). MuJoCo's own fitting of a primitive to a
-      // mesh gives the equivalent-inertia box (too thin: 0.029 m against the hand's 0.052 m), and
+      // mesh gives the equivalent-inertia box (too thin: 0.029 m where the vertices span 0.045 m), and
       // 2.2's `fitaabb` mislocates the box's centre, so the bounds are taken from the compiled mesh.
       // The pads sit in geom group 3, which MuJoCo does not draw by default: renders show the hands.
       const std::string probe = out_mjcf_path + ".hands.xml";
@@ -281,10 +276,9 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
         throw ConfigError(robot.mjcf_path + ": hand_collision_shape: box: " + e.what());
       }
       fs::remove(probe);
-      const int first = copies[0].first > copies[1].first ? 0 : 1;  // the later copy first: the earlier one's offset holds
-      for (int i : {first, 1 - first}) {
-        const std::string side = i == 0 ? "left" : "right";
-        const int g = mj_name2id(m.get(), mjOBJ_GEOM, ("task_" + side + "_hand_collision").c_str());
+      for (const std::string side : {"left", "right"}) {
+        const std::string name = "task_" + side + "_hand_collision";
+        const int g = mj_name2id(m.get(), mjOBJ_GEOM, name.c_str());
         const int mesh = g < 0 ? -1 : m->geom_dataid[g];
         if (mesh < 0) throw ConfigError(robot.mjcf_path + ": hand_collision_shape: no compiled " + side + " hand mesh");
         Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
@@ -302,7 +296,8 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
             "<geom name=\"task_{}_hand_collision\" {} type=\"box\" pos=\"{:.6f} {:.6f} {:.6f}\" quat=\"{:.6f} {:.6f} {:.6f} {:.6f}\" "
             "size=\"{:.6f} {:.6f} {:.6f}\" group=\"3\" rgba=\"0.7 0.7 0.7 1\"/>",
             side, contact_attrs, c_B.x(), c_B.y(), c_B.z(), q_BG.w(), q_BG.x(), q_BG.y(), q_BG.z(), h.x(), h.y(), h.z());
-        xml.replace(copies[i].first, copies[i].second, pad);
+        const auto open = xml.rfind("<geom", xml.find("name=\"" + name + "\""));  // the mesh copy written above
+        xml.replace(open, xml.find("/>", open) + 2 - open, pad);
       }
     }
   }

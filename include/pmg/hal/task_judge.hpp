@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "pmg/hal/task_scene.hpp"
 
 namespace pmg {
@@ -64,6 +66,10 @@ struct BoxCriteria {
 
 /// Judges a box trial of @p object from table @p pick to table @p place. @throws
 /// std::invalid_argument on an empty trajectory or unknown names.
+/// An object's tilt [rad], [0, pi]: the angle between its z axis and W's (0: upright). @p q_W: its
+/// orientation in W (normalised here). The box judge's "upright" and the bench's logged tilt.
+double tiltAngle(const Eigen::Quaterniond& q_W);
+
 TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const std::string& pick, const std::string& place,
                      const std::vector<TaskObjectSample>& traj, bool robot_fell, const BoxCriteria& c = {});
 
