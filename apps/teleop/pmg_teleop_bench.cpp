@@ -30,6 +30,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <ostream>
 #include <random>
@@ -118,6 +119,9 @@ struct OperatorConfig : OperatorCommon {
   double keep_gain = 1.0;           ///< hand forward speed per metre of that error [1/s] (at most 0.05 m/s)
   double max_lead_m = 1.0;          ///< the operator's hand leads the robot hand it sees by at most this (robot scale) [m]
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
+  bool palm_down = false;           ///< with the grip squeezed, the controller turns the hand over so that its palm (the flat side of the scene's hand pad) faces down and its fingers point forward
+  double palm_pitch_rad = 0.0;      ///< ... the fingers this far below the torso's forward axis (frame T), so the pad's tip, not the wrist housing, touches first [rad]
+  double palm_turn_s = 1.0;         ///< ... over this long [s]
   template <class A>
   void Serialize(A* a) {
     OperatorCommon::Serialize(a);
@@ -132,6 +136,9 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
     a->Visit("crouch_m", &crouch_m, "[m]");
     a->Visit("yaw_gain", &yaw_gain, "[1/s]");
+    a->Visit("palm_down", &palm_down, "true | false");
+    a->Visit("palm_pitch_rad", &palm_pitch_rad, "[rad]");
+    a->Visit("palm_turn_s", &palm_turn_s, "[s]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("clearance_m", &clearance_m, "[m]");
     a->Visit("raise_margin_m", &raise_margin_m, "[m]");
@@ -160,6 +167,8 @@ struct OperatorConfig : OperatorCommon {
       return "raise_margin_m: expected [0, hover_m + clearance_m] m";
     if (!(transit_tol_m >= 0 && transit_tol_m <= 0.5)) return "transit_tol_m: expected [0, 0.5] m (0: off)";
     if (!(transit_height_m >= hover_m && transit_height_m <= 0.5)) return "transit_height_m: expected [hover_m, 0.5] m";
+    if (!(std::abs(palm_pitch_rad) <= 0.8)) return "palm_pitch_rad: expected [-0.8, 0.8] rad";
+    if (!(palm_turn_s > 0 && palm_turn_s <= 10)) return "palm_turn_s: expected (0, 10] s";
     return "";
   }
 };
@@ -332,6 +341,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   const int hand = mj_name2id(m, mjOBJ_BODY, use_left ? "left_wrist_yaw_link" : "right_wrist_yaw_link");
   if (hand < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks *_wrist_yaw_link");
   bool aligned = false;  // the controller put where the robot hand is, before the grip is squeezed
+  Eigen::Quaterniond palm_turn = Eigen::Quaterniond::Identity();  // palm_down: the controller's turn (frame H)
+  double palm_t0 = 0.0;
 
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_towel(op.view_latency_s, op.view_noise_m, rng), see_hand(op.view_latency_s, op.view_noise_m, rng),
@@ -368,7 +379,14 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
-  csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch\n";
+  csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
+         "press_n,press_pad_n,palm_normal_z\n";
+  // The working hand's push on the towel: through its whole hand (from the wrist roll link on) and
+  // through the scene's hand collision geom alone (hand_collision; -1 without).
+  const int towel_body = mj_name2id(m, mjOBJ_BODY, ("task_" + towel.name).c_str());
+  const int hand_root = mj_name2id(m, mjOBJ_BODY, use_left ? "left_wrist_roll_link" : "right_wrist_roll_link");
+  const int pad_geom = mj_name2id(m, mjOBJ_GEOM, use_left ? "task_left_hand_collision" : "task_right_hand_collision");
+  if (towel_body < 0 || hand_root < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the towel body or *_wrist_roll_link");
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -381,12 +399,20 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     const Vector3d pelvis(base[0], base[1], base[2]);
     traj.push_back({t, obj});
     if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, towel.name, obj);  // 50 Hz
-    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}\n", t,
+    csv << fmt::format("{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:d},{:.3f},{:.3f},{:.3f},{:.3f}", t,
                        phase_names[phase], pelvis.x(), pelvis.y(), pelvis.z(), hand_p.x(), hand_p.y(), hand_p.z(),
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1],
                        app.controller().teleop()->status().engaged ? 1 : 0, app.controller().teleop()->status().command.vx,
                        app.controller().teleop()->status().command.vy, app.controller().teleop()->status().command.wz,
                        app.controller().teleop()->status().command.pitch);
+    {
+      const std::size_t h = use_left ? 0 : 1;
+      std::array<int, 2> roots{hand_root, hand_root}, pads{pad_geom, pad_geom};
+      const std::array<double, 4> press = contactNormalForce(m, d, towel_body, roots, pads);
+      // palm_normal_z: the hand's y axis (across the palm: the pad's thin axis) in W, z component;
+      // +-1 with the palm flat on the table, 0 with the palm facing sideways.
+      csv << fmt::format(",{:.2f},{:.2f},{:.3f}\n", press[h], press[2 + h], d->xmat[9 * hand + 7]);
+    }
     // What the operator sees: object and hand relative to the torso (head camera), the robot's
     // place in the room, with latency and noise.
     // Frame R: the torso's position, yawed with the pelvis (the robot's heading: the waist may turn
@@ -568,6 +594,23 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     if (have_hand_target && !aligned) {
       work_H = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R);
       aligned = true;
+      if (op.palm_down) {
+        // The hand's orientation in T now, and the one wanted: fingers forward (palm_pitch_rad
+        // down), the pad's thin axis (the hand's y axis, across the palm) vertical, whichever way up
+        // is the smaller turn. The relative mapping applies the controller's turn since the grip to
+        // the hand in T, so the controller turns by R_want R_now^T.
+        const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> R_WT(d->xmat + 9 * torso), R_WH(d->xmat + 9 * hand);
+        const Eigen::Quaterniond q_now(Eigen::Matrix3d(R_WT.transpose() * R_WH));
+        const Eigen::AngleAxisd pitch_down(op.palm_pitch_rad, Vector3d::UnitY());
+        const Eigen::Quaterniond up(pitch_down * Eigen::AngleAxisd(0.5 * M_PI, Vector3d::UnitX())),
+            down(pitch_down * Eigen::AngleAxisd(-0.5 * M_PI, Vector3d::UnitX()));
+        palm_turn = (up.angularDistance(q_now) < down.angularDistance(q_now) ? up : down) * q_now.inverse();
+        palm_t0 = t;
+      }
+    }
+    if (op.palm_down && aligned) {
+      const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity().slerp(std::clamp((t - palm_t0) / op.palm_turn_s, 0.0, 1.0), palm_turn);
+      vr.hand_quat[static_cast<std::size_t>(side)] = {qh.w(), qh.x(), qh.y(), qh.z()};
     }
     if (have_hand_target) {
       work_H += op.hand_gain * dt * (hand_target_R - hand_R) / tc.arm_scale;
@@ -637,6 +680,9 @@ struct BoxOperatorConfig : OperatorCommon {
   bool hands_along_box = false;    ///< the controllers turned so that the hands point along the box's sides (its seen yaw), not straight ahead: the palms lie flat on a turned box
   double hand_toe_in_rad = 0.0;    ///< ... and each hand turned in by this much (fingers towards the box's centre line) [rad]
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
+  double release_clear_m = 0.0;    ///< after a slide, the hands move on to grip again only once both wrists are seen this far outside the box's sides (still touching it, they dragged it forward out of reach); 0 = after the opening time alone [m]
+  bool keep_hand_pitch = false;    ///< holding the box (lift, carry, lower): the controllers turned against the torso's seen pitch change, so that the hands keep their pitch in the room while the robot stands up
+  double unturn_speed = 0.3;       ///< ... and turned back at this rate once the box is no longer held [rad/s]
   template <class A>
   void Serialize(A* a) {
     OperatorCommon::Serialize(a);
@@ -648,6 +694,9 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("side_tol_m", &side_tol_m, "[m]");
     a->Visit("hands_along_box", &hands_along_box, "true | false");
     a->Visit("hand_toe_in_rad", &hand_toe_in_rad, "[rad]");
+    a->Visit("keep_hand_pitch", &keep_hand_pitch, "true | false");
+    a->Visit("release_clear_m", &release_clear_m, "[m]");
+    a->Visit("unturn_speed", &unturn_speed, "[rad/s]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
     a->Visit("stand_after_lift_m", &stand_after_lift_m, "[m]");
@@ -689,6 +738,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(regrip_in_m >= 0 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [0, 0.3] m (0: grasp_in_m)";
     if (!(std::abs(hand_toe_in_rad) <= 0.5)) return "hand_toe_in_rad: expected [-0.5, 0.5] rad";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
+    if (!(unturn_speed > 0 && unturn_speed <= 2.0)) return "unturn_speed: expected (0, 2] rad/s";
+    if (!(release_clear_m >= 0 && release_clear_m <= 0.2)) return "release_clear_m: expected [0, 0.2] m (0: no check)";
     if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
     if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
     if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
@@ -737,7 +788,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   View see_box(op.view_latency_s, op.view_noise_m, rng), see_box_room(op.view_latency_s, op.view_noise_m, rng),
       see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_yaw(op.view_latency_s, 0.0, rng),
       see_box_yaw(op.view_latency_s, 0.0, rng),  // the box's yaw relative to the robot's heading (x) [rad]
-      see_box_up(op.view_latency_s, 0.0, rng);   // the box's z axis in W (upright: (0, 0, 1))
+      see_box_up(op.view_latency_s, 0.0, rng),   // the box's z axis in W (upright: (0, 0, 1))
+      see_torso_pitch(op.view_latency_s, 0.0, rng);  // the torso's pitch (x) [rad]: the head camera's horizon
   std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
 
@@ -751,6 +803,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   bool aligned = false;
   std::array<Eigen::Quaterniond, 2> turn_H{Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};
   double turn_t0 = 0.0;
+  double pitch_comp = 0.0;  // keep_hand_pitch: the controllers' extra turn about the pitch axis [rad]
+  double last_torso_pitch = std::numeric_limits<double>::quiet_NaN();
   pmg::CommandSample sample;
 
   enum Phase { kSettle, kEngage, kApproach, kRaise, kCloseIn, kDescend, kSqueeze, kSlide, kRelease, kLift, kCarry, kLower, kOpen, kWait, kDone };
@@ -811,6 +865,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     see_box_yaw.push(t, Vector3d(std::remainder(yawOf(obj.q_W) - yaw, 2.0 * M_PI), 0.0, 0.0));
     see_box_up.push(t, obj.q_W * Vector3d::UnitZ());
+    see_torso_pitch.push(t, Vector3d(std::asin(std::clamp(-d->xmat[9 * torso + 6], -1.0, 1.0)), 0.0, 0.0));
     for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
     const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
@@ -947,7 +1002,14 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         squeeze_y = std::min(half_w + op.spread_m, squeeze_y + (op.spread_m + op.squeeze_m) / op.squeeze_s * dt);
         beside(Vector3d(std::min(grasp_c.x(), 0.5 * (hand_R[0].x() + hand_R[1].x())), grasp_c.y(), grasp_z_R), squeeze_y);
         walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m, working_y), op.max_speed);
-        if (t - phase_t0 > op.squeeze_s + 0.3) phase = kDescend, phase_t0 = t, slid = true;
+        {
+          // Open until both wrists are seen clear of the box's sides (across it): hands still touching
+          // it drag it forward as they move on to the deeper grip.
+          bool clear = true;
+          for (std::size_t h = 0; h < 2; ++h)
+            clear = clear && std::abs((box_turn.inverse() * (hand_R[h] - box_R)).y()) >= half_w + op.release_clear_m;
+          if ((t - phase_t0 > op.squeeze_s + 0.3 && clear) || t - phase_t0 > op.squeeze_s + 4.0) phase = kDescend, phase_t0 = t, slid = true;
+        }
         break;
       case kLift:
         // Up to the carrying height, standing up meanwhile (the head rises at once; the robot's
@@ -1031,10 +1093,23 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       aligned = true;
       turn_t0 = t;
     }
+    // Holding the box, the operator turns its controllers against the torso's pitch change (seen as
+    // the camera's horizon tilting): the teleop mapping puts the hands' orientation in the torso's
+    // frame, so a robot standing up from the bend would otherwise turn the hands, and the box held
+    // between them, up by as much. Not holding, the turn goes back at unturn_speed.
+    {
+      const double pitch_seen = see_torso_pitch.seen(t).x();
+      if (op.keep_hand_pitch && (phase == kLift || phase == kCarry || phase == kLower) && std::isfinite(last_torso_pitch))
+        pitch_comp -= pitch_seen - last_torso_pitch;
+      else
+        pitch_comp -= std::clamp(pitch_comp, -op.unturn_speed * dt, op.unturn_speed * dt);
+      last_torso_pitch = pitch_seen;
+    }
     if (aligned) {
       const double f = std::clamp((t - turn_t0) / op.turn_s, 0.0, 1.0);
       for (std::size_t h = 0; h < 2; ++h) {
-        const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity().slerp(f, turn_H[h]);
+        const Eigen::Quaterniond qh =
+            Eigen::Quaterniond(Eigen::AngleAxisd(pitch_comp, Vector3d::UnitY())) * Eigen::Quaterniond::Identity().slerp(f, turn_H[h]);
         vr.hand_quat[h] = {qh.w(), qh.x(), qh.y(), qh.z()};
       }
     }

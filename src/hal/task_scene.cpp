@@ -93,6 +93,7 @@ void TaskScene::Serialize(A* a) {
   a->Visit("hand_collision", &hand_collision, "the robot's rubber hands get collision geoms (true | false)");
   a->Visit("hand_collision_shape", &hand_collision_shape, "the rubber hands' collision geoms: mesh | box");
   a->Visit("hand_torsional_friction", &hand_torsional_friction, "the rubber hands' torsional friction [m], [0, 0.1]");
+  a->Visit("wrist_torsional_friction", &wrist_torsional_friction, "the wrist links' torsional friction [m], [0, 0.1]");
   a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
   a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
 }
@@ -120,6 +121,8 @@ void TaskScene::check() const {
     throw ConfigError(fmt::format("{}: hand_torsional_friction = {}: expected [0, 0.1] m", where, hand_torsional_friction));
   if (hand_torsional_friction > 0.0 && !hand_collision)
     throw ConfigError(fmt::format("{}: hand_torsional_friction needs hand_collision: true", where));
+  if (!(wrist_torsional_friction >= 0.0 && wrist_torsional_friction <= 0.1))
+    throw ConfigError(fmt::format("{}: wrist_torsional_friction = {}: expected [0, 0.1] m", where, wrist_torsional_friction));
   if (hand_collision_shape != "mesh" && hand_collision_shape != "box")
     throw ConfigError(fmt::format("{}: hand_collision_shape = '{}': expected mesh | box", where, hand_collision_shape));
   if (hand_collision_shape != "mesh" && !hand_collision)
@@ -300,6 +303,18 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
         xml.replace(open, xml.find("/>", open) + 2 - open, pad);
       }
     }
+  }
+  if (scene.wrist_torsional_friction > 0.0) {
+    // The wrist links' collision geoms (the robot MJCF's unnamed mesh geoms with the default contact
+    // classes) get condim 4 and the torsional coefficient; sliding and rolling stay MuJoCo's defaults.
+    for (const std::string side : {"left", "right"})
+      for (const std::string link : {"roll", "pitch", "yaw"}) {
+        const std::string geom = "<geom type=\"mesh\" rgba=\"0.7 0.7 0.7 1\" mesh=\"" + side + "_wrist_" + link + "_link\"/>";
+        const auto at = xml.find(geom);
+        if (at == std::string::npos)
+          throw ConfigError(robot.mjcf_path + ": wrist_torsional_friction: no collision " + geom + " (scene " + scene.source + ")");
+        xml.insert(at + 5, fmt::format(" condim=\"4\" friction=\"1 {} 0.0001\"", scene.wrist_torsional_friction));
+      }
   }
   if (scene.impratio != 1.0 || scene.cone != "pyramidal") {
     // The scene's contact options, written after <compiler> (the robot's MJCF has no <option> of its own).

@@ -120,6 +120,8 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
        "hand_collision_shape needs hand_collision: true"},
       {"torsional_without_hands", "hand_torsional_friction: 0.05\n" + table + obj + "}\n",
        "hand_torsional_friction needs hand_collision: true"},
+      {"wrist_torsional_range", "wrist_torsional_friction: -0.01\n" + table + obj + "}\n",
+       "wrist_torsional_friction = -0.01: expected [0, 0.1] m"},
   };
   const test::TempDir dir;
   for (const auto& b : bad) {
@@ -140,11 +142,11 @@ TEST(TaskScene, BadScenesAreRefusedNamingFileAndField) {
   EXPECT_NO_THROW(taskObjectState(sim.model(), sim.data(), "box"));
 }
 
-// The box scene's contact for a grasp without fingers: the composed model has collision pads for
-// the rubber hands (boxes bounding their meshes; contact on, massless: the wrist links' inertias stay),
-// with torsional friction (condim 4), and MuJoCo's elliptic cones with impratio 10; the wiping
-// scene keeps the robot's own contact model (no hand collision, pyramidal, impratio 1).
-TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {
+// The task scenes' contact: both give the rubber hands collision pads (boxes bounding their meshes;
+// contact on, massless: the wrist links' inertias stay). The box scene's grasp has torsional friction
+// (condim 4) and MuJoCo's elliptic cones with impratio 10; the wiping scene's palm pad keeps the
+// robot's own contact model (condim 3, pyramidal, impratio 1).
+TEST(TaskScene, TaskScenesGiveTheHandsPadsAndTheGraspItsFriction) {
   const test::TempDir dir;
   const TaskScene box = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
   const RobotConfig with_box = robotWithTaskScene(test::g1Robot(), box, dir.file("box.xml"));
@@ -152,37 +154,77 @@ TEST(TaskScene, BoxSceneGivesTheHandsContactAndTheGraspItsFriction) {
   const mjModel* m = sim.model();
   EXPECT_EQ(m->opt.cone, mjCONE_ELLIPTIC);
   EXPECT_DOUBLE_EQ(m->opt.impratio, 10.0);
-  for (const char* side : {"left", "right"}) {
-    const int g = mj_name2id(m, mjOBJ_GEOM, (std::string("task_") + side + "_hand_collision").c_str());
-    ASSERT_GE(g, 0) << side;
-    EXPECT_EQ(m->geom_contype[g], 1) << side;
-    EXPECT_EQ(m->geom_conaffinity[g], 1) << side;
-    EXPECT_EQ(m->geom_condim[g], 4) << side;
-    EXPECT_DOUBLE_EQ(m->geom_friction[3 * g + 1], 0.05) << side;
-    EXPECT_STREQ(mj_id2name(m, mjOBJ_BODY, m->geom_bodyid[g]), (std::string(side) + "_wrist_yaw_link").c_str());
-    // A pad bounding the rubber hand's mesh: a few centimetres thick, palm-sized.
-    EXPECT_EQ(m->geom_type[g], mjGEOM_BOX) << side;
-    const double* h = m->geom_size + 3 * g;
-    EXPECT_GT(std::min({h[0], h[1], h[2]}), 0.005) << side;
-    EXPECT_LT(std::min({h[0], h[1], h[2]}), 0.03) << side;
-    EXPECT_GT(std::max({h[0], h[1], h[2]}), 0.04) << side;
-    EXPECT_LT(std::max({h[0], h[1], h[2]}), 0.08) << side;
-  }
   const TaskScene wipe = loadTaskScene(test::sourcePath("config/tasks/wipe_scene.yaml"));
   const RobotConfig with_towel = robotWithTaskScene(test::g1Robot(), wipe, dir.file("wipe.xml"));
   MujocoBackend sim_wipe(with_towel, free_standing());
   const mjModel* mw = sim_wipe.model();
   EXPECT_EQ(mw->opt.cone, mjCONE_PYRAMIDAL);
   EXPECT_DOUBLE_EQ(mw->opt.impratio, 1.0);
-  EXPECT_LT(mj_name2id(mw, mjOBJ_GEOM, "task_left_hand_collision"), 0);
-  // The hands' copies add no mass: each wrist link weighs, and sits on its inertia, as without them.
+  for (const mjModel* model : {m, mw})
+    for (const char* side : {"left", "right"}) {
+      const int g = mj_name2id(model, mjOBJ_GEOM, (std::string("task_") + side + "_hand_collision").c_str());
+      ASSERT_GE(g, 0) << side;
+      EXPECT_EQ(model->geom_contype[g], 1) << side;
+      EXPECT_EQ(model->geom_conaffinity[g], 1) << side;
+      EXPECT_EQ(model->geom_condim[g], model == m ? 4 : 3) << side;
+      if (model == m) EXPECT_DOUBLE_EQ(model->geom_friction[3 * g + 1], 0.05) << side;
+      EXPECT_STREQ(mj_id2name(model, mjOBJ_BODY, model->geom_bodyid[g]), (std::string(side) + "_wrist_yaw_link").c_str());
+      // A pad bounding the rubber hand's mesh: a few centimetres thick, palm-sized.
+      EXPECT_EQ(model->geom_type[g], mjGEOM_BOX) << side;
+      const double* h = model->geom_size + 3 * g;
+      EXPECT_GT(std::min({h[0], h[1], h[2]}), 0.005) << side;
+      EXPECT_LT(std::min({h[0], h[1], h[2]}), 0.03) << side;
+      EXPECT_GT(std::max({h[0], h[1], h[2]}), 0.04) << side;
+      EXPECT_LT(std::max({h[0], h[1], h[2]}), 0.08) << side;
+    }
+  // The hands' pads add no mass: each wrist link weighs, and sits on its inertia, as without them.
+  TaskScene bare = wipe;
+  bare.hand_collision = false;
+  bare.hand_collision_shape = "mesh";
+  const RobotConfig without = robotWithTaskScene(test::g1Robot(), bare, dir.file("bare.xml"));
+  MujocoBackend sim_bare(without, free_standing());
+  const mjModel* mb = sim_bare.model();
+  EXPECT_LT(mj_name2id(mb, mjOBJ_GEOM, "task_left_hand_collision"), 0);
   for (const char* body : {"left_wrist_yaw_link", "right_wrist_yaw_link"}) {
-    const int b = mj_name2id(m, mjOBJ_BODY, body), bw = mj_name2id(mw, mjOBJ_BODY, body);
+    const int b = mj_name2id(m, mjOBJ_BODY, body), bb = mj_name2id(mb, mjOBJ_BODY, body);
     ASSERT_GE(b, 0);
-    ASSERT_GE(bw, 0);
-    EXPECT_DOUBLE_EQ(m->body_mass[b], mw->body_mass[bw]) << body;
-    for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(m->body_inertia[3 * b + i], mw->body_inertia[3 * bw + i]) << body;
+    ASSERT_GE(bb, 0);
+    EXPECT_DOUBLE_EQ(m->body_mass[b], mb->body_mass[bb]) << body;
+    for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(m->body_inertia[3 * b + i], mb->body_inertia[3 * bb + i]) << body;
   }
+}
+
+// wrist_torsional_friction: the six wrist links' collision meshes get condim 4 and the coefficient
+// (sliding and rolling friction stay MuJoCo's defaults); without it they keep condim 3.
+TEST(TaskScene, WristTorsionalFrictionReachesTheWristLinksOnly) {
+  const test::TempDir dir;
+  TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  scene.wrist_torsional_friction = 0.02;
+  const RobotConfig with = robotWithTaskScene(test::g1Robot(), scene, dir.file("with.xml"));
+  scene.wrist_torsional_friction = 0.0;
+  const RobotConfig without = robotWithTaskScene(test::g1Robot(), scene, dir.file("without.xml"));
+  MujocoBackend sim_with(with, free_standing()), sim_without(without, free_standing());
+  const mjModel* mw = sim_with.model();
+  const mjModel* mo = sim_without.model();
+  ASSERT_EQ(mw->ngeom, mo->ngeom);
+  int changed = 0;
+  for (int g = 0; g < mw->ngeom; ++g) {
+    const std::string body = mj_id2name(mw, mjOBJ_BODY, mw->geom_bodyid[g]);
+    const bool wrist_collision = body.find("_wrist_") != std::string::npos && mw->geom_contype[g] != 0 &&
+                                 mw->geom_type[g] == mjGEOM_MESH && mw->geom_group[g] != 3 &&
+                                 mj_id2name(mw, mjOBJ_GEOM, g) == nullptr;
+    if (wrist_collision) {
+      ++changed;
+      EXPECT_EQ(mw->geom_condim[g], 4) << body;
+      EXPECT_DOUBLE_EQ(mw->geom_friction[3 * g + 1], 0.02) << body;
+      EXPECT_DOUBLE_EQ(mw->geom_friction[3 * g], 1.0) << body;
+      EXPECT_EQ(mo->geom_condim[g], 3) << body;
+    } else {
+      EXPECT_EQ(mw->geom_condim[g], mo->geom_condim[g]) << body << " geom " << g;
+      EXPECT_DOUBLE_EQ(mw->geom_friction[3 * g + 1], mo->geom_friction[3 * g + 1]) << body << " geom " << g;
+    }
+  }
+  EXPECT_EQ(changed, 6);
 }
 
 // Why the box scene's hands are fitted boxes: pressed flat on the box's side, the right hand's pad

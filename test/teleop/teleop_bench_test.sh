@@ -5,7 +5,8 @@
 # CSV (the lateral path recomputed here from the CSV, 1 cm steps, and the on-table check), every
 # failure carries a known class, the two trials drew different towel places, both trials meet the
 # paper's criterion (the towel moved laterally more than 1 m on the top, the robot standing), the first
-# success gets its frame strip and trace plot (only its event log is kept), and a bad
+# success gets its frame strip and trace plot (only its event log is kept), the hand wipes palm down
+# with the scene's hand pad carrying most of the push on the towel, and a bad
 # --operator file is refused naming the file and key. (20 trials succeed at the rate docs/teleop.md
 # reports; these two, seeds 2 and 3, are among the successes with the shipped operator and controller.)
 #   teleop_bench_test.sh BIN_DIR
@@ -43,6 +44,16 @@ for r in s["trial_results"]:
     if abs(path - r["measure"]) > 0.02 + 0.03 * path:  # the CSV's 0.1 mm rounding moves 1 cm steps
         fail.append(f"trial {r['trial']}: judged path {r['measure']:.3f} m, CSV path {path:.3f} m")
     on_top = min(float(x["obj_z"]) for x in rows) > 0.6  # the top is at 0.67 m; off it the towel drops to the floor
+    # The shipped operator wipes palm down: while wiping, the hand's palm faces the table and the
+    # scene's hand pad, not the wrist housing, carries most of the push on the towel.
+    wiping = [x for x in rows if x["phase"] == "wipe"]
+    flat = sorted(abs(float(x["palm_normal_z"])) for x in wiping)
+    if not wiping or flat[len(flat) // 2] < 0.8:
+        fail.append(f"trial {r['trial']}: the palm is not down while wiping (median |palm_normal_z| {flat[len(flat) // 2] if flat else None})")
+    push = sum(float(x["press_n"]) for x in wiping)
+    pad = sum(float(x["press_pad_n"]) for x in wiping)
+    if not push > 0 or pad < 0.5 * push:
+        fail.append(f"trial {r['trial']}: the pad carries {pad:.0f} of {push:.0f} N*ticks of the push on the towel")
     if r["success"] != (r["measure"] > 1.0 and path > 0.95 and not r["fell"] and on_top):
         fail.append(f"trial {r['trial']}: verdict {r['success']} disagrees with the trajectory (path {path:.3f} m)")
 if s["successes"] != 2:

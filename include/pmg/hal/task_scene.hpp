@@ -88,7 +88,7 @@ struct TaskScene {
   /// Give the robot's rubber hands contact: a collision copy of each `*_rubber_hand` visual mesh
   /// (MuJoCo collides its convex hull; mass 0, friction 1.0). The public G1 MJCF renders the hands
   /// without contact, so the wrist links (0.13 m behind the finger tips) were all that touched an
-  /// object. Off by default (the wiping operator was tuned and measured without it).
+  /// object. Off by default; both shipped task scenes turn it on.
   bool hand_collision = false;
   /// With hand_collision: the shape of each hand's collision geom. "mesh" (default): the visual
   /// mesh itself (MuJoCo collides its convex hull). MuJoCo 2.2's general convex collider (libccd,
@@ -107,6 +107,14 @@ struct TaskScene {
   /// does not, so a box squeezed between two hands pivots freely about the line through the two
   /// contacts. 0 (default): condim 3, MuJoCo's default torsional coefficient 0.005 unused.
   double hand_torsional_friction = 0.0;
+  /// The wrist links' collision meshes (`*_wrist_roll_link`, `*_wrist_pitch_link`,
+  /// `*_wrist_yaw_link`): torsional friction coefficient [m], [0, 0.1], with condim 4. 0 (default):
+  /// the robot's own contact model (condim 3). The G1's wrist housings stand out beyond its rubber
+  /// hands, so they are what squeezes a box; MuJoCo's point contact lets the box pivot freely about
+  /// the line through the two housings' contacts, while a real housing pressed into cardboard
+  /// touches over a patch. For a patch of radius a and friction mu the torque it resists is about
+  /// (2/3) mu a N: 0.005 m (MuJoCo's default coefficient) is a = 1 cm at mu = 0.7.
+  double wrist_torsional_friction = 0.0;
   /// MuJoCo's `option/impratio` for the composed model, [1, 100]: the ratio of the frictional to the
   /// normal constraints' impedance. MuJoCo's default 1 lets an object held by friction creep out of a
   /// squeeze (soft friction constraints slide under a steady load); MuJoCo's documentation
