@@ -387,6 +387,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   const int hand_root = mj_name2id(m, mjOBJ_BODY, use_left ? "left_wrist_roll_link" : "right_wrist_roll_link");
   const int pad_geom = mj_name2id(m, mjOBJ_GEOM, use_left ? "task_left_hand_collision" : "task_right_hand_collision");
   if (towel_body < 0 || hand_root < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the towel body or *_wrist_roll_link");
+  const std::array<int, 2> press_root{hand_root, -1}, press_pad{pad_geom, -1};  // slot 0: the working hand
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -406,12 +407,10 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
                        app.controller().teleop()->status().command.vy, app.controller().teleop()->status().command.wz,
                        app.controller().teleop()->status().command.pitch);
     {
-      const std::size_t h = use_left ? 0 : 1;
-      std::array<int, 2> roots{hand_root, hand_root}, pads{pad_geom, pad_geom};
-      const std::array<double, 4> press = contactNormalForce(m, d, towel_body, roots, pads);
+      const std::array<double, 4> press = contactNormalForce(m, d, towel_body, press_root, press_pad);
       // palm_normal_z: the hand's y axis (across the palm: the pad's thin axis) in W, z component;
       // +-1 with the palm flat on the table, 0 with the palm facing sideways.
-      csv << fmt::format(",{:.2f},{:.2f},{:.3f}\n", press[h], press[2 + h], d->xmat[9 * hand + 7]);
+      csv << fmt::format(",{:.2f},{:.2f},{:.3f}\n", press[0], press[2], d->xmat[9 * hand + 7]);
     }
     // What the operator sees: object and hand relative to the torso (head camera), the robot's
     // place in the room, with latency and noise.
@@ -1005,8 +1004,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         {
           // Open until both wrists are seen clear of the box's sides (across it): hands still touching
           // it drag it forward as they move on to the deeper grip.
-          bool clear = true;
-          for (std::size_t h = 0; h < 2; ++h)
+          bool clear = true;  // release_clear_m 0: no check, the opening time alone
+          for (std::size_t h = 0; op.release_clear_m > 0 && h < 2; ++h)
             clear = clear && std::abs((box_turn.inverse() * (hand_R[h] - box_R)).y()) >= half_w + op.release_clear_m;
           if ((t - phase_t0 > op.squeeze_s + 0.3 && clear) || t - phase_t0 > op.squeeze_s + 4.0) phase = kDescend, phase_t0 = t, slid = true;
         }

@@ -64,12 +64,12 @@ struct BoxCriteria {
   double floor_margin_m = 0.05; ///< bottom this close to the floor = dropped
 };
 
-/// Judges a box trial of @p object from table @p pick to table @p place. @throws
-/// std::invalid_argument on an empty trajectory or unknown names.
 /// An object's tilt [rad], [0, pi]: the angle between its z axis and W's (0: upright). @p q_W: its
 /// orientation in W (normalised here). The box judge's "upright" and the bench's logged tilt.
 double tiltAngle(const Eigen::Quaterniond& q_W);
 
+/// Judges a box trial of @p object from table @p pick to table @p place. @throws
+/// std::invalid_argument on an empty trajectory or unknown names.
 TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const std::string& pick, const std::string& place,
                      const std::vector<TaskObjectSample>& traj, bool robot_fell, const BoxCriteria& c = {});
 
