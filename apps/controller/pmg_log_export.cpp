@@ -31,7 +31,8 @@ int main(int argc, char** argv) {
     if (!log.good()) throw std::runtime_error(log_path + ": cannot open LCM log");
     std::ofstream csv(csv_path);
     if (!csv) throw std::runtime_error(csv_path + ": cannot write");
-    csv << "t,mode,phase,vx,vy,wz,pitch,roll,height,opt_vx,opt_vy,opt_wz,opt_pitch,opt_roll,opt_height,gco_status,"
+    csv << "t,mode,phase,vx,vy,wz,pitch,roll,height,opt_vx,opt_vy,opt_wz,opt_pitch,opt_roll,opt_height,"
+           "fb_vx,fb_vy,fb_wz,est_vx,est_vy,est_wz,gco_status,"
            "contact_l,contact_r,base_x,base_y,base_z,fault";
     for (const auto& prefix : {"q_", "q_ref_", "tau_"})
       for (const auto& j : robot.joints) csv << ',' << prefix << j.name;
@@ -56,6 +57,8 @@ int main(int argc, char** argv) {
       csv << 1e-6 * static_cast<double>(m.utime) << ',' << int(m.mode) << ',' << m.phase;
       for (double c : m.command) csv << ',' << c;
       for (double c : m.command_opt) csv << ',' << c;
+      for (double c : m.command_feedback) csv << ',' << c;
+      for (double c : m.velocity_estimate) csv << ',' << c;
       csv << ',' << m.gco_status;
       csv << ',' << int(m.in_contact[0]) << ',' << int(m.in_contact[1]);
       for (double p : m.base_position) csv << ',' << p;

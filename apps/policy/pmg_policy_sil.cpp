@@ -44,6 +44,9 @@
 //              pmg::motion::PostureProbe measures the static clips; level when no foot is in
 //              stance; KDL, pelvis -> torso_link), height the template's GeneratorOutput::base_height
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
+//   u_feedback vx, vy, wz after the velocity feedback: what the generator got (the shaped command
+//              when velocity_feedback is off; --velocity-feedback on|off overrides the config)
+//   estimate   the feedback's leg-odometry estimate of vx, vy, wz (null when off)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
 //              |command| >= 0.05 (m/s or rad/s), else null
 // printed as a table and written to summary.json "segments" (per seed under runs[k].segments).
@@ -116,7 +119,7 @@ struct AxisMeans {
 
 /// One seed's samples in one segment's window (the last 60 % of the segment).
 struct SegmentSeed {
-  AxisMeans achieved, reference, u_prime;
+  AxisMeans achieved, reference, u_prime, feedback, estimate;
   long ticks = 0;         // ticks in the window
   long stance_ticks = 0;  // of which the reference had a stance foot
   double first_t = kNaN, last_t = kNaN;  // first and last tick in the window [s]
@@ -211,6 +214,10 @@ int main(int argc, char** argv) {
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
+  std::string velocity_feedback;
+  app.add_option("--velocity-feedback", velocity_feedback,
+                 "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)")
+      ->check(CLI::IsMember({"on", "off"}));
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -230,6 +237,7 @@ int main(int argc, char** argv) {
     if (!model_path.empty()) base.policy_file = model_path;
     if (base.policy_file.empty()) throw pmg::ConfigError(controller_path + ": policy.model: missing (or give --model)");
     base.policy_native = native;
+    if (!velocity_feedback.empty()) base.velocity_feedback.enabled = velocity_feedback == "on";
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
@@ -340,6 +348,8 @@ int main(int argc, char** argv) {
           // the reference's implied motion (vx/vy/wz nan without a stance foot) and GCO's u'
           csv << ",vx_ref,vy_ref,wz_ref,pitch_ref,roll_ref";
           for (const char* a : kAxisNames) csv << ',' << a << "_uopt";
+          // the velocity command after the feedback (= the command when off) and leg odometry (nan when off)
+          csv << ",vx_fb,vy_fb,wz_fb,vx_est,vy_est,wz_est";
           csv << ",episode\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
@@ -409,6 +419,20 @@ int main(int argc, char** argv) {
           }
           const pmg::gco::BaseCommand& up = controller.gcoResult().u_opt;
           const Axes u_prime = {up.v_x, up.v_y, up.yaw_rate, up.pitch, up.roll, up.height};
+          Axes fb, est;
+          fb.fill(kNaN);
+          est.fill(kNaN);
+          if (const pmg::VelocityFeedback* vf = controller.velocityFeedback(); vf && active) {
+            const pmg::VelocityCommand& c_fb = vf->command();
+            fb[0] = c_fb.vx;
+            fb[1] = c_fb.vy;
+            fb[2] = c_fb.wz;
+            for (std::size_t i = 0; i < 3; ++i) est[i] = vf->filteredEstimate()[i];
+          } else if (active) {
+            fb[0] = controller.commands().velocity().vx;
+            fb[1] = controller.commands().velocity().vy;
+            fb[2] = controller.commands().velocity().wz;
+          }
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];
             if (fallen) ss.fell = true;
@@ -421,6 +445,8 @@ int main(int argc, char** argv) {
                 ss.achieved.add(i, ach[static_cast<std::size_t>(i)]);
                 ss.reference.add(i, ref[static_cast<std::size_t>(i)]);
                 if (active) ss.u_prime.add(i, u_prime[static_cast<std::size_t>(i)]);
+                ss.feedback.add(i, fb[static_cast<std::size_t>(i)]);
+                ss.estimate.add(i, est[static_cast<std::size_t>(i)]);
               }
             }
           }
@@ -441,6 +467,8 @@ int main(int argc, char** argv) {
           for (int j = 0; j < na; ++j) csv << ',' << controller.reference()[static_cast<std::size_t>(j)];
           for (int i = 0; i < 5; ++i) csv << ',' << ref[static_cast<std::size_t>(i)];
           for (double x : u_prime) csv << ',' << x;
+          for (int i = 0; i < 3; ++i) csv << ',' << fb[static_cast<std::size_t>(i)];
+          for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << episode << '\n';
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
@@ -486,13 +514,13 @@ int main(int argc, char** argv) {
     }
     // Per segment: the mean over the seeds that ran through its window without falling.
     struct SegmentResult {
-      Axes achieved, reference, u_prime;
+      Axes achieved, reference, u_prime, feedback, estimate;
       int seeds = 0, fallen = 0;
     };
     std::vector<SegmentResult> seg_results(windows.size());
     for (std::size_t k = 0; k < windows.size(); ++k) {
       const SegmentWindow& w = windows[k];
-      AxisMeans a, r, u;
+      AxisMeans a, r, u, fbm, em;
       SegmentResult& res = seg_results[k];
       for (const Totals& t : totals) {
         const SegmentSeed& ss = t.segments[k];
@@ -505,16 +533,21 @@ int main(int argc, char** argv) {
         }
         ++res.seeds;
         const Axes ma = ss.achieved.mean(), mr = ss.reference.mean(), mu = ss.u_prime.mean();
+        const Axes mf = ss.feedback.mean(), me = ss.estimate.mean();
         for (int i = 0; i < kAxes; ++i) {
           const auto ii = static_cast<std::size_t>(i);
           a.add(i, ma[ii]);
           r.add(i, mr[ii]);
           u.add(i, mu[ii]);
+          fbm.add(i, mf[ii]);
+          em.add(i, me[ii]);
         }
       }
       res.achieved = a.mean();
       res.reference = r.mean();
       res.u_prime = u.mean();
+      res.feedback = fbm.mean();
+      res.estimate = em.mean();
     }
     if (!windows.empty()) {
       std::printf("\nper segment (means over the last 60 %% of each segment and over seeds): "
@@ -539,7 +572,8 @@ int main(int argc, char** argv) {
     std::ofstream js(out + "/summary.json");
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
-    js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent") << ", \"commands\": " << jstr(commands)
+    js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
+       << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false") << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];
@@ -559,7 +593,8 @@ int main(int argc, char** argv) {
         const SegmentSeed& ss = t.segments[k];
         js << (k ? ", " : "") << "{\"name\": " << jstr(windows[k].name) << ", \"ticks\": " << ss.ticks
            << ", \"stance_ticks\": " << ss.stance_ticks << ", \"achieved\": " << jaxes(ss.achieved.mean())
-           << ", \"reference\": " << jaxes(ss.reference.mean()) << ", \"u_prime\": " << jaxes(ss.u_prime.mean()) << "}";
+           << ", \"reference\": " << jaxes(ss.reference.mean()) << ", \"u_prime\": " << jaxes(ss.u_prime.mean())
+           << ", \"u_feedback\": " << jaxes(ss.feedback.mean()) << ", \"estimate\": " << jaxes(ss.estimate.mean()) << "}";
       }
       js << "]}";
     }
@@ -575,7 +610,8 @@ int main(int argc, char** argv) {
          << ", \"t_end\": " << jnum(w.t_end) << ", \"window\": [" << jnum(w.w_begin) << ", " << jnum(w.w_end)
          << "], \"seeds\": " << res.seeds << ", \"fallen\": " << res.fallen << ", \"command\": " << jaxes(w.command)
          << ", \"reference\": " << jaxes(res.reference) << ", \"achieved\": " << jaxes(res.achieved)
-         << ", \"u_prime\": " << jaxes(res.u_prime) << ", \"ratio\": " << jaxes(ratios(res.achieved, w.command), 3)
+         << ", \"u_prime\": " << jaxes(res.u_prime) << ", \"u_feedback\": " << jaxes(res.feedback)
+         << ", \"estimate\": " << jaxes(res.estimate) << ", \"ratio\": " << jaxes(ratios(res.achieved, w.command), 3)
          << ", \"reference_ratio\": " << jaxes(ratios(res.reference, w.command), 3) << "}";
     }
     js << "]}\n";

@@ -1,6 +1,7 @@
 #include "pmg/controller/controller.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "pmg/controller/lcm_command_source.hpp"
@@ -57,6 +58,9 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   dt_ = 1.0 / config_.loop_rate_hz;
   ref_out_ = pmg_->generatorOutput();  // sizes the vectors once
   if (config_.teleop.enabled) teleop_ = std::make_unique<teleop::TeleopMode>(robot, config_.teleop);
+  if (config_.velocity_feedback.enabled)
+    feedback_ = std::make_unique<VelocityFeedback>(config_.velocity_feedback, pmg_->gco().legModel(),
+                                                   pmg_->legJointIndex(), L.max_velocity);
   command_.num_motors = n;
   holdStandingPose();
 }
@@ -127,18 +131,23 @@ TickStatus Controller::tick(double now) noexcept {
     // from rest; the reference limiter starts from the standing pose the supervisor held.
     status.entered_active = true;
     shaper_.reset();
+    if (feedback_) feedback_->reset();
     pmg_->reset(0.0);
     if (policy_) policy_->reset();
     limiter_.reset(q_ref_.data(), n);
   }
-  if (!active) shaper_.reset();  // the command takes effect only while the loop drives the motors
+  if (!active) {  // the command takes effect only while the loop drives the motors
+    shaper_.reset();
+    if (feedback_) feedback_->reset();
+  }
   prev_mode_ = state_.mode;
 
   // ---- generate / optimise
   if (active) {
+    const VelocityCommand& u_d = feedback_ ? feedback_->update(shaper_.velocity(), state_, dt_) : shaper_.velocity();
     const gco::GcoResult& g =
         fixed_generator_ ? pmg_->step(fixed_u_d_, PostureCommand{0.0, 0.0, config_.commands.standing_height}, dt_)
-                         : pmg_->step(shaper_.velocity(), shaper_.posture(), dt_);
+                         : pmg_->step(u_d, shaper_.posture(), dt_);
     const GeneratorOutput& out = pmg_->generatorOutput();
     status.generator = out.status;
     status.gco = static_cast<std::int32_t>(g.status);
@@ -149,11 +158,16 @@ TickStatus Controller::tick(double now) noexcept {
 
     // ---- policy (legs) or the references directly
     if (policy_) {
-      // The actor observes u' (PMG eq. 19) when GCO runs, else the shaped command.
-      const std::array<double, 6> u =
-          config_.gco.enabled ? std::array<double, 6>{g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch,
-                                                      g.u_opt.roll, g.u_opt.height}
-                              : shaper_.vector();
+      // The actor observes u' (PMG eq. 19) when GCO runs, else the shaped command (after the
+      // velocity feedback, when on).
+      std::array<double, 6> u = shaper_.vector();
+      if (config_.gco.enabled) {
+        u = {g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch, g.u_opt.roll, g.u_opt.height};
+      } else if (!fixed_generator_) {
+        u[0] = u_d.vx;
+        u[1] = u_d.vy;
+        u[2] = u_d.wz;
+      }
       status.policy = static_cast<std::int32_t>(policy_->step(state_, u, ref_out_, command_).code);
     } else {
       for (int i = 0; i < n; ++i) {
@@ -198,6 +212,15 @@ void Controller::publish(double now, const TickStatus& status, double wall_start
   f.period = out.period;
   f.in_contact = out.in_contact;
   f.command = shaper_.vector();
+  if (feedback_) {
+    const VelocityCommand& u_fb = feedback_->command();
+    f.command_feedback = {u_fb.vx, u_fb.vy, u_fb.wz};
+    f.velocity_estimate = feedback_->filteredEstimate();
+  } else {
+    f.command_feedback = {f.command[0], f.command[1], f.command[2]};
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    f.velocity_estimate = {nan, nan, nan};
+  }
   const gco::GcoResult& g = pmg_->gcoResult();
   f.command_opt = {g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch, g.u_opt.roll, g.u_opt.height};
   f.gco_status = status.gco;

@@ -93,6 +93,8 @@ void TelemetryPublisher::drain() {
     msg.gco_status = f.gco_status;
     for (std::size_t i = 0; i < 3; ++i) {
       msg.base_position[i] = f.base_position[i];
+      msg.command_feedback[i] = f.command_feedback[i];
+      msg.velocity_estimate[i] = f.velocity_estimate[i];
       msg.imu_gyro[i] = f.imu_gyro[i];
       msg.imu_acc[i] = f.imu_acc[i];
     }

@@ -24,9 +24,10 @@
 namespace pmg {
 namespace {
 
-ControllerConfig silConfig() {
+ControllerConfig silConfig(bool velocity_feedback = false) {
   ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
   c.makeOffline();
+  c.velocity_feedback.enabled = velocity_feedback;
   return c;
 }
 
@@ -72,7 +73,7 @@ class RecordingBackend final : public HalBackend {
 };
 
 struct Sweep {
-  ControllerConfig config = silConfig();
+  ControllerConfig config;
   RecordingBackend* recorder = nullptr;
   std::unique_ptr<ControllerApp> app;
   CommandSample sample;
@@ -82,7 +83,7 @@ struct Sweep {
   std::array<double, kMaxMotors> prev_ref{};
   bool have_prev = false;
 
-  Sweep() {
+  explicit Sweep(bool velocity_feedback = false) : config(silConfig(velocity_feedback)) {
     ControllerAppOptions o;
     auto rec = std::make_unique<RecordingBackend>(config.robot, config.mujoco);
     recorder = rec.get();
@@ -176,8 +177,46 @@ TEST(ReferenceContinuity, AbruptCommandSweepKeepsEveryJointReferenceUnderTheBoun
   EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
 }
 
+// The velocity feedback (velocity_feedback.hpp) in the gantry: the legs swing in the air, so leg
+// odometry reads nonsense and the correction sits at its bound r |u| -- its worst case. Abrupt
+// steps, reversals and mode changes still keep every reference under the bound.
+TEST(ReferenceContinuity, VelocityFeedbackAtItsBoundKeepsEveryJointReferenceUnderTheBound) {
+  Sweep s(true);
+  const CommandLimits& L = s.config.commands;
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  ASSERT_NE(s.app->controller().velocityFeedback(), nullptr);
+  const double vx = L.max_velocity[0], vy = L.max_velocity[1], wz = L.max_velocity[2];
+  double max_correction_share = 0.0;
+  for (const auto& [label, u] : std::vector<std::pair<std::string, Command>>{
+           {"+vx", cmd(0.5 * vx, 0, 0)}, {"-vx+wz", cmd(-0.5 * vx, 0, 0.5 * wz)}, {"vy-wz", cmd(0, 0.5 * vy, -0.5 * wz)},
+           {"reversal", cmd(-0.5 * vx, -0.5 * vy, 0.5 * wz)}, {"everything", cmd(vx, vy, wz, 0.2, 0.1, 0.7)}}) {
+    s.hold(u, 2.0, label);
+    const VelocityFeedback& fb = *s.app->controller().velocityFeedback();
+    const VelocityCommand& shaped = s.app->controller().commands().velocity();
+    for (std::size_t i = 0; i < 3; ++i)
+      if (std::fabs(shaped[i]) > 1e-6)
+        max_correction_share = std::max(max_correction_share, std::fabs(fb.correction()[i]) / std::fabs(shaped[i]));
+  }
+  s.hold(cmd(0, 0, 0), 1.5, "stop");
+  EXPECT_EQ(s.app->controller().velocityFeedback()->command().vx, 0.0) << "standing: no correction left";
+  s.request(ModeRequest::kSoftStand);
+  s.hold(cmd(0.5, 0, 0), 1.0, "active->soft stand");
+  s.request(ModeRequest::kActive);
+  s.hold(cmd(0.5, 0, 0), 2.0, "soft stand->active");
+  std::printf("[ SIL ] velocity feedback in the gantry: largest correction %.2f of |u|; fastest PMG reference %.2f "
+              "rad/s at %s; limiter acted on %llu ticks\n",
+              max_correction_share, s.max_ref_speed, s.worst_at.c_str(),
+              static_cast<unsigned long long>(s.app->controller().referenceLimiter().limitedTicks()));
+  EXPECT_GT(max_correction_share, 0.3) << "the correction really acted";
+  EXPECT_LE(max_correction_share, s.config.velocity_feedback.max_ratio + 1e-9);
+  EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
+  EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
 TEST(Controller, TickAndHalCycleDoNotAllocate) {
-  Sweep s;
+  Sweep s(true);  // with every stage on: the velocity feedback too
   s.hold(cmd(0, 0, 0), 1.5, "engage");
   ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
   s.hold(cmd(0.4, 0.1, 0.2), 1.0, "walk");

@@ -7,6 +7,8 @@
 ///  teleop    (teleop.enabled) the VR stream: once engaged the headset's command replaces the
 ///            other sources' (teleop_mode.hpp);
 ///  shape     CommandShaper: validate, clamp to the one CommandLimits, slew;
+///  feedback  (velocity_feedback.enabled) the integral correction of the shaped velocity on leg
+///            odometry (velocity_feedback.hpp): the generator gets u_fb, evaluations compare with u;
 ///  generate  PMG generator + GCO (kActive only); teleop's arm IK replaces the arm references of
 ///            the arms it controls; then ReferenceRateLimiter bounds every joint reference's
 ///            speed (CommandLimits::max_reference_speed);
@@ -23,6 +25,7 @@
 
 #include "pmg/controller/commands.hpp"
 #include "pmg/controller/controller_config.hpp"
+#include "pmg/controller/velocity_feedback.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/hal_runner.hpp"
@@ -88,6 +91,8 @@ class Controller {
   const LowCommand& lastCommand() const noexcept { return command_; }
   const LowState& lastState() const noexcept { return state_; }
   const CommandShaper& commands() const noexcept { return shaper_; }
+  /// The velocity feedback stage (config velocity_feedback.enabled), or nullptr.
+  const VelocityFeedback* velocityFeedback() const noexcept { return feedback_.get(); }
   const ReferenceRateLimiter& referenceLimiter() const noexcept { return limiter_; }
   /// Mode requests the loop forwarded to the supervisor (operator and start-up sequence).
   std::uint64_t modeRequestsPosted() const noexcept { return requests_posted_; }
@@ -113,6 +118,7 @@ class Controller {
   TelemetryPublisher* telemetry_;
   const LcmInputCounters* input_counters_;
   CommandShaper shaper_;
+  std::unique_ptr<VelocityFeedback> feedback_;
   ReferenceRateLimiter limiter_;
   GeneratorOutput ref_out_;  // generator output with the rate-limited reference (preallocated)
   LatestValue<CommandSample> input_;

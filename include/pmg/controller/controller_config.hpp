@@ -12,6 +12,7 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/comms/auth.hpp"
 #include "pmg/controller/commands.hpp"
+#include "pmg/controller/velocity_feedback.hpp"
 #include "pmg/gco/gco.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/hal_stack.hpp"
@@ -56,6 +57,9 @@ struct ControllerConfig {
   std::string gco_file;          ///< absolute path of the GCO options ("" = defaults)
   gco::GcoOptions gco;           ///< Ground-aware Command Optimization; gco.enabled = false: "PMG w/o GCO"
   CommandLimits commands;
+  /// Closed-loop velocity tracking on leg odometry (`velocity_feedback:`, velocity_feedback.hpp);
+  /// off unless the file enables it.
+  VelocityFeedbackConfig velocity_feedback;
   double soft_stand_duration = 1.0;  ///< supervisor soft stand: measured → standing pose [s]
   double damping_kd_scale = 1.0;     ///< damping mode: kd = scale · robot config kd
   StartupMode startup = StartupMode::kActive;

@@ -36,6 +36,8 @@ struct TelemetryFrame {
   std::array<bool, 2> in_contact{};
   std::array<double, 6> command{};      ///< shaped u: vx, vy, wz, pitch, roll, height
   std::array<double, 6> command_opt{};  ///< u' after GCO (eq. 19)
+  std::array<double, 3> command_feedback{};  ///< u_fb: vx, vy, wz after the velocity feedback (= u when off)
+  std::array<double, 3> velocity_estimate{};  ///< leg-odometry vx, vy [m/s], wz [rad/s] in H (NaN when off)
   std::int32_t gco_status = 0;
   std::array<double, 3> base_position{};
   std::array<double, 4> base_quat{1, 0, 0, 0};

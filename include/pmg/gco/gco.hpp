@@ -238,6 +238,8 @@ class Gco {
 
   const GcoOptions& options() const noexcept { return options_; }
   const GcoCounters& counters() const noexcept { return counters_; }
+  /// The leg chains GCO works on.
+  const std::shared_ptr<const LegModel>& legModel() const noexcept { return model_; }
 
  private:
   struct Impl;

@@ -1,0 +1,177 @@
+#pragma once
+/// @file velocity_feedback.hpp
+/// Closed-loop velocity tracking around the PMG generator and the policy (beyond the paper;
+/// issue 12, docs/controller.md "Velocity feedback").
+///
+/// The trained actor achieves 75–90 % of many commands (docs/policy.md "Command fidelity"): it has
+/// no measurement of its own linear velocity. The loop can measure it: leg odometry from the IMU
+/// and the leg encoders (the base velocity that holds the stance soles still, the same kinematics
+/// as PMG eq. 14 on KDL leg chains) and the yaw rate from the gyro. An integral correction on the
+/// velocity command then makes the achieved velocity meet the user's command u in steady state:
+///
+///   e_i = u_i − v̂_i,   c_i ← clamp(c_i + k_i e_i dt, −r |u_i|, r |u_i|),
+///   u_fb,i = clamp(u_i + c_i, −max_velocity_i, max_velocity_i)          (i = v_x, v_y, ω)
+///
+/// u_fb goes to the generator (and, through GCO's u' or directly, to the actor's observation); u
+/// is what the user commanded and what every evaluation compares against. The bound r |u_i| makes
+/// the correction vanish with the command (a robot told to stand is not steered back to where it
+/// started, and u_fb keeps the sign of u), and keeps u_fb continuous: |du_fb/dt| ≤ (1 + r) ×
+/// the shaper's slew limit + k_i × the largest error. The correction holds (does not integrate)
+/// while no foot is in stance or the estimate is not finite.
+///
+/// Frames: B = pelvis (the IMU frame of the G1's imu_in_pelvis, axes parallel to the pelvis link),
+/// W = world (the IMU's orientation estimate), H = heading frame (W rotated by the pelvis yaw:
+/// x forward, y left, z up). No allocation, noexcept per tick (tested).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "pmg/gco/leg_kinematics.hpp"
+#include "pmg/generator/generator.hpp"
+#include "pmg/hal/types.hpp"
+
+namespace pmg {
+
+/// `velocity_feedback:` of the controller config.
+struct VelocityFeedbackConfig {
+  bool enabled = false;
+  /// Integral gains k_i for v_x, v_y, ω [1/s] (each ≥ 0; 0 turns an axis off).
+  std::array<double, 3> ki{1.0, 1.0, 1.0};
+  /// r: largest correction as a share of |u_i|, [0, 2].
+  double max_ratio = 0.6;
+  /// Feet whose sole is within this height of the lowest sole (in H) count as in stance [m], (0, 0.1].
+  double stance_band_m = 0.02;
+  /// Time constant with which leg odometry corrects the IMU-propagated estimate [s], [0, 2].
+  double odometry_time_s = 0.1;
+  /// Leg-odometry samples further than this from the prediction are rejected [m/s], (0, 5].
+  double gate_mps = 0.15;
+  /// After this long of consecutive rejections the estimate restarts from the next sample [s], [0, 5].
+  double max_rejected_s = 0.3;
+  /// Above this pelvis tilt (IMU roll or pitch) [rad], (0, 1.5], the correction is not integrated
+  /// and decays to zero with decay_time_s: a robot that is being shoved or catching itself gets
+  /// exactly the user's command.
+  double max_tilt_rad = 0.3;
+  /// Time constant of that decay [s], (0, 5].
+  double decay_time_s = 0.5;
+  /// Empty when valid, else "<field>: expected ..." for the first bad field.
+  std::string validate() const;
+};
+
+/// Base velocity of the pelvis measured by leg odometry, heading frame H.
+struct BaseVelocityEstimate {
+  bool valid = false;    ///< false: no foot judged in stance or a non-finite input this tick
+  int stance_feet = 0;   ///< feet used (1 or 2)
+  double v_x = 0.0;      ///< [m/s] forward (H)
+  double v_y = 0.0;      ///< [m/s] left (H)
+  double yaw_rate = 0.0; ///< [rad/s] about the world z axis (gyro, rotated into W)
+};
+
+/// Leg odometry: per stance foot f (vectors in H, R_HB from the IMU orientation with its yaw
+/// removed, ω_B the gyro),
+///   v_f = −(ω_H × R_HB p_BS,f + R_HB v_BS,f)   with p_BS, v_BS from the KDL leg chain (eq. 13–14),
+/// the mean over the stance feet; a foot is in stance when its sole lies within stance_band_m of the
+/// lower sole. Assumes the stance soles do not slip (slip shows up as estimate error).
+class LegOdometry {
+ public:
+  /// @param legs leg chains of the robot (gco::LegModel::fromRobotConfig); @param leg_idx the
+  /// chain joints' columns in LowState::motors (LegModel::jointIndices on the robot's joint names).
+  /// Setup: allocates; throws std::invalid_argument if legs is null.
+  LegOdometry(std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx, double stance_band_m);
+  ~LegOdometry();
+  LegOdometry(const LegOdometry&) = delete;
+  LegOdometry& operator=(const LegOdometry&) = delete;
+
+  /// One estimate from the newest state (motor q [rad], qd [rad/s]; IMU quaternion W←B, gyro in B
+  /// [rad/s]). noexcept, no allocation.
+  BaseVelocityEstimate estimate(const LowState& state) noexcept;
+
+ private:
+  gco::LegKinematics kin_;
+  gco::LegJointIndex idx_;
+  double band_;
+};
+
+/// Leg odometry fused with the IMU (a complementary filter, the pattern of leg-inertial state
+/// estimators): the velocity in H is propagated with the accelerometer (specific force rotated into
+/// W, plus gravity; the rotation of H by the gyro's yaw rate) and pulled towards the leg-odometry
+/// measurement with time constant odometry_time_s; a measurement more than gate_mps from the
+/// prediction is rejected (touchdown and lift-off transients, slips, flight phases); once the
+/// rejections have lasted max_rejected_s the estimate restarts from the legs' measurement. The yaw
+/// rate is the gyro's, low-passed alike.
+class BaseVelocityEstimator {
+ public:
+  /// Setup: allocates; throws std::invalid_argument if legs is null.
+  BaseVelocityEstimator(std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx,
+                        const VelocityFeedbackConfig& config);
+  /// One tick [dt s]. valid once a first leg-odometry sample arrived. noexcept, no allocation.
+  BaseVelocityEstimate update(const LowState& state, double dt) noexcept;
+  void reset() noexcept;
+  /// The leg-odometry measurement of the last update.
+  const BaseVelocityEstimate& lastLegOdometry() const noexcept { return last_leg_; }
+  /// Leg-odometry samples believed / rejected by the gate so far.
+  std::uint64_t accepted() const noexcept { return accepted_; }
+  std::uint64_t rejected() const noexcept { return rejected_; }
+  /// Whether the last update rejected its leg-odometry sample (the estimate is the IMU's alone).
+  bool rejecting() const noexcept { return rejected_run_ > 0; }
+  /// Pelvis tilt from vertical of the last update [rad] (IMU orientation).
+  double tilt() const noexcept { return tilt_; }
+
+ private:
+  static constexpr double kGravity = 9.81;
+  LegOdometry odometry_;
+  VelocityFeedbackConfig config_;
+  std::array<double, 3> v_{};
+  bool initialized_ = false;
+  int rejected_run_ = 0;
+  double tilt_ = 0.0;
+  std::uint64_t accepted_ = 0, rejected_ = 0;
+  BaseVelocityEstimate last_leg_;
+};
+
+/// The integral correction of the velocity command (file comment). One per control loop.
+class VelocityFeedback {
+ public:
+  /// @param max_velocity |v_x|, |v_y| [m/s], |ω| [rad/s] limits of u_fb (the shaper's limits).
+  /// Setup: allocates; throws ConfigError on an invalid config.
+  VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
+                   const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity);
+
+  /// One tick [dt s]: estimate from @p state (BaseVelocityEstimator), integrate the error of the
+  /// shaped command @p u, and return u_fb. When disabled returns @p u. noexcept, no allocation.
+  const VelocityCommand& update(const VelocityCommand& u, const LowState& state, double dt) noexcept;
+  /// The integrator alone, on a given estimate @p est (update() = BaseVelocityEstimator + this);
+  /// @p hold: do not integrate (the estimator is rejecting its measurements); @p decay: the robot
+  /// tilts beyond max_tilt_rad, the correction decays to zero. noexcept, no allocation.
+  const VelocityCommand& correct(const VelocityCommand& u, const BaseVelocityEstimate& est, double dt,
+                                 bool hold = false, bool decay = false) noexcept;
+  /// Ticks on which the correction was held (estimator rejecting) / decayed (tilt) so far.
+  std::uint64_t heldTicks() const noexcept { return held_ticks_; }
+  std::uint64_t decayedTicks() const noexcept { return decayed_ticks_; }
+  /// Zero correction, estimator restarted (entering kActive, leaving it).
+  void reset() noexcept;
+
+  bool enabled() const noexcept { return config_.enabled; }
+  /// The command after feedback of the last update (what the generator got).
+  const VelocityCommand& command() const noexcept { return u_fb_; }
+  /// The correction c (v_x, v_y, ω) of the last update.
+  const std::array<double, 3>& correction() const noexcept { return c_; }
+  /// The estimate (v_x, v_y [m/s], ω [rad/s] in H) the last update integrated on.
+  const BaseVelocityEstimate& lastEstimate() const noexcept { return est_; }
+  std::array<double, 3> filteredEstimate() const noexcept { return {est_.v_x, est_.v_y, est_.yaw_rate}; }
+  const BaseVelocityEstimator& estimator() const noexcept { return estimator_; }
+  const VelocityFeedbackConfig& config() const noexcept { return config_; }
+
+ private:
+  double estimate(std::size_t i) const noexcept { return i == 0 ? est_.v_x : (i == 1 ? est_.v_y : est_.yaw_rate); }
+  VelocityFeedbackConfig config_;
+  BaseVelocityEstimator estimator_;
+  std::array<double, 3> max_velocity_;
+  std::array<double, 3> c_{};
+  BaseVelocityEstimate est_;
+  VelocityCommand u_fb_{};
+  std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0;
+};
+
+}  // namespace pmg

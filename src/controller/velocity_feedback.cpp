@@ -1,0 +1,196 @@
+#include "pmg/controller/velocity_feedback.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "pmg/common/config_error.hpp"
+
+namespace pmg {
+
+std::string VelocityFeedbackConfig::validate() const {
+  static const char* kAxis[3] = {"v_x", "v_y", "yaw rate"};
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(std::isfinite(ki[i]) && ki[i] >= 0.0 && ki[i] <= 20.0))
+      return std::string("ki[") + std::to_string(i) + "] (" + kAxis[i] + "): expected 0..20 [1/s]";
+  if (!(max_ratio >= 0.0 && max_ratio <= 2.0)) return "max_ratio: expected 0..2 (share of |u|)";
+  if (!(stance_band_m > 0.0 && stance_band_m <= 0.1)) return "stance_band_m: expected (0, 0.1] m";
+  if (!(odometry_time_s >= 0.0 && odometry_time_s <= 2.0)) return "odometry_time_s: expected 0..2 s";
+  if (!(gate_mps > 0.0 && gate_mps <= 5.0)) return "gate_mps: expected (0, 5] m/s";
+  if (!(max_rejected_s >= 0.0 && max_rejected_s <= 5.0)) return "max_rejected_s: expected 0..5 s";
+  if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
+  if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
+  return {};
+}
+
+LegOdometry::LegOdometry(std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx,
+                         double stance_band_m)
+    : kin_((legs ? legs : throw std::invalid_argument("LegOdometry: leg model is null"))),
+      idx_(leg_idx),
+      band_(stance_band_m) {}
+
+LegOdometry::~LegOdometry() = default;
+
+BaseVelocityEstimate LegOdometry::estimate(const LowState& state) noexcept {
+  BaseVelocityEstimate out;
+  if (!state.imu.valid) return out;
+  const auto& qw = state.imu.quat_wxyz;
+  Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
+  const double norm = q_WB.norm();
+  if (!(norm > 0.5 && norm < 1.5)) return out;
+  q_WB.coeffs() /= norm;
+  const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
+  const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
+  const Eigen::Matrix3d R_HB = Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_WB;
+  const Eigen::Vector3d w_B(state.imu.gyro[0], state.imu.gyro[1], state.imu.gyro[2]);
+  const Eigen::Vector3d w_H = R_HB * w_B;
+  if (!w_H.allFinite()) return out;
+
+  std::array<Eigen::Vector3d, kNumFeet> v_f;
+  std::array<double, kNumFeet> z_f{};
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    gco::LegVector q, qd;
+    for (int j = 0; j < gco::kLegDofs; ++j) {
+      const int m = idx_[f][static_cast<std::size_t>(j)];
+      if (m < 0 || m >= state.num_motors) return out;
+      q[j] = state.motors[static_cast<std::size_t>(m)].q;
+      qd[j] = state.motors[static_cast<std::size_t>(m)].qd;
+    }
+    gco::FootKinematics k;
+    if (!kin_.compute(static_cast<Foot>(f), q, qd, &k)) return out;
+    const Eigen::Vector3d r_H = R_HB * k.p_BS_B;
+    z_f[f] = r_H.z();
+    v_f[f] = -(w_H.cross(r_H) + R_HB * k.v_BS_B);
+  }
+  const double z_low = std::min(z_f[0], z_f[1]);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    if (z_f[f] - z_low > band_) continue;
+    sum += v_f[f];
+    ++out.stance_feet;
+  }
+  sum /= out.stance_feet;  // at least the lower foot
+  out.v_x = sum.x();
+  out.v_y = sum.y();
+  out.yaw_rate = w_H.z();
+  out.valid = sum.allFinite() && std::isfinite(out.yaw_rate);
+  return out;
+}
+
+BaseVelocityEstimator::BaseVelocityEstimator(std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx,
+                                             const VelocityFeedbackConfig& config)
+    : odometry_(std::move(legs), leg_idx, config.stance_band_m), config_(config) {}
+
+void BaseVelocityEstimator::reset() noexcept {
+  v_ = {0.0, 0.0, 0.0};
+  initialized_ = false;
+  rejected_run_ = 0;
+  tilt_ = 0.0;
+  last_leg_ = BaseVelocityEstimate{};
+}
+
+BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double dt) noexcept {
+  last_leg_ = odometry_.estimate(state);
+  const BaseVelocityEstimate& leg = last_leg_;
+  // Prediction from the IMU: the specific force rotated into W plus gravity is the acceleration of
+  // the IMU; in the turning heading frame H, dv_H/dt = R_HW a_W - w_z e_z x v_H.
+  if (initialized_ && state.imu.valid) {
+    const auto& qw = state.imu.quat_wxyz;
+    Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
+    const double norm = q_WB.norm();
+    if (norm > 0.5 && norm < 1.5) {
+      q_WB.coeffs() /= norm;
+      const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
+      tilt_ = std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0));
+      const Eigen::Vector3d a_W =
+          R_WB * Eigen::Vector3d(state.imu.acc[0], state.imu.acc[1], state.imu.acc[2]) - Eigen::Vector3d(0, 0, kGravity);
+      const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
+      const double cy = std::cos(yaw), sy = std::sin(yaw);
+      const double ax = cy * a_W.x() + sy * a_W.y(), ay = -sy * a_W.x() + cy * a_W.y();
+      const double wz = (R_WB * Eigen::Vector3d(state.imu.gyro[0], state.imu.gyro[1], state.imu.gyro[2])).z();
+      const double vx = v_[0] + (ax + wz * v_[1]) * dt, vy = v_[1] + (ay - wz * v_[0]) * dt;
+      if (std::isfinite(vx) && std::isfinite(vy)) {
+        v_[0] = vx;
+        v_[1] = vy;
+      }
+    }
+  }
+  // Correction by leg odometry, gated: a measurement further than gate_mps from the prediction
+  // (a swing foot taken for a stance foot at touchdown or lift-off, a slipping foot, a flight
+  // phase) is rejected, unless the rejections have lasted max_rejected_s (then the estimate
+  // restarts from it).
+  if (leg.valid) {
+    const double a = config_.odometry_time_s > 0.0 ? std::min(1.0, dt / config_.odometry_time_s) : 1.0;
+    const double innovation = std::hypot(leg.v_x - v_[0], leg.v_y - v_[1]);
+    // Rejected for max_rejected_s: the IMU-only prediction has drifted; restart from the legs.
+    const bool restart = !initialized_ || static_cast<double>(rejected_run_) * dt >= config_.max_rejected_s;
+    if (restart || innovation <= config_.gate_mps) {
+      v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
+      v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
+      v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
+      initialized_ = true;
+      rejected_run_ = 0;
+      ++accepted_;
+    } else {
+      ++rejected_run_;
+      ++rejected_;
+    }
+  }
+  BaseVelocityEstimate out;
+  out.valid = initialized_;
+  out.stance_feet = leg.stance_feet;
+  out.v_x = v_[0];
+  out.v_y = v_[1];
+  out.yaw_rate = v_[2];
+  return out;
+}
+
+VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
+                                   const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity)
+    : config_(config), estimator_(std::move(legs), leg_idx, config), max_velocity_(max_velocity) {
+  if (const std::string e = config_.validate(); !e.empty()) throw ConfigError("velocity_feedback: " + e);
+}
+
+void VelocityFeedback::reset() noexcept {
+  c_ = {0.0, 0.0, 0.0};
+  estimator_.reset();
+  est_ = BaseVelocityEstimate{};
+}
+
+const VelocityCommand& VelocityFeedback::update(const VelocityCommand& u, const LowState& state, double dt) noexcept {
+  if (!config_.enabled) {
+    u_fb_ = u;
+    return u_fb_;
+  }
+  const BaseVelocityEstimate est = estimator_.update(state, dt);
+  return correct(u, est, dt, estimator_.rejecting(), estimator_.tilt() > config_.max_tilt_rad);
+}
+
+const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const BaseVelocityEstimate& est,
+                                                 double dt, bool hold, bool decay) noexcept {
+  u_fb_ = u;
+  est_ = est;
+  if (decay) {
+    ++decayed_ticks_;
+  } else if (hold) {
+    ++held_ticks_;
+  }
+  const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double bound = config_.max_ratio * std::fabs(u[i]);
+    double c = c_[i] * keep;
+    if (est_.valid && !hold && !decay) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
+    c = std::clamp(c, -bound, bound);
+    // Anti-windup: the correction never holds more than the limits let through.
+    const double limited = std::clamp(u[i] + c, -max_velocity_[i], max_velocity_[i]);
+    c_[i] = limited - u[i];
+  }
+  u_fb_.vx = u.vx + c_[0];
+  u_fb_.vy = u.vy + c_[1];
+  u_fb_.wz = u.wz + c_[2];
+  return u_fb_;
+}
+
+}  // namespace pmg

@@ -1,0 +1,281 @@
+// Velocity feedback (velocity_feedback.hpp): leg odometry against an independent finite-difference
+// computation on the G1's leg chains, and the integral correction on a plant that achieves only a
+// share of its command (the measured shortfall of the trained actor, docs/policy.md).
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "g1_fixture.hpp"
+#include "pmg/controller/velocity_feedback.hpp"
+
+namespace pmg {
+namespace {
+
+std::vector<std::string> robotJointNames() {
+  std::vector<std::string> names;
+  for (const JointConfig& j : test::g1Robot().joints) names.push_back(j.name);
+  return names;
+}
+
+struct Legs {
+  std::shared_ptr<const gco::LegModel> model = gco::LegModel::fromRobotConfig(test::g1Robot());
+  gco::LegJointIndex idx = model->jointIndices(robotJointNames());
+};
+
+Eigen::Matrix3d rotZ(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+
+// A state with the given leg joints, IMU orientation R_WB and gyro (B).
+LowState makeState(const Legs& legs, const gco::LegVector (&q)[2], const gco::LegVector (&qd)[2],
+                   const Eigen::Matrix3d& R_WB, const Eigen::Vector3d& w_B) {
+  LowState s;
+  s.num_motors = static_cast<int>(test::g1Robot().numJoints());
+  for (std::size_t f = 0; f < 2; ++f)
+    for (int j = 0; j < gco::kLegDofs; ++j) {
+      const auto m = static_cast<std::size_t>(legs.idx[f][static_cast<std::size_t>(j)]);
+      s.motors[m].q = q[f][j];
+      s.motors[m].qd = qd[f][j];
+    }
+  const Eigen::Quaterniond qWB(R_WB);
+  s.imu.quat_wxyz = {qWB.w(), qWB.x(), qWB.y(), qWB.z()};
+  s.imu.gyro = {w_B.x(), w_B.y(), w_B.z()};
+  s.imu.valid = true;
+  return s;
+}
+
+TEST(LegOdometry, MatchesTheFiniteDifferenceOfTheStanceSoleInTheWorld) {
+  Legs legs;
+  gco::LegKinematics kin(legs.model);
+  // Left leg nearly straight (the lower sole: stance), right knee bent (its sole 5+ cm higher: swing).
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;
+  qd[0] << 0.4, -0.2, 0.1, -0.5, 0.3, 0.15;
+  qd[1] << 2.0, 1.0, -1.0, 3.0, 2.0, -1.0;  // a fast swing leg must not enter the estimate
+  const Eigen::Matrix3d R_WB = rotZ(0.7) * Eigen::AngleAxisd(0.12, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                               Eigen::AngleAxisd(-0.05, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Vector3d w_B(0.05, -0.1, 0.3);
+  LegOdometry odo(legs.model, legs.idx, 0.02);
+  const BaseVelocityEstimate est = odo.estimate(makeState(legs, q, qd, R_WB, w_B));
+  ASSERT_TRUE(est.valid);
+  EXPECT_EQ(est.stance_feet, 1);
+
+  // Independent: the pelvis velocity (world) that keeps the left sole's world position fixed while
+  // the joints move by qd dt and the pelvis turns by w_B dt, by central differences; then into H.
+  const double h = 1e-6;
+  Eigen::Isometry3d X_plus, X_minus;
+  const Eigen::Matrix3d dR_plus = Eigen::AngleAxisd(w_B.norm() * h, w_B.normalized()).toRotationMatrix();
+  const Eigen::Matrix3d dR_minus = dR_plus.transpose();
+  ASSERT_TRUE(kin.forward(Foot::kLeft, q[0] + qd[0] * h, &X_plus));
+  ASSERT_TRUE(kin.forward(Foot::kLeft, q[0] - qd[0] * h, &X_minus));
+  const Eigen::Vector3d v_W =
+      -((R_WB * dR_plus) * X_plus.translation() - (R_WB * dR_minus) * X_minus.translation()) / (2 * h);
+  const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
+  const Eigen::Vector3d v_H = rotZ(-yaw) * v_W;
+  std::printf("leg odometry %.5f %.5f, finite difference %.5f %.5f m/s; yaw rate %.5f vs %.5f\n", est.v_x, est.v_y,
+              v_H.x(), v_H.y(), est.yaw_rate, (R_WB * w_B).z());
+  EXPECT_NEAR(est.v_x, v_H.x(), 1e-6);
+  EXPECT_NEAR(est.v_y, v_H.y(), 1e-6);
+  EXPECT_NEAR(est.yaw_rate, (R_WB * w_B).z(), 1e-12);
+  EXPECT_GT(std::hypot(est.v_x, est.v_y), 0.05) << "a non-trivial velocity was tested";
+
+  // Both soles level (same joints on both legs, mirrored): both count, the estimate is their mean.
+  gco::LegVector qs[2] = {q[0], q[0]}, qds[2] = {qd[0], qd[0]};
+  qs[1][1] = -q[0][1];
+  qs[1][2] = -q[0][2];
+  qs[1][5] = -q[0][5];
+  const BaseVelocityEstimate both = odo.estimate(makeState(legs, qs, qds, Eigen::Matrix3d::Identity(), w_B));
+  ASSERT_TRUE(both.valid);
+  EXPECT_EQ(both.stance_feet, 2);
+
+  // Non-finite joint state or an invalid IMU: no estimate.
+  gco::LegVector qn[2] = {q[0], q[1]};
+  qn[0][3] = std::nan("");
+  EXPECT_FALSE(odo.estimate(makeState(legs, qn, qd, R_WB, w_B)).valid);
+  LowState no_imu = makeState(legs, q, qd, R_WB, w_B);
+  no_imu.imu.valid = false;
+  EXPECT_FALSE(odo.estimate(no_imu).valid);
+}
+
+VelocityFeedbackConfig enabledConfig() {
+  VelocityFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.5, 1.5, 1.5};
+  c.max_ratio = 0.6;
+  c.odometry_time_s = 0.1;
+  return c;
+}
+
+// First-order plant that achieves `gain` of its command (time constant tau), as the actor does.
+struct Plant {
+  std::array<double, 3> gain, v{};
+  double tau = 0.3;
+  BaseVelocityEstimate step(const VelocityCommand& u_fb, double dt) {
+    for (std::size_t i = 0; i < 3; ++i) v[i] += dt / tau * (gain[i] * u_fb[i] - v[i]);
+    BaseVelocityEstimate e;
+    e.valid = true;
+    e.stance_feet = 1;
+    e.v_x = v[0];
+    e.v_y = v[1];
+    e.yaw_rate = v[2];
+    return e;
+  }
+};
+
+TEST(VelocityFeedback, BringsAnUnderachievingPlantToTheCommandWithinTheBound) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  Plant plant{{0.7, 0.8, 0.75}};
+  const VelocityCommand u{-0.3, 0.2, 0.5};
+  BaseVelocityEstimate est;
+  double max_step = 0.0;
+  VelocityCommand prev = u;
+  for (int k = 0; k < 1000; ++k) {
+    const VelocityCommand& out = fb.correct(u, est, 0.01);
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_LE(std::fabs(out[i] - u[i]), 0.6 * std::fabs(u[i]) + 1e-12) << "axis " << i << " tick " << k;
+      max_step = std::max(max_step, std::fabs(out[i] - prev[i]));
+    }
+    prev = out;
+    est = plant.step(out, 0.01);
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(plant.v[i], u[i], 0.01 * std::fabs(u[i])) << "axis " << i << ": achieved " << plant.v[i];
+    EXPECT_NEAR(fb.command()[i], u[i] / plant.gain[i], 0.01) << "axis " << i;
+  }
+  EXPECT_LT(max_step, 1.5 * 0.5 * 0.01 + 1e-9) << "u_fb moves at most k_i |e| per second";
+}
+
+TEST(VelocityFeedback, SaturatesAtTheRatioAndTheLimitsAndVanishesWithTheCommand) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  Plant weak{{0.3, 0.3, 0.3}};
+  BaseVelocityEstimate est;
+  for (int k = 0; k < 1000; ++k) est = weak.step(fb.correct({0.5, -0.2, 0.4}, est, 0.01), 0.01);
+  EXPECT_NEAR(fb.command().vx, 0.8, 1e-9) << "1.6 x 0.5: the ratio bound";
+  EXPECT_NEAR(fb.command().vy, -0.32, 1e-9);
+  EXPECT_NEAR(fb.command().wz, 0.64, 1e-9);
+  // Near the limits: the anti-windup keeps the correction at what the limits let through.
+  for (int k = 0; k < 1000; ++k) est = weak.step(fb.correct({0.9, 0.0, -0.7}, est, 0.01), 0.01);
+  EXPECT_NEAR(fb.command().vx, 1.0, 1e-12);
+  EXPECT_NEAR(fb.command().wz, -0.8, 1e-12);
+  EXPECT_NEAR(fb.correction()[0], 0.1, 1e-12);
+  EXPECT_EQ(fb.command().vy, 0.0) << "no command, no correction, whatever the drift";
+  // The command ramps to zero (as the shaper slews it): the correction follows it to zero.
+  for (int k = 0; k <= 100; ++k) {
+    const double s = 1.0 - k / 100.0;
+    const VelocityCommand& out = fb.correct({0.9 * s, 0.0, -0.7 * s}, est, 0.01);
+    EXPECT_LE(std::fabs(out.vx - 0.9 * s), 0.6 * 0.9 * s + 1e-12);
+    est = weak.step(out, 0.01);
+  }
+  EXPECT_EQ(fb.command().vx, 0.0);
+  EXPECT_EQ(fb.command().wz, 0.0);
+}
+
+TEST(VelocityFeedback, HoldsWithoutAnEstimateResetsAndPassesThroughWhenDisabled) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  Plant plant{{0.7, 0.7, 0.7}};
+  BaseVelocityEstimate est;
+  for (int k = 0; k < 300; ++k) est = plant.step(fb.correct({0.4, 0.0, 0.0}, est, 0.01), 0.01);
+  const double held = fb.correction()[0];
+  EXPECT_GT(held, 0.05);
+  for (int k = 0; k < 100; ++k) fb.correct({0.4, 0.0, 0.0}, BaseVelocityEstimate{}, 0.01);
+  EXPECT_EQ(fb.correction()[0], held) << "no foot in stance: the correction holds";
+  fb.reset();
+  EXPECT_EQ(fb.correction()[0], 0.0);
+  EXPECT_EQ(fb.correct({0.4, 0.0, 0.0}, BaseVelocityEstimate{}, 0.01).vx, 0.4);
+
+  VelocityFeedbackConfig off = enabledConfig();
+  off.enabled = false;
+  VelocityFeedback pass(off, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  LowState s;
+  EXPECT_EQ(pass.update({0.3, -0.1, 0.2}, s, 0.01).vy, -0.1);
+}
+
+TEST(VelocityFeedback, HoldsWhileTheEstimatorRejectsAndDecaysWhenTheRobotTilts) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  Plant plant{{0.7, 0.7, 0.7}};
+  BaseVelocityEstimate est;
+  for (int k = 0; k < 300; ++k) est = plant.step(fb.correct({0.4, 0.0, 0.5}, est, 0.01), 0.01);
+  const auto held = fb.correction();
+  ASSERT_GT(held[0], 0.05);
+  BaseVelocityEstimate wild = est;
+  wild.v_x = -1.0;  // what a confused estimate reads while its measurements are rejected
+  for (int k = 0; k < 50; ++k) fb.correct({0.4, 0.0, 0.5}, wild, 0.01, /*hold=*/true);
+  EXPECT_EQ(fb.correction()[0], held[0]);
+  EXPECT_EQ(fb.correction()[2], held[2]);
+  EXPECT_EQ(fb.heldTicks(), 50u);
+  // Tilted beyond max_tilt_rad: the correction decays to zero (time constant decay_time_s 0.5 s).
+  for (int k = 0; k < 50; ++k) fb.correct({0.4, 0.0, 0.5}, wild, 0.01, false, /*decay=*/true);
+  EXPECT_NEAR(fb.correction()[0], held[0] * std::pow(1.0 - 0.01 / 0.5, 50), 1e-12);
+  for (int k = 0; k < 450; ++k) fb.correct({0.4, 0.0, 0.5}, wild, 0.01, false, true);
+  EXPECT_LT(std::fabs(fb.correction()[0]), 1e-4);
+  EXPECT_LT(std::fabs(fb.command().wz - 0.5), 1e-4) << "the user's command, nothing added";
+  EXPECT_EQ(fb.decayedTicks(), 500u);
+}
+
+TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) {
+  Legs legs;
+  VelocityFeedbackConfig c = enabledConfig();
+  BaseVelocityEstimator est(legs.model, legs.idx, c);
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;  // right foot lifted: the left is the stance foot
+  qd[0].setZero();
+  qd[1].setZero();
+  LowState s = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  s.imu.acc = {0.0, 0.0, 9.81};  // standing still: the specific force is gravity's reaction
+  for (int k = 0; k < 20; ++k) est.update(s, 0.01);
+  EXPECT_NEAR(est.update(s, 0.01).v_x, 0.0, 1e-9);
+  // A stance leg whose knee and hip suddenly read a fast motion (a touchdown transient): rejected.
+  LegOdometry odo(legs.model, legs.idx, c.stance_band_m);
+  qd[0] << 3.0, 0.0, 0.0, -4.0, 1.0, 0.0;
+  LowState spike = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  spike.imu.acc = s.imu.acc;
+  ASSERT_GT(std::fabs(odo.estimate(spike).v_x), 0.3) << "the spike is an outlier";
+  const std::uint64_t rejected_before = est.rejected();
+  const BaseVelocityEstimate during = est.update(spike, 0.01);
+  EXPECT_NEAR(during.v_x, 0.0, 1e-9);
+  EXPECT_TRUE(est.rejecting());
+  EXPECT_EQ(est.rejected(), rejected_before + 1);
+  // The accelerometer reads 1 m/s^2 forward for 0.2 s: the estimate follows it (0.2 m/s) while leg
+  // odometry, which still reads the outlier, stays rejected.
+  spike.imu.acc = {1.0, 0.0, 9.81};
+  BaseVelocityEstimate e;
+  for (int k = 0; k < 20; ++k) e = est.update(spike, 0.01);
+  EXPECT_NEAR(e.v_x, 0.21, 0.011);
+  // Rejections beyond max_rejected_s (0.3 s): the estimate restarts from the legs' measurement.
+  for (int k = 0; k < 10; ++k) e = est.update(spike, 0.01);
+  EXPECT_FALSE(est.rejecting());
+  EXPECT_NEAR(e.v_x, odo.estimate(spike).v_x, 1e-9);
+}
+
+TEST(VelocityFeedback, UpdateDoesNotAllocate) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.35, -0.05, 0.0, 0.7, -0.35, 0.02;
+  qd[0] << 0.4, -0.2, 0.1, -0.5, 0.3, 0.15;
+  qd[1] << 0.2, 0.1, -0.1, 0.3, 0.2, -0.1;
+  const LowState s = makeState(legs, q, qd, rotZ(0.3), Eigen::Vector3d(0.0, 0.0, 0.2));
+  fb.update({0.3, 0.1, 0.2}, s, 0.01);
+  std::size_t n = 0;
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) fb.update({0.3, 0.1, 0.2}, s, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  EXPECT_TRUE(fb.lastEstimate().valid);
+  EXPECT_TRUE(fb.estimator().lastLegOdometry().valid);
+}
+
+// Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.
+
+}  // namespace
+}  // namespace pmg
