@@ -44,8 +44,9 @@
 //              pmg::motion::PostureProbe measures the static clips; level when no foot is in
 //              stance; KDL, pelvis -> torso_link), height the template's GeneratorOutput::base_height
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
-//   u_feedback vx, vy, wz after the velocity feedback: what the generator got (the shaped command
-//              when velocity_feedback is off; --velocity-feedback on|off overrides the config)
+//   u_feedback vx, vy, wz, pitch, roll after the velocity and posture feedback: what the generator
+//              got (the shaped command when off; --velocity-feedback / --posture-feedback on|off
+//              override the config)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz (null when off)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
 //              |command| >= 0.05 (m/s or rad/s), else null
@@ -218,6 +219,10 @@ int main(int argc, char** argv) {
   app.add_option("--velocity-feedback", velocity_feedback,
                  "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string posture_feedback;
+  app.add_option("--posture-feedback", posture_feedback,
+                 "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)")
+      ->check(CLI::IsMember({"on", "off"}));
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -238,6 +243,7 @@ int main(int argc, char** argv) {
     if (base.policy_file.empty()) throw pmg::ConfigError(controller_path + ": policy.model: missing (or give --model)");
     base.policy_native = native;
     if (!velocity_feedback.empty()) base.velocity_feedback.enabled = velocity_feedback == "on";
+    if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
@@ -349,7 +355,7 @@ int main(int argc, char** argv) {
           csv << ",vx_ref,vy_ref,wz_ref,pitch_ref,roll_ref";
           for (const char* a : kAxisNames) csv << ',' << a << "_uopt";
           // the velocity command after the feedback (= the command when off) and leg odometry (nan when off)
-          csv << ",vx_fb,vy_fb,wz_fb,vx_est,vy_est,wz_est";
+          csv << ",vx_fb,vy_fb,wz_fb,vx_est,vy_est,wz_est,pitch_fb,roll_fb";
           csv << ",episode\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
@@ -433,6 +439,12 @@ int main(int argc, char** argv) {
             fb[1] = controller.commands().velocity().vy;
             fb[2] = controller.commands().velocity().wz;
           }
+          if (active) {
+            const pmg::PostureFeedback* pf = controller.postureFeedback();
+            const pmg::PostureCommand& ps = pf ? pf->command() : controller.commands().posture();
+            fb[3] = ps.pitch;
+            fb[4] = ps.roll;
+          }
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];
             if (fallen) ss.fell = true;
@@ -469,6 +481,7 @@ int main(int argc, char** argv) {
           for (double x : u_prime) csv << ',' << x;
           for (int i = 0; i < 3; ++i) csv << ',' << fb[static_cast<std::size_t>(i)];
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
+          csv << ',' << fb[3] << ',' << fb[4];
           csv << ',' << episode << '\n';
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
@@ -573,7 +586,8 @@ int main(int argc, char** argv) {
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
     js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
-       << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false") << ", \"commands\": " << jstr(commands)
+       << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
+       << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false") << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];

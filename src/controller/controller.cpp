@@ -61,6 +61,9 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   if (config_.velocity_feedback.enabled)
     feedback_ = std::make_unique<VelocityFeedback>(config_.velocity_feedback, pmg_->gco().legModel(),
                                                    pmg_->legJointIndex(), L.max_velocity);
+  if (config_.posture_feedback.enabled)
+    posture_feedback_ =
+        std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range);
   command_.num_motors = n;
   holdStandingPose();
 }
@@ -132,6 +135,7 @@ TickStatus Controller::tick(double now) noexcept {
     status.entered_active = true;
     shaper_.reset();
     if (feedback_) feedback_->reset();
+    if (posture_feedback_) posture_feedback_->reset();
     pmg_->reset(0.0);
     if (policy_) policy_->reset();
     limiter_.reset(q_ref_.data(), n);
@@ -139,15 +143,18 @@ TickStatus Controller::tick(double now) noexcept {
   if (!active) {  // the command takes effect only while the loop drives the motors
     shaper_.reset();
     if (feedback_) feedback_->reset();
+    if (posture_feedback_) posture_feedback_->reset();
   }
   prev_mode_ = state_.mode;
 
   // ---- generate / optimise
   if (active) {
     const VelocityCommand& u_d = feedback_ ? feedback_->update(shaper_.velocity(), state_, dt_) : shaper_.velocity();
+    const PostureCommand& u_s =
+        posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_) : shaper_.posture();
     const gco::GcoResult& g =
         fixed_generator_ ? pmg_->step(fixed_u_d_, PostureCommand{0.0, 0.0, config_.commands.standing_height}, dt_)
-                         : pmg_->step(u_d, shaper_.posture(), dt_);
+                         : pmg_->step(u_d, u_s, dt_);
     const GeneratorOutput& out = pmg_->generatorOutput();
     status.generator = out.status;
     status.gco = static_cast<std::int32_t>(g.status);
@@ -167,6 +174,8 @@ TickStatus Controller::tick(double now) noexcept {
         u[0] = u_d.vx;
         u[1] = u_d.vy;
         u[2] = u_d.wz;
+        u[3] = u_s.pitch;
+        u[4] = u_s.roll;
       }
       status.policy = static_cast<std::int32_t>(policy_->step(state_, u, ref_out_, command_).code);
     } else {

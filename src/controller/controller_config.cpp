@@ -129,12 +129,29 @@ struct VelocityFeedbackYaml {
     a->Visit("enabled", &f.enabled, "integral correction of the velocity command on leg odometry");
     a->Visit("ki", &f.ki, "integral gains for v_x, v_y, w, 0..20 [1/s]");
     a->Visit("max_ratio", &f.max_ratio, "largest correction as a share of |u|, 0..2");
+    a->Visit("envelope_min", &f.envelope_min, "v_x, v_y [m/s], w [rad/s] below which no correction pushes (training range)");
+    a->Visit("envelope_max", &f.envelope_max, "v_x, v_y [m/s], w [rad/s] above which no correction pushes (training range)");
     a->Visit("stance_band_m", &f.stance_band_m, "soles within this height of the lowest are in stance, (0, 0.1] m");
     a->Visit("odometry_time_s", &f.odometry_time_s, "time constant of the leg-odometry correction, 0..2 s");
     a->Visit("gate_mps", &f.gate_mps, "leg-odometry samples further than this from the IMU prediction are rejected, (0, 5] m/s");
     a->Visit("max_rejected_s", &f.max_rejected_s, "after this long of rejections a sample is believed, 0..5 s");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
+    a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");
+  }
+};
+
+struct PostureFeedbackYaml {
+  PostureFeedbackConfig f;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("enabled", &f.enabled, "integral correction of the pitch/roll command on the measured torso attitude");
+    a->Visit("ki", &f.ki, "integral gains for pitch, roll, 0..20 [1/s]");
+    a->Visit("max_correction_rad", &f.max_correction_rad, "largest correction, 0..0.3 rad");
+    a->Visit("filter_time_s", &f.filter_time_s, "low-pass time constant of the measured attitude, 0..2 s");
+    a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
+    a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
+    a->Visit("still_velocity", &f.still_velocity, "integrates only while |v_x|, |v_y| < this, |w| < 2x this, 0..1");
   }
 };
 
@@ -205,6 +222,7 @@ struct ControllerYaml {
   GeneratorYaml generator;
   CommandsYaml commands;
   VelocityFeedbackYaml velocity_feedback;
+  PostureFeedbackYaml posture_feedback;
   SafetyYaml safety;
   std::optional<PolicyYaml> policy;
   TelemetryYaml telemetry;
@@ -223,6 +241,7 @@ struct ControllerYaml {
     a->Visit("generator", &generator, "PMG generator parameters");
     a->Visit("commands", &commands, "command limits");
     a->Visit("velocity_feedback", &velocity_feedback, "closed-loop velocity tracking (docs/controller.md)");
+    a->Visit("posture_feedback", &posture_feedback, "closed-loop torso pitch/roll tracking (docs/controller.md)");
     a->Visit("safety", &safety, "supervisor settings");
     a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
     a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
@@ -298,6 +317,8 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);
   c.velocity_feedback = y.velocity_feedback.f;
   if (const std::string e = c.velocity_feedback.validate(); !e.empty()) fail("velocity_feedback", e);
+  c.posture_feedback = y.posture_feedback.f;
+  if (const std::string e = c.posture_feedback.validate(); !e.empty()) fail("posture_feedback", e);
   c.soft_stand_duration = y.safety.soft_stand_duration_s;
   c.damping_kd_scale = y.safety.damping_kd_scale;
   c.startup = y.safety.startup;

@@ -16,12 +16,16 @@ std::string VelocityFeedbackConfig::validate() const {
     if (!(std::isfinite(ki[i]) && ki[i] >= 0.0 && ki[i] <= 20.0))
       return std::string("ki[") + std::to_string(i) + "] (" + kAxis[i] + "): expected 0..20 [1/s]";
   if (!(max_ratio >= 0.0 && max_ratio <= 2.0)) return "max_ratio: expected 0..2 (share of |u|)";
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(envelope_min[i] <= 0.0 && envelope_max[i] >= 0.0 && envelope_max[i] - envelope_min[i] > 0.0))
+      return "envelope_min/envelope_max[" + std::to_string(i) + "]: expected min <= 0 <= max, min < max";
   if (!(stance_band_m > 0.0 && stance_band_m <= 0.1)) return "stance_band_m: expected (0, 0.1] m";
   if (!(odometry_time_s >= 0.0 && odometry_time_s <= 2.0)) return "odometry_time_s: expected 0..2 s";
   if (!(gate_mps > 0.0 && gate_mps <= 5.0)) return "gate_mps: expected (0, 5] m/s";
   if (!(max_rejected_s >= 0.0 && max_rejected_s <= 5.0)) return "max_rejected_s: expected 0..5 s";
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
+  if (!(settle_time_s >= 0.0 && settle_time_s <= 5.0)) return "settle_time_s: expected 0..5 s";
   return {};
 }
 
@@ -149,12 +153,18 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
 
 VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
                                    const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity)
-    : config_(config), estimator_(std::move(legs), leg_idx, config), max_velocity_(max_velocity) {
+    : config_(config), estimator_(std::move(legs), leg_idx, config) {
   if (const std::string e = config_.validate(); !e.empty()) throw ConfigError("velocity_feedback: " + e);
+  for (std::size_t i = 0; i < 3; ++i) {
+    lo_[i] = std::max(config_.envelope_min[i], -max_velocity[i]);
+    hi_[i] = std::min(config_.envelope_max[i], max_velocity[i]);
+  }
 }
 
 void VelocityFeedback::reset() noexcept {
   c_ = {0.0, 0.0, 0.0};
+  u_prev_ = {0.0, 0.0, 0.0};
+  steady_ = {0.0, 0.0, 0.0};
   estimator_.reset();
   est_ = BaseVelocityEstimate{};
 }
@@ -181,15 +191,99 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   for (std::size_t i = 0; i < 3; ++i) {
     const double bound = config_.max_ratio * std::fabs(u[i]);
     double c = c_[i] * keep;
-    if (est_.valid && !hold && !decay) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
+    steady_[i] = std::fabs(u[i] - u_prev_[i]) > 1e-9 ? 0.0 : steady_[i] + dt;
+    u_prev_[i] = u[i];
+    const bool settled = steady_[i] >= config_.settle_time_s - 1e-9;
+    if (est_.valid && !hold && !decay && settled) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
     c = std::clamp(c, -bound, bound);
     // Anti-windup: the correction never holds more than the limits let through.
-    const double limited = std::clamp(u[i] + c, -max_velocity_[i], max_velocity_[i]);
+    const double limited = std::clamp(u[i] + c, std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));
     c_[i] = limited - u[i];
   }
   u_fb_.vx = u.vx + c_[0];
   u_fb_.vy = u.vy + c_[1];
   u_fb_.wz = u.wz + c_[2];
+  return u_fb_;
+}
+
+std::string PostureFeedbackConfig::validate() const {
+  for (std::size_t i = 0; i < 2; ++i)
+    if (!(std::isfinite(ki[i]) && ki[i] >= 0.0 && ki[i] <= 20.0))
+      return std::string("ki[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") + "): expected 0..20 [1/s]";
+  if (!(max_correction_rad >= 0.0 && max_correction_rad <= 0.3)) return "max_correction_rad: expected 0..0.3 rad";
+  if (!(filter_time_s >= 0.0 && filter_time_s <= 2.0)) return "filter_time_s: expected 0..2 s";
+  if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
+  if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
+  if (!(still_velocity >= 0.0 && still_velocity <= 1.0)) return "still_velocity: expected 0..1 m/s";
+  return {};
+}
+
+namespace {
+LimbChain torsoChain(const PostureFeedbackConfig& config, const RobotConfig& robot) {
+  if (const std::string e = config.validate(); !e.empty()) throw ConfigError("posture_feedback: " + e);
+  return KinematicModel(robot).chain(robot.base_link, "torso_link");
+}
+}  // namespace
+
+PostureFeedback::PostureFeedback(const PostureFeedbackConfig& config, const RobotConfig& robot,
+                                 const std::array<double, 2>& pitch_range, const std::array<double, 2>& roll_range)
+    : config_(config),
+      torso_(torsoChain(config, robot)),
+      fk_(torso_),
+      q_(Eigen::VectorXd::Zero(static_cast<Eigen::Index>(robot.numJoints()))),
+      pitch_range_(pitch_range),
+      roll_range_(roll_range) {}
+
+void PostureFeedback::reset() noexcept {
+  c_ = {0.0, 0.0};
+  p_hat_ = {0.0, 0.0};
+  have_ = false;
+}
+
+bool PostureFeedback::torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept {
+  if (!state.imu.valid || state.num_motors != q_.size()) return false;
+  for (Eigen::Index i = 0; i < q_.size(); ++i) q_[i] = state.motors[static_cast<std::size_t>(i)].q;
+  const auto& qw = state.imu.quat_wxyz;
+  Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
+  const double norm = q_WB.norm();
+  Eigen::Isometry3d X_BT;
+  if (!(norm > 0.5 && norm < 1.5) || !q_.allFinite() || !fk_.tipPose(q_, X_BT)) return false;
+  q_WB.coeffs() /= norm;
+  const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
+  const Eigen::Matrix3d R = R_WB * X_BT.linear();
+  *pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  *roll = std::atan2(R(2, 1), R(2, 2));
+  *pelvis_tilt = std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0));
+  return std::isfinite(*pitch) && std::isfinite(*roll);
+}
+
+const PostureCommand& PostureFeedback::update(const PostureCommand& u, const VelocityCommand& v,
+                                              const LowState& state, double dt) noexcept {
+  u_fb_ = u;
+  if (!config_.enabled) return u_fb_;
+  double pitch = 0.0, roll = 0.0, tilt = 0.0;
+  const bool ok = torsoAttitude(state, &pitch, &roll, &tilt);
+  if (ok) {
+    const double a = config_.filter_time_s > 0.0 ? std::min(1.0, dt / config_.filter_time_s) : 1.0;
+    p_hat_[0] = have_ ? p_hat_[0] + a * (pitch - p_hat_[0]) : pitch;
+    p_hat_[1] = have_ ? p_hat_[1] + a * (roll - p_hat_[1]) : roll;
+    have_ = true;
+  }
+  const bool still = std::fabs(v.vx) < config_.still_velocity && std::fabs(v.vy) < config_.still_velocity &&
+                     std::fabs(v.wz) < 2.0 * config_.still_velocity;
+  const bool decay = !still || (ok && tilt > config_.max_tilt_rad);
+  const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
+  const double cmd[2] = {u.pitch, u.roll};
+  const std::array<double, 2>* range[2] = {&pitch_range_, &roll_range_};
+  for (std::size_t i = 0; i < 2; ++i) {
+    double c = c_[i] * keep;
+    if (have_ && ok && !decay) c += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
+    c = std::clamp(c, -config_.max_correction_rad, config_.max_correction_rad);
+    const double limited = std::clamp(cmd[i] + c, (*range[i])[0], (*range[i])[1]);
+    c_[i] = limited - cmd[i];
+  }
+  u_fb_.pitch = u.pitch + c_[0];
+  u_fb_.roll = u.roll + c_[1];
   return u_fb_;
 }
 

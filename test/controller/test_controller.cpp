@@ -28,6 +28,7 @@ ControllerConfig silConfig(bool velocity_feedback = false) {
   ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
   c.makeOffline();
   c.velocity_feedback.enabled = velocity_feedback;
+  c.posture_feedback.enabled = velocity_feedback;  // both feedback stages together
   return c;
 }
 

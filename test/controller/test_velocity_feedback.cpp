@@ -1,6 +1,7 @@
 // Velocity feedback (velocity_feedback.hpp): leg odometry against an independent finite-difference
 // computation on the G1's leg chains, and the integral correction on a plant that achieves only a
 // share of its command (the measured shortfall of the trained actor, docs/policy.md).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -163,6 +164,13 @@ TEST(VelocityFeedback, SaturatesAtTheRatioAndTheLimitsAndVanishesWithTheCommand)
   EXPECT_NEAR(fb.command().wz, -0.8, 1e-12);
   EXPECT_NEAR(fb.correction()[0], 0.1, 1e-12);
   EXPECT_EQ(fb.command().vy, 0.0) << "no command, no correction, whatever the drift";
+  // Backward: the training envelope ends at -0.5 m/s (the shaper would allow -1.0): no correction
+  // pushes beyond it, and a command already beyond it is passed on uncorrected.
+  for (int k = 0; k < 1000; ++k) est = weak.step(fb.correct({-0.45, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_NEAR(fb.command().vx, -0.5, 1e-12);
+  for (int k = 0; k < 100; ++k) est = weak.step(fb.correct({-0.8, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_EQ(fb.command().vx, -0.8);
+  for (int k = 0; k < 1000; ++k) est = weak.step(fb.correct({0.9, 0.0, -0.7}, est, 0.01), 0.01);
   // The command ramps to zero (as the shaper slews it): the correction follows it to zero.
   for (int k = 0; k <= 100; ++k) {
     const double s = 1.0 - k / 100.0;
@@ -273,6 +281,67 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   EXPECT_EQ(n, 0u);
   EXPECT_TRUE(fb.lastEstimate().valid);
   EXPECT_TRUE(fb.estimator().lastLegOdometry().valid);
+}
+
+int jointIndex(const std::string& name) {
+  const auto names = robotJointNames();
+  return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin());
+}
+
+LowState uprightState(double imu_pitch, double waist_pitch) {
+  LowState s;
+  s.num_motors = static_cast<int>(test::g1Robot().numJoints());
+  for (int i = 0; i < s.num_motors; ++i) s.motors[static_cast<std::size_t>(i)].q = 0.0;
+  s.motors[static_cast<std::size_t>(jointIndex("waist_pitch_joint"))].q = waist_pitch;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(imu_pitch, Eigen::Vector3d::UnitY()));
+  s.imu.quat_wxyz = {q.w(), q.x(), q.y(), q.z()};
+  s.imu.valid = true;
+  return s;
+}
+
+TEST(PostureFeedback, MeasuresTheTorsoFromTheImuAndTheWaistAndClosesTheLoop) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.max_correction_rad = 0.15;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  double pitch = 0, roll = 0, tilt = 0;
+  ASSERT_TRUE(fb.torsoAttitude(uprightState(0.1, 0.2), &pitch, &roll, &tilt));
+  EXPECT_NEAR(pitch, 0.3, 1e-9) << "pelvis pitch + waist pitch";
+  EXPECT_NEAR(roll, 0.0, 1e-9);
+  EXPECT_NEAR(tilt, 0.1, 1e-9);
+  // A robot whose torso reaches 60 % of the commanded bend (the actor's shortfall on the bend):
+  // the command is raised until the torso is where the user asked, within the bound.
+  double torso = 0.0;
+  for (int k = 0; k < 2000; ++k) {
+    const PostureCommand& out = fb.update({0.15, 0.0, 0.78}, {}, uprightState(0.0, torso), 0.01);
+    torso += 0.01 / 0.3 * (0.6 * out.pitch - torso);
+  }
+  EXPECT_NEAR(torso, 0.15, 0.002);
+  EXPECT_NEAR(fb.command().pitch, 0.25, 0.005);
+  EXPECT_NEAR(fb.correction()[0], 0.10, 0.005);
+  // A bigger bend: the correction stops at max_correction_rad.
+  for (int k = 0; k < 2000; ++k) {
+    const PostureCommand& out = fb.update({0.3, 0.0, 0.78}, {}, uprightState(0.0, torso), 0.01);
+    torso += 0.01 / 0.3 * (0.6 * out.pitch - torso);
+  }
+  EXPECT_NEAR(fb.correction()[0], 0.15, 1e-12);
+  // Tilted pelvis beyond max_tilt_rad (0.5): the correction decays to zero.
+  for (int k = 0; k < 500; ++k) fb.update({0.3, 0.0, 0.78}, {}, uprightState(0.7, 0.0), 0.01);
+  EXPECT_LT(std::fabs(fb.correction()[0]), 1e-3);
+  // Walking: no integration, the correction built while standing decays.
+  for (int k = 0; k < 500; ++k) fb.update({0.3, 0.0, 0.78}, {}, uprightState(0.0, 0.1), 0.01);
+  EXPECT_NEAR(fb.correction()[0], 0.15, 1e-12);
+  for (int k = 0; k < 500; ++k) fb.update({0.3, 0.0, 0.78}, {0.0, 0.3, 0.0}, uprightState(0.0, 0.1), 0.01);
+  EXPECT_LT(std::fabs(fb.correction()[0]), 1e-3);
+  std::size_t n = 0;
+  const LowState bent = uprightState(0.05, 0.1);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) fb.update({0.3, 0.1, 0.78}, {}, bent, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
 }
 
 // Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.

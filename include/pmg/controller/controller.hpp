@@ -7,8 +7,9 @@
 ///  teleop    (teleop.enabled) the VR stream: once engaged the headset's command replaces the
 ///            other sources' (teleop_mode.hpp);
 ///  shape     CommandShaper: validate, clamp to the one CommandLimits, slew;
-///  feedback  (velocity_feedback.enabled) the integral correction of the shaped velocity on leg
-///            odometry (velocity_feedback.hpp): the generator gets u_fb, evaluations compare with u;
+///  feedback  (velocity_feedback / posture_feedback enabled) the integral corrections of the shaped
+///            velocity on leg odometry + IMU and of pitch/roll on the measured torso attitude
+///            (velocity_feedback.hpp): the generator gets u_fb, evaluations compare with u;
 ///  generate  PMG generator + GCO (kActive only); teleop's arm IK replaces the arm references of
 ///            the arms it controls; then ReferenceRateLimiter bounds every joint reference's
 ///            speed (CommandLimits::max_reference_speed);
@@ -93,6 +94,8 @@ class Controller {
   const CommandShaper& commands() const noexcept { return shaper_; }
   /// The velocity feedback stage (config velocity_feedback.enabled), or nullptr.
   const VelocityFeedback* velocityFeedback() const noexcept { return feedback_.get(); }
+  /// The posture feedback stage (config posture_feedback.enabled), or nullptr.
+  const PostureFeedback* postureFeedback() const noexcept { return posture_feedback_.get(); }
   const ReferenceRateLimiter& referenceLimiter() const noexcept { return limiter_; }
   /// Mode requests the loop forwarded to the supervisor (operator and start-up sequence).
   std::uint64_t modeRequestsPosted() const noexcept { return requests_posted_; }
@@ -119,6 +122,7 @@ class Controller {
   const LcmInputCounters* input_counters_;
   CommandShaper shaper_;
   std::unique_ptr<VelocityFeedback> feedback_;
+  std::unique_ptr<PostureFeedback> posture_feedback_;
   ReferenceRateLimiter limiter_;
   GeneratorOutput ref_out_;  // generator output with the rate-limited reference (preallocated)
   LatestValue<CommandSample> input_;

@@ -60,6 +60,8 @@ struct ControllerConfig {
   /// Closed-loop velocity tracking on leg odometry (`velocity_feedback:`, velocity_feedback.hpp);
   /// off unless the file enables it.
   VelocityFeedbackConfig velocity_feedback;
+  /// Closed-loop torso pitch/roll tracking (`posture_feedback:`, velocity_feedback.hpp); off unless enabled.
+  PostureFeedbackConfig posture_feedback;
   double soft_stand_duration = 1.0;  ///< supervisor soft stand: measured → standing pose [s]
   double damping_kd_scale = 1.0;     ///< damping mode: kd = scale · robot config kd
   StartupMode startup = StartupMode::kActive;

@@ -9,8 +9,8 @@
 /// as PMG eq. 14 on KDL leg chains) and the yaw rate from the gyro. An integral correction on the
 /// velocity command then makes the achieved velocity meet the user's command u in steady state:
 ///
-///   e_i = u_i − v̂_i,   c_i ← clamp(c_i + k_i e_i dt, −r |u_i|, r |u_i|),
-///   u_fb,i = clamp(u_i + c_i, −max_velocity_i, max_velocity_i)          (i = v_x, v_y, ω)
+///   e_i = u_i − v̂_i,   c_i ← clamp(c_i + k_i e_i dt, −r |u_i|, r |u_i|)   (once u_i is steady),
+///   u_fb,i = clamp(u_i + c_i, envelope_i ∩ ±max_velocity_i)            (i = v_x, v_y, ω)
 ///
 /// u_fb goes to the generator (and, through GCO's u' or directly, to the actor's observation); u
 /// is what the user commanded and what every evaluation compares against. The bound r |u_i| makes
@@ -28,6 +28,7 @@
 #include <memory>
 #include <string>
 
+#include "pmg/common/kinematics.hpp"
 #include "pmg/gco/leg_kinematics.hpp"
 #include "pmg/generator/generator.hpp"
 #include "pmg/hal/types.hpp"
@@ -41,6 +42,11 @@ struct VelocityFeedbackConfig {
   std::array<double, 3> ki{1.0, 1.0, 1.0};
   /// r: largest correction as a share of |u_i|, [0, 2].
   double max_ratio = 0.6;
+  /// The range u_fb stays in (v_x, v_y [m/s], ω [rad/s]): the policy's training command range (the
+  /// issue-12 envelope), intersected with the shaper's limits. A correction never pushes a command
+  /// beyond it (a command already beyond it is passed on uncorrected).
+  std::array<double, 3> envelope_min{-0.5, -0.4, -0.8};
+  std::array<double, 3> envelope_max{1.0, 0.4, 0.8};
   /// Feet whose sole is within this height of the lowest sole (in H) count as in stance [m], (0, 0.1].
   double stance_band_m = 0.02;
   /// Time constant with which leg odometry corrects the IMU-propagated estimate [s], [0, 2].
@@ -55,6 +61,10 @@ struct VelocityFeedbackConfig {
   double max_tilt_rad = 0.3;
   /// Time constant of that decay [s], (0, 5].
   double decay_time_s = 0.5;
+  /// An axis integrates only once its shaped command has been steady this long [s], [0, 5]: while
+  /// the command ramps (and the robot lags it by design) the error is not the robot's shortfall,
+  /// and integrating it winds the correction up into an overshoot.
+  double settle_time_s = 0.5;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
@@ -133,7 +143,8 @@ class BaseVelocityEstimator {
 /// The integral correction of the velocity command (file comment). One per control loop.
 class VelocityFeedback {
  public:
-  /// @param max_velocity |v_x|, |v_y| [m/s], |ω| [rad/s] limits of u_fb (the shaper's limits).
+  /// @param max_velocity |v_x|, |v_y| [m/s], |ω| [rad/s]: the shaper's limits (u_fb stays inside
+  /// them and inside config.envelope_min/max).
   /// Setup: allocates; throws ConfigError on an invalid config.
   VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
                    const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity);
@@ -167,11 +178,68 @@ class VelocityFeedback {
   double estimate(std::size_t i) const noexcept { return i == 0 ? est_.v_x : (i == 1 ? est_.v_y : est_.yaw_rate); }
   VelocityFeedbackConfig config_;
   BaseVelocityEstimator estimator_;
-  std::array<double, 3> max_velocity_;
+  std::array<double, 3> lo_, hi_;
   std::array<double, 3> c_{};
+  std::array<double, 3> u_prev_{}, steady_{};
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{};
   std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0;
+};
+
+/// `posture_feedback:` of the controller config (PostureFeedback).
+struct PostureFeedbackConfig {
+  bool enabled = false;
+  /// Integral gains for torso pitch and roll [1/s], each 0..20.
+  std::array<double, 2> ki{0.5, 0.5};
+  /// Largest correction of the pitch and roll commands [rad], [0, 0.3].
+  double max_correction_rad = 0.15;
+  /// Time constant of the low-pass on the measured torso pitch/roll [s], [0, 2].
+  double filter_time_s = 0.2;
+  /// Above this pelvis tilt [rad], (0, 1.5], the correction decays to zero (decay_time_s).
+  double max_tilt_rad = 0.5;
+  double decay_time_s = 0.5;  ///< [s], (0, 5]
+  /// The correction integrates only while the robot is told to stand still: |v_x|, |v_y| of the
+  /// shaped command below still_velocity [m/s] and |ω| below twice that [rad/s], [0, 1]; while
+  /// walking it decays (decay_time_s). Walking sways the torso, and a lean commanded against the
+  /// sway of a side-step at the envelope's edge felled the robot (docs/controller.md).
+  double still_velocity = 0.05;
+  std::string validate() const;
+};
+
+/// The same idea for the posture (beyond the paper; docs/controller.md "Tracking feedback"): the
+/// torso's pitch and roll (ZYX Euler angles of torso_link in W, as Table I measures them) from the
+/// IMU orientation and the waist encoders (KDL forward kinematics pelvis -> torso_link),
+///   p̂ low-passed,  c_p ← clamp(c_p + k_p (u_p − p̂) dt, ±max_correction_rad),
+///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range);
+/// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays;
+/// the height is not corrected. noexcept and allocation-free per tick (tested).
+class PostureFeedback {
+ public:
+  /// @param pitch_range, roll_range the shaper's posture limits [rad]. Setup: allocates; throws
+  /// ConfigError on an invalid config or a robot without a torso_link chain.
+  PostureFeedback(const PostureFeedbackConfig& config, const RobotConfig& robot, const std::array<double, 2>& pitch_range,
+                  const std::array<double, 2>& roll_range);
+  /// One tick [dt s] with the shaped posture @p u and velocity @p v commands: returns the posture
+  /// command after feedback. When disabled returns @p u.
+  const PostureCommand& update(const PostureCommand& u, const VelocityCommand& v, const LowState& state,
+                               double dt) noexcept;
+  void reset() noexcept;
+  const PostureCommand& command() const noexcept { return u_fb_; }
+  /// Correction (pitch, roll) [rad] and the low-passed measurement (pitch, roll) [rad] of the last update.
+  const std::array<double, 2>& correction() const noexcept { return c_; }
+  const std::array<double, 2>& measured() const noexcept { return p_hat_; }
+  /// Torso pitch and roll of @p state (IMU orientation, waist encoders) [rad]; false on bad input.
+  bool torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept;
+
+ private:
+  PostureFeedbackConfig config_;
+  LimbChain torso_;
+  ChainFkWorkspace fk_;
+  Eigen::VectorXd q_;
+  std::array<double, 2> pitch_range_, roll_range_;
+  std::array<double, 2> c_{}, p_hat_{};
+  bool have_ = false;
+  PostureCommand u_fb_{};
 };
 
 }  // namespace pmg
