@@ -25,7 +25,7 @@ import yaml
 
 AXES = ["vx", "vy", "wz", "pitch", "roll", "height"]
 SEGMENT_KEYS = {"name", "t_begin", "t_end", "window", "seeds", "fallen", "command", "reference", "achieved",
-                "u_prime", "ratio", "reference_ratio"}
+                "u_prime", "u_feedback", "estimate", "ratio", "reference_ratio"}
 
 BOUNDS = {"lin_vel": 0.18, "yaw_vel": 0.25, "roll": 0.07, "pitch": 0.08, "height": 0.012}
 
@@ -58,7 +58,7 @@ def check_segments(out, summary, seeds):
     for s, sc in zip(segs, script["segments"]):
         name = s.get("name")
         good = set(s) == SEGMENT_KEYS and all(set(s[b]) == set(AXES) for b in
-                                              ("command", "reference", "achieved", "u_prime"))
+                                              ("command", "reference", "achieved", "u_prime", "u_feedback", "estimate"))
         good &= all(set(s[b]) == {"vx", "vy", "wz"} for b in ("ratio", "reference_ratio"))
         checks[f"{name}: keys"] = good
         if not good:
@@ -68,6 +68,11 @@ def check_segments(out, summary, seeds):
             all(abs(s["command"][a] - sc[a]) < 1e-9 for a in AXES))
         checks[f"{name}: window = last 60 %"] = abs(s["window"][0] - (s["t_begin"] + 0.4 * (s["t_end"] - s["t_begin"]))) < 1e-6
         checks[f"{name}: all {seeds} seeds, none fallen"] = s["seeds"] == seeds and s["fallen"] == 0
+        if not summary.get("velocity_feedback", True):
+            # Feedback off: the generator got the shaped command itself, and there is no estimate.
+            checks[f"{name}: u_feedback = command, no estimate (feedback off)"] = (
+                all(abs(s["u_feedback"][a] - s["command"][a]) < 1e-6 for a in AXES[:3]) and
+                all(s["estimate"][a] is None for a in AXES))
         vals = [s[b][a] for b in ("reference", "achieved", "u_prime") for a in AXES]
         checks[f"{name}: finite"] = all(v is not None and math.isfinite(v) for v in vals)
         if not checks[f"{name}: finite"]:
