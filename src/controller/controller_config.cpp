@@ -138,6 +138,7 @@ struct VelocityFeedbackYaml {
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");
+    a->Visit("steady_band", &f.steady_band, "steady: within max(this, 5 % of |u|) of where it settled, 0..0.5 m/s, rad/s");
   }
 };
 

@@ -26,6 +26,7 @@ std::string VelocityFeedbackConfig::validate() const {
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
   if (!(settle_time_s >= 0.0 && settle_time_s <= 5.0)) return "settle_time_s: expected 0..5 s";
+  if (!(steady_band >= 0.0 && steady_band <= 0.5)) return "steady_band: expected 0..0.5 (m/s, rad/s)";
   return {};
 }
 
@@ -163,7 +164,7 @@ VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::sh
 
 void VelocityFeedback::reset() noexcept {
   c_ = {0.0, 0.0, 0.0};
-  u_prev_ = {0.0, 0.0, 0.0};
+  u_anchor_ = {0.0, 0.0, 0.0};
   steady_ = {0.0, 0.0, 0.0};
   estimator_.reset();
   est_ = BaseVelocityEstimate{};
@@ -191,8 +192,12 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   for (std::size_t i = 0; i < 3; ++i) {
     const double bound = config_.max_ratio * std::fabs(u[i]);
     double c = c_[i] * keep;
-    steady_[i] = std::fabs(u[i] - u_prev_[i]) > 1e-9 ? 0.0 : steady_[i] + dt;
-    u_prev_[i] = u[i];
+    if (std::fabs(u[i] - u_anchor_[i]) > std::max(config_.steady_band, 0.05 * std::fabs(u_anchor_[i]))) {
+      u_anchor_[i] = u[i];  // the command moved: it settles again from here
+      steady_[i] = 0.0;
+    } else {
+      steady_[i] += dt;
+    }
     const bool settled = steady_[i] >= config_.settle_time_s - 1e-9;
     if (est_.valid && !hold && !decay && settled) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
     c = std::clamp(c, -bound, bound);

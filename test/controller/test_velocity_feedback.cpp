@@ -149,6 +149,27 @@ TEST(VelocityFeedback, BringsAnUnderachievingPlantToTheCommandWithinTheBound) {
   EXPECT_LT(max_step, 1.5 * 0.5 * 0.01 + 1e-9) << "u_fb moves at most k_i |e| per second";
 }
 
+TEST(VelocityFeedback, IntegratesOnceTheCommandIsSteadyAndAStickJitterIsSteady) {
+  Legs legs;
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  Plant plant{{0.7, 0.7, 0.7}};
+  BaseVelocityEstimate est;
+  // A ramp of 0.01 per tick (the shaper's 1 m/s^2 slew): the robot lags by design; nothing integrates.
+  for (int k = 1; k <= 50; ++k) est = plant.step(fb.correct({0.01 * k, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_EQ(fb.correction()[0], 0.0);
+  // Held: nothing for settle_time_s (0.5 s), then it integrates.
+  for (int k = 0; k < 49; ++k) est = plant.step(fb.correct({0.5, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_EQ(fb.correction()[0], 0.0);
+  for (int k = 0; k < 20; ++k) est = plant.step(fb.correct({0.5, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_GT(fb.correction()[0], 0.0);
+  // A gamepad stick jittering +-0.01 m/s around 0.3: steady, so it settles and integrates.
+  fb.reset();
+  Plant p2{{0.7, 0.7, 0.7}};
+  est = BaseVelocityEstimate{};
+  for (int k = 0; k < 500; ++k) est = p2.step(fb.correct({0.3 + ((k % 7) - 3) * 0.0033, 0.0, 0.0}, est, 0.01), 0.01);
+  EXPECT_GT(fb.correction()[0], 0.05);
+}
+
 TEST(VelocityFeedback, SaturatesAtTheRatioAndTheLimitsAndVanishesWithTheCommand) {
   Legs legs;
   VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});

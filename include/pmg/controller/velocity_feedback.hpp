@@ -63,8 +63,11 @@ struct VelocityFeedbackConfig {
   double decay_time_s = 0.5;
   /// An axis integrates only once its shaped command has been steady this long [s], [0, 5]: while
   /// the command ramps (and the robot lags it by design) the error is not the robot's shortfall,
-  /// and integrating it winds the correction up into an overshoot.
+  /// and integrating it winds the correction up into an overshoot. "Steady": within
+  /// max(steady_band, 5 % of |u|) of where it was when it last settled (a gamepad stick's jitter
+  /// is steady) [m/s, rad/s], [0, 0.5].
   double settle_time_s = 0.5;
+  double steady_band = 0.02;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
@@ -180,7 +183,7 @@ class VelocityFeedback {
   BaseVelocityEstimator estimator_;
   std::array<double, 3> lo_, hi_;
   std::array<double, 3> c_{};
-  std::array<double, 3> u_prev_{}, steady_{};
+  std::array<double, 3> u_anchor_{}, steady_{};
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{};
   std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0;
