@@ -66,6 +66,7 @@ def main():
     ax2.set_xticks(range(len(labels)), [str(i + 1) for i in range(len(labels))])
     ax2.set_xlabel("policy (legend order)")
     ax2.set_ylabel("falls per seed (171 s script)")
+    ax2.set_ylim(0, max(1.0, 1.2 * max(f / max(n, 1) for _, f, n in scores)))
     ax2.set_title("falls")
     fig.tight_layout()
     fig.savefig(args.out, dpi=110)
