@@ -433,7 +433,8 @@ int main(int argc, char** argv) {
             fb[0] = c_fb.vx;
             fb[1] = c_fb.vy;
             fb[2] = c_fb.wz;
-            for (std::size_t i = 0; i < 3; ++i) est[i] = vf->filteredEstimate()[i];
+            const std::array<double, 3> e = vf->filteredEstimate();
+            std::copy(e.begin(), e.end(), est.begin());
           } else if (active) {
             fb[0] = controller.commands().velocity().vx;
             fb[1] = controller.commands().velocity().vy;

@@ -10,6 +10,28 @@
 
 namespace pmg {
 
+namespace {
+/// R_WB of the IMU's orientation estimate, normalised; false when the IMU is invalid or its
+/// quaternion is far from unit length. noexcept, no allocation.
+bool imuRotation(const ImuState& imu, Eigen::Matrix3d* R_WB) noexcept {
+  if (!imu.valid) return false;
+  Eigen::Quaterniond q_WB(imu.quat_wxyz[0], imu.quat_wxyz[1], imu.quat_wxyz[2], imu.quat_wxyz[3]);
+  const double norm = q_WB.norm();
+  if (!(norm > 0.5 && norm < 1.5)) return false;
+  q_WB.coeffs() /= norm;
+  *R_WB = q_WB.toRotationMatrix();
+  return true;
+}
+
+/// Rotation from the pelvis frame B to the heading frame H (W turned by the pelvis yaw).
+Eigen::Matrix3d headingFromBody(const Eigen::Matrix3d& R_WB) noexcept {
+  const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
+  return Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_WB;
+}
+
+double tiltFromVertical(const Eigen::Matrix3d& R_WB) noexcept { return std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0)); }
+}  // namespace
+
 std::string VelocityFeedbackConfig::validate() const {
   static const char* kAxis[3] = {"v_x", "v_y", "yaw rate"};
   for (std::size_t i = 0; i < 3; ++i)
@@ -39,16 +61,14 @@ LegOdometry::LegOdometry(std::shared_ptr<const gco::LegModel> legs, const gco::L
 LegOdometry::~LegOdometry() = default;
 
 BaseVelocityEstimate LegOdometry::estimate(const LowState& state) noexcept {
+  Eigen::Matrix3d R_WB;
+  if (!imuRotation(state.imu, &R_WB)) return BaseVelocityEstimate{};
+  return estimate(state, R_WB);
+}
+
+BaseVelocityEstimate LegOdometry::estimate(const LowState& state, const Eigen::Matrix3d& R_WB) noexcept {
   BaseVelocityEstimate out;
-  if (!state.imu.valid) return out;
-  const auto& qw = state.imu.quat_wxyz;
-  Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
-  const double norm = q_WB.norm();
-  if (!(norm > 0.5 && norm < 1.5)) return out;
-  q_WB.coeffs() /= norm;
-  const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
-  const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
-  const Eigen::Matrix3d R_HB = Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R_WB;
+  const Eigen::Matrix3d R_HB = headingFromBody(R_WB);
   const Eigen::Vector3d w_B(state.imu.gyro[0], state.imu.gyro[1], state.imu.gyro[2]);
   const Eigen::Vector3d w_H = R_HB * w_B;
   if (!w_H.allFinite()) return out;
@@ -97,29 +117,22 @@ void BaseVelocityEstimator::reset() noexcept {
 }
 
 BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double dt) noexcept {
-  last_leg_ = odometry_.estimate(state);
+  Eigen::Matrix3d R_WB;
+  const bool imu_ok = imuRotation(state.imu, &R_WB);  // once per tick, for the legs and the prediction
+  last_leg_ = imu_ok ? odometry_.estimate(state, R_WB) : BaseVelocityEstimate{};
   const BaseVelocityEstimate& leg = last_leg_;
   // Prediction from the IMU: the specific force rotated into W plus gravity is the acceleration of
   // the IMU; in the turning heading frame H, dv_H/dt = R_HW a_W - w_z e_z x v_H.
-  if (initialized_ && state.imu.valid) {
-    const auto& qw = state.imu.quat_wxyz;
-    Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
-    const double norm = q_WB.norm();
-    if (norm > 0.5 && norm < 1.5) {
-      q_WB.coeffs() /= norm;
-      const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
-      tilt_ = std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0));
-      const Eigen::Vector3d a_W =
-          R_WB * Eigen::Vector3d(state.imu.acc[0], state.imu.acc[1], state.imu.acc[2]) - Eigen::Vector3d(0, 0, kGravity);
-      const double yaw = std::atan2(R_WB(1, 0), R_WB(0, 0));
-      const double cy = std::cos(yaw), sy = std::sin(yaw);
-      const double ax = cy * a_W.x() + sy * a_W.y(), ay = -sy * a_W.x() + cy * a_W.y();
-      const double wz = (R_WB * Eigen::Vector3d(state.imu.gyro[0], state.imu.gyro[1], state.imu.gyro[2])).z();
-      const double vx = v_[0] + (ax + wz * v_[1]) * dt, vy = v_[1] + (ay - wz * v_[0]) * dt;
-      if (std::isfinite(vx) && std::isfinite(vy)) {
-        v_[0] = vx;
-        v_[1] = vy;
-      }
+  if (initialized_ && imu_ok) {
+    tilt_ = tiltFromVertical(R_WB);
+    const Eigen::Matrix3d R_HB = headingFromBody(R_WB);
+    const Eigen::Vector3d a_H =
+        R_HB * Eigen::Vector3d(state.imu.acc[0], state.imu.acc[1], state.imu.acc[2]) - Eigen::Vector3d(0, 0, kGravity);
+    const double wz = (R_HB * Eigen::Vector3d(state.imu.gyro[0], state.imu.gyro[1], state.imu.gyro[2])).z();
+    const double vx = v_[0] + (a_H.x() + wz * v_[1]) * dt, vy = v_[1] + (a_H.y() - wz * v_[0]) * dt;
+    if (std::isfinite(vx) && std::isfinite(vy)) {
+      v_[0] = vx;
+      v_[1] = vy;
     }
   }
   // Correction by leg odometry, gated: a measurement further than gate_mps from the prediction
@@ -246,19 +259,15 @@ void PostureFeedback::reset() noexcept {
 }
 
 bool PostureFeedback::torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept {
-  if (!state.imu.valid || state.num_motors != q_.size()) return false;
+  Eigen::Matrix3d R_WB;
+  if (state.num_motors != q_.size() || !imuRotation(state.imu, &R_WB)) return false;
   for (Eigen::Index i = 0; i < q_.size(); ++i) q_[i] = state.motors[static_cast<std::size_t>(i)].q;
-  const auto& qw = state.imu.quat_wxyz;
-  Eigen::Quaterniond q_WB(qw[0], qw[1], qw[2], qw[3]);
-  const double norm = q_WB.norm();
   Eigen::Isometry3d X_BT;
-  if (!(norm > 0.5 && norm < 1.5) || !q_.allFinite() || !fk_.tipPose(q_, X_BT)) return false;
-  q_WB.coeffs() /= norm;
-  const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
+  if (!q_.allFinite() || !fk_.tipPose(q_, X_BT)) return false;
   const Eigen::Matrix3d R = R_WB * X_BT.linear();
   *pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
   *roll = std::atan2(R(2, 1), R(2, 2));
-  *pelvis_tilt = std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0));
+  *pelvis_tilt = tiltFromVertical(R_WB);
   return std::isfinite(*pitch) && std::isfinite(*roll);
 }
 

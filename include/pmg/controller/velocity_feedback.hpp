@@ -99,6 +99,9 @@ class LegOdometry {
   /// One estimate from the newest state (motor q [rad], qd [rad/s]; IMU quaternion W←B, gyro in B
   /// [rad/s]). noexcept, no allocation.
   BaseVelocityEstimate estimate(const LowState& state) noexcept;
+  /// The same with the IMU orientation R_WB already computed (normalised; the estimator computes it
+  /// once per tick for the legs and its prediction). noexcept, no allocation.
+  BaseVelocityEstimate estimate(const LowState& state, const Eigen::Matrix3d& R_WB) noexcept;
 
  private:
   gco::LegKinematics kin_;
