@@ -45,6 +45,11 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"udp", "socketcan"}));
   app.add_option("--can-port", can_port, "UDP base port of pmg_sil")->check(CLI::Range(1024, 65000));
   CLI11_PARSE(app, argc, argv);
+  // Every run mode stops cleanly on SIGINT/SIGTERM, a signal during setup included: the runner
+  // checks the flag every tick (lockstep) or every 10 ms (real time), then the log and the summary
+  // are written.
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
 
   try {
     pmg::ControllerConfig config = pmg::loadControllerConfig(config_path);
@@ -65,10 +70,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "pmg_controller: lockstep mode needs --duration or --script\n");
       return 2;
     }
-    // Every run mode stops cleanly on SIGINT/SIGTERM: the runner checks the flag every tick
-    // (lockstep) or every 10 ms (real time), then the log and the summary are written.
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
     const bool rt = config.timing == pmg::TimingMode::kRealtime;
     const bool can = config.backend == pmg::BackendKind::kCan;
     std::printf("pmg_controller: robot %s (%zu joints), backend %s, %s, %.0f Hz loop / %.0f Hz HAL, supervisor on\n",

@@ -177,9 +177,12 @@ RunSummary ControllerApp::finish() {
   s.reference_limited_ticks = controller_->referenceLimiter().limitedTicks();
   s.mode_requests_posted = controller_->modeRequestsPosted();
   // Asked to engage, but the motors or the IMU never all answered (a short run that was still
-  // standing up is not this).
+  // standing up is not this, nor a run a signal stopped before the inputs had kStartupGraceS to
+  // answer: a SIGTERM during a slow start says nothing about the motors).
+  constexpr double kStartupGraceS = 1.0;
+  const bool stopped_early = s.run.stopped_by_flag && s.run.sim_time < kStartupGraceS;
   s.never_active = config_.startup == StartupMode::kActive && !controller_->everActive() &&
-                   !controller_->startupStandPosted();
+                   !controller_->startupStandPosted() && !stopped_early;
   s.backend_report = inner_->report();
   if (const teleop::TeleopMode* t = controller_->teleop()) {
     s.teleop_enabled = true;

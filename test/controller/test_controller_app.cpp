@@ -163,6 +163,20 @@ TEST(ControllerApp, StopFlagEndsALockstepRunCleanly) {
   EXPECT_GT(std::filesystem::file_size(config.log_file), 10000u);
 }
 
+// A signal that arrives while the controller is still starting (a slow start on a loaded machine)
+// stops the run cleanly; the summary does not claim the motors never answered, and it exits 0.
+TEST(ControllerApp, StopFlagBeforeTheFirstTickIsNotNeverActive) {
+  ControllerConfig config = silConfig();
+  std::atomic<bool> stop{true};
+  ControllerApp app(config);
+  const RunSummary s = app.run(1000.0, nullptr, &stop);
+  EXPECT_TRUE(s.run.stopped_by_flag);
+  EXPECT_LT(s.run.sim_time, 1.0);
+  EXPECT_FALSE(s.never_active) << s.text();
+  EXPECT_EQ(s.exitCode(), 0) << s.text();
+  EXPECT_EQ(s.text().find("never reached active"), std::string::npos) << s.text();
+}
+
 // A backend that serves the MuJoCo SIL but, in a window of cycles, one motor replies NaN.
 class CorruptingBackend final : public HalBackend {
  public:
