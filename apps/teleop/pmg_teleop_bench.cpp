@@ -122,6 +122,10 @@ struct OperatorConfig : OperatorCommon {
   bool palm_down = false;           ///< with the grip squeezed, the controller turns the hand over so that its palm (the flat side of the scene's hand pad) faces down and its fingers point forward
   double palm_pitch_rad = 0.0;      ///< ... the fingers this far below the torso's forward axis (frame T), so the pad's tip, not the wrist housing, touches first [rad]
   double palm_turn_s = 1.0;         ///< ... over this long [s]
+  double palm_level_gain = 0.0;     ///< palm_down: the operator levels the fingers it sees (their elevation in the room, 0.1 s late), turning its controller about the torso's lateral axis at this rate per radian [1/s] (0: off; the arm IK trades the hand's orientation for its position, and a pitched pad touches with its edge)
+  double stroke_m = 0.0;            ///< > 0: wipe by arm strokes, the robot standing at its working place: the hand sweeps the towel this far to either side of where it pressed (0: walk sideways with the hand on the towel) [m]
+  double stroke_speed = 0.20;       ///< the hand's lateral speed along a stroke [m/s]
+  double stroke_press_m = 0.03;     ///< while stroking, the operator's hand leads the robot hand it sees by at most this downwards (robot scale): a light press that the arm can drag sideways [m]
   template <class A>
   void Serialize(A* a) {
     OperatorCommon::Serialize(a);
@@ -139,6 +143,10 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("palm_down", &palm_down, "true | false");
     a->Visit("palm_pitch_rad", &palm_pitch_rad, "[rad]");
     a->Visit("palm_turn_s", &palm_turn_s, "[s]");
+    a->Visit("palm_level_gain", &palm_level_gain, "[1/s] (0: off)");
+    a->Visit("stroke_m", &stroke_m, "[m] (0: walk sideways)");
+    a->Visit("stroke_speed", &stroke_speed, "[m/s]");
+    a->Visit("stroke_press_m", &stroke_press_m, "[m]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("clearance_m", &clearance_m, "[m]");
     a->Visit("raise_margin_m", &raise_margin_m, "[m]");
@@ -169,6 +177,10 @@ struct OperatorConfig : OperatorCommon {
     if (!(transit_height_m >= hover_m && transit_height_m <= 0.5)) return "transit_height_m: expected [hover_m, 0.5] m";
     if (!(std::abs(palm_pitch_rad) <= 0.8)) return "palm_pitch_rad: expected [-0.8, 0.8] rad";
     if (!(palm_turn_s > 0 && palm_turn_s <= 10)) return "palm_turn_s: expected (0, 10] s";
+    if (!(palm_level_gain >= 0 && palm_level_gain <= 10)) return "palm_level_gain: expected [0, 10] 1/s (0: off)";
+    if (!(stroke_m >= 0 && stroke_m <= 0.3)) return "stroke_m: expected [0, 0.3] m (0: walk sideways)";
+    if (!(stroke_speed > 0 && stroke_speed <= 0.5)) return "stroke_speed: expected (0, 0.5] m/s";
+    if (!(stroke_press_m > 0 && stroke_press_m <= max_lead_m)) return "stroke_press_m: expected (0, max_lead_m] m";
     return "";
   }
 };
@@ -348,6 +360,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   View see_towel(op.view_latency_s, op.view_noise_m, rng), see_hand(op.view_latency_s, op.view_noise_m, rng),
       see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_towel_room(op.view_latency_s, op.view_noise_m, rng);
   View see_yaw(op.view_latency_s, 0.0, rng);  // the robot's heading (x: yaw [rad]), late, without noise
+  View see_fingers(op.view_latency_s, 0.0, rng);  // the working hand's fingers' elevation in the room (x [rad]), late
+  double palm_level = 0.0;  // palm_level_gain: the levelling turn so far [rad]
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
   double work_y = 0.0;  // the pelvis' lateral working place
   double raise_x = 0.0;  // the hand's forward place while it is raised
@@ -376,6 +390,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   bool regrabbing = false;  // the reach in progress follows a slip
   bool descending = false;  // the reaching hand is over its aim and goes down to the hover height
   Vector3d lift_from = Vector3d::Zero();  // where the hand was when it started lifting (frame R)
+  double stroke_center_y = 0.0;  // stroke_m > 0: the hand's lateral place (frame R) the strokes sweep about
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
@@ -530,20 +545,42 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
         if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, regrabbing = false;
         if (phase == kWipe) {
-          // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
           const double half_len = 0.5 * table.top_size[1];
           // Where the towel is along the table, and how far it went: seen against the table (the room),
           // not through the swaying robot.
           const double y_T = towel_room.y() - table.pos[1];
-          if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
-          if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
-          // Sideways, holding the working distance to the table (a P term on the seen place).
-          const double vx_hold = std::clamp(op.walk_gain * (table_near_x - op.stand_off_m - pelvis_W.x()), -0.1, 0.1);
-          v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(vx_hold, wipe_dir * op.wipe_speed);
+          if (op.stroke_m > 0) {
+            // Arm strokes: the robot stands at its working place and the hand sweeps the towel to
+            // and fro, stroke_m either side of where it pressed, turning back early near an end of
+            // the table. The operator moves its controller along with the stroke (feed-forward) and
+            // corrects what it sees of the robot hand.
+            if (entered) stroke_center_y = work_hand.y();
+            if (wipe_dir > 0 && (work_hand.y() > stroke_center_y + op.stroke_m || y_T > half_len - op.wipe_margin_m))
+              wipe_dir = -1;
+            else if (wipe_dir < 0 && (work_hand.y() < stroke_center_y - op.stroke_m || y_T < -half_len + op.wipe_margin_m))
+              wipe_dir = 1;
+            work_hand.y() += wipe_dir * op.stroke_speed * dt;
+            work_H.y() += wipe_dir * op.stroke_speed * dt / tc.arm_scale;
+            hand_target_R.y() = work_hand.y();
+            // Hold the working place with a P term only (no integral, no minimum speed): a robot
+            // pressing its hand on the table does not reach it exactly, and a wound-up lean would
+            // keep it stepping into the table.
+            const Eigen::Vector2d e(table_near_x - op.stand_off_m - pelvis_W.x(), work_y - pelvis_W.y());
+            v_body = Eigen::Rotation2Dd(-yaw_seen) * (op.walk_gain * e).cwiseMax(-0.1).cwiseMin(0.1);
+          } else {
+            // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
+            if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
+            if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
+            // Sideways, holding the working distance to the table (a P term on the seen place).
+            const double vx_hold = std::clamp(op.walk_gain * (table_near_x - op.stand_off_m - pelvis_W.x()), -0.1, 0.1);
+            v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(vx_hold, wipe_dir * op.wipe_speed);
+          }
           // The hand slipped off (seen beside the towel's centre): stop, lift it and place it again
-          // from where the robot is now (reach, press, wipe on in the same direction).
+          // from where the robot is now (reach, press, wipe on in the same direction); with strokes,
+          // the robot steps to face the towel again while the hand is placed.
           if (std::abs(hand_R.y() - towel_R.y()) > op.regrab_offset_m) {
-            phase = kReach, phase_t0 = t, work_y = pelvis_W.y(), walk_integral.setZero();
+            phase = kReach, phase_t0 = t, walk_integral.setZero();
+            work_y = op.stroke_m > 0 ? towel_W_seen.y() + lateral : pelvis_W.y();
             regrabbing = true;
             ++regrabs;
           }
@@ -603,12 +640,29 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         const Eigen::AngleAxisd pitch_down(op.palm_pitch_rad, Vector3d::UnitY());
         const Eigen::Quaterniond up(pitch_down * Eigen::AngleAxisd(0.5 * M_PI, Vector3d::UnitX())),
             down(pitch_down * Eigen::AngleAxisd(-0.5 * M_PI, Vector3d::UnitX()));
-        palm_turn = (up.angularDistance(q_now) < down.angularDistance(q_now) ? up : down) * q_now.inverse();
+        // With a pad (scene hand_collision), the operator knows which side of the robot hand is its
+        // palm: the turn that puts the pad's centre below the wrist (the pad bounds the rubber hand's
+        // mesh, which is off the wrist axis; the smaller turn put the left pad above its wrist, and
+        // the wrist housing pressed the towel instead). Without a pad, the smaller turn.
+        bool pick_up = up.angularDistance(q_now) < down.angularDistance(q_now);
+        if (pad_geom >= 0) {
+          const Eigen::Map<const Eigen::Matrix<mjtNum, 3, 3, Eigen::RowMajor>> R_WH_now(d->xmat + 9 * hand);
+          const Vector3d pad_H = R_WH_now.transpose() * (Vector3d(d->geom_xpos[3 * pad_geom], d->geom_xpos[3 * pad_geom + 1],
+                                                                   d->geom_xpos[3 * pad_geom + 2]) - hand_p);
+          pick_up = (up * pad_H).z() < (down * pad_H).z();
+        }
+        palm_turn = (pick_up ? up : down) * q_now.inverse();
         palm_t0 = t;
       }
     }
     if (op.palm_down && aligned) {
-      const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity().slerp(std::clamp((t - palm_t0) / op.palm_turn_s, 0.0, 1.0), palm_turn);
+      // Levelling: the fingers' elevation in the room as seen (late), driven to zero by turning the
+      // controller about frame T's lateral axis (a positive turn about y points the fingers down).
+      see_fingers.push(t, Vector3d(std::asin(std::clamp(d->xmat[9 * hand + 6], -1.0, 1.0)), 0.0, 0.0));
+      if (op.palm_level_gain > 0 && grip && t - palm_t0 > op.palm_turn_s)
+        palm_level = std::clamp(palm_level + op.palm_level_gain * dt * see_fingers.seen(t).x(), -0.6, 0.6);
+      const Eigen::Quaterniond qh = Eigen::AngleAxisd(palm_level, Vector3d::UnitY()) *
+                                    Eigen::Quaterniond::Identity().slerp(std::clamp((t - palm_t0) / op.palm_turn_s, 0.0, 1.0), palm_turn);
       vr.hand_quat[static_cast<std::size_t>(side)] = {qh.w(), qh.x(), qh.y(), qh.z()};
     }
     if (have_hand_target) {
@@ -619,6 +673,9 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       const Vector3d at = controllerAtRobotHand(d, shoulder_l, shoulder_r, torso_p, unyaw, tc, hand_R);
       const double lead_max = op.max_lead_m / tc.arm_scale;
       if ((work_H - at).norm() > lead_max) work_H = at + lead_max * (work_H - at).normalized();
+      // Stroking, the press is light and the lead is mostly sideways: a hand held down by the full
+      // lead pressed the towel with about 35 N, and the arm could not drag it (strokes of +-4 cm).
+      if (op.stroke_m > 0 && phase == kWipe) work_H.z() = std::max(work_H.z(), at.z() - op.stroke_press_m / tc.arm_scale);
     }
     const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
     const Vector3d wh = head + work_H, lh = head + rest_left, rh = head + rest_right;
