@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """CPU smoke run of the training code, in the installed training environment (ctest training_smoke_cpu).
 
-Usage: test_smoke_cpu.py [--part env|ppo|all] [--workdir DIR] [--steps 60] [--envs 8]
+Usage: test_smoke_cpu.py [--part env|models|ppo|all] [--workdir DIR] [--steps 60] [--envs 8]
 Any python3 may start it: it re-runs itself with the training environment's interpreter,
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
@@ -10,8 +10,8 @@ steps run fast enough without). It installs nothing. A missing environment is a 
 PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
-it): a re-run with unchanged code skips most of the compile time. ctest runs the two parts as two tests (training_smoke_env,
-training_smoke_ppo) so that they compile in parallel.
+it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as three tests (training_smoke_env: 1,
+training_smoke_models: 1b and 1c, training_smoke_ppo: 2) so that they compile in parallel.
 
 0. The environment holds the versions training/pyproject.toml pins.
 1. The MJX environment (the training configuration: full PMG with GCO, randomised reset and
@@ -591,8 +591,9 @@ def main():
     ap.add_argument("--workdir", default=None, help="outputs (default: a temporary directory)")
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
-    ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
-                    help="env: the environment rollout checks; ppo: the tiny PPO run; all: both")
+    ap.add_argument("--part", choices=["env", "models", "ppo", "all"], default="all",
+                    help="env: the environment rollout checks (1); models: the actuator models, gains and "
+                         "hand forces (1b, 1c); ppo: the tiny PPO run (2); all: every part")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -607,7 +608,7 @@ def main():
     check = Checks()
     pin_checks(check)
     obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
-    if args.part in ("env", "all"):
+    if args.part in ("models", "all"):
         actuator_port_jax_checks(check)
         actuator_env_checks(check, workdir)
         hand_force_checks(check)
