@@ -549,6 +549,12 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           // Where the towel is along the table, and how far it went: seen against the table (the room),
           // not through the swaying robot.
           const double y_T = towel_room.y() - table.pos[1];
+          // Hold the working distance to the table (and, stroking, the working place along it) with
+          // a P term only on the seen place (no integral, no minimum speed): a robot pressing its hand
+          // on the table does not reach it exactly, and a wound-up lean would keep it stepping into
+          // the table.
+          const Eigen::Vector2d e(table_near_x - op.stand_off_m - pelvis_W.x(), work_y - pelvis_W.y());
+          Eigen::Vector2d hold = (op.walk_gain * e).cwiseMax(-0.1).cwiseMin(0.1);
           if (op.stroke_m > 0) {
             // Arm strokes: the robot stands at its working place and the hand sweeps the towel to
             // and fro, stroke_m either side of where it pressed, turning back early near an end of
@@ -562,19 +568,13 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
             work_hand.y() += wipe_dir * op.stroke_speed * dt;
             work_H.y() += wipe_dir * op.stroke_speed * dt / tc.arm_scale;
             hand_target_R.y() = work_hand.y();
-            // Hold the working place with a P term only (no integral, no minimum speed): a robot
-            // pressing its hand on the table does not reach it exactly, and a wound-up lean would
-            // keep it stepping into the table.
-            const Eigen::Vector2d e(table_near_x - op.stand_off_m - pelvis_W.x(), work_y - pelvis_W.y());
-            v_body = Eigen::Rotation2Dd(-yaw_seen) * (op.walk_gain * e).cwiseMax(-0.1).cwiseMin(0.1);
           } else {
             // Walk sideways, keeping the hand on the towel; turn back near an end of the table.
             if (wipe_dir > 0 && y_T > half_len - op.wipe_margin_m) wipe_dir = -1;
             if (wipe_dir < 0 && y_T < -half_len + op.wipe_margin_m) wipe_dir = 1;
-            // Sideways, holding the working distance to the table (a P term on the seen place).
-            const double vx_hold = std::clamp(op.walk_gain * (table_near_x - op.stand_off_m - pelvis_W.x()), -0.1, 0.1);
-            v_body = Eigen::Rotation2Dd(-yaw_seen) * Eigen::Vector2d(vx_hold, wipe_dir * op.wipe_speed);
+            hold.y() = wipe_dir * op.wipe_speed;
           }
+          v_body = Eigen::Rotation2Dd(-yaw_seen) * hold;
           // The hand slipped off (seen beside the towel's centre): stop, lift it and place it again
           // from where the robot is now (reach, press, wipe on in the same direction); with strokes,
           // the robot steps to face the towel again while the hand is placed.
