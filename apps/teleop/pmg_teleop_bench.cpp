@@ -118,6 +118,25 @@ struct OperatorConfig : OperatorCommon {
   double keep_from_edge_m = 0.27;   ///< while wiping, keep the towel's centre this far from the table's near edge [m]
   double keep_gain = 1.0;           ///< hand forward speed per metre of that error [1/s] (at most 0.05 m/s)
   double max_lead_m = 1.0;          ///< the operator's hand leads the robot hand it sees by at most this (robot scale) [m]
+  /// Pinned against the table: the pelvis seen more than unpin_m past its working place for unpin_s
+  /// while closing in, reaching or pressing (the crouched thighs wedged under the top's edge, the
+  /// robot not stepping back) makes the operator stand up, step back to stand_off_far_m and close in
+  /// again. 0: off [m]
+  double unpin_m = 0.0;
+  double unpin_s = 2.0;             ///< [s]
+  /// The keep-from-edge correction moves the wrist at most this far beyond its aim at the towel
+  /// (grab_inset_m short of its seen centre). Unbounded, a hand that no longer touched the towel
+  /// moved on forward (the towel did not come), out over it to the edge of its reach, pressing
+  /// nothing [m]. Negative: unbounded.
+  double keep_reach_m = -1.0;
+  /// Crouch and look down only once at the working place (from the reach on), walking in upright:
+  /// crouched and bent, the robot overshoots its place by 4-20 cm and walks into the table.
+  bool crouch_in_place = false;
+  /// With crouch_in_place, the first reach keeps the hand at transit height for this long after the
+  /// crouch begins, and until the pelvis is seen back within 2 arrive_tol_m of its place: crouching
+  /// and bending, the robot sways back by up to 0.2 m, and a hand already down drags the towel with
+  /// it and holds the robot there [s].
+  double crouch_settle_s = 0.0;
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
   bool palm_down = false;           ///< with the grip squeezed, the controller turns the hand over so that its palm (the flat side of the scene's hand pad) faces down and its fingers point forward
   double palm_pitch_rad = 0.0;      ///< ... the fingers this far below the torso's forward axis (frame T), so the pad's tip, not the wrist housing, touches first [rad]
@@ -159,6 +178,11 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("keep_from_edge_m", &keep_from_edge_m, "[m]");
     a->Visit("keep_gain", &keep_gain, "[1/s]");
     a->Visit("max_lead_m", &max_lead_m, "[m]");
+    a->Visit("unpin_m", &unpin_m, "[m] (0: off)");
+    a->Visit("unpin_s", &unpin_s, "[s]");
+    a->Visit("crouch_in_place", &crouch_in_place, "true | false");
+    a->Visit("crouch_settle_s", &crouch_settle_s, "[s]");
+    a->Visit("keep_reach_m", &keep_reach_m, "[m] (negative: unbounded)");
   }
   std::string validate() const {
     if (std::string e = OperatorCommon::validate(); !e.empty()) return e;
@@ -181,6 +205,10 @@ struct OperatorConfig : OperatorCommon {
     if (!(stroke_m >= 0 && stroke_m <= 0.3)) return "stroke_m: expected [0, 0.3] m (0: walk sideways)";
     if (!(stroke_speed > 0 && stroke_speed <= 0.5)) return "stroke_speed: expected (0, 0.5] m/s";
     if (!(stroke_press_m > 0 && stroke_press_m <= max_lead_m)) return "stroke_press_m: expected (0, max_lead_m] m";
+    if (!(unpin_m >= 0 && unpin_m <= 0.3)) return "unpin_m: expected [0, 0.3] m (0: off)";
+    if (!(unpin_s >= 0.5 && unpin_s <= 20)) return "unpin_s: expected [0.5, 20] s";
+    if (!(crouch_settle_s >= 0 && crouch_settle_s <= 6)) return "crouch_settle_s: expected [0, 6] s";
+    if (!(keep_reach_m >= -1.0 && keep_reach_m <= 0.5)) return "keep_reach_m: expected [-1, 0.5] m (negative: unbounded)";
     return "";
   }
 };
@@ -328,6 +356,7 @@ struct TrialResult {
   bool fell = false;
   double seconds = 0.0;
   int regrabs = 0;  ///< times the operator placed the hand again after it slipped off the towel (wipe) / gripped the box again (box)
+  int unpins = 0;   ///< wipe: times the operator stood up and stepped back, the robot pinned against the table
 };
 
 // One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
@@ -387,6 +416,9 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   bool counting = false;  // the towel's travel is counted from the first stroke on
   double towel_y_eye = 0.0;  // the towel's seen place along the table, as judged by eye (smoothed) [m]
   int regrabs = 0;  // times the hand was placed again after slipping off the towel
+  int unpins = 0;   // times the robot was seen pinned against the table and stepped back (unpin_m)
+  bool unpinning = false;  // standing up and stepping back to the far stand-off
+  double pinned_since = -1.0;  // when the pelvis was first seen past its working place (-1: not)
   bool regrabbing = false;  // the reach in progress follows a slip
   bool descending = false;  // the reaching hand is over its aim and goes down to the hover height
   Vector3d lift_from = Vector3d::Zero();  // where the hand was when it started lifting (frame R)
@@ -486,10 +518,13 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
                                  top_z_R + op.hover_m + op.clearance_m);
         if (phase == kRaise) {
           if (entered) raise_x = hand_R.x();
-          walkTo(Eigen::Vector2d(table_near_x - op.stand_off_far_m, work_y), op.max_speed);
+          const double off = walkTo(Eigen::Vector2d(table_near_x - op.stand_off_far_m, work_y), op.max_speed);
+          // Unpinning: standing (below), back at the far stand-off; then crouch and raise again.
+          if (unpinning && ((off < op.arrive_tol_m && t - phase_t0 > 1.0) || t - phase_t0 > 10.0))
+            unpinning = false, phase_t0 = t, walk_integral.setZero();
           // Walk in only with the hand high above the top: a hand that walks in at hover height
           // (the wrist; the rubber hand hangs below it) sweeps the towel out of reach.
-          if (t - phase_t0 > 1.0 &&
+          if (!unpinning && t - phase_t0 > 1.0 &&
               (hand_R.z() > top_z_R + op.hover_m + op.clearance_m - op.raise_margin_m || t - phase_t0 > 6.0))
             phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
         } else {
@@ -524,6 +559,11 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           if (off > 2.0 * op.transit_tol_m) descending = false;
           if (!descending) hand_target_R.z() = transit_z;
         }
+        if (phase == kReach && op.crouch_in_place && !regrabbing) {
+          const Eigen::Vector2d place(table_near_x - op.stand_off_m, work_y);
+          if (t - phase_t0 < op.crouch_settle_s || (place - pelvis_W.head<2>()).norm() > 2.0 * op.arrive_tol_m)
+            if (t - phase_t0 < 6.0) hand_target_R.z() = std::max(hand_target_R.z(), transit_z);
+        }
         // Placing the hand again after a slip: lift it straight up first (moving it sideways while it
         // still presses drags the towel, and the push shoves the robot back).
         if (phase == kReach && regrabbing && t - phase_t0 < op.lift_s) {
@@ -536,6 +576,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         if (phase == kWipe) {
           const double x_goal = table_near_x + op.keep_from_edge_m;
           work_hand.x() += std::clamp(op.keep_gain * (x_goal - towel_room.x()), -0.05, 0.05) * dt;
+          if (op.keep_reach_m >= 0) work_hand.x() = std::min(work_hand.x(), towel_R.x() - op.grab_inset_m + op.keep_reach_m);
           hand_target_R.x() = work_hand.x();
         }
         // Hold the working place while reaching and pressing (the wipe phase walks on its own).
@@ -610,9 +651,26 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       case kDone:
         break;
     }
+    // Pinned against the table: the robot, crouched and bent, went past its working place (its thighs
+    // under the top's edge) and does not step back when told to. Stand up, step back, close in again.
+    if (op.unpin_m > 0 && (phase == kCloseIn || phase == kReach || phase == kPress)) {
+      if (pelvis_W.x() - (table_near_x - op.stand_off_m) > op.unpin_m) {
+        if (pinned_since < 0) pinned_since = t;
+      } else {
+        pinned_since = -1.0;
+      }
+      if (pinned_since >= 0 && t - pinned_since > op.unpin_s) {
+        phase = kRaise, phase_t0 = t, walk_integral.setZero();
+        unpinning = true, pinned_since = -1.0, descending = false;
+        ++unpins;
+      }
+    } else {
+      pinned_since = -1.0;
+    }
     // Headset: displacement for the locomotion command, pitch for looking down.
     const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
-    const bool working = (phase >= kRaise && phase <= kWipe) || (phase == kRelease && t - phase_t0 < 1.5);
+    const bool working = (phase >= (op.crouch_in_place ? kReach : kRaise) && phase <= kWipe && !unpinning) ||
+                         (phase == kRelease && t - phase_t0 < 1.5);
     vr.head_position = {disp.x(), disp.y(), head_z - (working ? op.crouch_m : 0.0)};
     const double pitch = working ? op.look_down_rad : 0.0;
     // Keep the robot facing the table: turn the head against the heading it sees (yaw rate
@@ -699,6 +757,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
   r.regrabs = regrabs;
+  r.unpins = unpins;
   r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
   return r;
 }
@@ -1275,6 +1334,7 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       summary["trial_results"].push_back({{"trial", k}, {"success", r.verdict.success}, {"measure", r.verdict.measure},
                                           {"fell", r.fell}, {"seconds", r.seconds}, {"regrabs", r.regrabs}, {"detail", r.verdict.detail}});
+      if (task == "wipe") summary["trial_results"].back()["unpins"] = r.unpins;
       if (!r.verdict.success)
         summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
       // Keep the event log and object track of the first success and the first failure; drop the rest
