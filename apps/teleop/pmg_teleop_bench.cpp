@@ -790,6 +790,11 @@ struct BoxOperatorConfig : OperatorCommon {
   double slide_speed = 0.05;       ///< ... at this speed [m/s]
   double regrip_in_m = 0.0;        ///< after a slide, grip again with the wrists this far behind the box's near side (nearer its centre of mass); 0 = grasp_in_m [m]
   double stand_after_lift_m = 0.0; ///< lifting: stay crouched and bent until the box's bottom is seen this far above the pick top, then stand up over stand_s; 0 = at once [m]
+  /// Hug: once the box is seen clear of the pick top, draw the hands this much towards the torso
+  /// (at hug_speed), so that the box's near side rests against the body, a third contact against
+  /// the box turning about the line through the two grip contacts; 0 = off [m]
+  double hug_m = 0.0;
+  double hug_speed = 0.05;         ///< [m/s]
   int max_regrabs = 0;             ///< a box seen back on the pick table, upright, after a lift: open, lower the hands beside it and grip it again, at most this often
   bool feedforward = false;        ///< the controllers held where the mapping puts the hands at their targets (torso pose as now), plus the seen error's integral (at most max_lead_m)
   double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
@@ -816,6 +821,8 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
     a->Visit("stand_after_lift_m", &stand_after_lift_m, "[m]");
+    a->Visit("hug_m", &hug_m, "[m] (0: off)");
+    a->Visit("hug_speed", &hug_speed, "[m/s]");
     a->Visit("slide_to_m", &slide_to_m, "[m]");
     a->Visit("slide_speed", &slide_speed, "[m/s]");
     a->Visit("regrip_in_m", &regrip_in_m, "[m]");
@@ -848,6 +855,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(stand_s >= 0 && stand_s <= 10)) return "stand_s: expected [0, 10] s (0: at once)";
     if (!(max_raise_m >= 0 && max_raise_m <= 0.3)) return "max_raise_m: expected [0, 0.3] m";
     if (!(stand_after_lift_m >= 0 && stand_after_lift_m <= 0.3)) return "stand_after_lift_m: expected [0, 0.3] m (0: at once)";
+    if (!(hug_m >= 0 && hug_m <= 0.3)) return "hug_m: expected [0, 0.3] m (0: off)";
+    if (!(hug_speed > 0 && hug_speed <= 0.3)) return "hug_speed: expected (0, 0.3] m/s";
     if (!(max_regrabs >= 0 && max_regrabs <= 5)) return "max_regrabs: expected [0, 5]";
     if (!(slide_to_m >= -2.0 && slide_to_m <= 0.3)) return "slide_to_m: expected [-2, 0.3] m (< -1: never)";
     if (!(slide_speed > 0 && slide_speed <= 0.2)) return "slide_speed: expected (0, 0.2] m/s";
@@ -932,6 +941,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   double phase_t0 = 0.0;
   double lift_z = 0.0;     // the hands' height target while lifting / lowering (frame R, ramps) [m]
   double carry_x = 0.0;    // the hands' forward place while carrying (frame R) [m]
+  double hug_x = 0.0;      // hug_m: where carry_x goes once the box is clear (frame R) [m]
   double squeeze_y = 0.0;  // half the distance between the wrists' targets (ramps) [m]
   double working_y = 0.0;  // the pelvis' lateral place at the pick table (W) [m]
   double carry_y = 0.0;    // the hands' lateral centre while holding the box (frame R) [m]
@@ -1134,6 +1144,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         if (entered) {
           stand_t0 = -1.0;
           carry_x = 0.5 * (hand_R[0].x() + hand_R[1].x());
+          hug_x = carry_x - op.hug_m;
           carry_y = 0.5 * (hand_R[0].y() + hand_R[1].y());
           held_yaw = box_yaw_R;
         }
@@ -1142,6 +1153,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         if (stand_t0 < 0 && op.stand_after_lift_m <= 0) stand_t0 = phase_t0;
         if (stand_t0 < 0 && (box_room.z() - 0.5 * box_h > pick.height + op.stand_after_lift_m || t - phase_t0 > 4.0)) stand_t0 = t;
         work_f = stand_t0 < 0 ? 1.0 : (op.stand_s > 0 ? std::max(0.0, 1.0 - (t - stand_t0) / op.stand_s) : 0.0);
+        if (op.hug_m > 0 && box_room.z() - 0.5 * box_h > pick.height + std::max(0.02, op.stand_after_lift_m))
+          carry_x = std::max(hug_x, carry_x - op.hug_speed * dt);
         raiseBox();
         holding(carry_x, lift_z, half_w - op.squeeze_m);
         if (!op.lift_in_place) walkTo(Eigen::Vector2d(pick_near_x - op.stand_off_m - 0.10, working_y), op.max_speed);
