@@ -133,9 +133,9 @@ struct OperatorConfig : OperatorCommon {
   /// crouched and bent, the robot overshoots its place by 4-20 cm and walks into the table.
   bool crouch_in_place = false;
   /// With crouch_in_place, the first reach keeps the hand at transit height for this long after the
-  /// crouch begins, and until the pelvis is seen back within 2 arrive_tol_m of its place: crouching
-  /// and bending, the robot sways back by up to 0.2 m, and a hand already down drags the towel with
-  /// it and holds the robot there [s].
+  /// crouch begins, and until the pelvis is seen back within 2 arrive_tol_m of its place (at most 6 s
+  /// in all): crouching and bending, the robot sways back by up to 0.2 m, and a hand already down
+  /// drags the towel with it and holds the robot there [s].
   double crouch_settle_s = 0.0;
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
   bool palm_down = false;           ///< with the grip squeezed, the controller turns the hand over so that its palm (the flat side of the scene's hand pad) faces down and its fingers point forward
