@@ -7,7 +7,8 @@
 # paper's criterion (the towel moved laterally more than 1 m on the top, the robot standing), the first
 # success gets its frame strip and trace plot (only its event log is kept), the hand wipes palm down
 # with the scene's hand pad carrying most of the push on the towel and wipes by arm strokes (the
-# hand sweeps to and fro in the room while the pelvis stays nearly put), and a bad
+# hand sweeps to and fro in the room while the pelvis stays nearly put), the robot walks in upright
+# and crouches only at the table, and a bad
 # --operator file is refused naming the file and key. (20 trials succeed at the rate docs/teleop.md
 # reports; these two, seeds 1 and 2, are among the successes with the shipped operator and controller,
 # one with each hand.)
@@ -72,6 +73,17 @@ for r in s["trial_results"]:
     if not hy or reversals < 10 or max(py) - min(py) > 0.6 * (max(hy) - min(hy)):
         fail.append(f"trial {r['trial']}: no arm strokes while wiping ({reversals} reversals of the hand; pelvis over "
                     f"{max(py) - min(py) if py else 0:.3f} m, hand over {max(hy) - min(hy) if hy else 0:.3f} m)")
+    # The shipped operator walks in upright and crouches only at the table (crouch_in_place):
+    # crouched while walking in, the robot overshot its place into the table. Standing, the pelvis is
+    # at about 0.78 m; crouched 0.15 m, about 0.65 m (seeds 0-39: 0.771-0.775 walking in, 0.644-0.649
+    # wiping). Every trial reports how often it stood up and stepped back, pinned (unpin_m).
+    walk_in = [float(x["pelvis_z"]) for x in rows if x["phase"] == "close_in"]
+    wipe_z = sorted(float(x["pelvis_z"]) for x in wiping)
+    if not walk_in or min(walk_in) < 0.74 or not wipe_z or wipe_z[len(wipe_z) // 2] > 0.70:
+        fail.append(f"trial {r['trial']}: not upright walking in (lowest pelvis {min(walk_in) if walk_in else None}) or "
+                    f"not crouched wiping (median pelvis {wipe_z[len(wipe_z) // 2] if wipe_z else None})")
+    if not isinstance(r.get("unpins"), int) or r["unpins"] < 0:
+        fail.append(f"trial {r['trial']}: trial_results lacks unpins")
     if r["success"] != (r["measure"] > 1.0 and path > 0.95 and not r["fell"] and on_top):
         fail.append(f"trial {r['trial']}: verdict {r['success']} disagrees with the trajectory (path {path:.3f} m)")
 if s["successes"] != 2:
