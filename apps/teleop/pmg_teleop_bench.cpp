@@ -482,6 +482,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
+    // The pelvis' working place at the table (W): stand_off_m from its near edge, at work_y.
+    auto workPlace = [&] { return Eigen::Vector2d(table_near_x - op.stand_off_m, work_y); };
     // The towel's lateral place on the table, in W (seen through the robot: torso + R(yaw) towel_R).
     const Vector3d towel_W_seen = torso_p + Eigen::AngleAxisd(yaw_seen, Vector3d::UnitZ()) * towel_R;
     bool grip = false;
@@ -528,7 +530,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
               (hand_R.z() > top_z_R + op.hover_m + op.clearance_m - op.raise_margin_m || t - phase_t0 > 6.0))
             phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
         } else {
-          if (walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed) < op.arrive_tol_m &&
+          if (walkTo(workPlace(), op.max_speed) < op.arrive_tol_m &&
               t - phase_t0 > 1.0)
             phase = kReach, phase_t0 = t, walk_integral.setZero();
           if (t - phase_t0 > 15.0) phase = kReach, phase_t0 = t, walk_integral.setZero();
@@ -559,11 +561,10 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           if (off > 2.0 * op.transit_tol_m) descending = false;
           if (!descending) hand_target_R.z() = transit_z;
         }
-        if (phase == kReach && op.crouch_in_place && !regrabbing) {
-          const Eigen::Vector2d place(table_near_x - op.stand_off_m, work_y);
-          if (t - phase_t0 < op.crouch_settle_s || (place - pelvis_W.head<2>()).norm() > 2.0 * op.arrive_tol_m)
-            if (t - phase_t0 < 6.0) hand_target_R.z() = std::max(hand_target_R.z(), transit_z);
-        }
+        // Crouching in place: the hand stays high until the crouch has settled (crouch_settle_s).
+        const bool settling = t - phase_t0 < op.crouch_settle_s || (workPlace() - pelvis_W.head<2>()).norm() > 2.0 * op.arrive_tol_m;
+        if (phase == kReach && op.crouch_in_place && !regrabbing && settling && t - phase_t0 < 6.0)
+          hand_target_R.z() = std::max(hand_target_R.z(), transit_z);
         // Placing the hand again after a slip: lift it straight up first (moving it sideways while it
         // still presses drags the towel, and the push shoves the robot back).
         if (phase == kReach && regrabbing && t - phase_t0 < op.lift_s) {
@@ -581,7 +582,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         }
         // Hold the working place while reaching and pressing (the wipe phase walks on its own).
         if (phase != kWipe)
-          walkTo(Eigen::Vector2d(table_near_x - op.stand_off_m, work_y), op.max_speed);
+          walkTo(workPlace(), op.max_speed);
         if (phase == kReach && (hand_R - reach_aim).norm() < 0.03 && t - phase_t0 > 1.0) phase = kPress, phase_t0 = t;
         if (phase == kReach && t - phase_t0 > 8.0) phase = kPress, phase_t0 = t;
         if (phase == kPress && t - phase_t0 > op.press_s) phase = kWipe, phase_t0 = t, regrabbing = false;
@@ -594,7 +595,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
           // a P term only on the seen place (no integral, no minimum speed): a robot pressing its hand
           // on the table does not reach it exactly, and a wound-up lean would keep it stepping into
           // the table.
-          const Eigen::Vector2d e(table_near_x - op.stand_off_m - pelvis_W.x(), work_y - pelvis_W.y());
+          const Eigen::Vector2d e = workPlace() - pelvis_W.head<2>();
           Eigen::Vector2d hold = (op.walk_gain * e).cwiseMax(-0.1).cwiseMin(0.1);
           if (op.stroke_m > 0) {
             // Arm strokes: the robot stands at its working place and the hand sweeps the towel to
@@ -654,7 +655,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // Pinned against the table: the robot, crouched and bent, went past its working place (its thighs
     // under the top's edge) and does not step back when told to. Stand up, step back, close in again.
     if (op.unpin_m > 0 && (phase == kCloseIn || phase == kReach || phase == kPress)) {
-      if (pelvis_W.x() - (table_near_x - op.stand_off_m) > op.unpin_m) {
+      if (pelvis_W.x() - workPlace().x() > op.unpin_m) {
         if (pinned_since < 0) pinned_since = t;
       } else {
         pinned_since = -1.0;
