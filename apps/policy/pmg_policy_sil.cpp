@@ -44,10 +44,11 @@
 //              pmg::motion::PostureProbe measures the static clips; level when no foot is in
 //              stance; KDL, pelvis -> torso_link), height the template's GeneratorOutput::base_height
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
-//   u_feedback vx, vy, wz, pitch, roll after the velocity and posture feedback: what the generator
-//              got (the shaped command when off; --velocity-feedback / --posture-feedback on|off
-//              override the config)
-//   estimate   the feedback's leg-odometry estimate of vx, vy, wz (null when off)
+//   u_feedback vx, vy, wz, pitch, roll (and height, when posture_feedback.height_ki > 0) after the
+//              velocity and posture feedback: what the generator got (the shaped command when off;
+//              --velocity-feedback / --posture-feedback on|off override the config)
+//   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
+//              kinematic pelvis height (null when off)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
 //              |command| >= 0.05 (m/s or rad/s), else null
 // printed as a table and written to summary.json "segments" (per seed under runs[k].segments).
@@ -445,6 +446,10 @@ int main(int argc, char** argv) {
             const pmg::PostureCommand& ps = pf ? pf->command() : controller.commands().posture();
             fb[3] = ps.pitch;
             fb[4] = ps.roll;
+            if (pf && base.posture_feedback.height_ki > 0.0) {
+              fb[5] = ps.height;
+              est[5] = pf->measuredHeight();
+            }
           }
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];

@@ -63,7 +63,8 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
                                                    pmg_->legJointIndex(), L.max_velocity);
   if (config_.posture_feedback.enabled)
     posture_feedback_ =
-        std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range);
+        std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range, L.height_range,
+                                          L.standing_height, pmg_->gco().legModel(), pmg_->legJointIndex());
   command_.num_motors = n;
   holdStandingPose();
 }

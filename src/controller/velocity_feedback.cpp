@@ -233,6 +233,10 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
   if (!(still_velocity >= 0.0 && still_velocity <= 1.0)) return "still_velocity: expected 0..1 m/s";
+  if (!(std::isfinite(height_ki) && height_ki >= 0.0 && height_ki <= 20.0)) return "height_ki: expected 0..20 [1/s]";
+  if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
+    return "max_height_correction_m: expected 0..0.1 m";
+  if (!(height_settle_s >= 0.0 && height_settle_s <= 5.0)) return "height_settle_s: expected 0..5 s";
   return {};
 }
 
@@ -244,18 +248,57 @@ LimbChain torsoChain(const PostureFeedbackConfig& config, const RobotConfig& rob
 }  // namespace
 
 PostureFeedback::PostureFeedback(const PostureFeedbackConfig& config, const RobotConfig& robot,
-                                 const std::array<double, 2>& pitch_range, const std::array<double, 2>& roll_range)
+                                 const std::array<double, 2>& pitch_range, const std::array<double, 2>& roll_range,
+                                 const std::array<double, 2>& height_range, double standing_height,
+                                 std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx)
     : config_(config),
       torso_(torsoChain(config, robot)),
       fk_(torso_),
       q_(Eigen::VectorXd::Zero(static_cast<Eigen::Index>(robot.numJoints()))),
       pitch_range_(pitch_range),
-      roll_range_(roll_range) {}
+      roll_range_(roll_range),
+      height_range_(height_range),
+      standing_height_(standing_height),
+      leg_idx_(leg_idx) {
+  if (config_.height_ki > 0.0) {
+    if (!legs) throw ConfigError("posture_feedback.height_ki: the height feedback needs the robot's leg chains");
+    if (!(height_range_[0] > 0.0 && height_range_[0] <= height_range_[1] && standing_height_ >= height_range_[0]))
+      throw ConfigError("posture_feedback.height_ki: the height feedback needs a height range containing the standing "
+                        "height (got [" + std::to_string(height_range_[0]) + ", " + std::to_string(height_range_[1]) +
+                        "] m, standing " + std::to_string(standing_height_) + " m)");
+    legs_ = std::make_unique<gco::LegKinematics>(std::move(legs));
+  }
+}
+
+PostureFeedback::~PostureFeedback() = default;
 
 void PostureFeedback::reset() noexcept {
   c_ = {0.0, 0.0};
   p_hat_ = {0.0, 0.0};
   have_ = false;
+  c_h_ = h_hat_ = 0.0;
+  have_h_ = false;
+  h_settled_ = h_steady_s_ = 0.0;
+}
+
+bool PostureFeedback::pelvisHeight(const LowState& state, double* height) noexcept {
+  Eigen::Matrix3d R_WB;
+  if (!legs_ || !imuRotation(state.imu, &R_WB)) return false;
+  double z_low = 0.0;
+  for (std::size_t f = 0; f < kNumFeet; ++f) {
+    gco::LegVector q;
+    for (int j = 0; j < gco::kLegDofs; ++j) {
+      const int m = leg_idx_[f][static_cast<std::size_t>(j)];
+      if (m < 0 || m >= state.num_motors) return false;
+      q[j] = state.motors[static_cast<std::size_t>(m)].q;
+    }
+    Eigen::Isometry3d X_BS;
+    if (!legs_->forward(static_cast<Foot>(f), q, &X_BS)) return false;
+    const double z = (R_WB * X_BS.translation()).z();  // sole below the pelvis origin, W axes
+    z_low = f == 0 ? z : std::min(z_low, z);
+  }
+  *height = -z_low;
+  return std::isfinite(*height);
 }
 
 bool PostureFeedback::torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept {
@@ -298,6 +341,28 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   }
   u_fb_.pitch = u.pitch + c_[0];
   u_fb_.roll = u.roll + c_[1];
+  if (legs_) {
+    double h = 0.0;
+    const bool h_ok = pelvisHeight(state, &h);
+    if (h_ok) {
+      const double a = config_.filter_time_s > 0.0 ? std::min(1.0, dt / config_.filter_time_s) : 1.0;
+      h_hat_ = have_h_ ? h_hat_ + a * (h - h_hat_) : h;
+      have_h_ = true;
+    }
+    if (std::fabs(u.height - h_settled_) > 0.005) {
+      h_settled_ = u.height;
+      h_steady_s_ = 0.0;
+    } else {
+      h_steady_s_ += dt;
+    }
+    const bool steady = h_steady_s_ >= config_.height_settle_s;
+    double c = c_h_ * keep;
+    if (have_h_ && h_ok && !decay && steady && u.height > 0.0) c += config_.height_ki * (u.height - h_hat_) * dt;
+    c = std::clamp(c, -config_.max_height_correction_m, config_.max_height_correction_m);
+    const double upper = std::max(u.height, std::min(height_range_[1], standing_height_));
+    c_h_ = u.height > 0.0 ? std::clamp(u.height + c, height_range_[0], upper) - u.height : 0.0;
+    u_fb_.height = u.height + c_h_;
+  }
   return u_fb_;
 }
 

@@ -28,7 +28,8 @@ ControllerConfig silConfig(bool velocity_feedback = false) {
   ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
   c.makeOffline();
   c.velocity_feedback.enabled = velocity_feedback;
-  c.posture_feedback.enabled = velocity_feedback;  // both feedback stages together
+  c.posture_feedback.enabled = velocity_feedback;  // both feedback stages together, the height too
+  c.posture_feedback.height_ki = velocity_feedback ? 1.0 : 0.0;
   return c;
 }
 

@@ -10,6 +10,7 @@
 
 #include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
+#include "pmg/common/config_error.hpp"
 #include "pmg/controller/velocity_feedback.hpp"
 
 namespace pmg {
@@ -363,6 +364,123 @@ TEST(PostureFeedback, MeasuresTheTorsoFromTheImuAndTheWaistAndClosesTheLoop) {
     n = guard.count();
   }
   EXPECT_EQ(n, 0u);
+}
+
+// A crouch with flat feet: hip pitch -a, knee 2a, ankle pitch -a on both legs (the pelvis goes
+// straight down as a grows), the IMU level.
+LowState crouchState(double a) {
+  LowState s = uprightState(0.0, 0.0);
+  for (const char* side : {"left", "right"}) {
+    s.motors[static_cast<std::size_t>(jointIndex(std::string(side) + "_hip_pitch_joint"))].q = -a;
+    s.motors[static_cast<std::size_t>(jointIndex(std::string(side) + "_knee_joint"))].q = 2.0 * a;
+    s.motors[static_cast<std::size_t>(jointIndex(std::string(side) + "_ankle_pitch_joint"))].q = -a;
+  }
+  return s;
+}
+
+struct HeightFixture {
+  std::shared_ptr<const gco::LegModel> legs = gco::LegModel::fromRobotConfig(test::g1Robot());
+  gco::LegJointIndex idx = legs->jointIndices(robotJointNames());
+};
+
+TEST(PostureFeedback, HeightIsThePelvisAboveTheLowerSoleInTheWorld) {
+  HeightFixture hf;
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.height_ki = 1.0;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {0.45, 0.85}, 0.78, hf.legs, hf.idx);
+  // Independent check on the same chains: the sole of the zero pose in B.
+  gco::LegKinematics kin(hf.legs);
+  Eigen::Isometry3d X_BS;
+  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
+  double h0 = 0.0, h1 = 0.0, h_tilt = 0.0;
+  ASSERT_TRUE(fb.pelvisHeight(crouchState(0.0), &h0));
+  EXPECT_NEAR(h0, -X_BS.translation().z(), 1e-9);
+  EXPECT_GT(h0, 0.6);
+  ASSERT_TRUE(fb.pelvisHeight(crouchState(0.4), &h1));
+  EXPECT_LT(h1, h0 - 0.03) << "a crouch lowers the pelvis";
+  // The pelvis pitched 0.3 rad on straight legs: the soles swing out and rise in W, so the height
+  // is the sole's W z, not its B z.
+  ASSERT_TRUE(fb.pelvisHeight(uprightState(0.3, 0.0), &h_tilt));
+  EXPECT_LT(h_tilt, h0 - 0.01);
+  // One of the right leg's joints not finite: no height.
+  LowState bad = crouchState(0.2);
+  bad.motors[static_cast<std::size_t>(jointIndex("right_knee_joint"))].q = std::nan("");
+  EXPECT_FALSE(fb.pelvisHeight(bad, &h1));
+  // Off (height_ki 0): no height is measured and the command's height passes unchanged.
+  PostureFeedbackConfig off = c;
+  off.height_ki = 0.0;
+  PostureFeedback fb_off(off, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  EXPECT_FALSE(fb_off.pelvisHeight(crouchState(0.2), &h1));
+  EXPECT_EQ(fb_off.update({0.0, 0.0, 0.62}, {}, crouchState(0.2), 0.01).height, 0.62);
+  // On without leg chains: a setup error.
+  EXPECT_THROW(PostureFeedback(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {0.45, 0.85}, 0.78), ConfigError);
+}
+
+TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyondStanding) {
+  HeightFixture hf;
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.height_ki = 1.0;
+  c.max_height_correction_m = 0.03;
+  gco::LegKinematics kin(hf.legs);
+  Eigen::Isometry3d X_BS;
+  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
+  const double h0 = -X_BS.translation().z();  // straight legs
+  const double standing = h0 - 0.01;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {0.45, 0.85}, standing, hf.legs, hf.idx);
+  // Crouch angle that puts the pelvis at height h (bisection on the same measure).
+  auto angleFor = [&](double h) {
+    double lo = 0.0, hi = 1.2;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      double hm = 0.0;
+      fb.pelvisHeight(crouchState(mid), &hm);
+      (hm > h ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  };
+  // A robot that crouches 85 % as deep as it is told (the actor stopped 1.6 cm short of 0.62 m).
+  double a = 0.0;
+  auto run = [&](double u_h, const VelocityCommand& v, int ticks) {
+    for (int k = 0; k < ticks; ++k) {
+      const PostureCommand& out = fb.update({0.0, 0.0, u_h}, v, crouchState(a), 0.01);
+      const double a_target = angleFor(standing - 0.85 * (standing - out.height));
+      a += 0.01 / 0.3 * (a_target - a);
+    }
+  };
+  const double u1 = standing - 0.10;
+  // While the crouch is new (height_settle_s, 1 s) the lag is by design: nothing integrates.
+  run(u1, {}, 90);
+  EXPECT_EQ(fb.heightCorrection(), 0.0);
+  run(u1, {}, 1500);
+  double h = 0.0;
+  ASSERT_TRUE(fb.pelvisHeight(crouchState(a), &h));
+  EXPECT_NEAR(h, u1, 0.002) << "the crouch reaches the commanded height";
+  EXPECT_NEAR(fb.heightCorrection(), -0.10 * 0.15 / 0.85, 0.002);
+  EXPECT_NEAR(fb.command().height, u1 + fb.heightCorrection(), 1e-12);
+  EXPECT_NEAR(fb.measuredHeight(), h, 0.002);
+  // A deeper crouch needs more than max_height_correction_m: the correction stops at the bound.
+  run(standing - 0.25, {}, 1500);
+  EXPECT_NEAR(fb.heightCorrection(), -0.03, 1e-12);
+  // Walking: no integration, the correction decays.
+  run(u1, {0.3, 0.0, 0.0}, 500);
+  EXPECT_LT(std::fabs(fb.heightCorrection()), 1e-3);
+  // Told to stand while standing 1 cm below the standing height: never straightened beyond it.
+  a = angleFor(standing - 0.01);
+  for (int k = 0; k < 1000; ++k) fb.update({0.0, 0.0, standing}, {}, crouchState(a), 0.01);
+  EXPECT_EQ(fb.heightCorrection(), 0.0);
+  EXPECT_EQ(fb.command().height, standing);
+  // Per tick with the height on: no allocation.
+  std::size_t n = 0;
+  const LowState crouched = crouchState(0.3);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 200; ++k) fb.update({0.0, 0.0, 0.65}, {}, crouched, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  EXPECT_LT(fb.heightCorrection(), 0.0);
 }
 
 // Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.

@@ -7,7 +7,8 @@ effect is the actor's shortfall on backward, sideways and turning commands and o
 and the bend by more than 0.05 rad. On: every velocity axis commanded with |u| >= 0.2 achieved
 within the issue-12 band (+-15 %, or +-0.05 m/s / +-0.08 rad/s when larger), the mean relative miss
 over those axes smaller than off, bend and lean
-within 0.03 rad, no fall, and the feedback's own leg-odometry estimate within 0.1 (m/s, rad/s) of
+within 0.03 rad, the squat's height within 0.015 m with the height fed back (and its kinematic
+estimate within 0.01 m of the truth), no fall, and the feedback's own leg-odometry estimate within 0.1 (m/s, rad/s) of
 the simulator's truth in every walking segment.
 Usage: check_sil_velocity_feedback.py OFF_DIR ON_DIR
 """
@@ -50,6 +51,15 @@ def main(off_dir, on_dir):
         ach_on, ach_off = on_seg[name]["achieved"][a], off_seg[name]["achieved"][a]
         print(f"{name:10s} {a}: command {u:+.3f}  off {ach_off:+.3f}  on {ach_on:+.3f}, u_fb {on_seg[name]['u_feedback'][a]:+.3f}")
         checks[f"{name} {a} within 0.03 rad with the feedback"] = abs(ach_on - u) <= 0.03
+    squat = on_seg["squat"]
+    print(f"squat     height: command {squat['command']['height']:.3f}  off {off_seg['squat']['achieved']['height']:.3f}  "
+          f"on {squat['achieved']['height']:.3f}, u_fb {squat['u_feedback']['height']}, estimate {squat['estimate']['height']}")
+    checks["the height feedback reports its command and estimate"] = \
+        squat["u_feedback"]["height"] is not None and squat["estimate"]["height"] is not None
+    checks["squat height within 0.015 m with the feedback"] = abs(squat["achieved"]["height"] - squat["command"]["height"]) <= 0.015
+    if squat["estimate"]["height"] is not None:
+        checks["the kinematic height estimate within 0.01 m of the truth in the squat"] = \
+            abs(squat["estimate"]["height"] - squat["achieved"]["height"]) <= 0.01
     checks["without the feedback some velocity segment misses by more than 10 % (the effect is there)"] = max(miss_off) > 0.10
     checks["without the feedback the bend misses by more than 0.05 rad"] = abs(off_seg["bend"]["achieved"]["pitch"] - 0.3) > 0.05
     checks["the mean miss over the velocity segments is smaller with the feedback"] = \

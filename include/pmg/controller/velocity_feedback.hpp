@@ -209,6 +209,15 @@ struct PostureFeedbackConfig {
   /// walking it decays (decay_time_s). Walking sways the torso, and a lean commanded against the
   /// sway of a side-step at the envelope's edge felled the robot (docs/controller.md).
   double still_velocity = 0.05;
+  /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
+  double height_ki = 0.0;
+  /// Largest correction of the height command [m], [0, 0.1].
+  double max_height_correction_m = 0.03;
+  /// The height integrates only once its command has stayed within 5 mm of where it settled for
+  /// this long [s], [0, 5]: the robot lags a crouch by design (the shaper's height slew), and
+  /// integrating that lag winds the correction the wrong way (measured: a 0.66 m squat ended 9 mm
+  /// low instead of 4 mm high).
+  double height_settle_s = 1.0;
   std::string validate() const;
 };
 
@@ -217,14 +226,28 @@ struct PostureFeedbackConfig {
 /// IMU orientation and the waist encoders (KDL forward kinematics pelvis -> torso_link),
 ///   p̂ low-passed,  c_p ← clamp(c_p + k_p (u_p − p̂) dt, ±max_correction_rad),
 ///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range);
-/// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays;
-/// the height is not corrected. noexcept and allocation-free per tick (tested).
+/// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays.
+/// With height_ki > 0 the pelvis height gets the same treatment: ĥ = the height of the pelvis (B
+/// origin) above the lower stance sole, −min_f (R_WB p_BS,f)_z on the KDL leg chains (flat ground
+/// assumed: the Table I Height measure on a level floor), low-passed alike;
+///   c_h ← clamp(c_h + k_h (u_h − ĥ) dt, ±max_height_correction_m)   (once u_h is steady),
+///   u_fb,h = clamp(u_h + c_h, [height_range[0], max(u_h, min(height_range[1], standing_height))]):
+/// a crouch is deepened or raised to the commanded height, and a robot that stands a little low is
+/// never straightened beyond the standing pose. noexcept and allocation-free per tick (tested).
 class PostureFeedback {
  public:
-  /// @param pitch_range, roll_range the shaper's posture limits [rad]. Setup: allocates; throws
-  /// ConfigError on an invalid config or a robot without a torso_link chain.
+  /// @param pitch_range, roll_range the shaper's posture limits [rad]; @param height_range the
+  /// shaper's height limits [m] and @param standing_height its standing height [m]; @param legs,
+  /// leg_idx the robot's leg chains and their columns in LowState::motors (needed only with
+  /// height_ki > 0). Setup: allocates; throws ConfigError on an invalid config, a robot without a
+  /// torso_link chain, or height_ki > 0 without leg chains.
   PostureFeedback(const PostureFeedbackConfig& config, const RobotConfig& robot, const std::array<double, 2>& pitch_range,
-                  const std::array<double, 2>& roll_range);
+                  const std::array<double, 2>& roll_range, const std::array<double, 2>& height_range = {0.0, 0.0},
+                  double standing_height = 0.0, std::shared_ptr<const gco::LegModel> legs = nullptr,
+                  const gco::LegJointIndex& leg_idx = {});
+  ~PostureFeedback();
+  PostureFeedback(const PostureFeedback&) = delete;
+  PostureFeedback& operator=(const PostureFeedback&) = delete;
   /// One tick [dt s] with the shaped posture @p u and velocity @p v commands: returns the posture
   /// command after feedback. When disabled returns @p u.
   const PostureCommand& update(const PostureCommand& u, const VelocityCommand& v, const LowState& state,
@@ -236,15 +259,27 @@ class PostureFeedback {
   const std::array<double, 2>& measured() const noexcept { return p_hat_; }
   /// Torso pitch and roll of @p state (IMU orientation, waist encoders) [rad]; false on bad input.
   bool torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept;
+  /// Pelvis height above the lower sole [m] of @p state (IMU orientation, leg encoders); false on
+  /// bad input or when the height is not fed back (height_ki = 0).
+  bool pelvisHeight(const LowState& state, double* height) noexcept;
+  /// Height correction c_h [m] and the low-passed measured height ĥ [m] of the last update (0 when off).
+  double heightCorrection() const noexcept { return c_h_; }
+  double measuredHeight() const noexcept { return h_hat_; }
 
  private:
   PostureFeedbackConfig config_;
   LimbChain torso_;
   ChainFkWorkspace fk_;
   Eigen::VectorXd q_;
-  std::array<double, 2> pitch_range_, roll_range_;
+  std::array<double, 2> pitch_range_, roll_range_, height_range_;
+  double standing_height_;
+  std::unique_ptr<gco::LegKinematics> legs_;  ///< null when the height is not fed back
+  gco::LegJointIndex leg_idx_;
   std::array<double, 2> c_{}, p_hat_{};
   bool have_ = false;
+  double c_h_ = 0.0, h_hat_ = 0.0;
+  bool have_h_ = false;
+  double h_settled_ = 0.0, h_steady_s_ = 0.0;  ///< where the height command settled, and for how long
   PostureCommand u_fb_{};
 };
 
