@@ -27,6 +27,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import numpy as np  # noqa: E402
 
 PINNED_JAX = "0.10.2"  # training/pyproject.toml
+COMMAND_AXES = ("vx", "vy", "wz", "pitch", "roll", "height")  # EnvConfig command ranges (--command-range)
 
 
 def log(*a):
@@ -164,6 +165,10 @@ def parse_args(argv=None):
     ap.add_argument("--reward-weight", action="append", default=[], metavar="NAME=W",
                     help="set one reward term's weight (EnvConfig.w: lin_vel, yaw_rate, orientation, height, ref_q, "
                          "ref_qd, contact, energy, action_rate, alive, termination); repeatable; an unknown NAME is an error")
+    ap.add_argument("--command-range", action="append", default=[], metavar="AXIS=LO,HI",
+                    help="training command range of one axis (EnvConfig: vx, vy [m/s], wz [rad/s], pitch, roll [rad], "
+                         "height [m]; default the issue-12 envelope); repeatable. Wider than the user's envelope, it "
+                         "leaves the controller's tracking feedback room (velocity_feedback.envelope_min/max)")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -194,6 +199,21 @@ def parse_args(argv=None):
     if args.yaw_rate_weight is not None:  # the older spelling of --reward-weight yaw_rate=W
         weights["yaw_rate"] = args.yaw_rate_weight
     args.reward_weight = weights
+    ranges = {}
+    for item in args.command_range:
+        axis, _, value = item.partition("=")
+        axis = axis.strip()
+        try:
+            lo, hi = (float(x) for x in value.split(","))
+        except ValueError:
+            lo = hi = math.nan
+        if axis not in COMMAND_AXES or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            ap.error(f"--command-range {item!r}: expected AXIS=LO,HI with AXIS one of {', '.join(COMMAND_AXES)} "
+                     f"and finite LO < HI")
+        ranges[axis] = (lo, hi)
+    if "height" in ranges and not 0.3 <= ranges["height"][0]:
+        ap.error(f"--command-range height={ranges['height'][0]},{ranges['height'][1]}: expected LO >= 0.3 m")
+    args.command_range = ranges
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
@@ -284,6 +304,9 @@ def main(argv=None):
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
     if args.tracking_sigma is not None:
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
+    if args.command_range:
+        cfg = dataclasses.replace(cfg, **args.command_range)
+        log("command ranges:", {a: getattr(cfg, a) for a in COMMAND_AXES})
     unknown = sorted(set(args.reward_weight) - set(cfg.w))
     if unknown:
         raise SystemExit(f"pmg-train: --reward-weight {unknown}: unknown reward term(s); known: {sorted(cfg.w)}")

@@ -69,6 +69,13 @@ struct OperatorCommon {
   double min_speed = 0.06;          ///< commanded at least this while not arrived [m/s]
   double walk_integral_gain = 0.5;  ///< integral action on the place error [1/s^2]
   double arrive_tol_m = 0.03;       ///< a walk ends within this [m]
+  /// The operator steers by where the robot will be, not where it is: the place error is taken from
+  /// the seen pelvis plus lead_s times its seen velocity (the robot takes a step or two to stop, and
+  /// a P controller on the present place overshoots by 0.08-0.27 m) [s]. 0: off.
+  double lead_s = 0.0;
+  /// The integral action accumulates only within this distance of the place (a long approach winds
+  /// it up to its bound and the robot arrives at full lean) [m]. 0: everywhere.
+  double integral_zone_m = 0.0;
   double hand_gain = 0.5;           ///< fraction of the seen hand error corrected per second [1/s]
   double max_trial_s = 45.0;        ///< the trial ends here [s]
   template <class A>
@@ -81,6 +88,8 @@ struct OperatorCommon {
     a->Visit("min_speed", &min_speed, "[m/s]");
     a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
     a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
+    a->Visit("lead_s", &lead_s, "steer by the seen place plus lead_s x the seen velocity [s], [0, 2] (0: off)");
+    a->Visit("integral_zone_m", &integral_zone_m, "integrate the place error only within this distance [m], [0, 2] (0: everywhere)");
     a->Visit("hand_gain", &hand_gain, "[1/s]");
     a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
@@ -89,6 +98,8 @@ struct OperatorCommon {
     if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
     if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
     if (!(hand_gain > 0 && hand_gain <= 10)) return "hand_gain: expected (0, 10] 1/s";
+    if (!(lead_s >= 0 && lead_s <= 2)) return "lead_s: expected [0, 2] s";
+    if (!(integral_zone_m >= 0 && integral_zone_m <= 2)) return "integral_zone_m: expected [0, 2] m";
     if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
     return "";
   }
@@ -242,23 +253,54 @@ Eigen::Vector2d headFor(const Eigen::Vector2d& v, double deadband, double gain) 
   return (s / gain + deadband) * v / s;
 }
 
+// The robot's velocity in the room as the operator judges it from the seen (noisy, late) pelvis
+// positions: the mean of the newest 10 samples against the mean of the 10 taken 20 ticks before
+// them, over the time between (at 100 Hz and 5 mm of noise: about 1 cm/s of noise, 0.25 s late).
+class SeenVelocity {
+ public:
+  Eigen::Vector2d update(const Vector3d& p_seen, double t) {
+    buf_[n_ % kN] = {t, p_seen.head<2>()};
+    ++n_;
+    if (n_ < kN) return Eigen::Vector2d::Zero();
+    Eigen::Vector2d old = Eigen::Vector2d::Zero(), now = Eigen::Vector2d::Zero();
+    double t_old = 0.0, t_now = 0.0;
+    for (std::size_t i = 0; i < 10; ++i) {
+      const auto& o = buf_[(n_ + i) % kN];           // the oldest ten
+      const auto& w = buf_[(n_ + kN - 10 + i) % kN];  // the newest ten
+      old += o.second / 10.0, t_old += o.first / 10.0;
+      now += w.second / 10.0, t_now += w.first / 10.0;
+    }
+    return t_now > t_old ? Eigen::Vector2d((now - old) / (t_now - t_old)) : Eigen::Vector2d::Zero();
+  }
+  void reset() { n_ = 0; }
+
+ private:
+  static constexpr std::size_t kN = 30;
+  std::array<std::pair<double, Eigen::Vector2d>, kN> buf_{};
+  std::size_t n_ = 0;
+};
+
 // Locomotion by leaning: a P controller on the robot's place (W), with integral action (the operator
-// leans further while the robot does not get there, bounded) and a minimum speed (small steps are not
-// walked); the result is the body-frame velocity the headset displacement must command. Returns the
-// distance left [m]. Op: an operator config with walk_gain, walk_integral_gain, max_speed, min_speed,
-// arrive_tol_m.
+// leans further while the robot does not get there, bounded; only within integral_zone_m of the place
+// when that is set) and a minimum speed (small steps are not walked); with lead_s the error is taken
+// from where the robot will be (seen place + lead_s x seen velocity @p v_seen_W). The result is the
+// body-frame velocity the headset displacement must command. Returns the distance left [m] (from
+// the seen place). Op: an operator config (OperatorCommon).
 template <class Op>
-double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, double yaw_seen, double max_speed,
-                   double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body) {
-  Eigen::Vector2d e = target_W - pelvis_W.head<2>();
-  *walk_integral += e * dt;
+double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, const Eigen::Vector2d& v_seen_W,
+                   double yaw_seen, double max_speed, double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body) {
+  const Eigen::Vector2d e_now = target_W - pelvis_W.head<2>();
+  const Eigen::Vector2d e = e_now - op.lead_s * v_seen_W;
+  if (op.integral_zone_m <= 0.0 || e_now.norm() < op.integral_zone_m) *walk_integral += e * dt;
   const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
   if (walk_integral->norm() > imax) *walk_integral *= imax / walk_integral->norm();
   Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * *walk_integral;
   if (v.norm() > max_speed) v *= max_speed / v.norm();
-  if (e.norm() > op.arrive_tol_m && v.norm() < op.min_speed) v *= op.min_speed / v.norm();
+  // (Braking, when the lead sees the robot past its place, is not raised to min_speed.)
+  if (e_now.norm() > op.arrive_tol_m && v.norm() < op.min_speed && v.norm() > 0.0 && (op.lead_s <= 0.0 || v.dot(e_now) > 0.0))
+    v *= op.min_speed / v.norm();
   *v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
-  return e.norm();
+  return e_now.norm();
 }
 
 // A body's position in the world frame W [m] (mjData::xpos).
@@ -392,6 +434,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   View see_fingers(op.view_latency_s, 0.0, rng);  // the working hand's fingers' elevation in the room (x [rad]), late
   double palm_level = 0.0;  // palm_level_gain: the levelling turn so far [rad]
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
+  SeenVelocity pelvis_velocity;  // the robot's velocity in the room, as seen
   double work_y = 0.0;  // the pelvis' lateral working place
   double raise_x = 0.0;  // the hand's forward place while it is raised
   Vector3d work_hand = Vector3d::Zero();  // the working hand's place relative to the torso (frame R)
@@ -472,6 +515,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     see_towel_room.push(t, obj.p_W);  // the towel on the table, as the operator sees it in the room
     see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     const Vector3d towel_R = see_towel.seen(t), hand_R = see_hand.seen(t), pelvis_W = see_pelvis.seen(t);
+    const Eigen::Vector2d pelvis_v_W = pelvis_velocity.update(pelvis_W, t);
     const Vector3d towel_room = see_towel_room.seen(t);
     towel_y_eye = k == 0 ? towel_room.y() : towel_y_eye + std::min(1.0, dt / op.path_smoothing_s) * (towel_room.y() - towel_y_eye);
     const double yaw_seen = see_yaw.seen(t).x();
@@ -479,7 +523,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
+      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
     // The pelvis' working place at the table (W): stand_off_m from its near edge, at work_y.
@@ -918,6 +962,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       see_torso_pitch(op.view_latency_s, 0.0, rng);  // the torso's pitch (x) [rad]: the head camera's horizon
   std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
+  SeenVelocity pelvis_velocity;  // the robot's velocity in the room, as seen
 
   pmg::teleop::VrSample vr;
   const double head_z = 1.6;
@@ -995,6 +1040,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     see_torso_pitch.push(t, Vector3d(std::asin(std::clamp(-d->xmat[9 * torso + 6], -1.0, 1.0)), 0.0, 0.0));
     for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
+    const Eigen::Vector2d pelvis_v_W = pelvis_velocity.update(pelvis_W, t);
     const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
     const double yaw_seen = see_yaw.seen(t).x();
     const double box_yaw_R = see_box_yaw.seen(t).x();  // the box's seen yaw relative to the robot's heading [rad]
@@ -1002,7 +1048,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
 
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
+      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double pick_near_x = pick.pos[0] - 0.5 * pick.top_size[0];
     const double place_near_x = place.pos[0] - 0.5 * place.top_size[0];

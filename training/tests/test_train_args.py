@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """pmg-train's command line refuses bad reward settings with the flag named (argparse exit 2):
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
-a non-positive --tracking-sigma and a negative --yaw-rate-weight. (An unknown NAME is refused in
+a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
+into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -15,7 +16,14 @@ failures = []
 args = train_pmg.parse_args(["--out", "/tmp/x", "--reward-weight", "orientation=1.0", "--reward-weight", "height=2"])
 if args.reward_weight != {"orientation": 1.0, "height": 2.0}:
     failures.append(f"--reward-weight parsed as {args.reward_weight}")
-for bad, flag in ((["--reward-weight", "orientation"], "--reward-weight"),
+args = train_pmg.parse_args(["--out", "/tmp/x", "--command-range", "vx=-0.65,1.0", "--command-range", "wz=-1,1"])
+if args.command_range != {"vx": (-0.65, 1.0), "wz": (-1.0, 1.0)}:
+    failures.append(f"--command-range parsed as {args.command_range}")
+for bad, flag in ((["--command-range", "vx=1.0,-0.5"], "--command-range"),
+                  (["--command-range", "speed=-1,1"], "--command-range"),
+                  (["--command-range", "vy=-0.4"], "--command-range"),
+                  (["--command-range", "height=0.1,0.78"], "--command-range"),
+                  (["--reward-weight", "orientation"], "--reward-weight"),
                   (["--reward-weight", "orientation=nan"], "--reward-weight"),
                   (["--reward-weight", "height=abc"], "--reward-weight"),
                   (["--tracking-sigma", "0"], "--tracking-sigma"),
@@ -28,5 +36,5 @@ for bad, flag in ((["--reward-weight", "orientation"], "--reward-weight"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 6 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 11 cases as expected")
 sys.exit(1 if failures else 0)
