@@ -71,7 +71,8 @@ struct OperatorCommon {
   double arrive_tol_m = 0.03;       ///< a walk ends within this [m]
   /// The operator steers by where the robot will be, not where it is: the place error is taken from
   /// the seen pelvis plus lead_s times its seen velocity (the robot takes a step or two to stop, and
-  /// a P controller on the present place overshoots by 0.08-0.27 m) [s]. 0: off.
+  /// a P controller on the present place overshoots by 0.08-0.27 m) [s]. Only in the walks from afar
+  /// (the wiping operator's approach and close-in), not while holding a place. 0: off.
   double lead_s = 0.0;
   /// The integral action accumulates only within this distance of the place (a long approach winds
   /// it up to its bound and the robot arrives at full lean) [m]. 0: everywhere.
@@ -283,21 +284,25 @@ class SeenVelocity {
 // Locomotion by leaning: a P controller on the robot's place (W), with integral action (the operator
 // leans further while the robot does not get there, bounded; only within integral_zone_m of the place
 // when that is set) and a minimum speed (small steps are not walked); with lead_s the error is taken
-// from where the robot will be (seen place + lead_s x seen velocity @p v_seen_W). The result is the
+// from where the robot will be (seen place + lead_s x seen velocity @p v_seen_W); both only where
+// @p anticipate (the walks from afar: holding a place, the sway of stepping is not a velocity to
+// steer by). The result is the
 // body-frame velocity the headset displacement must command. Returns the distance left [m] (from
 // the seen place). Op: an operator config (OperatorCommon).
 template <class Op>
 double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, const Eigen::Vector2d& v_seen_W,
-                   double yaw_seen, double max_speed, double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body) {
+                   double yaw_seen, double max_speed, double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body,
+                   bool anticipate = true) {
+  const double lead = anticipate ? op.lead_s : 0.0, zone = anticipate ? op.integral_zone_m : 0.0;
   const Eigen::Vector2d e_now = target_W - pelvis_W.head<2>();
-  const Eigen::Vector2d e = e_now - op.lead_s * v_seen_W;
-  if (op.integral_zone_m <= 0.0 || e_now.norm() < op.integral_zone_m) *walk_integral += e * dt;
+  const Eigen::Vector2d e = e_now - lead * v_seen_W;
+  if (zone <= 0.0 || e_now.norm() < zone) *walk_integral += e * dt;
   const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
   if (walk_integral->norm() > imax) *walk_integral *= imax / walk_integral->norm();
   Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * *walk_integral;
   if (v.norm() > max_speed) v *= max_speed / v.norm();
   // (Braking, when the lead sees the robot past its place, is not raised to min_speed.)
-  if (e_now.norm() > op.arrive_tol_m && v.norm() < op.min_speed && v.norm() > 0.0 && (op.lead_s <= 0.0 || v.dot(e_now) > 0.0))
+  if (e_now.norm() > op.arrive_tol_m && v.norm() < op.min_speed && v.norm() > 0.0 && (lead <= 0.0 || v.dot(e_now) > 0.0))
     v *= op.min_speed / v.norm();
   *v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
   return e_now.norm();
@@ -522,8 +527,8 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
-    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
+    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed, bool anticipate = false) {
+      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body, anticipate);
     };
     const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
     // The pelvis' working place at the table (W): stand_off_m from its near edge, at work_y.
@@ -548,7 +553,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
         // Stop short of the table: the hands hang at about the top's height and would catch its edge.
         const Eigen::Vector2d target(table_near_x - op.stand_off_far_m, towel_W_seen.y() + lateral);
         work_y = target.y();
-        if (walkTo(target, op.max_speed) < op.arrive_tol_m && t - phase_t0 > 1.0)
+        if (walkTo(target, op.max_speed, true) < op.arrive_tol_m && t - phase_t0 > 1.0)
           phase = kRaise, phase_t0 = t, walk_integral.setZero();
         if (t - phase_t0 > 20.0) phase = kRelease, phase_t0 = t;
         break;
@@ -574,7 +579,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
               (hand_R.z() > top_z_R + op.hover_m + op.clearance_m - op.raise_margin_m || t - phase_t0 > 6.0))
             phase = kCloseIn, phase_t0 = t, walk_integral.setZero();
         } else {
-          if (walkTo(workPlace(), op.max_speed) < op.arrive_tol_m &&
+          if (walkTo(workPlace(), op.max_speed, true) < op.arrive_tol_m &&
               t - phase_t0 > 1.0)
             phase = kReach, phase_t0 = t, walk_integral.setZero();
           if (t - phase_t0 > 15.0) phase = kReach, phase_t0 = t, walk_integral.setZero();
