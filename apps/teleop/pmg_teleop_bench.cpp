@@ -69,14 +69,6 @@ struct OperatorCommon {
   double min_speed = 0.06;          ///< commanded at least this while not arrived [m/s]
   double walk_integral_gain = 0.5;  ///< integral action on the place error [1/s^2]
   double arrive_tol_m = 0.03;       ///< a walk ends within this [m]
-  /// The operator steers by where the robot will be, not where it is: the place error is taken from
-  /// the seen pelvis plus lead_s times its seen velocity (the robot takes a step or two to stop, and
-  /// a P controller on the present place overshoots by 0.08-0.27 m) [s]. Only in the walks from afar
-  /// (the wiping operator's approach and close-in), not while holding a place. 0: off.
-  double lead_s = 0.0;
-  /// The integral action accumulates only within this distance of the place (a long approach winds
-  /// it up to its bound and the robot arrives at full lean) [m]. 0: everywhere.
-  double integral_zone_m = 0.0;
   double hand_gain = 0.5;           ///< fraction of the seen hand error corrected per second [1/s]
   double max_trial_s = 45.0;        ///< the trial ends here [s]
   template <class A>
@@ -89,8 +81,6 @@ struct OperatorCommon {
     a->Visit("min_speed", &min_speed, "[m/s]");
     a->Visit("walk_integral_gain", &walk_integral_gain, "[1/s^2]");
     a->Visit("arrive_tol_m", &arrive_tol_m, "[m]");
-    a->Visit("lead_s", &lead_s, "steer by the seen place plus lead_s x the seen velocity [s], [0, 2] (0: off)");
-    a->Visit("integral_zone_m", &integral_zone_m, "integrate the place error only within this distance [m], [0, 2] (0: everywhere)");
     a->Visit("hand_gain", &hand_gain, "[1/s]");
     a->Visit("max_trial_s", &max_trial_s, "[s]");
   }
@@ -99,8 +89,6 @@ struct OperatorCommon {
     if (!(view_latency_s >= 0 && view_latency_s <= 1)) return "view_latency_s: expected [0, 1] s";
     if (!(max_speed > 0 && max_speed <= 0.5)) return "max_speed: expected (0, 0.5] m/s";
     if (!(hand_gain > 0 && hand_gain <= 10)) return "hand_gain: expected (0, 10] 1/s";
-    if (!(lead_s >= 0 && lead_s <= 2)) return "lead_s: expected [0, 2] s";
-    if (!(integral_zone_m >= 0 && integral_zone_m <= 2)) return "integral_zone_m: expected [0, 2] m";
     if (!(max_trial_s > settle_s && max_trial_s <= 300)) return "max_trial_s: expected (settle_s, 300] s";
     return "";
   }
@@ -149,6 +137,14 @@ struct OperatorConfig : OperatorCommon {
   /// in all): crouching and bending, the robot sways back by up to 0.2 m, and a hand already down
   /// drags the towel with it and holds the robot there [s].
   double crouch_settle_s = 0.0;
+  /// The walks from afar (the approach and the walk in) steer by where the robot will be, not where
+  /// it is: the place error is taken from the seen pelvis plus lead_s times its seen velocity (the
+  /// robot takes a step or two to stop, and a P controller on the present place overshot by up to
+  /// 0.16 m) [s]. Holding a place, the sway of the steps is no velocity to steer by. 0: off.
+  double lead_s = 0.0;
+  /// In those walks the integral action accumulates only within this distance of the place (a long
+  /// approach winds it up to its bound and the robot arrives at full lean) [m]. 0: everywhere.
+  double integral_zone_m = 0.0;
   double regrab_offset_m = 0.10;    ///< while wiping, a hand seen this far beside the towel's centre has slipped: lift and place it again [m]
   bool palm_down = false;           ///< with the grip squeezed, the controller turns the hand over so that its palm (the flat side of the scene's hand pad) faces down and its fingers point forward
   double palm_pitch_rad = 0.0;      ///< ... the fingers this far below the torso's forward axis (frame T), so the pad's tip, not the wrist housing, touches first [rad]
@@ -194,6 +190,8 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("unpin_s", &unpin_s, "[s]");
     a->Visit("crouch_in_place", &crouch_in_place, "true | false");
     a->Visit("crouch_settle_s", &crouch_settle_s, "[s]");
+    a->Visit("lead_s", &lead_s, "the walks from afar steer by the seen place plus lead_s x the seen velocity [s], [0, 2] (0: off)");
+    a->Visit("integral_zone_m", &integral_zone_m, "in those walks integrate the place error only within this distance [m], [0, 2] (0: everywhere)");
     a->Visit("keep_reach_m", &keep_reach_m, "[m] (negative: unbounded)");
   }
   std::string validate() const {
@@ -220,6 +218,8 @@ struct OperatorConfig : OperatorCommon {
     if (!(unpin_m >= 0 && unpin_m <= 0.3)) return "unpin_m: expected [0, 0.3] m (0: off)";
     if (!(unpin_s >= 0.5 && unpin_s <= 20)) return "unpin_s: expected [0.5, 20] s";
     if (!(crouch_settle_s >= 0 && crouch_settle_s <= 6)) return "crouch_settle_s: expected [0, 6] s";
+    if (!(lead_s >= 0 && lead_s <= 2)) return "lead_s: expected [0, 2] s";
+    if (!(integral_zone_m >= 0 && integral_zone_m <= 2)) return "integral_zone_m: expected [0, 2] m";
     if (!(keep_reach_m >= -1.0 && keep_reach_m <= 0.5)) return "keep_reach_m: expected [-1, 0.5] m (negative: unbounded)";
     return "";
   }
@@ -273,8 +273,6 @@ class SeenVelocity {
     }
     return t_now > t_old ? Eigen::Vector2d((now - old) / (t_now - t_old)) : Eigen::Vector2d::Zero();
   }
-  void reset() { n_ = 0; }
-
  private:
   static constexpr std::size_t kN = 30;
   std::array<std::pair<double, Eigen::Vector2d>, kN> buf_{};
@@ -282,27 +280,24 @@ class SeenVelocity {
 };
 
 // Locomotion by leaning: a P controller on the robot's place (W), with integral action (the operator
-// leans further while the robot does not get there, bounded; only within integral_zone_m of the place
-// when that is set) and a minimum speed (small steps are not walked); with lead_s the error is taken
-// from where the robot will be (seen place + lead_s x seen velocity @p v_seen_W); both only where
-// @p anticipate (the walks from afar: holding a place, the sway of stepping is not a velocity to
-// steer by). The result is the
-// body-frame velocity the headset displacement must command. Returns the distance left [m] (from
-// the seen place). Op: an operator config (OperatorCommon).
+// leans further while the robot does not get there, bounded; only within @p integral_zone_m of the
+// place when that is > 0) and a minimum speed (small steps are not walked); with @p lead_s > 0 the
+// error is taken from where the robot will be (seen place + lead_s x seen velocity @p v_seen_W). The
+// result is the body-frame velocity the headset displacement must command. Returns the distance left
+// [m] (from the seen place). Op: an operator config (OperatorCommon).
 template <class Op>
-double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, const Eigen::Vector2d& v_seen_W,
-                   double yaw_seen, double max_speed, double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body,
-                   bool anticipate = true) {
-  const double lead = anticipate ? op.lead_s : 0.0, zone = anticipate ? op.integral_zone_m : 0.0;
+double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d& pelvis_W, double yaw_seen, double max_speed,
+                   double dt, Eigen::Vector2d* walk_integral, Eigen::Vector2d* v_body,
+                   const Eigen::Vector2d& v_seen_W = Eigen::Vector2d::Zero(), double lead_s = 0.0, double integral_zone_m = 0.0) {
   const Eigen::Vector2d e_now = target_W - pelvis_W.head<2>();
-  const Eigen::Vector2d e = e_now - lead * v_seen_W;
-  if (zone <= 0.0 || e_now.norm() < zone) *walk_integral += e * dt;
+  const Eigen::Vector2d e = e_now - lead_s * v_seen_W;
+  if (integral_zone_m <= 0.0 || e_now.norm() < integral_zone_m) *walk_integral += e * dt;
   const double imax = op.max_speed / std::max(op.walk_integral_gain, 1e-9);
   if (walk_integral->norm() > imax) *walk_integral *= imax / walk_integral->norm();
   Eigen::Vector2d v = op.walk_gain * e + op.walk_integral_gain * *walk_integral;
   if (v.norm() > max_speed) v *= max_speed / v.norm();
   // (Braking, when the lead sees the robot past its place, is not raised to min_speed.)
-  if (e_now.norm() > op.arrive_tol_m && v.norm() < op.min_speed && v.norm() > 0.0 && (lead <= 0.0 || v.dot(e_now) > 0.0))
+  if (e_now.norm() > op.arrive_tol_m && v.norm() < op.min_speed && v.norm() > 0.0 && (lead_s <= 0.0 || v.dot(e_now) > 0.0))
     v *= op.min_speed / v.norm();
   *v_body = Eigen::Rotation2Dd(-yaw_seen) * v;
   return e_now.norm();
@@ -527,8 +522,11 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
 
     // Locomotion: a P controller on the robot's place, expressed as headset displacement.
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
-    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed, bool anticipate = false) {
-      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body, anticipate);
+    // from_afar: the approach and the walk in (lead_s, integral_zone_m act only there).
+    auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed, bool from_afar = false) {
+      return from_afar ? walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body, pelvis_v_W,
+                                     op.lead_s, op.integral_zone_m)
+                       : walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double table_near_x = table.pos[0] - 0.5 * table.top_size[0];
     // The pelvis' working place at the table (W): stand_off_m from its near edge, at work_y.
@@ -967,7 +965,6 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       see_torso_pitch(op.view_latency_s, 0.0, rng);  // the torso's pitch (x) [rad]: the head camera's horizon
   std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
-  SeenVelocity pelvis_velocity;  // the robot's velocity in the room, as seen
 
   pmg::teleop::VrSample vr;
   const double head_z = 1.6;
@@ -1045,7 +1042,6 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     see_torso_pitch.push(t, Vector3d(std::asin(std::clamp(-d->xmat[9 * torso + 6], -1.0, 1.0)), 0.0, 0.0));
     for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
-    const Eigen::Vector2d pelvis_v_W = pelvis_velocity.update(pelvis_W, t);
     const std::array<Vector3d, 2> hand_R{see_hand[0].seen(t), see_hand[1].seen(t)};
     const double yaw_seen = see_yaw.seen(t).x();
     const double box_yaw_R = see_box_yaw.seen(t).x();  // the box's seen yaw relative to the robot's heading [rad]
@@ -1053,7 +1049,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
 
     Eigen::Vector2d v_body = Eigen::Vector2d::Zero();
     auto walkTo = [&](const Eigen::Vector2d& target_W, double max_speed) {
-      return walkCommand(op, target_W, pelvis_W, pelvis_v_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
+      return walkCommand(op, target_W, pelvis_W, yaw_seen, max_speed, dt, &walk_integral, &v_body);
     };
     const double pick_near_x = pick.pos[0] - 0.5 * pick.top_size[0];
     const double place_near_x = place.pos[0] - 0.5 * place.top_size[0];
