@@ -96,6 +96,7 @@ void TaskScene::Serialize(A* a) {
   a->Visit("wrist_torsional_friction", &wrist_torsional_friction, "the wrist links' torsional friction [m], [0, 0.1]");
   a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
   a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
+  a->Visit("noslip_iterations", &noslip_iterations, "MuJoCo option/noslip_iterations, [0, 1000]");
 }
 
 const TaskTable& TaskScene::table(const std::string& name) const {
@@ -128,6 +129,8 @@ void TaskScene::check() const {
   if (hand_collision_shape != "mesh" && !hand_collision)
     throw ConfigError(fmt::format("{}: hand_collision_shape needs hand_collision: true", where));
   if (!(impratio >= 1.0 && impratio <= 100.0)) throw ConfigError(fmt::format("{}: impratio = {}: expected [1, 100]", where, impratio));
+  if (!(noslip_iterations >= 0 && noslip_iterations <= 1000))
+    throw ConfigError(fmt::format("{}: noslip_iterations = {}: expected [0, 1000]", where, noslip_iterations));
   if (cone != "pyramidal" && cone != "elliptic")
     throw ConfigError(fmt::format("{}: cone = '{}': expected pyramidal | elliptic", where, cone));
   std::set<std::string> names;
@@ -316,14 +319,15 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
         xml.insert(at + 5, fmt::format(" condim=\"4\" friction=\"1 {} 0.0001\"", scene.wrist_torsional_friction));
       }
   }
-  if (scene.impratio != 1.0 || scene.cone != "pyramidal") {
+  if (scene.impratio != 1.0 || scene.cone != "pyramidal" || scene.noslip_iterations != 0) {
     // The scene's contact options, written after <compiler> (the robot's MJCF has no <option> of its own).
     if (xml.find("<option") != std::string::npos)
-      throw ConfigError(robot.mjcf_path + ": impratio/cone: the robot MJCF has an <option> already (scene " + scene.source + ")");
+      throw ConfigError(robot.mjcf_path + ": impratio/cone/noslip_iterations: the robot MJCF has an <option> already (scene " + scene.source + ")");
     const auto comp = xml.find("<compiler");
     const auto comp_end = comp == std::string::npos ? std::string::npos : xml.find('>', comp);
     if (comp_end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no <compiler> to put <option> after");
-    xml.insert(comp_end + 1, fmt::format("\n  <option impratio=\"{}\" cone=\"{}\"/>", scene.impratio, scene.cone));
+    xml.insert(comp_end + 1, fmt::format("\n  <option impratio=\"{}\" cone=\"{}\" noslip_iterations=\"{}\"/>", scene.impratio,
+                                         scene.cone, scene.noslip_iterations));
   }
   const auto end = xml.rfind("</worldbody>");
   if (end == std::string::npos) throw ConfigError(robot.mjcf_path + ": the MJCF has no </worldbody>");

@@ -124,6 +124,13 @@ struct TaskScene {
   /// MuJoCo's `option/cone`: "pyramidal" (MuJoCo's default, the model the policies were trained
   /// with) or "elliptic".
   std::string cone = "pyramidal";
+  /// MuJoCo's `option/noslip_iterations` for the composed model, [0, 1000]: iterations of MuJoCo's
+  /// no-slip solver, run after the main solver on the friction dimensions only. MuJoCo's soft
+  /// friction constraints let a contact creep under a steady tangential load (and turn under a
+  /// steady torque about the normal), which real static friction does not; the no-slip pass
+  /// removes that creep. MuJoCo's documentation recommends it for grasping. It applies to every
+  /// contact of the composed model. Default 0 (off, MuJoCo's default).
+  int noslip_iterations = 0;
   template <class A>
   void Serialize(A* a);
   /// Cross-checks: unique names, `on` names a table, footprints on the top (nominal and at the
