@@ -169,6 +169,10 @@ def parse_args(argv=None):
                     help="training command range of one axis (EnvConfig: vx, vy [m/s], wz [rad/s], pitch, roll [rad], "
                          "height [m]; default the issue-12 envelope); repeatable. Wider than the user's envelope, it "
                          "leaves the controller's tracking feedback room (velocity_feedback.envelope_min/max)")
+    ap.add_argument("--command-slew", action="store_true",
+                    help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
+                         "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
+                         "`commands:`); default off: a drawn command applies at once")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -319,6 +323,9 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
     if args.hand_forces is not None:
         cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
+    if args.command_slew:
+        cfg = dataclasses.replace(cfg, command_slew=True)
+        log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
     env = G1PmgEnv(cfg, clip_files)
     clip_files = env.clip_files
     if args.smoke:

@@ -231,6 +231,16 @@ class EnvConfig:
     sim_dt: float = 0.005          # s, physics step (PD recomputed every physics step)
     episode_length: int = 1000     # control steps (10 s)
     command_resample: int = 400    # control steps between command changes
+    # Command shaping as the controller's `commands:` block does it (include/pmg/controller/commands.hpp,
+    # config/controller/g1_sil_policy.yaml): with command_slew the drawn command is a goal the command
+    # (what the generator, the observation and the task rewards get) moves towards at most
+    # command_max_accel [m/s^2, m/s^2, rad/s^2] on v_x, v_y, w, command_posture_rate [rad/s] on pitch
+    # and roll and command_height_rate [m/s] on the height, per control step. Off (the default, as
+    # every policy so far was trained): the command jumps to the drawn one, which the SIL never does.
+    command_slew: bool = False
+    command_max_accel: tuple = (1.0, 1.0, 2.0)
+    command_posture_rate: float = 0.5
+    command_height_rate: float = 0.2
     # Command ranges (heading frame), uniform: the issue-12 envelope.
     vx: tuple = (-0.5, 1.0)
     vy: tuple = (-0.4, 0.4)
@@ -644,6 +654,16 @@ class G1PmgEnv(Env):
         posture = jnp.where(jnp.logical_and(commanded, axes), posture, neutral)
         return jnp.concatenate([v, posture])
 
+    def _shape_command(self, command, goal):
+        """The command after one control step towards the drawn goal (EnvConfig.command_slew: slew
+        limits per axis, as the controller's command shaper; off: the goal itself)."""
+        c = self.cfg
+        if not c.command_slew:
+            return goal
+        rate = jnp.array([*c.command_max_accel, c.command_posture_rate, c.command_posture_rate,
+                          c.command_height_rate]) * c.control_dt
+        return command + jnp.clip(goal - command, -rate, rate)
+
     def _reference(self, phase, command, gco_state):
         """Generator (+ GCO) tick as the controller runs it. Returns (ref dict, command the actor
         observes and the rewards track (6,), new GCO state)."""
@@ -757,6 +777,7 @@ class G1PmgEnv(Env):
             "hf_tgt": jnp.zeros((2, 3)),   # external hand forces (target, applied) [N], world frame (below)
             "hf": jnp.zeros((2, 3)),
         }
+        info["command_goal"] = info["command"]  # the drawn command (command_slew: what "command" moves to)
         if c.p_hand_force > 0:
             info["hf_tgt"] = self._hand_forces(k[15], info["tp_on"])
         if self.act_idx.size:
@@ -848,7 +869,8 @@ class G1PmgEnv(Env):
         info["step"] = info["step"] + 1
         resample = (info["step"] % c.command_resample) == 0
         user_prev = info["command"]  # the user's command u when the actor chose this action
-        info["command"] = jnp.where(resample, self._sample_command(k_cmd), info["command"])
+        info["command_goal"] = jnp.where(resample, self._sample_command(k_cmd), info["command_goal"])
+        info["command"] = self._shape_command(info["command"], info["command_goal"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         if c.p_hand_force > 0:
             info["hf_tgt"] = jnp.where(resample, self._hand_forces(jax.random.fold_in(k_seg, 1), info["tp_on"]),

@@ -2,7 +2,8 @@
 """pmg-train's command line refuses bad reward settings with the flag named (argparse exit 2):
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
-into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused. (An unknown NAME is refused in
+into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
+--command-slew is off unless given. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -19,6 +20,8 @@ if args.reward_weight != {"orientation": 1.0, "height": 2.0}:
 args = train_pmg.parse_args(["--out", "/tmp/x", "--command-range", "vx=-0.65,1.0", "--command-range", "wz=-1,1"])
 if args.command_range != {"vx": (-0.65, 1.0), "wz": (-1.0, 1.0)}:
     failures.append(f"--command-range parsed as {args.command_range}")
+if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-slew"]).command_slew:
+    failures.append("--command-slew: off by default, on with the flag")
 for bad, flag in ((["--command-range", "vx=1.0,-0.5"], "--command-range"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
                   (["--command-range", "vy=-0.4"], "--command-range"),
@@ -36,5 +39,5 @@ for bad, flag in ((["--command-range", "vx=1.0,-0.5"], "--command-range"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 11 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 12 cases as expected")
 sys.exit(1 if failures else 0)
