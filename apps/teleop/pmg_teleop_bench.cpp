@@ -389,7 +389,47 @@ struct TrialRig {
       throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / the shoulder pitch links");
     objects_csv.open(out_dir / fmt::format("trial_{}_objects.csv", trial));
     objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
+    for (const pmg::TaskTable& tb : scene.tables) {
+      const int b = mj_name2id(m, mjOBJ_BODY, ("task_" + tb.name).c_str());
+      if (b < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the table body task_" + tb.name);
+      table_bodies.push_back(b);
+    }
   }
+
+  /// The robot's pelvis and torso (its trunk and head; not the arms or legs) against the tables:
+  /// the first time they touched one [s] (-1: never) and the largest normal force [N].
+  double trunk_on_table_s = -1.0, trunk_on_table_n = 0.0;
+  void watchTrunk(double t) {
+    const mjModel* m = sim->model();
+    const mjData* d = sim->data();
+    const int pelvis = sim->pelvisBody();
+    double n = 0.0;
+    for (int i = 0; i < d->ncon; ++i) {
+      const int b1 = m->geom_bodyid[d->contact[i].geom1], b2 = m->geom_bodyid[d->contact[i].geom2];
+      const bool trunk = b1 == torso || b1 == pelvis || b2 == torso || b2 == pelvis;
+      const bool table = std::find(table_bodies.begin(), table_bodies.end(), b1) != table_bodies.end() ||
+                         std::find(table_bodies.begin(), table_bodies.end(), b2) != table_bodies.end();
+      if (!(trunk && table)) continue;
+      mjtNum f[6];
+      mj_contactForce(m, d, i, f);
+      n += std::abs(f[0]);
+    }
+    if (n > 0 && trunk_on_table_s < 0) trunk_on_table_s = t;
+    trunk_on_table_n = std::max(trunk_on_table_n, n);
+  }
+  /// The trunk touching a table goes into the verdict's detail; the verdict itself stays the
+  /// object's. The largest force does not tell a fall onto the table from leaning on it while
+  /// wiping bent over it (successful tuning trials: up to 1191 N, 3.6 times the robot's weight; held-out
+  /// seed 1006, which fell onto it: 2165 N).
+  void judgeTrunk(pmg::TaskVerdict* v) const {
+    if (trunk_on_table_s < 0) return;
+    const double weight = sim->model()->body_subtreemass[sim->pelvisBody()] * 9.81;
+    v->detail += fmt::format("; the robot's trunk touched a table at {:.2f} s (largest force {:.0f} N, its weight {:.0f} N)",
+                             trunk_on_table_s, trunk_on_table_n, weight);
+  }
+
+ private:
+  std::vector<int> table_bodies;
 };
 
 struct TrialResult {
@@ -399,6 +439,8 @@ struct TrialResult {
   double seconds = 0.0;
   int regrabs = 0;  ///< times the operator placed the hand again after it slipped off the towel (wipe) / gripped the box again (box)
   int unpins = 0;   ///< wipe: times the operator stood up and stepped back, the robot pinned against the table
+  double trunk_on_table_s = -1.0;  ///< first time the pelvis or torso touched a table [s] (-1: never)
+  double trunk_on_table_n = 0.0;   ///< the largest normal force between them [N]
 };
 
 // One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
@@ -794,6 +836,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     sample.vr = vr;
     sample.vr_time = t;
     const pmg::TickStatus st = app.stepLockstep(sample);
+    rig.watchTrunk(t);
     if (pmg::silRobotFell(app.controller().lastState(), st)) {
       fell = true;
       break;
@@ -807,6 +850,9 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   r.regrabs = regrabs;
   r.unpins = unpins;
   r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
+  rig.judgeTrunk(&r.verdict);
+  r.trunk_on_table_s = rig.trunk_on_table_s;
+  r.trunk_on_table_n = rig.trunk_on_table_n;
   return r;
 }
 
@@ -1321,6 +1367,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     sample.vr = vr;
     sample.vr_time = t;
     const pmg::TickStatus st = app.stepLockstep(sample);
+    rig.watchTrunk(t);
     if (pmg::silRobotFell(app.controller().lastState(), st)) {
       fell = true;
       break;
@@ -1342,6 +1389,9 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
   r.verdict = pmg::judgeBox(scene, box.name, pick.name, place.name, traj, fell);
+  rig.judgeTrunk(&r.verdict);
+  r.trunk_on_table_s = rig.trunk_on_table_s;
+  r.trunk_on_table_n = rig.trunk_on_table_n;
   r.regrabs = regrabs;
   return r;
 }
@@ -1396,6 +1446,8 @@ int main(int argc, char** argv) {
       summary["trial_results"].push_back({{"trial", k}, {"success", r.verdict.success}, {"measure", r.verdict.measure},
                                           {"fell", r.fell}, {"seconds", r.seconds}, {"regrabs", r.regrabs}, {"detail", r.verdict.detail}});
       if (task == "wipe") summary["trial_results"].back()["unpins"] = r.unpins;
+      summary["trial_results"].back()["trunk_on_table_s"] = r.trunk_on_table_s;
+      summary["trial_results"].back()["trunk_on_table_n"] = r.trunk_on_table_n;
       if (!r.verdict.success)
         summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
       // Keep the event log and object track of the first success and the first failure; drop the rest

@@ -38,6 +38,9 @@ for out in sys.argv[1:]:
         if f["reason"] not in known:
             fail.append(f"{out}: unknown failure class {f['reason']}")
     r = s["trial_results"][0]
+    ts, tn = r.get("trunk_on_table_s"), r.get("trunk_on_table_n")  # the trunk against a table, as the wiping test
+    if ts is None or tn is None or (ts >= 0) != (tn > 0) or (ts >= 0) != ("trunk touched a table" in r["detail"]):
+        fail.append(f"{out}: trunk_on_table_s {ts}, trunk_on_table_n {tn} and the detail disagree")
     rows = list(csv.DictReader(open(os.path.join(out, "trial_0.csv"))))
     x = [float(q["obj_x"]) for q in rows]
     y = [float(q["obj_y"]) for q in rows]

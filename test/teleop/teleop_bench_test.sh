@@ -36,6 +36,11 @@ for f in s["failures"]:
         fail.append(f"unknown failure class {f['reason']}")
 starts = []
 for r in s["trial_results"]:
+    # The trunk against a table (the pelvis or torso touching one): reported per trial, in the detail
+    # too; -1 / 0 when it never touched (wiping bent over the table, it may lean on it).
+    ts, tn = r.get("trunk_on_table_s"), r.get("trunk_on_table_n")
+    if ts is None or tn is None or (ts >= 0) != (tn > 0) or (ts >= 0) != ("trunk touched a table" in r["detail"]):
+        fail.append(f"trial {r['trial']}: trunk_on_table_s {ts}, trunk_on_table_n {tn} and the detail disagree")
     rows = list(csv.DictReader(open(os.path.join(out, f"trial_{r['trial']}.csv"))))
     ys = [float(x["obj_y"]) for x in rows]   # the table is not rotated: y in W = y along the table
     starts.append(ys[0])
