@@ -389,10 +389,11 @@ struct TrialRig {
       throw std::runtime_error("pmg_teleop_bench: the model lacks torso_link / the shoulder pitch links");
     objects_csv.open(out_dir / fmt::format("trial_{}_objects.csv", trial));
     objects_csv << "t,body,x,y,z,qw,qx,qy,qz\n";
+    is_table.assign(static_cast<std::size_t>(m->nbody), false);
     for (const pmg::TaskTable& tb : scene.tables) {
       const int b = mj_name2id(m, mjOBJ_BODY, ("task_" + tb.name).c_str());
       if (b < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the table body task_" + tb.name);
-      table_bodies.push_back(b);
+      is_table[static_cast<std::size_t>(b)] = true;
     }
   }
 
@@ -407,9 +408,7 @@ struct TrialRig {
     for (int i = 0; i < d->ncon; ++i) {
       const int b1 = m->geom_bodyid[d->contact[i].geom1], b2 = m->geom_bodyid[d->contact[i].geom2];
       const bool trunk = b1 == torso || b1 == pelvis || b2 == torso || b2 == pelvis;
-      const bool table = std::find(table_bodies.begin(), table_bodies.end(), b1) != table_bodies.end() ||
-                         std::find(table_bodies.begin(), table_bodies.end(), b2) != table_bodies.end();
-      if (!(trunk && table)) continue;
+      if (!trunk || !(is_table[static_cast<std::size_t>(b1)] || is_table[static_cast<std::size_t>(b2)])) continue;
       mjtNum f[6];
       mj_contactForce(m, d, i, f);
       n += std::abs(f[0]);
@@ -429,7 +428,7 @@ struct TrialRig {
   }
 
  private:
-  std::vector<int> table_bodies;
+  std::vector<bool> is_table;  ///< per body of the model: one of the scene's tables
 };
 
 struct TrialResult {
