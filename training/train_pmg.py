@@ -169,6 +169,9 @@ def parse_args(argv=None):
                     help="training command range of one axis (EnvConfig: vx, vy [m/s], wz [rad/s], pitch, roll [rad], "
                          "height [m]; default the issue-12 envelope); repeatable. Wider than the user's envelope, it "
                          "leaves the controller's tracking feedback room (velocity_feedback.envelope_min/max)")
+    ap.add_argument("--p-stop", type=float, default=None, metavar="P",
+                    help="probability that a command drawn after a walking one stands still (EnvConfig.p_stop, "
+                         "default 0: stops from a fast walk are rare)")
     ap.add_argument("--command-slew", action="store_true",
                     help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
                          "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
@@ -190,6 +193,8 @@ def parse_args(argv=None):
         ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
     if args.yaw_rate_weight is not None and not args.yaw_rate_weight >= 0:
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
+    if args.p_stop is not None and not 0.0 <= args.p_stop <= 1.0:
+        ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
     weights = {}
     for item in args.reward_weight:
         name, _, value = item.partition("=")
@@ -323,6 +328,9 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
     if args.hand_forces is not None:
         cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
+    if args.p_stop is not None:
+        cfg = dataclasses.replace(cfg, p_stop=args.p_stop)
+        log("p_stop:", cfg.p_stop)
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)

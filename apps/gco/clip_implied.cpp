@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
       double worst = 0.0;
       const pmg::ConsistencyMap m = pmg::gco::computeConsistencyMap(lib, robot, {}, &worst);
       const std::string path = (fs::path(clips_dir) / pmg::kConsistencyMapFile).string();
-      pmg::writeConsistencyMap(m, "written by pmg_clip_implied; worst residual after the fixed point " + std::to_string(worst), path);
+      pmg::writeConsistencyMap(m, "written by pmg_clip_implied; worst residual after the fixed point and Gauss-Newton " + std::to_string(worst), path);
       std::printf("wrote %s: %ld grid points, largest |correction| %.3f, worst residual %.4f\n", path.c_str(),
                   static_cast<long>(m.delta.rows()), m.delta.cwiseAbs().maxCoeff(), worst);
     }

@@ -52,6 +52,7 @@ struct Pipeline {
   GcoResult res;
   Eigen::Vector3d u_opt_sum = Eigen::Vector3d::Zero();  ///< Σ u' (v_x, v_y, ω) over the measured ticks
   int u_opt_n = 0;
+  int saturated_axes = 0;  ///< most axes at their implied-motion table's last amplitude in a measured tick
 };
 
 /// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
@@ -62,6 +63,7 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
   meter.reset();
   pipe.u_opt_sum.setZero();
   pipe.u_opt_n = 0;
+  pipe.saturated_axes = 0;
   for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     pipe.gen.step(c.u_d, c.u_s, dt);
@@ -75,6 +77,7 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
       meter.add(pipe.in, pipe.res.u_opt);
       pipe.u_opt_sum += Eigen::Vector3d(pipe.res.u_opt.v_x, pipe.res.u_opt.v_y, pipe.res.u_opt.yaw_rate);
       ++pipe.u_opt_n;
+      pipe.saturated_axes = std::max(pipe.saturated_axes, pipe.gen.output().amplitude_saturated);
     }
   }
   return meter.stats();
@@ -183,14 +186,14 @@ int main(int argc, char** argv) {
       grid_csv << "vx,vy,wz,pitch,roll,height,stances,speed_without,speed_with,slip_without,slip_with,"
                   "height_err_without,height_err_with,max_height_err_with,implied_vx_with,implied_vx_without,"
                   "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with,cycle_implied_vx,cycle_implied_vy,"
-                  "cycle_implied_wz,within_target\n";
+                  "cycle_implied_wz,within_target,saturated_axes\n";
     }
     std::vector<double> tick_us, gco_us;
     tick_us.reserve(2000000);
     gco_us.reserve(2000000);
     double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
     double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
-    int n_walk = 0, n_all = 0, n_within = 0;
+    int n_walk = 0, n_all = 0, n_within = 0, n_outside_saturated = 0;
     double axis_err[3] = {0, 0, 0}, uopt_err[3] = {0, 0, 0};
     int axis_ok[3] = {0, 0, 0};
     struct Miss { double vx, vy, wz, pitch, roll, h, ix, iy, iw; };
@@ -226,6 +229,7 @@ int main(int argc, char** argv) {
                   within = within && ok;
                 }
                 n_within += within ? 1 : 0;
+                n_outside_saturated += (!within && pipe_on.saturated_axes > 0) ? 1 : 0;
                 if (!within && worst.size() < 400)
                   worst.push_back({a, b, w, p, r, h, implied[0], implied[1], implied[2]});
                 failures += pipe_on.gco.counters().solver_failures;
@@ -247,7 +251,7 @@ int main(int argc, char** argv) {
                            << s0.mean_implied_v_x << ',' << s0.mean_single_support_speed << ','
                            << sG.mean_single_support_speed << ',' << s0.mean_double_support_speed << ','
                            << sG.mean_double_support_speed << ',' << implied[0] << ',' << implied[1] << ','
-                           << implied[2] << ',' << (within ? 1 : 0) << '\n';
+                           << implied[2] << ',' << (within ? 1 : 0) << ',' << pipe_on.saturated_axes << '\n';
                 }
                 ++n_all;
                 const auto hi = static_cast<std::size_t>(std::find(height.begin(), height.end(), h) - height.begin());
@@ -298,6 +302,8 @@ int main(int argc, char** argv) {
                 "    v_x %.3f m/s (%d/%d within)   v_y %.3f m/s (%d/%d)   w %.3f rad/s (%d/%d)   all axes within: %d/%d commands\n",
                 axis_err[0] / n_all, axis_ok[0], n_all, axis_err[1] / n_all, axis_ok[1], n_all, axis_err[2] / n_all, axis_ok[2],
                 n_all, n_within, n_all);
+    std::printf("  outside the target: %d commands, %d of them with an amplitude at its table's end (amplitude_saturated)\n",
+                n_all - n_within, n_outside_saturated);
     std::printf("  GCO's u' vs command: mean |u' - u|: v_x %.3f m/s   v_y %.3f m/s   w %.3f rad/s (what the full-PMG policy is told)\n",
                 uopt_err[0] / n_all, uopt_err[1] / n_all, uopt_err[2] / n_all);
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)

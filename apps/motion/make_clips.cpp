@@ -570,7 +570,7 @@ int main(int argc, char** argv) {
     const ConsistencyMap map = pmg::gco::computeConsistencyMap(implied_ctx.written, robot, {}, &worst_residual);
     outputs.emplace_back(fs::path(out_dir) / kConsistencyMapFile,
                          consistencyMapToYaml(map, fmt::format("written by pmg_make_clips (pmg::gco::computeConsistencyMap); "
-                                                               "worst residual after the fixed point {:.4f}", worst_residual)));
+                                                               "worst residual after the fixed point and Gauss-Newton {:.4f}", worst_residual)));
     std::printf("%-20s %ld grid points, largest |correction| %.3f, worst residual %.4f\n", kConsistencyMapFile,
                 static_cast<long>(map.delta.rows()), map.delta.cwiseAbs().maxCoeff(), worst_residual);
     outputs.emplace_back(fs::path(out_dir) / "report.md", report);

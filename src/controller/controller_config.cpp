@@ -139,6 +139,9 @@ struct VelocityFeedbackYaml {
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");
     a->Visit("steady_band", &f.steady_band, "steady: within max(this, 5 % of |u|) of where it settled, 0..0.5 m/s, rad/s");
+    a->Visit("brake_ratio", &f.brake_ratio, "braking steps: gait floor at this share of the estimated v_x, v_y, [0, 1); 0 = off");
+    a->Visit("brake_decel", &f.brake_decel, "the floor lets the reference decelerate at least this fast, (0, min(5, brake_rate)] m/s^2");
+    a->Visit("brake_rate", &f.brake_rate, "largest change of the floor per second, (0, 10] m/s^2");
   }
 };
 

@@ -49,6 +49,10 @@ std::string VelocityFeedbackConfig::validate() const {
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
   if (!(settle_time_s >= 0.0 && settle_time_s <= 5.0)) return "settle_time_s: expected 0..5 s";
   if (!(steady_band >= 0.0 && steady_band <= 0.5)) return "steady_band: expected 0..0.5 (m/s, rad/s)";
+  if (!(brake_ratio >= 0.0 && brake_ratio < 1.0)) return "brake_ratio: expected [0, 1)";
+  if (!(brake_rate > 0.0 && brake_rate <= 10.0)) return "brake_rate: expected (0, 10] m/s^2";
+  if (!(brake_decel > 0.0 && brake_decel <= std::min(5.0, brake_rate)))
+    return "brake_decel: expected (0, min(5, brake_rate)] m/s^2";
   return {};
 }
 
@@ -179,6 +183,8 @@ void VelocityFeedback::reset() noexcept {
   c_ = {0.0, 0.0, 0.0};
   u_anchor_ = {0.0, 0.0, 0.0};
   steady_ = {0.0, 0.0, 0.0};
+  brake_ = {0.0, 0.0};
+  u_fb_prev_ = VelocityCommand{};
   estimator_.reset();
   est_ = BaseVelocityEstimate{};
 }
@@ -218,9 +224,34 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     const double limited = std::clamp(u[i] + c, std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));
     c_[i] = limited - u[i];
   }
+  const VelocityCommand previous = u_fb_prev_;
   u_fb_.vx = u.vx + c_[0];
   u_fb_.vy = u.vy + c_[1];
   u_fb_.wz = u.wz + c_[2];
+  if (config_.brake_ratio > 0.0) {
+    // Braking floor (VelocityFeedbackConfig::brake_ratio), per linear axis, as a magnitude f >= 0
+    // along its direction s: the floor's direction is kept until it is back at zero.
+    bool raised = false;
+    double* out[2] = {&u_fb_.vx, &u_fb_.vy};
+    const double prev_out[2] = {previous.vx, previous.vy};
+    for (std::size_t i = 0; i < 2; ++i) {
+      const double v = estimate(i);
+      const double s = brake_[i] != 0.0 ? (brake_[i] > 0.0 ? 1.0 : -1.0) : (v >= 0.0 ? 1.0 : -1.0);
+      const double f = std::fabs(brake_[i]);
+      const bool active = est_.valid && !decay && s * *out[i] >= 0.0;
+      const double want = active ? std::max(0.0, config_.brake_ratio * s * v) : 0.0;
+      const double cap = std::max(0.0, s * prev_out[i] - config_.brake_decel * dt);
+      const double step = config_.brake_rate * dt;
+      const double f_new = std::clamp(std::min(want, cap), std::max(0.0, f - step), f + step);
+      brake_[i] = s * f_new;
+      if (f_new > 0.0 && s * *out[i] < f_new) {
+        *out[i] = s * f_new;
+        raised = true;
+      }
+    }
+    if (raised) ++braking_ticks_;
+  }
+  u_fb_prev_ = u_fb_;
   return u_fb_;
 }
 

@@ -137,19 +137,56 @@ ConsistencyMap computeConsistencyMap(const ClipLibrary& library, const RobotConf
           for (double pitch : o.pitch) {
           const Eigen::Vector3d u(vx, vy, wz);
           const PostureCommand posture{pitch, 0.0, h};
-          Eigen::Vector3d u_gen = u, best = u;
+          const auto implied = [&](const Eigen::Vector3d& ug) {
+            return cycleImpliedVelocity(gen, kin, idx, VelocityCommand{ug.x(), ug.y(), ug.z()}, posture, o.samples_per_cycle);
+          };
+          const auto clampToBox = [&](Eigen::Vector3d ug) {
+            for (int a = 0; a < 3; ++a) ug[a] = std::clamp(ug[a], u[a] - o.max_correction, u[a] + o.max_correction);
+            return ug;
+          };
+          Eigen::Vector3d u_gen = u, best = u, e_best = Eigen::Vector3d::Zero();
           double best_err = 1e9;
           for (int it = 0; it <= o.iterations; ++it) {
-            const Eigen::Vector3d v =
-                cycleImpliedVelocity(gen, kin, idx, VelocityCommand{u_gen.x(), u_gen.y(), u_gen.z()}, posture, o.samples_per_cycle);
-            const Eigen::Vector3d e = u - v;
+            const Eigen::Vector3d e = u - implied(u_gen);
             if (e.cwiseAbs().maxCoeff() < best_err) {
               best_err = e.cwiseAbs().maxCoeff();
               best = u_gen;
+              e_best = e;
             }
             if (it == o.iterations) break;
-            u_gen += e;
-            for (int a = 0; a < 3; ++a) u_gen[a] = std::clamp(u_gen[a], u[a] - 1.0, u[a] + 1.0);
+            u_gen = clampToBox(u_gen + e);
+          }
+          // Where the fixed point (which takes the map's Jacobian as the identity) leaves the point
+          // outside the target band (crouched combinations whose channels couple): damped
+          // Gauss-Newton from its best point on the residual scaled by the band, with a
+          // finite-difference Jacobian and step halving. Points inside the band keep their Δu.
+          Eigen::Vector3d inv_band;
+          for (int a = 0; a < 3; ++a) inv_band[a] = 1.0 / std::max(o.target_relative * std::fabs(u[a]), o.target_absolute[a]);
+          double best_scaled = e_best.cwiseProduct(inv_band).cwiseAbs().maxCoeff();
+          for (int it = 0; it < o.newton_iterations && best_scaled > 1.0; ++it) {
+            const Eigen::Vector3d v0 = u - e_best;
+            Eigen::Matrix3d J;
+            for (int a = 0; a < 3; ++a) {
+              Eigen::Vector3d ug = best;
+              ug[a] += o.jacobian_step;
+              J.col(a) = inv_band.asDiagonal() * ((implied(ug) - v0) / o.jacobian_step);
+            }
+            const Eigen::Matrix3d JtJ = J.transpose() * J + o.newton_damping * Eigen::Matrix3d::Identity();
+            const Eigen::Vector3d step = JtJ.ldlt().solve(J.transpose() * e_best.cwiseProduct(inv_band));
+            bool improved = false;
+            for (double scale = 1.0; scale >= 0.125 && !improved; scale *= 0.5) {
+              const Eigen::Vector3d ug = clampToBox(best + scale * step);
+              const Eigen::Vector3d e = u - implied(ug);
+              const double scaled = e.cwiseProduct(inv_band).cwiseAbs().maxCoeff();
+              if (scaled < best_scaled) {
+                best_scaled = scaled;
+                best_err = e.cwiseAbs().maxCoeff();
+                best = ug;
+                e_best = e;
+                improved = true;
+              }
+            }
+            if (!improved) break;
           }
           worst = std::max(worst, best_err);
           m.delta.row(row++) = (best - u).transpose();

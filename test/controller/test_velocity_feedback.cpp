@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <string>
 
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
@@ -246,6 +248,73 @@ TEST(VelocityFeedback, HoldsWhileTheEstimatorRejectsAndDecaysWhenTheRobotTilts) 
   EXPECT_LT(std::fabs(fb.correction()[0]), 1e-4);
   EXPECT_LT(std::fabs(fb.command().wz - 0.5), 1e-4) << "the user's command, nothing added";
   EXPECT_EQ(fb.decayedTicks(), 500u);
+}
+
+// Braking steps (VelocityFeedbackConfig::brake_ratio): the command stops at the shaper's 1 m/s^2
+// while the robot runs on (its velocity falls at 0.3 m/s^2). Without the floor u_fb goes to zero
+// with the command; with it the generator keeps a gait under the robot, never above the previous
+// u_fb minus brake_decel dt, continuous, and at zero once the robot has stopped.
+TEST(VelocityFeedback, BrakingFloorKeepsAGaitUnderARobotThatRunsOnAndStaysContinuous) {
+  Legs legs;
+  const auto run = [&](double brake_ratio, std::vector<double>* out, double* raised_ticks) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.ki = {0.0, 0.0, 0.0};  // the floor alone
+    c.brake_ratio = brake_ratio;
+    VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+    BaseVelocityEstimate est;
+    est.valid = true;
+    est.stance_feet = 1;
+    for (int k = 0; k < 600; ++k) {  // 2 s at 1.0, then the ramp to zero over 1 s, then 3 s standing
+      const double t = 0.01 * k;
+      const double u = t < 2.0 ? 1.0 : std::max(0.0, 1.0 - (t - 2.0));
+      est.v_x = t < 2.0 ? 1.0 : std::max(0.0, 1.0 - 0.3 * (t - 2.0));
+      out->push_back(fb.correct({u, 0.0, 0.0}, est, 0.01).vx);
+    }
+    *raised_ticks = static_cast<double>(fb.brakingTicks());
+  };
+  std::vector<double> off, on;
+  double raised_off = 0, raised_on = 0;
+  run(0.0, &off, &raised_off);
+  run(0.8, &on, &raised_on);
+  EXPECT_EQ(off[300], 0.0) << "no floor: u_fb is the stopped command";
+  EXPECT_EQ(raised_off, 0.0);
+  EXPECT_GT(raised_on, 50.0);
+  EXPECT_GT(on[300], 0.3) << "the command is zero, the robot still moves at 0.7 m/s: a gait is kept";
+  double largest_rise = -1.0, largest_fall = 0.0;
+  for (std::size_t k = 1; k < on.size(); ++k) {
+    largest_rise = std::max(largest_rise, on[k] - on[k - 1]);
+    largest_fall = std::max(largest_fall, on[k - 1] - on[k]);
+    if (on[k] > off[k]) EXPECT_LE(on[k], on[k - 1] - 0.5 * 0.01 + 1e-12) << "tick " << k << ": raised, it still falls";
+    EXPECT_GE(on[k], off[k]);
+  }
+  EXPECT_LE(largest_rise, 1e-12) << "the floor never raises u_fb above where it was";
+  EXPECT_LE(largest_fall, 0.01 + 1e-12) << "continuous: no step beyond the shaper's 0.01 per tick";
+  EXPECT_EQ(on.back(), 0.0) << "stopped robot, zero command: standing";
+
+  // The command turns against the motion, or the estimate is lost: the floor goes to zero at
+  // brake_rate (1 m/s^2), not at once.
+  VelocityFeedbackConfig c = enabledConfig();
+  c.ki = {0.0, 0.0, 0.0};
+  c.brake_ratio = 0.8;
+  VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  BaseVelocityEstimate est;
+  est.valid = true;
+  est.stance_feet = 1;
+  est.v_y = -0.5;
+  for (int k = 0; k < 100; ++k) fb.correct({0.0, -0.5, 0.0}, est, 0.01);
+  EXPECT_EQ(fb.command().vy, -0.5) << "the floor (0.8 x 0.5) lies under the command";
+  for (int k = 1; k <= 25; ++k) fb.correct({0.0, -0.5 + 0.02 * k, 0.0}, est, 0.01);  // stops at 2 m/s^2
+  const double floor = fb.brakeFloor()[1];
+  EXPECT_NEAR(fb.command().vy, floor, 1e-12);
+  ASSERT_LT(floor, -0.05);
+  fb.correct({0.0, 0.0, 0.0}, BaseVelocityEstimate{}, 0.01);
+  EXPECT_NEAR(fb.brakeFloor()[1], floor + 0.01, 1e-12);
+  EXPECT_NEAR(fb.command().vy, floor + 0.01, 1e-12);
+  for (int k = 0; k < 100; ++k) fb.correct({0.0, 0.1, 0.0}, est, 0.01);
+  EXPECT_EQ(fb.brakeFloor()[1], 0.0);
+  EXPECT_EQ(fb.command().vy, 0.1);
+  fb.reset();
+  EXPECT_EQ(fb.brakeFloor()[1], 0.0);
 }
 
 TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) {

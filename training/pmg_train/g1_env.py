@@ -252,6 +252,10 @@ class EnvConfig:
     p_single_axis: float = 0.4     # one velocity axis alone
     p_combined: float = 0.4        # combined velocity (the rest: standing, zero velocity)
     p_two_axes: float = 0.5        # share of the combined commands with exactly two axes
+    # Stops: at a resample after a walking goal, the new goal's velocity is zero with this
+    # probability (its posture drawn as usual). 0 (the default, as every policy so far): about 20 %
+    # of the draws stand, so a stop from a fast walk (>= 0.8 m/s) is rare (under 1 % of segments).
+    p_stop: float = 0.0
     p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
     p_posture_stand: float = 0.75  # posture commanded while standing
     p_posture_axis: float = 0.6    # each posture axis set in a commanded posture (at least one)
@@ -869,7 +873,12 @@ class G1PmgEnv(Env):
         info["step"] = info["step"] + 1
         resample = (info["step"] % c.command_resample) == 0
         user_prev = info["command"]  # the user's command u when the actor chose this action
-        info["command_goal"] = jnp.where(resample, self._sample_command(k_cmd), info["command_goal"])
+        goal = self._sample_command(k_cmd)
+        if c.p_stop > 0:
+            walked = jnp.any(info["command_goal"][:3] != 0.0)
+            stop = jnp.logical_and(walked, jax.random.uniform(jax.random.fold_in(k_cmd, 7)) < c.p_stop)
+            goal = jnp.where(stop, goal.at[:3].set(0.0), goal)
+        info["command_goal"] = jnp.where(resample, goal, info["command_goal"])
         info["command"] = self._shape_command(info["command"], info["command_goal"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         if c.p_hand_force > 0:

@@ -11,7 +11,7 @@ PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
 it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as three tests (training_smoke_env: 1,
-training_smoke_models: 1b, 1c and 1d, training_smoke_ppo: 2) so that they compile in parallel.
+training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they compile in parallel.
 
 0. The environment holds the versions training/pyproject.toml pins.
 1. The MJX environment (the training configuration: full PMG with GCO, randomised reset and
@@ -42,6 +42,8 @@ training_smoke_models: 1b, 1c and 1d, training_smoke_ppo: 2) so that they compil
 1d. Command slew (EnvConfig.command_slew, in 1c's env): every step the command the generator, the
    observation and the rewards get moves towards the drawn goal by exactly the slew-limited step
    (max_accel [m/s^2, rad/s^2] and posture/height rates x dt), and the goals are redrawn per segment.
+1e. Stops (EnvConfig.p_stop = 1, in 1c's env): every goal drawn after a walking goal has zero
+   velocity.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -500,7 +502,7 @@ def hand_force_checks(check, n_steps=50):
     from pmg_train import g1_env
 
     clips = sorted(glob.glob("config/clips/g1/*.yaml"))
-    base = dict(p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25, command_slew=True)
+    base = dict(p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25, command_slew=True, p_stop=1.0)
     env = g1_env.G1PmgEnv(g1_env.EnvConfig(p_hand_force=1.0, **base), clips)
     c = env.cfg
     hands = env.hand_bodies
@@ -521,14 +523,19 @@ def hand_force_checks(check, n_steps=50):
     # per-axis rate x dt, exactly cmd + clip(goal - cmd, +-rate dt).
     rate = np.array([*c.command_max_accel, c.command_posture_rate, c.command_posture_rate, c.command_height_rate]) * c.control_dt
     cmd_err, cmd_moved, goals = 0.0, 0.0, set()
+    stops, stop_ok = 0, True  # Stops (docstring 1e): resamples after a walking goal, and whether each stood
     for _ in range(n_steps):
         tgt = np.asarray(st.info["hf_tgt"], np.float64)
         cmd_before = np.asarray(st.info["command"], np.float64)
+        goal_before = np.asarray(st.info["command_goal"], np.float64)
         st, st0 = step(st, jnp.zeros(env.action_size)), step(unforced(st0), jnp.zeros(env.action_size))
         goal, cmd = np.asarray(st.info["command_goal"], np.float64), np.asarray(st.info["command"], np.float64)
         cmd_err = max(cmd_err, float(np.abs(cmd - (cmd_before + np.clip(goal - cmd_before, -rate, rate))).max()))
         cmd_moved = max(cmd_moved, float(np.abs(cmd - cmd_before).max()))
         goals.add(tuple(np.round(goal, 4)))
+        if int(st.info["step"]) % c.command_resample == 0 and np.any(goal_before[:3] != 0.0):
+            stops += 1
+            stop_ok &= bool(np.all(goal[:3] == 0.0))
         twin_free &= bool(np.all(np.asarray(st0.pipeline_state.xfrc_applied) == 0.0))
         hf = np.asarray(st.info["hf"], np.float64)
         xf = np.asarray(st.pipeline_state.xfrc_applied, np.float64)
@@ -544,6 +551,8 @@ def hand_force_checks(check, n_steps=50):
     check(cmd_err < 1e-5 and cmd_moved > 0.5 * rate.min() and len(goals) >= 2,
           f"command slew: command = command + clip(goal - command, +-rate dt) every step (max |diff| {cmd_err:.1e}), "
           f"largest step {cmd_moved:.4f} <= rate dt {np.round(rate, 4).tolist()}, {len(goals)} goals drawn")
+    check(stops >= 1 and stop_ok,
+          f"stops (p_stop = 1): {stops} resample(s) after a walking goal, each new goal's velocity zero: {stop_ok}")
     check(applied_ok and largest > 1.0,
           f"hand forces: xfrc_applied on the two wrist_yaw_link bodies = the env's applied force (largest "
           f"{largest:.1f} N after {n_steps} steps), zero torque, zero on every other body")
@@ -617,7 +626,7 @@ def main():
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--part", choices=["env", "models", "ppo", "all"], default="all",
                     help="env: the environment rollout checks (1); models: the actuator models, gains and "
-                         "hand forces, command slew (1b, 1c, 1d); ppo: the tiny PPO run (2); all: every part")
+                         "hand forces, command slew, stops (1b, 1c, 1d, 1e); ppo: the tiny PPO run (2); all: every part")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()

@@ -3,7 +3,7 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given. (An unknown NAME is refused in
+--command-slew is off unless given; --p-stop parses and a value outside [0, 1] is refused. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -22,7 +22,11 @@ if args.command_range != {"vx": (-0.65, 1.0), "wz": (-1.0, 1.0)}:
     failures.append(f"--command-range parsed as {args.command_range}")
 if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-slew"]).command_slew:
     failures.append("--command-slew: off by default, on with the flag")
-for bad, flag in ((["--command-range", "vx=1.0,-0.5"], "--command-range"),
+if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
+    failures.append("--p-stop 0.5 not parsed")
+for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
+                  (["--p-stop", "nan"], "--p-stop"),
+                  (["--command-range", "vx=1.0,-0.5"], "--command-range"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
                   (["--command-range", "vy=-0.4"], "--command-range"),
                   (["--command-range", "height=0.1,0.78"], "--command-range"),
@@ -39,5 +43,5 @@ for bad, flag in ((["--command-range", "vx=1.0,-0.5"], "--command-range"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 12 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 15 cases as expected")
 sys.exit(1 if failures else 0)

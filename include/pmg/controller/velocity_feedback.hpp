@@ -68,6 +68,19 @@ struct VelocityFeedbackConfig {
   /// is steady) [m/s, rad/s], [0, 0.5].
   double settle_time_s = 0.5;
   double steady_band = 0.02;
+  /// Braking steps (v_x, v_y; off when brake_ratio is 0, the default). When the robot moves faster
+  /// than the command in the same direction, e.g. the command stopped while it still walks at
+  /// speed, the generator keeps a gait of brake_ratio × the estimated velocity (a floor under u_fb),
+  /// so the robot brakes over steps instead of being given a standing reference it runs over. The
+  /// floor never lifts u_fb above its previous value minus brake_decel × dt (it only lets the
+  /// reference decelerate more slowly, at least at brake_decel), it changes by at most
+  /// brake_rate × dt per tick (the reference stays continuous), it keeps its direction until it
+  /// is back at zero, and it goes to zero (at brake_rate) while the estimate is invalid, the robot
+  /// tilts beyond max_tilt_rad or the command points against the motion. brake_ratio [0, 1) [-],
+  /// brake_rate (0, 10] [m/s²], brake_decel (0, min(5, brake_rate)] [m/s²].
+  double brake_ratio = 0.0;
+  double brake_decel = 0.5;
+  double brake_rate = 1.0;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
@@ -174,6 +187,10 @@ class VelocityFeedback {
   const VelocityCommand& command() const noexcept { return u_fb_; }
   /// The correction c (v_x, v_y, ω) of the last update.
   const std::array<double, 3>& correction() const noexcept { return c_; }
+  /// The braking floor (v_x, v_y [m/s] in H; 0: none) of the last update (config brake_ratio).
+  const std::array<double, 2>& brakeFloor() const noexcept { return brake_; }
+  /// Ticks on which the braking floor raised the command so far.
+  std::uint64_t brakingTicks() const noexcept { return braking_ticks_; }
   /// The estimate (v_x, v_y [m/s], ω [rad/s] in H) the last update integrated on.
   const BaseVelocityEstimate& lastEstimate() const noexcept { return est_; }
   std::array<double, 3> filteredEstimate() const noexcept { return {est_.v_x, est_.v_y, est_.yaw_rate}; }
@@ -187,9 +204,10 @@ class VelocityFeedback {
   std::array<double, 3> lo_, hi_;
   std::array<double, 3> c_{};
   std::array<double, 3> u_anchor_{}, steady_{};
+  std::array<double, 2> brake_{};
   BaseVelocityEstimate est_;
-  VelocityCommand u_fb_{};
-  std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0;
+  VelocityCommand u_fb_{}, u_fb_prev_{};
+  std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0;
 };
 
 /// `posture_feedback:` of the controller config (PostureFeedback).

@@ -44,6 +44,17 @@ struct ConsistencyMapOptions {
   std::vector<double> height{0.62, 0.70, 0.0};
   std::vector<double> pitch{0.0, 0.2, 0.4};  ///< torso pitch commands [rad]
   int iterations = 8;          ///< fixed-point iterations u_gen ← u_gen + (u − m(u_gen))
+  double max_correction = 1.5; ///< |Δu| bound per axis [m/s, rad/s]
+  /// Damped Gauss-Newton after the fixed point, only where its best point leaves some axis outside
+  /// the target band max(target_relative |u_i|, target_absolute_i) (issue 12's ±10 %, 0.03 m/s,
+  /// 0.05 rad/s): steps on the residual scaled by the band, (JᵀJ + λI)⁻¹ Jᵀ r, J by forward
+  /// differences of jacobian_step, halved up to 3 times until the largest scaled residual falls;
+  /// it stops when no step improves it. Points inside the band keep the fixed point's Δu.
+  int newton_iterations = 20;
+  double target_relative = 0.1;
+  Eigen::Vector3d target_absolute{0.03, 0.03, 0.05};  ///< [m/s, m/s, rad/s]
+  double jacobian_step = 0.02;      ///< [m/s or rad/s]
+  double newton_damping = 1e-3;     ///< λ
   int samples_per_cycle = 100; ///< phase samples of the cycle mean m(u_gen)
 };
 
