@@ -355,7 +355,9 @@ TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) 
 
 TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   Legs legs;
-  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});
+  VelocityFeedbackConfig c = enabledConfig();
+  c.brake_ratio = 0.8;  // the braking floor's path too
+  VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
   gco::LegVector q[2], qd[2];
   q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
   q[1] << -0.35, -0.05, 0.0, 0.7, -0.35, 0.02;
@@ -366,12 +368,25 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   std::size_t n = 0;
   {
     test::AllocationGuard guard;
-    for (int k = 0; k < 100; ++k) fb.update({0.3, 0.1, 0.2}, s, 0.01);
+    for (int k = 0; k < 100; ++k) fb.update({0.3 - 0.003 * k, 0.1, 0.2}, s, 0.01);  // a stop: the floor acts
     n = guard.count();
   }
   EXPECT_EQ(n, 0u);
   EXPECT_TRUE(fb.lastEstimate().valid);
   EXPECT_TRUE(fb.estimator().lastLegOdometry().valid);
+  // The floor acting: walking at 0.8 m/s, then the command stops while the robot runs on.
+  BaseVelocityEstimate moving;
+  moving.valid = true;
+  moving.stance_feet = 1;
+  moving.v_x = 0.8;
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) fb.correct({0.8, 0.0, 0.0}, moving, 0.01);
+    for (int k = 0; k < 20; ++k) fb.correct({0.0, 0.0, 0.0}, moving, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(fb.brakingTicks(), 20u);
 }
 
 int jointIndex(const std::string& name) {
