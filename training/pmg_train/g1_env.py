@@ -254,7 +254,7 @@ class EnvConfig:
     p_two_axes: float = 0.5        # share of the combined commands with exactly two axes
     # Stops: at a resample after a walking goal, the new goal's velocity is zero with this
     # probability (its posture drawn as usual). 0 (the default, as every policy so far): about 20 %
-    # of the draws stand, so a stop from a fast walk (>= 0.8 m/s) is rare (under 1 % of segments).
+    # of the draws stand, so a stop from a fast walk (>= 0.8 m/s) is rare (about 1 % of the segment changes).
     p_stop: float = 0.0
     p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
     p_posture_stand: float = 0.75  # posture commanded while standing
