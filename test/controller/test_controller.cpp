@@ -24,10 +24,11 @@
 namespace pmg {
 namespace {
 
-ControllerConfig silConfig(bool velocity_feedback = false) {
+ControllerConfig silConfig(bool velocity_feedback = false, double brake_ratio = 0.0) {
   ControllerConfig c = loadControllerConfig(test::g1SilControllerConfigPath());
   c.makeOffline();
   c.velocity_feedback.enabled = velocity_feedback;
+  c.velocity_feedback.brake_ratio = brake_ratio;
   c.posture_feedback.enabled = velocity_feedback;  // both feedback stages together, the height too
   c.posture_feedback.height_ki = velocity_feedback ? 1.0 : 0.0;
   return c;
@@ -85,7 +86,8 @@ struct Sweep {
   std::array<double, kMaxMotors> prev_ref{};
   bool have_prev = false;
 
-  explicit Sweep(bool velocity_feedback = false) : config(silConfig(velocity_feedback)) {
+  explicit Sweep(bool velocity_feedback = false, double brake_ratio = 0.0)
+      : config(silConfig(velocity_feedback, brake_ratio)) {
     ControllerAppOptions o;
     auto rec = std::make_unique<RecordingBackend>(config.robot, config.mujoco);
     recorder = rec.get();
@@ -212,6 +214,32 @@ TEST(ReferenceContinuity, VelocityFeedbackAtItsBoundKeepsEveryJointReferenceUnde
               static_cast<unsigned long long>(s.app->controller().referenceLimiter().limitedTicks()));
   EXPECT_GT(max_correction_share, 0.3) << "the correction really acted";
   EXPECT_LE(max_correction_share, s.config.velocity_feedback.max_ratio + 1e-9);
+  EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
+  EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
+// Braking steps (velocity_feedback.brake_ratio) in the gantry, where leg odometry reads the legs
+// swinging in the air as motion: abrupt commands and stops keep every joint reference under the
+// bound, and the floor, which decays at least at brake_decel, is gone within |u| / brake_decel
+// after the stop.
+TEST(ReferenceContinuity, BrakingStepsInTheGantryKeepEveryJointReferenceUnderTheBound) {
+  Sweep s(true, 0.8);
+  const CommandLimits& L = s.config.commands;
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  const double vx = L.max_velocity[0], vy = L.max_velocity[1];
+  for (const auto& [label, u] : std::vector<std::pair<std::string, Command>>{
+           {"+vx", cmd(0.8 * vx, 0, 0)}, {"stop", cmd(0, 0, 0)}, {"-vx-vy", cmd(-0.5 * vx, -0.8 * vy, 0)},
+           {"reversal", cmd(0.8 * vx, 0.8 * vy, 0)}, {"stop again", cmd(0, 0, 0)}})
+    s.hold(u, 2.0, label);
+  const double linger = 0.8 * vx / s.config.velocity_feedback.brake_decel + 0.5;
+  s.hold(cmd(0, 0, 0), linger, "standing");
+  const VelocityFeedback& fb = *s.app->controller().velocityFeedback();
+  std::printf("[ SIL ] braking steps in the gantry: floor acted on %llu ticks; fastest PMG reference %.2f rad/s at %s\n",
+              static_cast<unsigned long long>(fb.brakingTicks()), s.max_ref_speed, s.worst_at.c_str());
+  EXPECT_EQ(fb.command().vx, 0.0) << "the floor is gone " << linger << " s after the stop";
+  EXPECT_EQ(fb.command().vy, 0.0);
   EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
   EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
   EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
