@@ -79,7 +79,7 @@ struct VelocityFeedbackConfig {
   /// tilts beyond max_tilt_rad or the command points against the motion. brake_ratio [0, 1) [-],
   /// brake_rate (0, 10] [m/s²], brake_decel (0, min(5, brake_rate)] [m/s²].
   double brake_ratio = 0.0;
-  double brake_decel = 0.5;
+  double brake_decel = 0.2;  ///< chosen on the stop script (docs/controller.md "Braking steps")
   double brake_rate = 1.0;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
