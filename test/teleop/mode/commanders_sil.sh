@@ -30,6 +30,16 @@ make_config() {  # $1 = shipped config, $2 = output
   fi
   grep -q "key_file: $tmp/commands.key" "$2" || fail "could not set the key in $2"
 }
+# The controller's loop and HAL threads at SCHED_FIFO, as on a robot host (docs/controller.md,
+# timing.*_fifo_priority; without CAP_SYS_NICE the controller says so and runs normally scheduled).
+# Normally scheduled on a 2-core CI host they were once starved (bridge: 326 deadline misses and a
+# fall). With a busy loop on one core beside the bridge test: 99 and 116 misses normally scheduled,
+# 0, 1 and 1 at SCHED_FIFO. Niceing Chromium instead starved the page: its pose stream went stale
+# and teleop never engaged (2 of 2).
+realtime_threads() {  # $1 = controller config
+  sed -i -e "s/^  loop_fifo_priority: 0 /  loop_fifo_priority: 40 /" -e "s/^  hal_fifo_priority: 0$/  hal_fifo_priority: 50/" "$1"
+  grep -q "loop_fifo_priority: 40" "$1" && grep -q "hal_fifo_priority: 50" "$1" || fail "could not set the FIFO priorities in $1"
+}
 fail() { echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true; exit 1; }
 wait_listening() {  # until the controller has opened its authenticated LCM input (setup can be slow under load)
   for _ in $(seq 1 200); do
@@ -69,6 +79,7 @@ gamepad)
   ;;
 vr)
   make_config "$src/config/controller/g1_sil_teleop.yaml" "$tmp/ctl.yaml"
+  realtime_threads "$tmp/ctl.yaml"
   # The scripted operator (config/teleop/vr_walk_script.yaml) recorded into an LCM log, replayed
   # re-signed with the key, as a recorded headset session would be.
   "$bin/pmg_vr_script" --script "$src/config/teleop/vr_walk_script.yaml" --log "$tmp/session.lcmlog" > /dev/null
@@ -93,6 +104,7 @@ bridge)
   chromium="${PMG_CHROMIUM:-/usr/bin/chromium}"
   [ -x "$chromium" ] || { echo "SKIP: chromium not found ($chromium)"; exit 0; }
   make_config "$src/config/controller/g1_sil_teleop.yaml" "$tmp/ctl.yaml"
+  realtime_threads "$tmp/ctl.yaml"
   "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 16 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
   wait_listening
@@ -102,9 +114,7 @@ bridge)
   for _ in $(seq 1 100); do grep -q "synthetic=1" "$tmp/bridge.txt" && break; sleep 0.1; done
   page=$(grep -o "https://127.0.0.1:[0-9]*/?token=[a-z0-9]*&synthetic=1" "$tmp/bridge.txt" | head -1)
   [ -n "$page" ] || fail "the bridge printed no synthetic URL: $(cat "$tmp/bridge.txt")"
-  # Chromium renders the page at the display rate; niced, so that on a 2-core CI host it cannot starve
-  # the controller's real-time threads (un-niced it cost up to 326 deadline misses and a fall).
-  setsid nice -n 19 "$chromium" --headless=new --no-sandbox --ignore-certificate-errors --disable-gpu --disable-dev-shm-usage \
+  setsid "$chromium" --headless=new --no-sandbox --ignore-certificate-errors --disable-gpu --disable-dev-shm-usage \
       --no-first-run --no-default-browser-check --disable-extensions --disable-background-networking \
       --disable-component-update --disable-sync --mute-audio --user-data-dir="$tmp/profile" "$page" > "$tmp/chromium.txt" 2>&1 &
   browser=$!
