@@ -24,10 +24,11 @@ training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they co
    1e-3) and the phase advances by the port's own update.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
-   effect on; an env built with a calibrated robot config written into the workdir (left knee inline
-   {kp_scale 0.8, delay 4 ms, fc 1 N m, offset 0.02 rad}, right hip pitch from an actuator file
-   {kt_scale 0.9, limit 60 N m, fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets map) and one with
-   gains=physically_informed: randomised resets, zero action, finite and upright; the DR widths are
+   effect on; one env (compiled once for 1b-1e: compiling takes most of the time) built with a
+   calibrated robot config written into the workdir (left knee inline {kp_scale 0.8, delay 4 ms,
+   fc 1 N m, offset 0.02 rad}, right hip pitch from an actuator file {kt_scale 0.9, limit 60 N m,
+   fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets map), gains=physically_informed and 1c-1e's
+   settings: randomised resets, zero action, finite and upright; the DR widths are
    sized from the knee's actuator_uncertainty (z u / |value|, floored) and are actuator_dr where none is
    given; the identified parameters are drawn within those widths, unnamed effects stay off, offsets
    are not applied; with the identified values (one physics substep per env.step) the knee's and the
@@ -35,8 +36,8 @@ training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they co
    between 5 ms substeps; kt 0.9, 60 N m saturation) and differ from the nominal PD, the implicit
    damping, armature and the knee's friction row (1 N m) are the model's; PIG kp / kd equal
    config/robots/g1/g1_pig.yaml and the armature is the reflected inertia.
-1c. External hand forces (issue 14, EnvConfig.p_hand_force = 1, teleop on every arm, segments of
-   25 steps, one env, 50 steps): xfrc_applied at the two hand bodies equals the env's slewed force,
+1c. External hand forces (issue 14, in 1b's env: EnvConfig.p_hand_force = 1, teleop on every arm,
+   segments of 25 steps, no pushes; one episode of 50 steps): xfrc_applied at the two hand bodies equals the env's slewed force,
    nothing elsewhere; per-step change within hand_force_rate x dt; targets within their ranges and
    redrawn per segment; the same episode without forces ends in a different state.
 1d. Command slew (EnvConfig.command_slew, in 1c's env): every step the command the generator, the
@@ -255,6 +256,9 @@ def env_checks(check, n_envs, n_steps):
     return obs
 
 
+# 1c-1e: hand forces on both teleoperated arms, 25-step segments, command slew, stops; no pushes.
+HAND_FORCE_CFG = dict(p_hand_force=1.0, p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25,
+                      command_slew=True, p_stop=1.0)
 CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
 CAL_KNEE_UNCERTAINTY = {"kp_scale": 0.02, "delay_s": 0.0004, "fc_Nm": 0.001}  # pmg_calib_joints-style
 CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
@@ -356,7 +360,9 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
 
     clips = sorted(glob.glob("config/clips/g1/*.yaml"))
     cal_path = write_calibrated_robot(workdir)
-    cfg = g1_env.EnvConfig(actuators=cal_path)
+    # One env carries every variant of 1b-1e (calibrated robot, physically informed gains, hand forces,
+    # command slew, stops): compiling an env's reset and step takes most of this test's time.
+    cfg = g1_env.EnvConfig(actuators=cal_path, gains="physically_informed", **HAND_FORCE_CFG)
     env = g1_env.G1PmgEnv(cfg, clips)
     knee, hip = 3, 6
     c = env.act_center
@@ -389,7 +395,7 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
               f"(max {max(tilts):.3f})")
         return states, step
 
-    states, _ = rollout(env, "calibrated env")
+    states, step = rollout(env, "calibrated env with physically informed gains and hand forces")
     draws = [{k: np.asarray(v, np.float64) for k, v in st.info["act"].items()} for st in states]
     dr = cfg.actuator_dr
     # Widths from the knee's actuator_uncertainty: z u / |value| (kp_scale 2 x 0.02 / 0.8 = 0.05, delay
@@ -485,29 +491,27 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     ratio = np.asarray(sys_r.dof_armature)[:, 6:] / np.asarray(inertia)[None]
     check(ratio.min() >= 0.8 - 1e-6 and ratio.max() <= 1.5 + 1e-6,
           f"PIG armature DR = I x U(0.8, 1.5) (ratios {ratio.min():.3f}..{ratio.max():.3f})")
-    rollout(pig, "physically informed gains env")
     pig_tm = g1_env.G1PmgEnv(g1_env.EnvConfig(gains="physically_informed", action_scale_rule="torque_matched"), clips)
     nominal_kp = np.array([j["kp"] for j in yaml.safe_load(open("config/robots/g1/g1.yaml"))["joints"]][:12])
     authority_tm, authority_nom = pig_tm.action_scale * pig_tm.kp[:12], pig.action_scale * nominal_kp
     check(np.allclose(authority_tm, authority_nom, rtol=1e-5) and pig_tm.action_scale[0] > 3 * pig.action_scale[0],
           f"torque-matched action scale: kp x scale = the nominal's per leg joint (hip pitch "
           f"{authority_tm[0]:.1f} vs {authority_nom[0]:.1f} N m/unit action; motion rule {pig.action_scale[0] * pig.kp[0]:.1f})")
+    check(np.allclose(env.kp, pig.kp) and np.allclose(env.kd, pig.kd) and
+          np.isclose(float(env.mj_model.dof_armature[6 + knee]), inertia[knee]),
+          "the rolled-out env has the physically informed gains (kp, kd, armature) where nothing is identified")
+    return env, step
 
 
-def hand_force_checks(check, n_steps=50):
-    """External hand forces (docstring 1c)."""
+def hand_force_checks(check, env, step, n_steps=50):
+    """External hand forces (docstring 1c) in @p env (HAND_FORCE_CFG), @p step its jitted step."""
     import jax
     import jax.numpy as jnp
     import numpy as np
-    from pmg_train import g1_env
 
-    clips = sorted(glob.glob("config/clips/g1/*.yaml"))
-    base = dict(p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25, command_slew=True, p_stop=1.0)
-    env = g1_env.G1PmgEnv(g1_env.EnvConfig(p_hand_force=1.0, **base), clips)
     c = env.cfg
     hands = env.hand_bodies
     others = [b for b in range(env.mj_model.nbody) if b not in hands]
-    step = jax.jit(env.step)
     st = jax.jit(env.reset)(jax.random.PRNGKey(3))
     # The twin: the same episode (same env, compiled once, same random stream) with its hand-force
     # target and applied force zeroed before every step, so it never gets a force.
@@ -643,8 +647,8 @@ def main():
     obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
     if args.part in ("models", "all"):
         actuator_port_jax_checks(check)
-        actuator_env_checks(check, workdir)
-        hand_force_checks(check)
+        env, step = actuator_env_checks(check, workdir)
+        hand_force_checks(check, env, step)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")

@@ -85,11 +85,11 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
     }
   }
   if (state.imu.valid) {
-    bool finite = true;
-    for (double v : state.imu.quat_wxyz) finite = finite && std::isfinite(v);
-    for (double v : state.imu.gyro) finite = finite && std::isfinite(v);
-    for (double v : state.imu.acc) finite = finite && std::isfinite(v);
-    if (!finite) {
+    bool imu_finite = true;
+    for (double v : state.imu.quat_wxyz) imu_finite = imu_finite && std::isfinite(v);
+    for (double v : state.imu.gyro) imu_finite = imu_finite && std::isfinite(v);
+    for (double v : state.imu.acc) imu_finite = imu_finite && std::isfinite(v);
+    if (!imu_finite) {
       state.imu.valid = false;
       ++nonfinite_replies_;
     }
