@@ -108,6 +108,17 @@ def check_against_brax(params, make_inference_fn, env, out):
     return diff
 
 
+class _NoEvaluator:
+    """Stands in for brax.training.acting.Evaluator with --num-eval-envs 0 (run_evals=False: Brax never
+    calls it)."""
+
+    def __init__(self, *args, **kwargs):
+        pass
+
+    def run_evaluation(self, *args, **kwargs):
+        raise RuntimeError("pmg-train: --num-eval-envs 0 runs no evaluation rollouts")
+
+
 def _positive_ints(text):
     """'512,256,128' -> (512, 256, 128); argparse type for layer sizes."""
     try:
@@ -385,10 +396,19 @@ def main(argv=None):
         save_params(params, args.out, env, clip_names)
         log(f"checkpoint at step {step}")
 
-    make_inference_fn, params, _ = ppo.train(
-        environment=env, network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
-        randomization_fn=make_randomization_fn(env), progress_fn=progress_fn, policy_params_fn=policy_params_fn,
-        restore_params=restore, **ppo_cfg)
+    # Brax builds its Evaluator even with run_evals=False, and the Evaluator compiles the evaluation env's
+    # reset when built (brax 0.14.2: acting.Evaluator.__init__; 32 s on a CPU). With --num-eval-envs 0
+    # nothing evaluates, so a stand-in that compiles nothing is built instead.
+    evaluator_cls = ppo.acting.Evaluator
+    if args.num_eval_envs == 0:
+        ppo.acting.Evaluator = _NoEvaluator
+    try:
+        make_inference_fn, params, _ = ppo.train(
+            environment=env, network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
+            randomization_fn=make_randomization_fn(env), progress_fn=progress_fn,
+            policy_params_fn=policy_params_fn, restore_params=restore, **ppo_cfg)
+    finally:
+        ppo.acting.Evaluator = evaluator_cls
     log("training done in", time.time() - t_start, "s")
     save_params(params, args.out, env, clip_names)
     diff = check_against_brax(params, make_inference_fn, env, args.out)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """CPU smoke run of the training code, in the installed training environment (ctest training_smoke_cpu).
 
-Usage: test_smoke_cpu.py [--part env|models|ppo|all] [--workdir DIR] [--steps 60] [--envs 8]
+Usage: test_smoke_cpu.py [--part env|ppo|all] [--workdir DIR] [--steps 60] [--envs 8]
 Any python3 may start it: it re-runs itself with the training environment's interpreter,
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
@@ -10,13 +10,17 @@ steps run fast enough without). It installs nothing. A missing environment is a 
 PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
-it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as three tests (training_smoke_env: 1,
-training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they compile in parallel.
+it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as two tests
+(training_smoke_env: 1 to 1e, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
+env's reset and step takes most of the time, so parts 1 to 1e share one env with every training
+option on (make_smoke_env), compiled once; the default configuration is the PPO run's (2).
 
 0. The environment holds the versions training/pyproject.toml pins.
 1. The MJX environment (the training configuration: full PMG with GCO, randomised reset and
-   commands): --envs environments x --steps control steps with zero action (legs held at the
-   default pose by the PD), compiled as one reset + scan. Checks: every observation, privileged
+   commands, pushes; with 1b's calibrated robot and physically informed gains and 1c-1e's hand
+   forces, command slew and stops): --envs environments x --steps control steps with zero action
+   (legs held at the default pose by the PD), one compiled reset and step (un-batched, each env
+   stepped in turn). Checks: every observation, privileged
    observation and reward finite; no episode ends and the pelvis stays above 0.65 m with the trunk
    within 0.3 rad of upright; rewards at most the sum of the positive reward weights, mean > 0;
    the references in the observation equal the float64 NumPy ports (pmg_generator.step at the
@@ -24,11 +28,10 @@ training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they co
    1e-3) and the phase advances by the port's own update.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
-   effect on; one env (compiled once for 1b-1e: compiling takes most of the time) built with a
-   calibrated robot config written into the workdir (left knee inline {kp_scale 0.8, delay 4 ms,
-   fc 1 N m, offset 0.02 rad}, right hip pitch from an actuator file {kt_scale 0.9, limit 60 N m,
-   fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets map), gains=physically_informed and 1c-1e's
-   settings: randomised resets, zero action, finite and upright; the DR widths are
+   effect on; part 1's env is built with a calibrated robot config written into the workdir (left
+   knee inline {kp_scale 0.8, delay 4 ms, fc 1 N m, offset 0.02 rad}, right hip pitch from an
+   actuator file {kt_scale 0.9, limit 60 N m, fv 0.3, armature 0.02, Stribeck, kl}, a zero_offsets
+   map) and gains=physically_informed (its rollout: finite and upright, part 1); the DR widths are
    sized from the knee's actuator_uncertainty (z u / |value|, floored) and are actuator_dr where none is
    given; the identified parameters are drawn within those widths, unnamed effects stay off, offsets
    are not applied; with the identified values (one physics substep per env.step) the knee's and the
@@ -36,8 +39,8 @@ training_smoke_models: 1b, 1c, 1d and 1e, training_smoke_ppo: 2) so that they co
    between 5 ms substeps; kt 0.9, 60 N m saturation) and differ from the nominal PD, the implicit
    damping, armature and the knee's friction row (1 N m) are the model's; PIG kp / kd equal
    config/robots/g1/g1_pig.yaml and the armature is the reflected inertia.
-1c. External hand forces (issue 14, in 1b's env: EnvConfig.p_hand_force = 1, teleop on every arm,
-   segments of 25 steps, no pushes; one episode of 50 steps): xfrc_applied at the two hand bodies equals the env's slewed force,
+1c. External hand forces (issue 14, in part 1's env: EnvConfig.p_hand_force = 1, teleop on every arm,
+   segments of 25 steps; one episode of 50 steps, before the first push): xfrc_applied at the two hand bodies equals the env's slewed force,
    nothing elsewhere; per-step change within hand_force_rate x dt; targets within their ranges and
    redrawn per segment; the same episode without forces ends in a different state.
 1d. Command slew (EnvConfig.command_slew, in 1c's env): every step the command the generator, the
@@ -137,7 +140,24 @@ def pin_checks(check):
                               + (f"; differ: {', '.join(wrong)} (re-run scripts/setup.sh)" if wrong else ""))
 
 
-def env_checks(check, n_envs, n_steps):
+def make_smoke_env(workdir):
+    """The env of parts 1-1e (module docstring): the training configuration (full PMG with GCO, the
+    clips as train_pmg.py passes them) with a calibrated robot config written into @p workdir,
+    physically informed gains and HAND_FORCE_CFG. Returns (env, the calibrated config's path)."""
+    import jax
+    from pmg_train import g1_env
+    t0 = time.time()
+    cal_path = write_calibrated_robot(workdir)
+    cfg = g1_env.EnvConfig(actuators=cal_path, gains="physically_informed", **HAND_FORCE_CFG)
+    env = g1_env.G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")))
+    print(f"env built in {time.time() - t0:.1f} s: mode {cfg.mode}, clips {len(env.clip_files)}, "
+          f"{len(jax.local_devices())} host devices", flush=True)
+    return env, cal_path
+
+
+def env_checks(check, env, n_envs, n_steps):
+    """Part 1 on @p env. Returns (the rollout's observations (T+1, n, 62), the reset states, the jitted
+    reset and step)."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -147,11 +167,7 @@ def env_checks(check, n_envs, n_steps):
     from pmg_train import g1_env
     from pmg_train import pmg_generator as pg
 
-    t0 = time.time()
-    cfg = g1_env.EnvConfig()  # the training configuration (full PMG with GCO)
-    env = g1_env.G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")))  # as train_pmg.py passes them
-    print(f"env built in {time.time() - t0:.1f} s: mode {cfg.mode}, clips {len(env.clip_files)}, "
-          f"{len(jax.local_devices())} host devices", flush=True)
+    cfg = env.cfg
     sl, n_obs = term_slices(g1_env.OBS_TERMS)
     check([(n, s) for n, s, _ in export_onnx.OBS_TERMS] == [(n, s) for n, s, _ in g1_env.OBS_TERMS] and
           all(np.allclose(a, b) for (_, _, a), (_, _, b) in zip(export_onnx.OBS_TERMS, g1_env.OBS_TERMS)),
@@ -159,20 +175,21 @@ def env_checks(check, n_envs, n_steps):
     check(env.observation_size["state"] == (n_obs,) and n_obs == 62,
           f"actor observation has the contract's {n_obs} values (expected 62)")
 
-    def rollout(key):
-        keys = jax.random.split(key, n_envs)
-        s0 = jax.vmap(env.reset)(keys)
-        zero = jnp.zeros((n_envs, env.action_size))
-
-        def body(s, _):
-            s = jax.vmap(env.step)(s, zero)
-            return s, s
-
-        _, ss = jax.lax.scan(body, s0, None, length=n_steps)
-        return jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a[None], b]), s0, ss)
-
+    # One compiled reset and one compiled step (un-batched: the same programs serve 1b-1e), each env
+    # stepped in a Python loop; the trajectory stacked to (T+1, n, ...).
+    reset, step = jax.jit(env.reset), jax.jit(env.step)
+    zero = jnp.zeros(env.action_size)
     t0 = time.time()
-    traj = jax.block_until_ready(jax.jit(rollout)(jax.random.PRNGKey(3)))
+    starts, per_env = [], []
+    for key in jax.random.split(jax.random.PRNGKey(3), n_envs):
+        st = reset(key)
+        starts.append(st)
+        seq = [st]
+        for _ in range(n_steps):
+            st = step(st, zero)
+            seq.append(st)
+        per_env.append(jax.tree_util.tree_map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *seq))
+    traj = jax.tree_util.tree_map(lambda *xs: np.stack(xs, axis=1), *per_env)
     print(f"reset + {n_steps} steps x {n_envs} envs: {time.time() - t0:.1f} s (compile included)", flush=True)
     obs = np.asarray(traj.obs["state"], np.float64)            # (T+1, n, 62)
     priv = np.asarray(traj.obs["privileged_state"], np.float64)
@@ -253,12 +270,13 @@ def env_checks(check, n_envs, n_steps):
           f"(push_vel {cfg.push_vel})")
     check(min(timers) >= round(lo / cfg.control_dt) and max(timers) <= round(hi / cfg.control_dt),
           f"next push in {min(timers)}..{max(timers)} control steps (push_interval {lo}..{hi} s)")
-    return obs
+    return obs, starts, reset, step
 
 
-# 1c-1e: hand forces on both teleoperated arms, 25-step segments, command slew, stops; no pushes.
-HAND_FORCE_CFG = dict(p_hand_force=1.0, p_teleop=1.0, p_teleop_arm=1.0, push_vel=(0.0, 0.0), command_resample=25,
-                      command_slew=True, p_stop=1.0)
+# 1c-1e: hand forces on both teleoperated arms, 25-step segments, command slew, stops (pushes as in
+# training: the first comes after push_interval, 4 s at least, beyond these episodes).
+HAND_FORCE_CFG = dict(p_hand_force=1.0, p_teleop=1.0, p_teleop_arm=1.0, command_resample=25, command_slew=True,
+                      p_stop=1.0)
 CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
 CAL_KNEE_UNCERTAINTY = {"kp_scale": 0.02, "delay_s": 0.0004, "fc_Nm": 0.001}  # pmg_calib_joints-style
 CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
@@ -348,8 +366,9 @@ def actuator_port_jax_checks(check):
                               f"(stiction / driver-rate branch flips at thresholds allowed in 0.5 %)")
 
 
-def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
-    """Calibrated and physically-informed-gain environments (docstring 1b)."""
+def actuator_env_checks(check, env, cal_path, states):
+    """Calibrated robot and physically informed gains (docstring 1b) in @p env (make_smoke_env), whose
+    reset states part 1 returned as @p states."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -359,11 +378,7 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     from pmg_train import gains
 
     clips = sorted(glob.glob("config/clips/g1/*.yaml"))
-    cal_path = write_calibrated_robot(workdir)
-    # One env carries every variant of 1b-1e (calibrated robot, physically informed gains, hand forces,
-    # command slew, stops): compiling an env's reset and step takes most of this test's time.
-    cfg = g1_env.EnvConfig(actuators=cal_path, gains="physically_informed", **HAND_FORCE_CFG)
-    env = g1_env.G1PmgEnv(cfg, clips)
+    cfg = env.cfg
     knee, hip = 3, 6
     c = env.act_center
     check(list(env.act_idx) == [knee, hip] and np.allclose(c["kp_scale"], [0.8, 1.0]) and
@@ -373,29 +388,6 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
           f"calibrated robot config read: blocks on {[env.joint_names[i] for i in env.act_idx]} (inline and "
           f"file), torque limit = min(block, joint)")
 
-    def rollout(e, tag):
-        reset, step = jax.jit(e.reset), jax.jit(e.step)
-        t0 = time.time()
-        heights, tilts, finite, dones, states = [], [], True, 0, []
-        for i in range(n_envs):
-            st = reset(jax.random.PRNGKey(10 + i))
-            states.append(st)
-            for _ in range(n_steps):
-                st = step(st, jnp.zeros(e.action_size))
-                qp = np.asarray(st.pipeline_state.qpos, np.float64)
-                finite &= bool(np.isfinite(qp).all() and np.isfinite(np.asarray(st.obs["state"])).all()
-                               and np.isfinite(float(st.reward)))
-                dones += int(st.done)
-                heights.append(qp[2])
-                tilts.append(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (qp[4] ** 2 + qp[5] ** 2)))))
-        print(f"{tag}: reset + {n_steps} steps x {n_envs} envs {time.time() - t0:.1f} s (compile included)", flush=True)
-        check(finite and dones == 0 and min(heights) > 0.65 and max(tilts) < 0.3,
-              f"{tag}: randomised resets, zero action, {n_steps} steps x {n_envs}: finite, no episode ended "
-              f"({dones}), pelvis above 0.65 m (min {min(heights):.3f}), within 0.3 rad of upright "
-              f"(max {max(tilts):.3f})")
-        return states, step
-
-    states, step = rollout(env, "calibrated env with physically informed gains and hand forces")
     draws = [{k: np.asarray(v, np.float64) for k, v in st.info["act"].items()} for st in states]
     dr = cfg.actuator_dr
     # Widths from the knee's actuator_uncertainty: z u / |value| (kp_scale 2 x 0.02 / 0.8 = 0.05, delay
@@ -500,11 +492,11 @@ def actuator_env_checks(check, workdir, n_envs=2, n_steps=40):
     check(np.allclose(env.kp, pig.kp) and np.allclose(env.kd, pig.kd) and
           np.isclose(float(env.mj_model.dof_armature[6 + knee]), inertia[knee]),
           "the rolled-out env has the physically informed gains (kp, kd, armature) where nothing is identified")
-    return env, step
 
 
-def hand_force_checks(check, env, step, n_steps=50):
-    """External hand forces (docstring 1c) in @p env (HAND_FORCE_CFG), @p step its jitted step."""
+def hand_force_checks(check, env, reset, step, n_steps=50):
+    """External hand forces (docstring 1c) in @p env (HAND_FORCE_CFG); @p reset, @p step: its jitted
+    reset and step (compiled once, in part 1)."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -512,7 +504,7 @@ def hand_force_checks(check, env, step, n_steps=50):
     c = env.cfg
     hands = env.hand_bodies
     others = [b for b in range(env.mj_model.nbody) if b not in hands]
-    st = jax.jit(env.reset)(jax.random.PRNGKey(3))
+    st = reset(jax.random.PRNGKey(3))
     # The twin: the same episode (same env, compiled once, same random stream) with its hand-force
     # target and applied force zeroed before every step, so it never gets a force.
     zero = jnp.zeros((2, 3))
@@ -628,9 +620,9 @@ def main():
     ap.add_argument("--workdir", default=None, help="outputs (default: a temporary directory)")
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
-    ap.add_argument("--part", choices=["env", "models", "ppo", "all"], default="all",
-                    help="env: the environment rollout checks (1); models: the actuator models, gains and "
-                         "hand forces, command slew, stops (1b, 1c, 1d, 1e); ppo: the tiny PPO run (2); all: every part")
+    ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
+                    help="env: the environment checks (1, 1b, 1c, 1d, 1e: rollout, actuator models, gains, "
+                         "hand forces, command slew, stops); ppo: the tiny PPO run (2); all: both")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -644,11 +636,13 @@ def main():
           f"workdir {workdir}", flush=True)
     check = Checks()
     pin_checks(check)
-    obs = env_checks(check, args.envs, args.steps) if args.part in ("env", "all") else None
-    if args.part in ("models", "all"):
+    obs = None
+    if args.part in ("env", "all"):
         actuator_port_jax_checks(check)
-        env, step = actuator_env_checks(check, workdir)
-        hand_force_checks(check, env, step)
+        env, cal_path = make_smoke_env(workdir)
+        obs, starts, reset, step = env_checks(check, env, args.envs, args.steps)
+        actuator_env_checks(check, env, cal_path, starts)
+        hand_force_checks(check, env, reset, step)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")
