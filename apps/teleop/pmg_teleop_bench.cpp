@@ -895,6 +895,10 @@ struct BoxOperatorConfig : OperatorCommon {
   double hand_toe_in_rad = 0.0;    ///< ... and each hand turned in by this much (fingers towards the box's centre line) [rad]
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
   double release_clear_m = 0.0;    ///< after a slide, the hands move on to grip again only once both wrists are seen this far outside the box's sides (still touching it, they dragged it forward out of reach); 0 = after the opening time alone [m]
+  /// After a slide, the deeper grip's place along the box is taken where the box was seen when the
+  /// hands let go, not where it is seen while they move to it (hands that still touched it dragged
+  /// it forward, and the place they aimed at went forward with it). Tried, not kept (docs/teleop.md).
+  bool freeze_regrip_aim = false;
   bool keep_hand_pitch = false;    ///< holding the box (lift, carry, lower): the controllers turned against the torso's seen pitch change, so that the hands keep their pitch in the room while the robot stands up
   double unturn_speed = 0.3;       ///< ... and turned back at this rate once the box is no longer held [rad/s]
   template <class A>
@@ -910,6 +914,7 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("hand_toe_in_rad", &hand_toe_in_rad, "[rad]");
     a->Visit("keep_hand_pitch", &keep_hand_pitch, "true | false");
     a->Visit("release_clear_m", &release_clear_m, "[m]");
+    a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
     a->Visit("unturn_speed", &unturn_speed, "[rad/s]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
@@ -1029,6 +1034,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   const char* phase_names[] = {"settle",  "engage", "approach", "raise", "close_in", "descend", "squeeze", "slide",
                                "release", "lift",   "carry",    "lower", "open",     "wait",    "done"};
   bool slid = false;     // the box was slid towards the robot and gripped again
+  double regrip_x = std::numeric_limits<double>::quiet_NaN();  // freeze_regrip_aim: the deeper grip's forward place (frame R) [m]
   double slide_x = 0.0;  // sliding: the hands' forward place (frame R, ramps back) [m]
   Phase phase = kSettle, last_phase = kDone;
   double phase_t0 = 0.0;
@@ -1137,7 +1143,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     };
     // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
     const double grasp_in = slid && op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m;
-    const Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + grasp_in, 0, 0);
+    Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + grasp_in, 0, 0);
+    if (op.freeze_regrip_aim && slid && std::isfinite(regrip_x)) grasp_c.x() = regrip_x;
     switch (phase) {
       case kSettle:
         if (t >= op.settle_s) phase = kEngage, phase_t0 = t;
@@ -1227,7 +1234,10 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
           bool clear = true;  // release_clear_m 0: no check, the opening time alone
           for (std::size_t h = 0; op.release_clear_m > 0 && h < 2; ++h)
             clear = clear && std::abs((box_turn.inverse() * (hand_R[h] - box_R)).y()) >= half_w + op.release_clear_m;
-          if ((t - phase_t0 > op.squeeze_s + 0.3 && clear) || t - phase_t0 > op.squeeze_s + 4.0) phase = kDescend, phase_t0 = t, slid = true;
+          if ((t - phase_t0 > op.squeeze_s + 0.3 && clear) || t - phase_t0 > op.squeeze_s + 4.0) {
+            phase = kDescend, phase_t0 = t, slid = true;
+            regrip_x = (box_R + box_turn * Vector3d(-0.5 * box.size[0] + (op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m), 0, 0)).x();
+          }
         }
         break;
       case kLift:
@@ -1377,7 +1387,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     if ((phase == kLift || phase == kCarry) && t - phase_t0 > 2.0 && regrabs < op.max_regrabs) {
       const double bottom = box_room.z() - 0.5 * box_h;
       const Eigen::Vector3d up = see_box_up.seen(t);
-      if (std::abs(bottom - pick.height) < 0.02 && up.z() > std::cos(0.2)) phase = kDescend, phase_t0 = t, ++regrabs;
+      if (std::abs(bottom - pick.height) < 0.02 && up.z() > std::cos(0.2))
+        phase = kDescend, phase_t0 = t, ++regrabs, regrip_x = std::numeric_limits<double>::quiet_NaN();
     }
     // A box seen below the pick table's top has fallen: nothing left to do.
     if (phase > kSqueeze && box_room.z() < pick.height - 0.05) phase = kDone;

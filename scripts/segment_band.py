@@ -1,0 +1,69 @@
+#!/usr/bin/env python3
+"""Scores pmg_policy_sil per-segment results against issue 12's tracking targets.
+
+Usage: scripts/segment_band.py SUMMARY.json [SUMMARY.json ...]
+
+Reads `segments` of each summary (command / reference / achieved means over the last 60 % of each
+segment and over seeds; written by `pmg_policy_sil`) and prints, per commanded velocity axis, the
+segments whose achieved value is within the band
+    |achieved - command| <= max(0.15 |command|, tol),  tol = 0.05 m/s (v_x, v_y), 0.08 rad/s (omega)
+(issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the posture segments
+against pitch / roll within 0.03 rad and height within 0.015 m, and the torso roll in the side-steps
+(cross-coupling, target <= 0.05 rad). Frames: commands and achieved velocities in the robot's
+heading frame, as pmg_policy_sil writes them. Exit status 2 on a file without `segments`.
+"""
+import json
+import sys
+
+VEL_TOL = {"vx": 0.05, "vy": 0.05, "wz": 0.08}
+POSTURE_TOL = {"pitch": 0.03, "roll": 0.03, "height": 0.015}
+STANDING_HEIGHT = 0.78  # [m] the robot's standing pelvis height command
+
+
+def in_band(cmd, ach, tol):
+    return abs(ach - cmd) <= max(0.15 * abs(cmd), tol)
+
+
+def score(path):
+    with open(path) as f:
+        summary = json.load(f)
+    if "segments" not in summary:
+        print(f"{path}: no 'segments' (expected pmg_policy_sil's summary.json)", file=sys.stderr)
+        sys.exit(2)
+    segs = [s for s in summary["segments"] if s.get("achieved")]
+    print(f"== {path}")
+    total_in = total = 0
+    for axis, tol in VEL_TOL.items():
+        hit, miss = [], []
+        for s in segs:
+            cmd, ach = s["command"][axis], s["achieved"][axis]
+            if abs(cmd) < 1e-9:
+                continue
+            (hit if in_band(cmd, ach, tol) else miss).append(f"{s['name']} ({ach:+.3f} of {cmd:+.3f})")
+        total_in += len(hit)
+        total += len(hit) + len(miss)
+        print(f"{axis}: {len(hit)}/{len(hit) + len(miss)} in band; misses: {', '.join(miss) or 'none'}")
+    print(f"velocity segments in band: {total_in}/{total}")
+    posture_miss = []
+    for s in segs:
+        c, a = s["command"], s["achieved"]
+        for key, tol in POSTURE_TOL.items():
+            commanded = abs(c[key] - STANDING_HEIGHT) > 1e-9 if key == "height" else abs(c[key]) > 1e-9
+            if commanded and abs(a[key] - c[key]) > tol:
+                posture_miss.append(f"{s['name']} {key} {a[key]:+.3f} of {c[key]:+.3f}")
+    print(f"posture misses: {', '.join(posture_miss) or 'none'}")
+    side = [s for s in segs if abs(s["command"]["vy"]) > 1e-9 and abs(s["command"]["vx"]) < 1e-9
+            and abs(s["command"]["wz"]) < 1e-9 and abs(s["command"]["roll"]) < 1e-9]
+    rolls = [abs(s["achieved"]["roll"]) for s in side]
+    if rolls:
+        print(f"torso roll in the side-steps: {min(rolls):.3f}-{max(rolls):.3f} rad (target <= 0.05)")
+    falls = sum(s.get("fallen", 0) for s in summary["segments"])
+    print(f"seeds fallen (summed over segments): {falls}")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        print(__doc__, file=sys.stderr)
+        sys.exit(2)
+    for p in sys.argv[1:]:
+        score(p)
