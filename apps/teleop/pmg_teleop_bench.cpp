@@ -899,6 +899,17 @@ struct BoxOperatorConfig : OperatorCommon {
   /// hands let go, not where it is seen while they move to it (hands that still touched it dragged
   /// it forward, and the place they aimed at went forward with it). Tried, not kept (docs/teleop.md).
   bool freeze_regrip_aim = false;
+  /// Letting go (after the slide, and at the place table), the operator brings its controllers back to
+  /// where it sees the robot's hands before opening them: squeezing, it held them up to max_lead_m
+  /// inside the box (the arm's PD then presses the box), and opening from there the robot's hands
+  /// stayed closed until that lead was unwound, and moving on they dragged the box along.
+  bool unwind_on_release = false;
+  /// Face the box square: while walking up (approach, raise, close-in) the operator turns its head
+  /// so that the robot turns towards the box's seen yaw (yaw rate = gain x the box's yaw relative to
+  /// the robot's heading, at most 0.3 rad/s, 0.03 rad dead band); a box seen turned puts one side
+  /// further away than the other, and that hand grips at the edge of its reach. 0 = off [1/s]
+  double face_box_gain = 0.0;
+  bool face_box_hold = false;      ///< ... and keep facing it while grasping, sliding and letting go (until the lift)
   bool keep_hand_pitch = false;    ///< holding the box (lift, carry, lower): the controllers turned against the torso's seen pitch change, so that the hands keep their pitch in the room while the robot stands up
   double unturn_speed = 0.3;       ///< ... and turned back at this rate once the box is no longer held [rad/s]
   template <class A>
@@ -915,6 +926,9 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("keep_hand_pitch", &keep_hand_pitch, "true | false");
     a->Visit("release_clear_m", &release_clear_m, "[m]");
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
+    a->Visit("unwind_on_release", &unwind_on_release, "true | false");
+    a->Visit("face_box_gain", &face_box_gain, "[1/s] (0: off)");
+    a->Visit("face_box_hold", &face_box_hold, "true | false");
     a->Visit("unturn_speed", &unturn_speed, "[rad/s]");
     a->Visit("max_raise_m", &max_raise_m, "[m]");
     a->Visit("feedforward", &feedforward, "true | false");
@@ -963,6 +977,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     if (!(unturn_speed > 0 && unturn_speed <= 2.0)) return "unturn_speed: expected (0, 2] rad/s";
     if (!(release_clear_m >= 0 && release_clear_m <= 0.2)) return "release_clear_m: expected [0, 0.2] m (0: no check)";
+    if (!(face_box_gain >= 0 && face_box_gain <= 5.0)) return "face_box_gain: expected [0, 5] 1/s (0: off)";
     if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
     if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
     if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
@@ -1109,6 +1124,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const double carry_z_R = place.height + op.carry_clearance_m + box_h - op.grasp_below_top_m - torso_z;
     const double place_z_R = place.height - op.place_press_m + box_h - op.grasp_below_top_m - torso_z;
     const bool entered = phase != last_phase;
+    const bool unwind = op.unwind_on_release && entered && (phase == kRelease || phase == kOpen);
     last_phase = phase;
     bool grip = false, working = false;
     double work_f = -1.0;  // crouch and look-down fraction when not all or nothing (standing up slowly)
@@ -1305,7 +1321,12 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const Eigen::Vector2d disp = headFor(v_body, tc.position_deadband_m, tc.velocity_gain[0]);
     const double wf = work_f >= 0.0 ? work_f : (working ? 1.0 : 0.0);
     vr.head_position = {disp.x(), disp.y(), head_z - wf * op.crouch_m};
-    const Eigen::Quaterniond hq(Eigen::AngleAxisd(wf * op.look_down_rad, Vector3d::UnitY()));
+    double psi = 0.0;  // headset yaw beyond the dead band: the robot turns (teleop velocity_gain[2] per rad)
+    if (op.face_box_gain > 0 && phase >= kApproach && phase <= (op.face_box_hold ? kRelease : kCloseIn) && std::abs(box_yaw_R) > 0.03) {
+      const double w = std::clamp(op.face_box_gain * box_yaw_R, -0.3, 0.3);
+      psi = (w > 0 ? 1.0 : -1.0) * (std::abs(w) / tc.velocity_gain[2] + tc.yaw_deadband_rad);
+    }
+    const Eigen::Quaterniond hq(Eigen::AngleAxisd(psi, Vector3d::UnitZ()) * Eigen::AngleAxisd(wf * op.look_down_rad, Vector3d::UnitY()));
     vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
     if (grip && !aligned) {
       for (std::size_t h = 0; h < 2; ++h) {
@@ -1345,6 +1366,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         vr.hand_quat[h] = {qh.w(), qh.x(), qh.y(), qh.z()};
       }
     }
+    if (grip && unwind)
+      for (std::size_t h = 0; h < 2; ++h) hand_H[h] = controllerAtRobotHandBent(d, torso, shoulder_l, shoulder_r, unyaw, tc, hand_R[h]);
     if (grip)
       for (std::size_t h = 0; h < 2; ++h) {
         if (op.feedforward) {
