@@ -13,15 +13,16 @@ against pitch / roll within 0.03 rad and height within 0.015 m, and the torso ro
 heading frame, as pmg_policy_sil writes them. Exit status 2 on a file without `segments`.
 """
 import json
+import os
 import sys
 
-VEL_TOL = {"vx": 0.05, "vy": 0.05, "wz": 0.08}
-POSTURE_TOL = {"pitch": 0.03, "roll": 0.03, "height": 0.015}
-STANDING_HEIGHT = 0.78  # [m] the robot's standing pelvis height command
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# The issue's bands, as the envelope plot draws them (one definition).
+from plot_segments import COUPLING_ABS, POSTURE_ABS, VEL_ABS, VEL_REL, neutral_height  # noqa: E402
 
 
 def in_band(cmd, ach, tol):
-    return abs(ach - cmd) <= max(0.15 * abs(cmd), tol)
+    return abs(ach - cmd) <= max(VEL_REL * abs(cmd), tol)
 
 
 def score(path):
@@ -33,7 +34,7 @@ def score(path):
     segs = [s for s in summary["segments"] if s.get("achieved")]
     print(f"== {path}")
     total_in = total = 0
-    for axis, tol in VEL_TOL.items():
+    for axis, tol in VEL_ABS.items():
         hit, miss = [], []
         for s in segs:
             cmd, ach = s["command"][axis], s["achieved"][axis]
@@ -45,10 +46,11 @@ def score(path):
         print(f"{axis}: {len(hit)}/{len(hit) + len(miss)} in band; misses: {', '.join(miss) or 'none'}")
     print(f"velocity segments in band: {total_in}/{total}")
     posture_miss = []
+    standing = neutral_height(summary["segments"])
     for s in segs:
         c, a = s["command"], s["achieved"]
-        for key, tol in POSTURE_TOL.items():
-            commanded = abs(c[key] - STANDING_HEIGHT) > 1e-9 if key == "height" else abs(c[key]) > 1e-9
+        for key, tol in POSTURE_ABS.items():
+            commanded = abs(c[key] - standing) > 1e-9 if key == "height" else abs(c[key]) > 1e-9
             if commanded and abs(a[key] - c[key]) > tol:
                 posture_miss.append(f"{s['name']} {key} {a[key]:+.3f} of {c[key]:+.3f}")
     print(f"posture misses: {', '.join(posture_miss) or 'none'}")
@@ -56,7 +58,7 @@ def score(path):
             and abs(s["command"]["wz"]) < 1e-9 and abs(s["command"]["roll"]) < 1e-9]
     rolls = [abs(s["achieved"]["roll"]) for s in side]
     if rolls:
-        print(f"torso roll in the side-steps: {min(rolls):.3f}-{max(rolls):.3f} rad (target <= 0.05)")
+        print(f"torso roll in the side-steps: {min(rolls):.3f}-{max(rolls):.3f} rad (target <= {COUPLING_ABS})")
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
     print(f"seeds fallen (summed over segments): {falls}")
 
