@@ -150,6 +150,10 @@ struct OperatorConfig : OperatorCommon {
   double palm_pitch_rad = 0.0;      ///< ... the fingers this far below the torso's forward axis (frame T), so the pad's tip, not the wrist housing, touches first [rad]
   double palm_turn_s = 1.0;         ///< ... over this long [s]
   double palm_level_gain = 0.0;     ///< palm_down: the operator levels the fingers it sees (their elevation in the room, 0.1 s late), turning its controller about the torso's lateral axis at this rate per radian [1/s] (0: off; the arm IK trades the hand's orientation for its position, and a pitched pad touches with its edge)
+  /// Strokes that turn back at an end of the table (wipe_margin_m) slide their window inward by what
+  /// they fell short, so that the next stroke back is a full 2 x stroke_m: a towel lying near an end
+  /// otherwise moved about half as far per stroke (held-out seed 1019: 0.74 m in 90 s).
+  bool stroke_keep_length = false;
   double stroke_m = 0.0;            ///< > 0: wipe by arm strokes, the robot standing at its working place: the hand sweeps the towel this far to either side of where it pressed (0: walk sideways with the hand on the towel) [m]
   double stroke_speed = 0.20;       ///< the hand's lateral speed along a stroke [m/s]
   double stroke_press_m = 0.03;     ///< while stroking, the operator's hand leads the robot hand it sees by at most this downwards (robot scale): a light press that the arm can drag sideways [m]
@@ -172,6 +176,7 @@ struct OperatorConfig : OperatorCommon {
     a->Visit("palm_turn_s", &palm_turn_s, "[s]");
     a->Visit("palm_level_gain", &palm_level_gain, "[1/s] (0: off)");
     a->Visit("stroke_m", &stroke_m, "[m] (0: walk sideways)");
+    a->Visit("stroke_keep_length", &stroke_keep_length, "true | false");
     a->Visit("stroke_speed", &stroke_speed, "[m/s]");
     a->Visit("stroke_press_m", &stroke_press_m, "[m]");
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
@@ -691,10 +696,13 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
             // the table. The operator moves its controller along with the stroke (feed-forward) and
             // corrects what it sees of the robot hand.
             if (entered) stroke_center_y = work_hand.y();
-            if (wipe_dir > 0 && (work_hand.y() > stroke_center_y + op.stroke_m || y_T > half_len - op.wipe_margin_m))
+            if (wipe_dir > 0 && (work_hand.y() > stroke_center_y + op.stroke_m || y_T > half_len - op.wipe_margin_m)) {
+              if (op.stroke_keep_length) stroke_center_y = std::min(stroke_center_y, work_hand.y() - op.stroke_m);
               wipe_dir = -1;
-            else if (wipe_dir < 0 && (work_hand.y() < stroke_center_y - op.stroke_m || y_T < -half_len + op.wipe_margin_m))
+            } else if (wipe_dir < 0 && (work_hand.y() < stroke_center_y - op.stroke_m || y_T < -half_len + op.wipe_margin_m)) {
+              if (op.stroke_keep_length) stroke_center_y = std::max(stroke_center_y, work_hand.y() + op.stroke_m);
               wipe_dir = 1;
+            }
             work_hand.y() += wipe_dir * op.stroke_speed * dt;
             work_H.y() += wipe_dir * op.stroke_speed * dt / tc.arm_scale;
             hand_target_R.y() = work_hand.y();
