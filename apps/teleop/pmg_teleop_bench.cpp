@@ -912,6 +912,7 @@ struct BoxOperatorConfig : OperatorCommon {
   /// inside the box (the arm's PD then presses the box), and opening from there the robot's hands
   /// stayed closed until that lead was unwound, and moving on they dragged the box along.
   bool unwind_on_release = false;
+  double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
   /// Face the box square: while walking up (approach, raise, close-in) the operator turns its head
   /// so that the robot turns towards the box's seen yaw (yaw rate = gain x the box's yaw relative to
   /// the robot's heading, at most 0.3 rad/s, 0.03 rad dead band); a box seen turned puts one side
@@ -935,6 +936,7 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("release_clear_m", &release_clear_m, "[m]");
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
     a->Visit("unwind_on_release", &unwind_on_release, "true | false");
+    a->Visit("place_in_m", &place_in_m, "[m]");
     a->Visit("face_box_gain", &face_box_gain, "[1/s] (0: off)");
     a->Visit("face_box_hold", &face_box_hold, "true | false");
     a->Visit("unturn_speed", &unturn_speed, "[rad/s]");
@@ -986,6 +988,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(unturn_speed > 0 && unturn_speed <= 2.0)) return "unturn_speed: expected (0, 2] rad/s";
     if (!(release_clear_m >= 0 && release_clear_m <= 0.2)) return "release_clear_m: expected [0, 0.2] m (0: no check)";
     if (!(face_box_gain >= 0 && face_box_gain <= 5.0)) return "face_box_gain: expected [0, 5] 1/s (0: off)";
+    if (!(place_in_m >= 0 && place_in_m <= 0.3)) return "place_in_m: expected [0, 0.3] m";
     if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
     if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
     if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
@@ -1303,7 +1306,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       case kLower: {
         // Forward until the box is over the place top, then down onto it.
         grip = true;
-        const double x_goal = place_near_x + 0.04 - torso_p.x() + grasp_in;
+        const double x_goal = place_near_x + op.place_in_m - torso_p.x() + grasp_in;
         carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
         if (std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
