@@ -152,7 +152,8 @@ struct OperatorConfig : OperatorCommon {
   double palm_level_gain = 0.0;     ///< palm_down: the operator levels the fingers it sees (their elevation in the room, 0.1 s late), turning its controller about the torso's lateral axis at this rate per radian [1/s] (0: off; the arm IK trades the hand's orientation for its position, and a pitched pad touches with its edge)
   /// Strokes that turn back at an end of the table (wipe_margin_m) slide their window inward by what
   /// they fell short, so that the next stroke back is a full 2 x stroke_m: a towel lying near an end
-  /// otherwise moved about half as far per stroke (held-out seed 1019: 0.74 m in 90 s).
+  /// otherwise moved about half as far per stroke (held-out seed 1019: 0.74 m in 90 s). Tried, not
+  /// kept (docs/teleop.md).
   bool stroke_keep_length = false;
   double stroke_m = 0.0;            ///< > 0: wipe by arm strokes, the robot standing at its working place: the hand sweeps the towel this far to either side of where it pressed (0: walk sideways with the hand on the towel) [m]
   double stroke_speed = 0.20;       ///< the hand's lateral speed along a stroke [m/s]
@@ -257,6 +258,13 @@ Eigen::Vector2d headFor(const Eigen::Vector2d& v, double deadband, double gain) 
   const double s = v.norm();
   if (s < 1e-4) return Eigen::Vector2d::Zero();
   return (s / gain + deadband) * v / s;
+}
+
+// The headset yaw that makes teleop command yaw rate w [rad/s], given its dead band [rad] and gain
+// [1/s] (the inverse of TeleopMode's mapping; 0 for w = 0).
+double headYawFor(double w, double deadband, double gain) {
+  if (w == 0.0) return 0.0;
+  return (w > 0 ? 1.0 : -1.0) * (std::abs(w) / gain + deadband);
 }
 
 // The robot's velocity in the room as the operator judges it from the seen (noisy, late) pelvis
@@ -775,8 +783,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
     // the robot stalled in the approach (docs/teleop.md).
     double psi = 0.0;
     if (op.yaw_gain > 0 && phase > kEngage && phase < kRelease && std::abs(yaw_seen) > 0.03) {
-      const double w = std::clamp(-op.yaw_gain * yaw_seen, -0.5, 0.5);
-      psi = (w > 0 ? 1.0 : -1.0) * (std::abs(w) / tc.velocity_gain[2] + tc.yaw_deadband_rad);
+      psi = headYawFor(std::clamp(-op.yaw_gain * yaw_seen, -0.5, 0.5), tc.yaw_deadband_rad, tc.velocity_gain[2]);
     }
     const Eigen::Quaterniond hq = Eigen::AngleAxisd(psi, Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Vector3d::UnitY());
     vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
@@ -911,7 +918,7 @@ struct BoxOperatorConfig : OperatorCommon {
   /// where it sees the robot's hands before opening them: squeezing, it held them up to max_lead_m
   /// inside the box (the arm's PD then presses the box), and opening from there the robot's hands
   /// stayed closed until that lead was unwound, and moving on they dragged the box along.
-  bool unwind_on_release = false;
+  bool unwind_on_release = false;    // tried, not kept (docs/teleop.md), as are place_in_m 0.10 and face_box_*
   double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
   /// Face the box square: while walking up (approach, raise, close-in) the operator turns its head
   /// so that the robot turns towards the box's seen yaw (yaw rate = gain x the box's yaw relative to
@@ -1168,9 +1175,12 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       const double yaw_W = box_yaw_R + yaw_seen;
       return box_room.x() - 0.5 * box.size[0] * std::abs(std::cos(yaw_W)) - 0.5 * box.size[1] * std::abs(std::sin(yaw_W));
     };
-    // The grasp's centre on the box: grasp_in_m behind its near side, at the grasp height.
-    const double grasp_in = slid && op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m;
-    Vector3d grasp_c = box_R + box_turn * Vector3d(-0.5 * box.size[0] + grasp_in, 0, 0);
+    // The grasp's centre on the box: `in` behind its near side (along the box), at the box's centre
+    // height (frame R); grasp_in_m, or regrip_in_m after a slide.
+    auto graspCentre = [&](double in) -> Vector3d { return box_R + box_turn * Vector3d(-0.5 * box.size[0] + in, 0, 0); };
+    const double regrip_in = op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m;
+    const double grasp_in = slid ? regrip_in : op.grasp_in_m;
+    Vector3d grasp_c = graspCentre(grasp_in);
     if (op.freeze_regrip_aim && slid && std::isfinite(regrip_x)) grasp_c.x() = regrip_x;
     switch (phase) {
       case kSettle:
@@ -1263,7 +1273,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
             clear = clear && std::abs((box_turn.inverse() * (hand_R[h] - box_R)).y()) >= half_w + op.release_clear_m;
           if ((t - phase_t0 > op.squeeze_s + 0.3 && clear) || t - phase_t0 > op.squeeze_s + 4.0) {
             phase = kDescend, phase_t0 = t, slid = true;
-            regrip_x = (box_R + box_turn * Vector3d(-0.5 * box.size[0] + (op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m), 0, 0)).x();
+            regrip_x = graspCentre(regrip_in).x();
           }
         }
         break;
@@ -1333,10 +1343,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const double wf = work_f >= 0.0 ? work_f : (working ? 1.0 : 0.0);
     vr.head_position = {disp.x(), disp.y(), head_z - wf * op.crouch_m};
     double psi = 0.0;  // headset yaw beyond the dead band: the robot turns (teleop velocity_gain[2] per rad)
-    if (op.face_box_gain > 0 && phase >= kApproach && phase <= (op.face_box_hold ? kRelease : kCloseIn) && std::abs(box_yaw_R) > 0.03) {
-      const double w = std::clamp(op.face_box_gain * box_yaw_R, -0.3, 0.3);
-      psi = (w > 0 ? 1.0 : -1.0) * (std::abs(w) / tc.velocity_gain[2] + tc.yaw_deadband_rad);
-    }
+    if (op.face_box_gain > 0 && phase >= kApproach && phase <= (op.face_box_hold ? kRelease : kCloseIn) && std::abs(box_yaw_R) > 0.03)
+      psi = headYawFor(std::clamp(op.face_box_gain * box_yaw_R, -0.3, 0.3), tc.yaw_deadband_rad, tc.velocity_gain[2]);
     const Eigen::Quaterniond hq(Eigen::AngleAxisd(psi, Vector3d::UnitZ()) * Eigen::AngleAxisd(wf * op.look_down_rad, Vector3d::UnitY()));
     vr.head_quat = {hq.w(), hq.x(), hq.y(), hq.z()};
     if (grip && !aligned) {
