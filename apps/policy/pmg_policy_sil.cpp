@@ -198,6 +198,7 @@ int main(int argc, char** argv) {
   std::string commands = pmg::resolveData("config/policies/eval_commands.yaml").string(), out = "out/policy_sil";
   std::string config = "pmg_gco";
   int seeds = 3;
+  int first_seed = 0;
   bool noise = true, native = true, restart_after_fall = false;
   double duration = -1, frame_period = 0.1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
@@ -212,6 +213,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"consistent", "paper"}));
   app.add_option("--commands", commands, "command script YAML")->capture_default_str();
   app.add_option("--seeds", seeds, "runs (seed k perturbs the initial pose, and the sensor noise)")->check(CLI::Range(1, 100));
+  app.add_option("--first-seed", first_seed, "the first run's seed (runs first_seed .. first_seed + seeds - 1; held-out seeds for a check after the choices)")
+      ->check(CLI::Range(0, 10000));
   app.add_option("--noise", noise, "sensor noise on the observation (as in training)");
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
@@ -278,7 +281,7 @@ int main(int argc, char** argv) {
     Eigen::Isometry3d X_BT = Eigen::Isometry3d::Identity();
     Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
 
-    for (int seed = 0; seed < seeds; ++seed) {
+    for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
       std::uniform_real_distribution<double> uni(-1.0, 1.0);
       Totals tot;
@@ -601,7 +604,7 @@ int main(int argc, char** argv) {
       const double vals[6] = {t.lin / n, t.yaw / n, t.roll / n, t.pitch / n, t.height / n, t.slip / std::max<long>(1, t.slip_n)};
       for (int i = 0; i < 6; ++i) acc[i] += vals[i];
       falls += t.fell;
-      js << (s ? ", " : "") << "{\"seed\": " << s << ", \"fell\": " << (t.fell ? "true" : "false") << ", \"survived_s\": " << t.survived
+      js << (s ? ", " : "") << "{\"seed\": " << (first_seed + static_cast<int>(s)) << ", \"fell\": " << (t.fell ? "true" : "false") << ", \"survived_s\": " << t.survived
          << ", \"lin_vel\": " << vals[0] << ", \"yaw_vel\": " << vals[1] << ", \"roll\": " << vals[2] << ", \"pitch\": " << vals[3]
          << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5]
          << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts

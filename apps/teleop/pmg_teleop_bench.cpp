@@ -908,6 +908,10 @@ struct BoxOperatorConfig : OperatorCommon {
   double max_raise_m = 0.0;        ///< lifting and carrying: the hands at most this far above the nominal carrying height, to keep a sagging box clear [m]
   bool hands_along_box = false;    ///< the controllers turned so that the hands point along the box's sides (its seen yaw), not straight ahead: the palms lie flat on a turned box
   double hand_toe_in_rad = 0.0;    ///< ... and each hand turned in by this much (fingers towards the box's centre line) [rad]
+  /// ... and each hand rolled about its pointing axis by this much, palm turned down (pronation;
+  /// mirrored left/right): at pi/2 the hand's edge, the pad's 0.106 m width across the box, touches
+  /// the side instead of the palm, standing out further than the wrist housings [rad]
+  double hand_roll_rad = 0.0;
   double side_tol_m = 0.0;         ///< descending: a hand goes below the box's top only once seen this close to its place beside the box; 0 = at once [m]
   double release_clear_m = 0.0;    ///< after a slide, the hands move on to grip again only once both wrists are seen this far outside the box's sides (still touching it, they dragged it forward out of reach); 0 = after the opening time alone [m]
   /// After a slide, the deeper grip's place along the box is taken where the box was seen when the
@@ -939,6 +943,7 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("side_tol_m", &side_tol_m, "[m]");
     a->Visit("hands_along_box", &hands_along_box, "true | false");
     a->Visit("hand_toe_in_rad", &hand_toe_in_rad, "[rad]");
+    a->Visit("hand_roll_rad", &hand_roll_rad, "[rad]");
     a->Visit("keep_hand_pitch", &keep_hand_pitch, "true | false");
     a->Visit("release_clear_m", &release_clear_m, "[m]");
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
@@ -991,6 +996,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(slide_speed > 0 && slide_speed <= 0.2)) return "slide_speed: expected (0, 0.2] m/s";
     if (!(regrip_in_m >= 0 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [0, 0.3] m (0: grasp_in_m)";
     if (!(std::abs(hand_toe_in_rad) <= 0.5)) return "hand_toe_in_rad: expected [-0.5, 0.5] rad";
+    if (!(std::abs(hand_roll_rad) <= 1.8)) return "hand_roll_rad: expected [-1.8, 1.8] rad";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
     if (!(unturn_speed > 0 && unturn_speed <= 2.0)) return "unturn_speed: expected (0, 2] rad/s";
     if (!(release_clear_m >= 0 && release_clear_m <= 0.2)) return "release_clear_m: expected [0, 0.2] m (0: no check)";
@@ -1360,7 +1366,9 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         const double yaw_h = (op.hands_along_box ? box_yaw_R : 0.0) + (h == 0 ? -1.0 : 1.0) * op.hand_toe_in_rad;
         const Vector3d want =
             Eigen::AngleAxisd(yaw_h, Vector3d::UnitZ()) * Vector3d(std::cos(op.hand_pitch_rad), 0.0, -std::sin(op.hand_pitch_rad));
-        turn_H[h] = Eigen::Quaterniond::FromTwoVectors(x0, want);
+        // Pronation: the left hand rolls clockwise about its pointing axis seen from behind, the right anticlockwise.
+        turn_H[h] = Eigen::Quaterniond(Eigen::AngleAxisd((h == 0 ? 1.0 : -1.0) * op.hand_roll_rad, want)) *
+                    Eigen::Quaterniond::FromTwoVectors(x0, want);
       }
       aligned = true;
       turn_t0 = t;

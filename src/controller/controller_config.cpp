@@ -156,6 +156,11 @@ struct PostureFeedbackYaml {
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("still_velocity", &f.still_velocity, "integrates only while |v_x|, |v_y| < this, |w| < 2x this, 0..1");
+    a->Visit("walking_ki", &f.walking_ki, "integral gains for pitch, roll while walking, 0..5 [1/s] (0: decays while walking)");
+    a->Visit("walking_max_correction_rad", &f.walking_max_correction_rad, "largest correction while walking, 0..0.3 rad");
+    a->Visit("walking_filter_time_s", &f.walking_filter_time_s, "low-pass time constant of the attitude while walking, 0..5 s");
+    a->Visit("walking_settle_s", &f.walking_settle_s, "walking, an axis integrates once its posture command is steady this long, 0..5 s");
+    a->Visit("walking_min_command_rad", &f.walking_min_command_rad, "walking, an axis integrates only while |its command| >= this, 0..0.5 rad");
     a->Visit("height_ki", &f.height_ki, "integral gain on the pelvis height, 0..20 [1/s] (0: the height is not corrected)");
     a->Visit("max_height_correction_m", &f.max_height_correction_m, "largest height correction, 0..0.1 m");
     a->Visit("height_settle_s", &f.height_settle_s, "the height integrates once its command is steady this long, 0..5 s");

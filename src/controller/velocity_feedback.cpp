@@ -264,6 +264,14 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
   if (!(still_velocity >= 0.0 && still_velocity <= 1.0)) return "still_velocity: expected 0..1 m/s";
+  for (std::size_t i = 0; i < 2; ++i)
+    if (!(std::isfinite(walking_ki[i]) && walking_ki[i] >= 0.0 && walking_ki[i] <= 5.0))
+      return std::string("walking_ki[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") + "): expected 0..5 [1/s]";
+  if (!(walking_max_correction_rad >= 0.0 && walking_max_correction_rad <= 0.3))
+    return "walking_max_correction_rad: expected 0..0.3 rad";
+  if (!(walking_filter_time_s >= 0.0 && walking_filter_time_s <= 5.0)) return "walking_filter_time_s: expected 0..5 s";
+  if (!(walking_settle_s >= 0.0 && walking_settle_s <= 5.0)) return "walking_settle_s: expected 0..5 s";
+  if (!(walking_min_command_rad >= 0.0 && walking_min_command_rad <= 0.5)) return "walking_min_command_rad: expected 0..0.5 rad";
   if (!(std::isfinite(height_ki) && height_ki >= 0.0 && height_ki <= 20.0)) return "height_ki: expected 0..20 [1/s]";
   if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
     return "max_height_correction_m: expected 0..0.1 m";
@@ -306,6 +314,11 @@ PostureFeedback::~PostureFeedback() = default;
 void PostureFeedback::reset() noexcept {
   c_ = {0.0, 0.0};
   p_hat_ = {0.0, 0.0};
+  p_walk_hat_ = {0.0, 0.0};
+  c_stand_ = {0.0, 0.0};
+  c_walk_ = {0.0, 0.0};
+  p_settled_ = {0.0, 0.0};
+  p_steady_s_ = {0.0, 0.0};
   have_ = false;
   c_h_ = h_hat_ = 0.0;
   have_h_ = false;
@@ -355,20 +368,47 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     const double a = config_.filter_time_s > 0.0 ? std::min(1.0, dt / config_.filter_time_s) : 1.0;
     p_hat_[0] = have_ ? p_hat_[0] + a * (pitch - p_hat_[0]) : pitch;
     p_hat_[1] = have_ ? p_hat_[1] + a * (roll - p_hat_[1]) : roll;
+    const double aw = config_.walking_filter_time_s > 0.0 ? std::min(1.0, dt / config_.walking_filter_time_s) : 1.0;
+    p_walk_hat_[0] = have_ ? p_walk_hat_[0] + aw * (pitch - p_walk_hat_[0]) : pitch;
+    p_walk_hat_[1] = have_ ? p_walk_hat_[1] + aw * (roll - p_walk_hat_[1]) : roll;
     have_ = true;
   }
   const bool still = std::fabs(v.vx) < config_.still_velocity && std::fabs(v.vy) < config_.still_velocity &&
                      std::fabs(v.wz) < 2.0 * config_.still_velocity;
-  const bool decay = !still || (ok && tilt > config_.max_tilt_rad);
-  const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
+  const bool tilted = ok && tilt > config_.max_tilt_rad;
+  const bool decay = !still || tilted;
+  const double decay_keep = std::max(0.0, 1.0 - dt / config_.decay_time_s);
+  const double keep = decay ? decay_keep : 1.0;
   const double cmd[2] = {u.pitch, u.roll};
   const std::array<double, 2>* range[2] = {&pitch_range_, &roll_range_};
   for (std::size_t i = 0; i < 2; ++i) {
-    double c = c_[i] * keep;
-    if (have_ && ok && !decay) c += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
-    c = std::clamp(c, -config_.max_correction_rad, config_.max_correction_rad);
+    if (std::fabs(cmd[i] - p_settled_[i]) > 0.01) {
+      p_settled_[i] = cmd[i];
+      p_steady_s_[i] = 0.0;
+    } else {
+      p_steady_s_[i] += dt;
+    }
+    // Standing: integrate on the fast low-pass while still, decay otherwise.
+    double cs = c_stand_[i] * keep;
+    if (have_ && ok && !decay) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
+    cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
+    // Walking (walking_ki > 0): integrate on the gait-averaged attitude once the posture command is
+    // steady, within the walking bound; decay when the robot is told to stand or tilts, so that a
+    // lean built against a side-step's sway is not held into the stop.
+    const bool walking = !still && !tilted && config_.walking_ki[i] > 0.0 && std::fabs(cmd[i]) >= config_.walking_min_command_rad;
+    double cw = walking ? c_walk_[i] : c_walk_[i] * decay_keep;
+    if (walking && have_ && ok && p_steady_s_[i] >= config_.walking_settle_s)
+      cw = std::clamp(cw + config_.walking_ki[i] * (cmd[i] - p_walk_hat_[i]) * dt, -config_.walking_max_correction_rad,
+                      config_.walking_max_correction_rad);
+    const double c = std::clamp(cs + cw, -config_.max_correction_rad, config_.max_correction_rad);
     const double limited = std::clamp(cmd[i] + c, (*range[i])[0], (*range[i])[1]);
     c_[i] = limited - cmd[i];
+    // Anti-windup: what the bounds cut comes off the integrator that is acting.
+    const double cut = cs + cw - c_[i];
+    if (walking) cw -= cut;
+    else cs -= cut;
+    c_stand_[i] = cs;
+    c_walk_[i] = cw;
   }
   u_fb_.pitch = u.pitch + c_[0];
   u_fb_.roll = u.roll + c_[1];

@@ -452,6 +452,87 @@ TEST(PostureFeedback, MeasuresTheTorsoFromTheImuAndTheWaistAndClosesTheLoop) {
   EXPECT_EQ(n, 0u);
 }
 
+// Walking posture feedback (walking_ki): a bent walk whose torso sways about 60 % of the commanded
+// pitch. The walking integrator waits for the command to settle, closes the loop on the
+// gait-averaged pitch within its own bound, leaves an upright walk alone (walking_min_command_rad)
+// and decays when the robot is told to stand, so that the lean is not held into the stop.
+TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.walking_ki = {0.5, 0.0};
+  c.walking_max_correction_rad = 0.08;
+  c.walking_filter_time_s = 1.0;
+  c.walking_settle_s = 1.0;
+  c.walking_min_command_rad = 0.05;
+  ASSERT_EQ(c.validate(), "");
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  const VelocityCommand walk{0.3, 0.0, 0.0};
+  double torso = 0.0, t = 0.0;
+  auto step = [&](double u_pitch, const VelocityCommand& v) {
+    // The actor achieves 80 % of the pitch it is given, plus a 0.05 rad sway at 1.4 Hz (a gait cycle).
+    const double sway = 0.05 * std::sin(2.0 * M_PI * 1.4 * t);
+    const PostureCommand& out = fb.update({u_pitch, 0.0, 0.78}, v, uprightState(0.0, torso + sway), 0.01);
+    torso += 0.01 / 0.3 * (0.8 * out.pitch - torso);
+    t += 0.01;
+  };
+  // Settling: the first second after the command reaches 0.25 rad nothing is integrated.
+  for (int k = 0; k < 90; ++k) step(0.25, walk);
+  EXPECT_EQ(fb.correction()[0], 0.0) << "integrated before the command settled";
+  double peak = 0.0;
+  for (int k = 0; k < 3000; ++k) {
+    step(0.25, walk);
+    peak = std::max(peak, fb.correction()[0]);
+  }
+  EXPECT_NEAR(torso, 0.25, 0.01) << "the bent walk reaches the commanded pitch";
+  EXPECT_NEAR(fb.correction()[0], 0.0625, 0.01);
+  EXPECT_LE(peak, 0.08 + 1e-12) << "the walking bound";
+  // A bigger bend: the correction stops at walking_max_correction_rad, below max_correction_rad.
+  for (int k = 0; k < 3000; ++k) step(0.45, walk);
+  EXPECT_NEAR(fb.correction()[0], 0.08, 1e-12);
+  // Walking upright (|u| < walking_min_command_rad): the gait's pitch is left alone.
+  fb.reset();
+  torso = 0.0;
+  for (int k = 0; k < 3000; ++k) {
+    const PostureCommand& out = fb.update({0.0, 0.0, 0.78}, walk, uprightState(0.0, 0.04), 0.01);
+    EXPECT_EQ(out.pitch, 0.0);
+  }
+  // The walking roll gain is 0: a walking lean is not corrected.
+  fb.reset();
+  for (int k = 0; k < 3000; ++k) fb.update({0.25, 0.1, 0.78}, walk, uprightState(0.0, 0.0), 0.01);
+  EXPECT_EQ(fb.correction()[1], 0.0);
+  EXPECT_NEAR(fb.correction()[0], 0.08, 1e-12);
+  std::size_t n = 0;
+  const LowState bent = uprightState(0.0, 0.2);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) fb.update({0.25, 0.1, 0.78}, walk, bent, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+}
+
+TEST(PostureFeedback, WalkingDecayAfterAStop) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {0.0, 0.0};  // no standing integrator: what is left after the stop is the walking one
+  c.walking_ki = {1.0, 1.0};
+  c.walking_max_correction_rad = 0.08;
+  c.walking_settle_s = 0.0;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  for (int k = 0; k < 2000; ++k) fb.update({0.0, 0.0, 0.78}, {0.0, 0.4, 0.0}, uprightState(0.0, -0.2), 0.01);
+  EXPECT_NEAR(fb.correction()[0], 0.08, 1e-12) << "walking_min_command_rad 0: upright walks are corrected too";
+  double prev = fb.correction()[0];
+  for (int k = 0; k < 300; ++k) {
+    fb.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, -0.2), 0.01);
+    EXPECT_LE(fb.correction()[0], prev) << "monotone decay, no jump";
+    EXPECT_GE(prev - fb.correction()[0], 0.0);
+    EXPECT_LE(prev - fb.correction()[0], 0.08 * 0.01 / 0.5 + 1e-12) << "decays at decay_time_s, never jumps";
+    prev = fb.correction()[0];
+  }
+  EXPECT_LT(fb.correction()[0], 0.08 * 0.01) << "3 s after the stop (6 decay times)";
+}
+
 // A crouch with flat feet: hip pitch -a, knee 2a, ankle pitch -a on both legs (the pelvis goes
 // straight down as a grows), the IMU level.
 LowState crouchState(double a) {

@@ -227,6 +227,23 @@ struct PostureFeedbackConfig {
   /// walking it decays (decay_time_s). Walking sways the torso, and a lean commanded against the
   /// sway of a side-step at the envelope's edge felled the robot (docs/controller.md).
   double still_velocity = 0.05;
+  /// While walking (not still), integral gains for torso pitch and roll [1/s], each 0..5; 0 (the
+  /// default): the correction decays while walking, as above. A walking gait sways the torso about
+  /// a mean (roll ±0.1 rad over a side-step cycle), so walking uses its own slower low-pass of the
+  /// measured attitude (walking_filter_time_s, about a gait cycle) and its own, smaller bound.
+  std::array<double, 2> walking_ki{0.0, 0.0};
+  /// Largest walking correction c_w [rad], [0, 0.3].
+  double walking_max_correction_rad = 0.05;
+  /// Time constant of the walking low-pass [s], [0, 5].
+  double walking_filter_time_s = 1.0;
+  /// While walking, an axis integrates only once its posture command has stayed within 0.01 rad of
+  /// where it settled for this long [s], [0, 5]: the torso lags a posture ramp (the shaper's
+  /// posture_rate) and the walking low-pass lags more, and integrating that lag overshoots.
+  double walking_settle_s = 1.0;
+  /// While walking, an axis integrates only while |its posture command| is at least this [rad],
+  /// [0, 0.5]; 0: always. Walking with the torso upright, the gait's own pitch is left alone (fed
+  /// back, the lean it built at 1 m/s carried the robot 0.1 m further when it stopped).
+  double walking_min_command_rad = 0.0;
   /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
   double height_ki = 0.0;
   /// Largest correction of the height command [m], [0, 0.1].
@@ -244,7 +261,11 @@ struct PostureFeedbackConfig {
 /// IMU orientation and the waist encoders (KDL forward kinematics pelvis -> torso_link),
 ///   p̂ low-passed,  c_p ← clamp(c_p + k_p (u_p − p̂) dt, ±max_correction_rad),
 ///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range);
-/// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays.
+/// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays;
+/// with walking_ki > 0 a second integrator c_w acts while walking, once the posture command has been
+/// steady for walking_settle_s: c_w ← clamp(c_w + k_w (u_p − p̄) dt, ±walking_max_correction_rad) on
+/// the slower low-pass p̄ (walking_filter_time_s), and decays while standing; the correction is
+/// clamp(c_p + c_w, ±max_correction_rad).
 /// With height_ki > 0 the pelvis height gets the same treatment: ĥ = the height of the pelvis (B
 /// origin) above the lower stance sole, −min_f (R_WB p_BS,f)_z on the KDL leg chains (flat ground
 /// assumed: the Table I Height measure on a level floor), low-passed alike;
@@ -293,7 +314,9 @@ class PostureFeedback {
   double standing_height_;
   std::unique_ptr<gco::LegKinematics> legs_;  ///< null when the height is not fed back
   gco::LegJointIndex leg_idx_;
-  std::array<double, 2> c_{}, p_hat_{};
+  std::array<double, 2> c_{}, p_hat_{}, p_walk_hat_{};
+  std::array<double, 2> c_stand_{}, c_walk_{};  ///< the standing and the walking integrators (c_ = their bounded sum)
+  std::array<double, 2> p_settled_{}, p_steady_s_{};  ///< where each posture command settled, and for how long
   bool have_ = false;
   double c_h_ = 0.0, h_hat_ = 0.0;
   bool have_h_ = false;
