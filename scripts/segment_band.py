@@ -8,8 +8,9 @@ segment and over seeds; written by `pmg_policy_sil`) and prints, per commanded v
 segments whose achieved value is within the band
     |achieved - command| <= max(0.15 |command|, tol),  tol = 0.05 m/s (v_x, v_y), 0.08 rad/s (omega)
 (issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the posture segments
-against pitch / roll within 0.03 rad and height within 0.015 m, and the torso roll in the side-steps
-(cross-coupling, target <= 0.05 rad). Frames: commands and achieved velocities in the robot's
+against pitch / roll within 0.03 rad and height within 0.015 m, the torso roll in the side-steps
+and, in every segment, the torso pitch or roll that it does not command (cross-coupling, target
+<= 0.05 rad). Frames: commands and achieved velocities in the robot's
 heading frame, as pmg_policy_sil writes them. Exit status 2 on a file without `segments`.
 """
 import json
@@ -59,6 +60,14 @@ def score(path):
     rolls = [abs(s["achieved"]["roll"]) for s in side]
     if rolls:
         print(f"torso roll in the side-steps: {min(rolls):.3f}-{max(rolls):.3f} rad (target <= {COUPLING_ABS})")
+    # Cross-coupling everywhere: torso pitch or roll away from zero in a segment that does not
+    # command it (walking, crouching, bending on the other axis), beyond the issue's 0.05 rad.
+    coupling = [f"{s['name']} {key} {s['achieved'][key]:+.3f}" for s in segs for key in ("pitch", "roll")
+                if abs(s["command"][key]) < 1e-9 and abs(s["achieved"][key]) > COUPLING_ABS]
+    worst = max((abs(s["achieved"][key]) for s in segs for key in ("pitch", "roll") if abs(s["command"][key]) < 1e-9),
+                default=0.0)
+    print(f"cross-coupling beyond {COUPLING_ABS} rad (pitch/roll not commanded, every segment; largest {worst:.3f}): "
+          f"{', '.join(coupling) or 'none'}")
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
     print(f"seeds fallen (summed over segments): {falls}")
 

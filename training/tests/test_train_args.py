@@ -34,6 +34,8 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--reward-weight", "orientation=nan"], "--reward-weight"),
                   (["--reward-weight", "height=abc"], "--reward-weight"),
                   (["--tracking-sigma", "0"], "--tracking-sigma"),
+                  (["--orientation-sigma", "0"], "--orientation-sigma"),
+                  (["--orientation-sigma", "nan"], "--orientation-sigma"),
                   (["--yaw-rate-weight", "-1"], "--yaw-rate-weight")):
     err = io.StringIO()
     try:
