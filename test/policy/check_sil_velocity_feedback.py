@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Checks the tracking feedback through the product path (ctest pmg_policy_sil_tracking_feedback,
-label sil): the shipped policy runs the Table I sequence twice, with the velocity and posture
+label sil): the tracking actor (g1_sil_policy_tracking.yaml, the default until 2026-11-26, chosen
+because it misses on its own what the feedback closes) runs the Table I sequence twice, with the velocity and posture
 feedback off and on (pmg_policy_sil --velocity-feedback / --posture-feedback off|on). The hidden
 effect is the actor's shortfall on backward, sideways and turning commands and on the bend
 (docs/policy.md "Command fidelity"): off, some velocity segment misses its command by more than 10 %
