@@ -2,7 +2,8 @@
 """Checks the walking posture feedback through the product path (ctest
 pmg_policy_sil_walking_posture_feedback, label sil): the default config (g1_sil_policy.yaml) walks
 test/data/policy/eval_bent_walk.yaml (0.3 m/s with the torso bent 0.25 rad) with the posture
-feedback off and on (pmg_policy_sil --posture-feedback off|on; the velocity feedback stays on).
+feedback off and on (pmg_policy_sil --posture-feedback off|on --first-seed 3 --seeds 2; the
+velocity feedback stays on).
 The hidden effect: the actor alone bends short while walking (off: more than 0.03 rad below the
 command). On: the bent walk's torso pitch within 0.03 rad of the command, its v_x still within the
 issue-12 band, no fall, and the stand after it upright within 0.03 rad (the walking correction
@@ -36,6 +37,8 @@ def main(off_dir, on_dir):
         "v_x within the band with the feedback": abs(vx - vx_u) <= max(0.15 * abs(vx_u), 0.05),
         "the stand after it is upright within 0.03 rad": abs(end_on["achieved"]["pitch"]) <= 0.03,
         "no fall": on["mean"]["falls"] == 0 and off["mean"]["falls"] == 0,
+        "the runs are seeds 3 and 4 (--first-seed 3 --seeds 2)": [r["seed"] for r in on["runs"]] == [3, 4]
+        and [r["seed"] for r in off["runs"]] == [3, 4],
     }
     for name, ok in checks.items():
         print(("ok   " if ok else "FAIL ") + name)
