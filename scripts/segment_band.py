@@ -62,10 +62,10 @@ def score(path):
         print(f"torso roll in the side-steps: {min(rolls):.3f}-{max(rolls):.3f} rad (target <= {COUPLING_ABS})")
     # Cross-coupling everywhere: torso pitch or roll away from zero in a segment that does not
     # command it (walking, crouching, bending on the other axis), beyond the 0.05 rad.
-    coupling = [f"{s['name']} {key} {s['achieved'][key]:+.3f}" for s in segs for key in ("pitch", "roll")
-                if abs(s["command"][key]) < 1e-9 and abs(s["achieved"][key]) > COUPLING_ABS]
-    worst = max((abs(s["achieved"][key]) for s in segs for key in ("pitch", "roll") if abs(s["command"][key]) < 1e-9),
-                default=0.0)
+    uncommanded = [(s["name"], key, s["achieved"][key]) for s in segs for key in ("pitch", "roll")
+                   if abs(s["command"][key]) < 1e-9]
+    coupling = [f"{name} {key} {a:+.3f}" for name, key, a in uncommanded if abs(a) > COUPLING_ABS]
+    worst = max((abs(a) for _, _, a in uncommanded), default=0.0)
     print(f"cross-coupling beyond {COUPLING_ABS} rad (pitch/roll not commanded, every segment; largest {worst:.3f}): "
           f"{', '.join(coupling) or 'none'}")
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
