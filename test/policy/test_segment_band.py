@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Tests scripts/segment_band.py (ctest segment_band_scores_a_known_summary, label unit) on a
+synthetic pmg_policy_sil summary whose misses are known: backward at 80 % (outside +-15 %), forward
+at 96 % (inside), a crouch 20 mm high (outside 0.015 m), a side-step rolling 0.07 rad and a bent
+walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target.
+Usage: test_segment_band.py
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def seg(name, command, achieved):
+    base = {"vx": 0.0, "vy": 0.0, "wz": 0.0, "pitch": 0.0, "roll": 0.0, "height": 0.78}
+    return {"name": name, "seeds": 2, "fallen": 0, "command": {**base, **command}, "reference": dict(base),
+            "achieved": {**base, **achieved}}
+
+
+def main():
+    summary = {"segments": [
+        seg("stand", {}, {}),
+        seg("fwd", {"vx": 0.5}, {"vx": 0.48}),
+        seg("back", {"vx": -0.5}, {"vx": -0.40}),
+        seg("left", {"vy": 0.3}, {"vy": 0.29, "roll": -0.07}),
+        seg("crouch", {"height": 0.62}, {"height": 0.64}),
+        seg("bent_walk", {"vx": 0.3, "pitch": 0.25}, {"vx": 0.3, "pitch": 0.25, "roll": 0.06}),
+    ]}
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "summary.json")
+        with open(path, "w") as f:
+            json.dump(summary, f)
+        out = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/segment_band.py"), path],
+                             capture_output=True, text=True, check=True).stdout
+    print(out)
+    expect = [
+        "vx: 2/3 in band; misses: back (-0.400 of -0.500)",
+        "vy: 1/1 in band; misses: none",
+        "velocity segments in band: 3/4",
+        "posture misses: crouch height +0.640 of +0.620",
+        "torso roll in the side-steps: 0.070-0.070 rad",
+        "cross-coupling beyond 0.05 rad (pitch/roll not commanded, every segment; largest 0.070): "
+        "left roll -0.070, bent_walk roll +0.060",
+    ]
+    missing = [e for e in expect if e not in out]
+    for e in missing:
+        print(f"FAIL expected line: {e}")
+    return 1 if missing else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
