@@ -173,6 +173,8 @@ def parse_args(argv=None):
                          "default 0.25)")
     ap.add_argument("--orientation-sigma", type=float, default=None, metavar="S",
                     help="width of the torso pitch/roll reward exp(-err^2/S) [rad^2] (EnvConfig.orientation_sigma; default 0.05)")
+    ap.add_argument("--height-sigma", type=float, default=None, metavar="S",
+                    help="width of the pelvis height reward exp(-err^2/S) [m^2] (EnvConfig.height_sigma; default 0.005)")
     ap.add_argument("--yaw-rate-weight", type=float, default=None, metavar="W",
                     help="weight of the yaw-rate tracking reward (EnvConfig.w['yaw_rate']; default 0.8, lin_vel 1.5); the same as --reward-weight yaw_rate=W")
     ap.add_argument("--reward-weight", action="append", default=[], metavar="NAME=W",
@@ -204,6 +206,8 @@ def parse_args(argv=None):
     args = ap.parse_args(argv)
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
+    if args.height_sigma is not None and not args.height_sigma > 0:
+        ap.error(f"--height-sigma = {args.height_sigma}: expected > 0")
     if args.tracking_sigma is not None and not args.tracking_sigma > 0:
         ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
     if args.yaw_rate_weight is not None and not args.yaw_rate_weight >= 0:
@@ -330,6 +334,8 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
     if args.orientation_sigma is not None:
         cfg = dataclasses.replace(cfg, orientation_sigma=args.orientation_sigma)
+    if args.height_sigma is not None:
+        cfg = dataclasses.replace(cfg, height_sigma=args.height_sigma)
     if args.command_range:
         cfg = dataclasses.replace(cfg, **args.command_range)
         log("command ranges:", {a: getattr(cfg, a) for a in COMMAND_AXES})

@@ -360,7 +360,8 @@ int main(int argc, char** argv) {
           for (const char* a : kAxisNames) csv << ',' << a << "_uopt";
           // the velocity command after the feedback (= the command when off) and leg odometry (nan when off)
           csv << ",vx_fb,vy_fb,wz_fb,vx_est,vy_est,wz_est,pitch_fb,roll_fb";
-          csv << ",episode\n";
+          // the pelvis tilt from vertical (the IMU's attitude) that the feedback's tilt guards read [rad]
+          csv << ",pelvis_tilt,episode\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
@@ -491,7 +492,7 @@ int main(int argc, char** argv) {
           for (int i = 0; i < 3; ++i) csv << ',' << fb[static_cast<std::size_t>(i)];
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << fb[3] << ',' << fb[4];
-          csv << ',' << episode << '\n';
+          csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << '\n';
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
             for (int b = 1; b < m->nbody; ++b)

@@ -24,6 +24,8 @@ if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-
     failures.append("--command-slew: off by default, on with the flag")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
     failures.append("--p-stop 0.5 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
+    failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-stop", "nan"], "--p-stop"),
                   (["--command-range", "vx=1.0,-0.5"], "--command-range"),
@@ -36,6 +38,8 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--tracking-sigma", "0"], "--tracking-sigma"),
                   (["--orientation-sigma", "0"], "--orientation-sigma"),
                   (["--orientation-sigma", "nan"], "--orientation-sigma"),
+                  (["--height-sigma", "0"], "--height-sigma"),
+                  (["--height-sigma", "-0.001"], "--height-sigma"),
                   (["--yaw-rate-weight", "-1"], "--yaw-rate-weight")):
     err = io.StringIO()
     try:
@@ -45,5 +49,5 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 15 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 18 cases as expected")
 sys.exit(1 if failures else 0)
