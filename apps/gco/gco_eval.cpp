@@ -112,6 +112,7 @@ int main(int argc, char** argv) {
   std::vector<double> pitch{0.0, 0.2}, roll{0.0, 0.1}, height{0.0, 0.70};
   std::vector<double> trace{0.6, 0.0, 0.0}, trace_posture{0.0, 0.0, 0.0};
   std::string blending = "consistent";
+  double max_cadence_ratio = pmg::GeneratorParams{}.max_cadence_ratio;
   bool envelope = false;
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory)->capture_default_str();
@@ -127,6 +128,10 @@ int main(int argc, char** argv) {
   app.add_option("--height", height, "grid values of the height command [m] (0 = standing height)");
   app.add_option("--trace", trace, "command (v_x v_y ω) whose foot trajectories go to gco_trace.csv")->expected(3);
   app.add_option("--trace-posture", trace_posture, "posture (pitch roll height) of the traced command")->expected(3);
+  app.add_option("--max-cadence-ratio", max_cadence_ratio,
+                 "consistent blending: at most this much faster cadence where a stride saturates (1 = eq. 12's period)")
+      ->check(CLI::Range(1.0, 2.0))
+      ->capture_default_str();
   app.add_option("--blending", blending, "generator blending: consistent | paper (PMG eqs. 4-7)")
       ->check(CLI::IsMember({"consistent", "paper"}))
       ->capture_default_str();
@@ -157,8 +162,9 @@ int main(int argc, char** argv) {
     }
     pmg::GeneratorParams gen_params;
     gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
+    gen_params.max_cadence_ratio = max_cadence_ratio;
     auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot), gen_params);
-    std::printf("blending: %s\n", blending.c_str());
+    std::printf("blending: %s, max cadence ratio %.2f\n", blending.c_str(), max_cadence_ratio);
     auto legs = LegModel::fromRobotConfig(robot);
     GcoOptions on = gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config);
     on.enabled = true;

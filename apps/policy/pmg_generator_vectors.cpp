@@ -354,6 +354,7 @@ int main(int argc, char** argv) {
     j.key("mirror_sign"); j.list(js.mirror_sign); j.raw(",");
     j.key("standing_base_height"); j.num(js.standing_base_height); j.raw(",");
     j.key("epsilon"); j.num(params.epsilon); j.raw(",");
+    j.key("max_cadence_ratio"); j.num(params.max_cadence_ratio); j.raw(",");
     j.key("max_command"); j.list(params.max_command); j.raw(",");
     j.key("blending"); j.raw("\"consistent\",");
     j.key("consistency_map");

@@ -3,6 +3,7 @@
 // or 0.03 m/s / 0.05 rad/s) over single axes, combinations and a squat, where the paper's blending
 // misses it by far.
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include <gtest/gtest.h>
@@ -107,6 +108,56 @@ TEST_F(ConsistentG1, MapGaussNewtonSolvesACoupledCrouchedNodeAndKeepsSolvedOnes)
   const ConsistencyMap a = mapAt(solved, 0), b = mapAt(solved, 10);
   EXPECT_TRUE(within(impliedWith(solved, a), solved.u));
   EXPECT_EQ(a.delta, b.delta);
+}
+
+// Where a stride saturates, the gait steps faster (GeneratorParams::max_cadence_ratio): walking
+// forward 1.0 m/s while side-stepping left 0.4 m/s, crouched to 0.66 m, an amplitude is at its
+// table's end. With eq. 12's cadence the reference misses the
+// command; stepping up to 1.3 times faster it carries it, and the period played is eq. 12's divided
+// by the reported cadence ratio, within [1, 1.3].
+TEST_F(ConsistentG1, StrideAtItsEndStepsFaster) {
+  const Case corner{{1.0, 0.4, 0.0}, {0.0, 0.0, 0.66}};
+  const auto run = [&](double max_cadence_ratio, GeneratorOutput* last) {
+    GeneratorParams p;
+    p.max_cadence_ratio = max_cadence_ratio;
+    MotionGenerator gen(std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), p));
+    const Eigen::Vector3d v = cycleImpliedVelocity(gen, kin, idx, corner.u, corner.s);
+    gen.step(corner.u, corner.s, 0.01);
+    *last = gen.output();
+    return v;
+  };
+  GeneratorOutput fixed, faster;
+  const Eigen::Vector3d v_fixed = run(1.0, &fixed), v_faster = run(1.3, &faster);
+  EXPECT_GT(fixed.amplitude_saturated, 0);
+  EXPECT_DOUBLE_EQ(fixed.cadence_ratio, 1.0);
+  EXPECT_FALSE(within(v_fixed, corner.u)) << "eq. 12's cadence: implied (" << v_fixed.transpose() << ")";
+  EXPECT_TRUE(within(v_faster, corner.u)) << "stepping faster: implied (" << v_faster.transpose() << ")";
+  EXPECT_GT(faster.cadence_ratio, 1.05);
+  EXPECT_LE(faster.cadence_ratio, 1.3 + 1e-12);
+  EXPECT_NEAR(faster.period * faster.cadence_ratio, fixed.period, 1e-9);  // the same eq. 12 period
+
+  // The period is continuous in the command through the saturation's onset (ρ = 1 there): swept
+  // along v_y from 0 to 0.4 m/s, the largest change between neighbouring commands halves when the
+  // step halves (a jump would not), and the sweep passes from eq. 12's cadence to the faster one.
+  const auto sweep = [&](int steps, bool* saw_faster, bool* saw_plain) {
+    MotionGenerator gen(std::make_shared<const GeneratorModel>(clips, generatorJointSpace(robot), GeneratorParams{}));
+    double prev = -1.0, largest = 0.0;
+    for (int k = 0; k <= steps; ++k) {
+      gen.step({corner.u.vx, 0.4 * k / steps, corner.u.wz}, corner.s, 0.01);
+      const double period = gen.output().period;
+      if (prev > 0) largest = std::max(largest, std::fabs(period - prev));
+      prev = period;
+      *(gen.output().cadence_ratio > 1.0 ? saw_faster : saw_plain) = true;
+    }
+    return largest;
+  };
+  bool saw_faster = false, saw_plain = false;
+  const double largest_step = sweep(400, &saw_faster, &saw_plain), largest_half = sweep(800, &saw_faster, &saw_plain);
+  EXPECT_TRUE(saw_faster && saw_plain);
+  EXPECT_LT(largest_half, 0.6 * largest_step);
+  EXPECT_LT(largest_step, 5e-3);
+  std::printf("cadence ratio %.3f, period %.3f s (eq. 12: %.3f s), largest period step %.2e / %.2e s\n",
+              faster.cadence_ratio, faster.period, fixed.period, largest_step, largest_half);
 }
 
 }  // namespace

@@ -285,6 +285,23 @@ TEST(Generator, ReferenceVelocityMatchesTheFiniteDifferenceOfQref) {
   EXPECT_LT((fd - qd0).cwiseAbs().maxCoeff(), 1e-6 + 0.02 * fd.cwiseAbs().maxCoeff());
 }
 
+// GeneratorParams::max_cadence_ratio outside [1, 2] is refused naming the field.
+TEST(Generator, RejectsACadenceRatioOutsideItsRange) {
+  for (double bad : {0.9, 2.5, std::nan("")}) {
+    GeneratorParams p;
+    p.max_cadence_ratio = bad;
+    try {
+      GeneratorModel m(library(), jointSpace(), p);
+      ADD_FAILURE() << "max_cadence_ratio " << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("max_cadence_ratio"), std::string::npos) << e.what();
+    }
+  }
+  GeneratorParams ok;
+  ok.max_cadence_ratio = 1.0;
+  EXPECT_NO_THROW(GeneratorModel(library(), jointSpace(), ok));
+}
+
 // The generator refuses a clip by the clip library's one validation (pmg::validateClip).
 std::string modelError(const ClipLibrary& lib) {
   try {

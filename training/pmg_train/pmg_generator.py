@@ -156,9 +156,12 @@ class GeneratorModel:
     """Immutable model: 6 dynamic slots (axis x sign), up to 3 static clips (GeneratorModel)."""
 
     def __init__(self, dynamic_clips, static_clips, js: JointSpace, epsilon=0.05, max_command=(1.5, 0.8, 1.5),
-                 blending="consistent", consistency=None):
+                 blending="consistent", consistency=None, max_cadence_ratio=1.3):
         if blending not in BLENDINGS:
             raise ValueError(f"GeneratorModel.blending = {blending!r}: expected one of {BLENDINGS}")
+        if not 1.0 <= max_cadence_ratio <= 2.0:
+            raise ValueError(f"GeneratorModel.max_cadence_ratio = {max_cadence_ratio}: expected in [1, 2]")
+        self.max_cadence_ratio = float(max_cadence_ratio)
         self.blending = blending
         self.js = js
         self.epsilon = float(epsilon)
@@ -373,28 +376,57 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
 
     # Effective amplitudes e_i and the clip each axis plays (direction d_i).
     saturated = [xp.asarray(False)] * 3
-    if consistent:  # solveConsistentAmplitudes: fixed Gauss-Seidel sweeps
-        amp = [zero, zero, zero]
-        direction = list(sign)
-        for _ in range(KCONSISTENT_SWEEPS):
+    cadence_ratio = 1.0 + zero
+    if consistent:
+        def displacement(j, direction_j, e, column):  # D_j,s_j(e)[column]
+            return xp.where(direction_j < 0, _table_at(xp, model.tables[2 * j + 1], e, column),
+                            _table_at(xp, model.tables[2 * j], e, column))
+
+        def solve(period):  # solveConsistentAmplitudes: fixed Gauss-Seidel sweeps; returns (amp, direction, sat, rho)
+            amp = [zero, zero, zero]
+            direction = list(sign)
+            sat = [xp.asarray(False)] * 3
+            for _ in range(KCONSISTENT_SWEEPS):
+                for i in range(3):
+                    if not present[i]:
+                        amp[i] = zero
+                        continue
+                    r = u[i] * period
+                    for j in range(3):
+                        if j == i or not present[j]:
+                            continue
+                        r = r - xp.where(amp[j] > 0.0, displacement(j, direction[j], amp[j], i), 0.0)
+                    target = xp.abs(r)
+                    e_pos, s_pos = _table_inverse(xp, model.tables[2 * i], target, i, 1)
+                    e_neg, s_neg = _table_inverse(xp, model.tables[2 * i + 1], target, i, -1)
+                    neg = r < 0
+                    amp[i] = xp.where(neg, e_neg, e_pos)
+                    sat[i] = xp.where(neg, s_neg, s_pos)
+                    direction[i] = xp.where(neg, -1.0, 1.0)
+            rho = 1.0 + zero
             for i in range(3):
                 if not present[i]:
-                    amp[i] = zero
                     continue
-                r = u[i] * period
+                need = u[i] * period
+                got = zero
                 for j in range(3):
-                    if j == i or not present[j]:
-                        continue
-                    dj = xp.where(direction[j] < 0, _table_at(xp, model.tables[2 * j + 1], amp[j], i),
-                                  _table_at(xp, model.tables[2 * j], amp[j], i))
-                    r = r - xp.where(amp[j] > 0.0, dj, 0.0)
-                target = xp.abs(r)
-                e_pos, s_pos = _table_inverse(xp, model.tables[2 * i], target, i, 1)
-                e_neg, s_neg = _table_inverse(xp, model.tables[2 * i + 1], target, i, -1)
-                neg = r < 0
-                amp[i] = xp.where(neg, e_neg, e_pos)
-                saturated[i] = xp.where(neg, s_neg, s_pos)
-                direction[i] = xp.where(neg, -1.0, 1.0)
+                    if present[j]:
+                        got = got + xp.where(amp[j] > 0.0, displacement(j, direction[j], amp[j], i), 0.0)
+                use = xp.logical_and(sat[i], xp.abs(need) >= 1e-12)
+                share = xp.maximum(0.0, got / xp.where(use, need, 1.0))
+                rho = xp.where(use, xp.minimum(rho, share), rho)
+            return amp, direction, sat, rho
+
+        amp, direction, saturated, rho = solve(period)
+        if model.max_cadence_ratio > 1.0:  # a stride at its end: step faster (generator.hpp)
+            faster = rho < 1.0
+            period_fast = period * xp.clip(rho, 1.0 / model.max_cadence_ratio, 1.0)
+            amp_f, direction_f, saturated_f, _ = solve(period_fast)
+            amp = [xp.where(faster, a, b) for a, b in zip(amp_f, amp)]
+            direction = [xp.where(faster, a, b) for a, b in zip(direction_f, direction)]
+            saturated = [xp.where(faster, a, b) for a, b in zip(saturated_f, saturated)]
+            cadence_ratio = xp.where(faster, period / period_fast, 1.0)
+            period = xp.where(faster, period_fast, period)
         alpha = list(amp)
     else:
         amp = [weight[i] * alpha[i] for i in range(3)]
@@ -456,7 +488,8 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     qd_ref = (q_plus - q_minus) / (2.0 * h * period)
     next_phase = wrap_phase(xp, phase + dt / period)
     stack = lambda xs: xp.stack([xp.asarray(x) for x in xs])
-    return {"phase": phase, "next_phase": next_phase, "period": period, "q_ref": q_ref, "qd_ref": qd_ref,
+    return {"phase": phase, "next_phase": next_phase, "period": period, "cadence_ratio": cadence_ratio,
+            "q_ref": q_ref, "qd_ref": qd_ref,
             "alpha": stack(alpha), "weight": stack(weight), "amplitude": stack(amp),
             "clip_direction": stack(direction), "amplitude_saturated": xp.sum(stack(saturated).astype(xp.int32)),
             "command_correction": correction, "standing_weight": w_stand, "beta": stack(beta),
@@ -558,4 +591,5 @@ def model_from_vectors(v, blending=None):
     m = v.get("consistency_map")
     cmap = None if m is None else ConsistencyMap([np.atleast_1d(np.array(m[k], float)) for k in MAP_KEYS],
                                                  np.array(m["delta"], float).reshape(-1, 3))
-    return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"], blending or v.get("blending", "paper"), cmap)
+    return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"], blending or v.get("blending", "paper"), cmap,
+                          v["max_cadence_ratio"])

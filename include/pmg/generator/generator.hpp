@@ -33,6 +33,12 @@
 /// clip's drift, and e_i → 0 continuously as r_i → 0), e_i = D_i,s_i^{-1}(|r_i|) on the clip's own
 /// axis, clamped to the table's largest amplitude (reported as amplitude_saturated). α_i then
 /// reports e_i. A clip without a table gets the linear one D(e) = e T x̄ on its own axis, e ≤ 1.
+/// Where an amplitude saturates, the stride cannot grow, so the gait steps faster instead (a human's
+/// answer too): with ρ = min over the saturated axes i of Σ_j D_j(e_j)[i] / (u_i T_u), the achieved
+/// share of the required per-cycle displacement, the period becomes T_u' = T_u · clamp(ρ,
+/// 1 / max_cadence_ratio, 1) and the amplitudes are solved again for u T_u' (GeneratorParams::
+/// max_cadence_ratio; GeneratorOutput::cadence_ratio = T_u / T_u'). ρ = 1 at the saturation's onset,
+/// so the period is continuous in u; φ integrates dt / T_u', so q_ref stays continuous in time.
 /// The contact schedule (eqs. 8–9) splits the walking share Σ w_i among the played clips in
 /// proportion to e_i (eq. 6's split would time the contacts by a clip that barely moves).
 /// What the per-clip tables cannot capture (channel interactions, the leg geometry of a squat) is
@@ -118,6 +124,10 @@ struct GeneratorParams {
   double epsilon = 0.05;  ///< ε of eq. 6 [command units]; keeps w finite at zero command
   /// |command| accepted per axis (v_x, v_y, ω) [m/s, m/s, rad/s]; larger values are clamped.
   std::array<double, kNumCommandAxes> max_command{1.5, 0.8, 1.5};
+  /// kConsistent: at most this much faster than eq. 12's cadence where an amplitude saturates
+  /// (file comment), [1, 2]; 1 = eq. 12's period always. The library's ConsistencyMap is computed
+  /// with the default (pmg::gco::computeConsistencyMap), so a different value only for an ablation.
+  double max_cadence_ratio = 1.3;
 
   /// Returns an empty string when valid, else what is wrong (field and expected range).
   std::string validate() const {
@@ -126,6 +136,8 @@ struct GeneratorParams {
     if (!(epsilon > 0 && epsilon < 1)) return "GeneratorParams.epsilon: expected in (0, 1)";
     for (double m : max_command)
       if (!(m > 0 && m < 10)) return "GeneratorParams.max_command: expected each in (0, 10)";
+    if (!(max_cadence_ratio >= 1.0 && max_cadence_ratio <= 2.0))
+      return "GeneratorParams.max_cadence_ratio: expected in [1, 2]";
     return {};
   }
 };
@@ -142,7 +154,8 @@ enum class GeneratorStatus : int {
 struct GeneratorOutput {
   double phase = 0.0;                 ///< φ at which the references were evaluated [0, 1)
   double next_phase = 0.0;            ///< φ after the update of eq. 11
-  double period = 1.0;                ///< T_u of eq. 12 [s]
+  double period = 1.0;                ///< T_u of eq. 12 [s] (kConsistent: shortened where an amplitude saturates)
+  double cadence_ratio = 1.0;         ///< kConsistent: eq. 12's period / the period played, in [1, max_cadence_ratio]
   Eigen::VectorXd q_ref;              ///< (n) q_ref = q_d + q_s (eq. 10), clamped to limits [rad]
   Eigen::VectorXd qd_ref;             ///< (n) reference joint velocity [rad/s]
   Eigen::VectorXd q_dynamic;          ///< (n) q_d of eq. 7 [rad]
@@ -396,7 +409,16 @@ class MotionGenerator {
     // Command-consistent amplitudes (see the file comment); the weights above stay for the
     // period and the contact schedule.
     out_.amplitude_saturated = 0;
-    if (p.blending == Blending::kConsistent) solveConsistentAmplitudes(u, period);
+    out_.cadence_ratio = 1.0;
+    if (p.blending == Blending::kConsistent) {
+      const double rho = solveConsistentAmplitudes(u, period);
+      if (rho < 1.0 && p.max_cadence_ratio > 1.0) {  // a stride at its end: step faster (file comment)
+        period *= std::clamp(rho, 1.0 / p.max_cadence_ratio, 1.0);
+        solveConsistentAmplitudes(u, period);
+        out_.cadence_ratio = out_.period / period;
+        out_.period = period;
+      }
+    }
 
     // The dynamic reference at φ and φ ± h (eqs. 5, 7; reference velocity).
     const double h = 0.5 / static_cast<double>(model_->maxSamples());
@@ -565,8 +587,10 @@ class MotionGenerator {
   }
 
   // kConsistent: Gauss–Seidel sweeps for e with Σ_i D_i,s_i(e_i) = u T_u (file comment). Sets
-  // amplitude, clip_direction, alpha (= e) and amplitude_saturated. noexcept, no allocation.
-  void solveConsistentAmplitudes(const std::array<double, kNumCommandAxes>& u, double period) noexcept {
+  // amplitude, clip_direction, alpha (= e) and amplitude_saturated. Returns ρ, the smallest share
+  // of its required displacement u_i T_u that a saturated axis achieves (1 when none saturates).
+  // noexcept, no allocation.
+  double solveConsistentAmplitudes(const std::array<double, kNumCommandAxes>& u, double period) noexcept {
     const GeneratorModel& m = *model_;
     std::array<const GeneratorModel::DisplacementTable*, kNumCommandAxes> table{};
     std::array<bool, kNumCommandAxes> saturated{};
@@ -594,10 +618,20 @@ class MotionGenerator {
         out_.clip_direction[i] = dir;
       }
     }
+    out_.amplitude_saturated = 0;
+    double rho = 1.0;
     for (std::size_t i = 0; i < kNumCommandAxes; ++i) {
       out_.alpha[i] = out_.amplitude[i];
-      if (saturated[i]) ++out_.amplitude_saturated;
+      if (!saturated[i]) continue;
+      ++out_.amplitude_saturated;
+      const double need = u[i] * period;
+      if (std::fabs(need) < 1e-12) continue;
+      double got = 0.0;
+      for (std::size_t j = 0; j < kNumCommandAxes; ++j)
+        if (table[j] && out_.amplitude[j] > 0.0) got += tableAt(*table[j], out_.amplitude[j], static_cast<Eigen::Index>(i));
+      rho = std::min(rho, std::max(0.0, got / need));
     }
+    return rho;
   }
 
   // Fills out_.q_posture and out_.beta; returns true if a command was clamped to a clip's range.
