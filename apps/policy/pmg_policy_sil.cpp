@@ -46,7 +46,8 @@
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
 //   u_feedback vx, vy, wz, pitch, roll (and height, when posture_feedback.height_ki > 0) after the
 //              velocity and posture feedback: what the generator got (the shaped command when off;
-//              --velocity-feedback / --posture-feedback on|off override the config)
+//              --velocity-feedback / --posture-feedback on|off override the config;
+//              --crouched-envelope off drops commands.crouched_height)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
@@ -227,6 +228,10 @@ int main(int argc, char** argv) {
   app.add_option("--posture-feedback", posture_feedback,
                  "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string crouched_envelope;
+  app.add_option("--crouched-envelope", crouched_envelope,
+                 "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's")
+      ->check(CLI::IsMember({"on", "off"}));
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -248,6 +253,9 @@ int main(int argc, char** argv) {
     base.policy_native = native;
     if (!velocity_feedback.empty()) base.velocity_feedback.enabled = velocity_feedback == "on";
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
+    if (crouched_envelope == "off") base.commands.crouched_height = 0.0;
+    if (crouched_envelope == "on" && !(base.commands.crouched_height > 0.0))
+      throw pmg::ConfigError(controller_path + ": --crouched-envelope on: commands.crouched_height is 0 (off) there");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
@@ -597,7 +605,8 @@ int main(int argc, char** argv) {
     int falls = 0;
     js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
-       << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false") << ", \"commands\": " << jstr(commands)
+       << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
+       << ", \"crouched_height\": " << base.commands.crouched_height << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];

@@ -27,6 +27,16 @@ std::string CommandLimits::validate() const {
   if (!finitePositive(height_rate)) return "commands.height_rate: expected a finite value > 0 [m/s]";
   if (!(standing_height >= height_range[0] && standing_height <= height_range[1]))
     return "commands.height_range: must contain the standing height " + std::to_string(standing_height) + " m";
+  if (!(std::isfinite(crouched_height) && crouched_height >= 0.0))
+    return "commands.crouched_height: expected 0 (off) or a height in [height_range min, standing height) [m]";
+  if (crouched_height > 0.0) {
+    if (!(crouched_height >= height_range[0] && crouched_height < standing_height))
+      return "commands.crouched_height: expected 0 (off) or a height in [" + std::to_string(height_range[0]) + ", " +
+             std::to_string(standing_height) + ") m";
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!(finitePositive(crouched_max_velocity[i]) && crouched_max_velocity[i] <= max_velocity[i]))
+        return "commands.crouched_max_velocity: expected each in (0, max_velocity]";
+  }
   if (!finitePositive(max_reference_speed) || max_reference_speed > 50)
     return "commands.max_reference_speed: expected in (0, 50] rad/s";
   return {};
@@ -86,9 +96,29 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
     ++counters_.stale_ticks;
     target_ = {};
   }
-  velocity_.vx = slew(velocity_.vx, target_.vx, limits_.max_acceleration[0] * dt);
-  velocity_.vy = slew(velocity_.vy, target_.vy, limits_.max_acceleration[1] * dt);
-  velocity_.wz = slew(velocity_.wz, target_.wz, limits_.max_acceleration[2] * dt);
+  // Crouched velocity envelope (CommandLimits::crouched_height), on the shaped height.
+  VelocityCommand goal = target_;
+  if (limits_.crouched_height > 0.0) {
+    const double f = std::clamp((limits_.standing_height - posture_.height) /
+                                    (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
+    if (f > 0.0) {
+      const double t[3] = {target_.vx, target_.vy, target_.wz};
+      double box = 0.0, l1 = 0.0;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const double M = limits_.max_velocity[i], m = M + f * (limits_.crouched_max_velocity[i] - M);
+        box = std::max(box, std::fabs(t[i]) / M);
+        l1 += std::fabs(t[i]) / m;
+      }
+      const double scale = (1.0 - f) * box + f * l1;
+      if (scale > 1.0) {
+        goal = {target_.vx / scale, target_.vy / scale, target_.wz / scale};
+        ++counters_.crouch_limited_ticks;
+      }
+    }
+  }
+  velocity_.vx = slew(velocity_.vx, goal.vx, limits_.max_acceleration[0] * dt);
+  velocity_.vy = slew(velocity_.vy, goal.vy, limits_.max_acceleration[1] * dt);
+  velocity_.wz = slew(velocity_.wz, goal.wz, limits_.max_acceleration[2] * dt);
   posture_.pitch = slew(posture_.pitch, posture_target_.pitch, limits_.posture_rate * dt);
   posture_.roll = slew(posture_.roll, posture_target_.roll, limits_.posture_rate * dt);
   posture_.height = slew(posture_.height, posture_target_.height, limits_.height_rate * dt);

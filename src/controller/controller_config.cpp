@@ -102,6 +102,8 @@ struct GeneratorYaml {
     a->Visit("blending", &p.blending, "consistent (amplitudes from the clips' implied motion) | paper (PMG eqs. 4-7)");
     a->Visit("epsilon", &p.epsilon, "PMG eq. 6 epsilon");
     a->Visit("max_command", &p.max_command, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] the generator accepts");
+    a->Visit("max_cadence_ratio", &p.max_cadence_ratio,
+             "consistent blending: at most this much faster cadence where a stride saturates, [1, 2]; 1 = PMG eq. 12");
   }
   std::string validate() const { return p.validate(); }
 };
@@ -119,6 +121,9 @@ struct CommandsYaml {
     a->Visit("posture_rate", &l.posture_rate, "pitch/roll slew limit [rad/s]");
     a->Visit("height_rate", &l.height_rate, "height slew limit [m/s]");
     a->Visit("max_reference_speed", &l.max_reference_speed, "bound on every joint reference's speed [rad/s]");
+    a->Visit("crouched_height", &l.crouched_height,
+             "0 (off) or the pelvis height [m] at which crouched_max_velocity holds fully (L1 rule)");
+    a->Visit("crouched_max_velocity", &l.crouched_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at crouched_height");
   }
 };
 

@@ -594,6 +594,15 @@ std::vector<Case> allCases() {
       {"ctrl_posture_feedback_correction_out_of_range", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "posture_feedback:\n  max_correction_rad: 0.5\n"; }),
        error({"posture_feedback", "max_correction_rad", "0..0.3"})},
+      {"ctrl_commands_crouched_velocity_above_max", Kind::kControllerConfig,
+       text([] {
+         return sub(controllerText("g1_sil_policy.yaml"), "crouched_max_velocity: [0.3, 0.3, 0.6]",
+                    "crouched_max_velocity: [2.0, 0.3, 0.6]");
+       }),
+       error({"commands", "crouched_max_velocity", "(0, max_velocity]"})},
+      {"ctrl_generator_cadence_ratio_out_of_range", Kind::kControllerConfig,
+       text([] { return sub(controllerText("g1_sil.yaml"), "generator:\n", "generator:\n  max_cadence_ratio: 2.5\n"); }),
+       error({"generator", "max_cadence_ratio", "[1, 2]"})},
       {"ctrl_posture_feedback_walking_ki_out_of_range", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "posture_feedback:\n  walking_ki: [0.5, 6.0]\n"; }),
        error({"posture_feedback", "walking_ki[1]", "0..5"})},

@@ -109,6 +109,64 @@ TEST(CommandShaper, HeightNoneToValueAndBackIsSlewed) {
   EXPECT_LE(largest, max_step + 1e-12);
 }
 
+// The crouched velocity envelope (CommandLimits::crouched_height): standing, a fast arc passes;
+// crouched to crouched_height, it is slowed along its direction until Σ|u_i|/m_i = 1 and counted;
+// crouching while the arc is held never steps the velocity faster than the slew limits.
+TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
+  CommandLimits limits;
+  limits.standing_height = 0.78;
+  limits.max_velocity = {1.0, 0.4, 0.8};
+  limits.crouched_height = 0.62;
+  limits.crouched_max_velocity = {0.3, 0.3, 0.6};
+  CommandShaper shaper(limits);
+  CommandSample s = velocity(0.6, 0.2, 0.4, 0.0);
+  const double dt = 0.01;
+  double t = 0.0, largest[3] = {0, 0, 0};
+  VelocityCommand prev = shaper.velocity();
+  const auto run = [&](std::optional<double> h, double seconds) {
+    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
+      s.command.height = h;
+      s.posture_time = s.velocity_time = t;
+      shaper.update(s, t, dt);
+      const VelocityCommand& v = shaper.velocity();
+      largest[0] = std::max(largest[0], std::fabs(v.vx - prev.vx));
+      largest[1] = std::max(largest[1], std::fabs(v.vy - prev.vy));
+      largest[2] = std::max(largest[2], std::fabs(v.wz - prev.wz));
+      prev = v;
+    }
+  };
+  run(std::nullopt, 2.0);
+  EXPECT_NEAR(shaper.velocity().vx, 0.6, 1e-12) << "standing: the arc passes unchanged";
+  EXPECT_NEAR(shaper.velocity().wz, 0.4, 1e-12);
+  EXPECT_EQ(shaper.counters().crouch_limited_ticks, 0u);
+  run(0.62, 3.0);
+  ASSERT_NEAR(shaper.posture().height, 0.62, 1e-12);
+  const VelocityCommand v = shaper.velocity();
+  const double l1 = std::fabs(v.vx) / 0.3 + std::fabs(v.vy) / 0.3 + std::fabs(v.wz) / 0.6;
+  EXPECT_NEAR(l1, 1.0, 1e-9) << "on the crouched envelope's boundary";
+  EXPECT_NEAR(v.vy / v.vx, 0.2 / 0.6, 1e-9) << "the direction is kept";
+  EXPECT_NEAR(v.wz / v.vx, 0.4 / 0.6, 1e-9);
+  EXPECT_GT(shaper.counters().crouch_limited_ticks, 0u);
+  EXPECT_EQ(shaper.counters().clamped, 0u) << "inside max_velocity: not a clamp";
+  EXPECT_LE(largest[0], limits.max_acceleration[0] * dt + 1e-12);
+  EXPECT_LE(largest[1], limits.max_acceleration[1] * dt + 1e-12);
+  EXPECT_LE(largest[2], limits.max_acceleration[2] * dt + 1e-12);
+  run(std::nullopt, 3.0);
+  EXPECT_NEAR(shaper.velocity().vx, 0.6, 1e-12) << "standing up gives the command back";
+
+  // Off (crouched_height 0, the default): crouched to 0.62 m the arc passes.
+  CommandLimits off = limits;
+  off.crouched_height = 0.0;
+  CommandShaper plain(off);
+  s = velocity(0.6, 0.2, 0.4, 0.0);
+  for (int k = 0; k < 400; ++k) {
+    s.command.height = 0.62;
+    s.posture_time = s.velocity_time = k * dt;
+    plain.update(s, k * dt, dt);
+  }
+  EXPECT_NEAR(plain.velocity().vx, 0.6, 1e-12);
+}
+
 TEST(CommandLimits, ValidateNamesTheField) {
   CommandLimits l;
   EXPECT_EQ(l.validate(), "");
@@ -120,6 +178,13 @@ TEST(CommandLimits, ValidateNamesTheField) {
   l = CommandLimits{};
   l.max_reference_speed = 0;
   EXPECT_NE(l.validate().find("max_reference_speed"), std::string::npos);
+  l = CommandLimits{};
+  l.crouched_height = 0.8;  // above the standing height
+  EXPECT_NE(l.validate().find("commands.crouched_height"), std::string::npos);
+  l = CommandLimits{};
+  l.crouched_height = 0.62;
+  l.crouched_max_velocity = {1.5, 0.3, 0.6};  // beyond max_velocity
+  EXPECT_NE(l.validate().find("commands.crouched_max_velocity"), std::string::npos);
 }
 
 TEST(ReferenceRateLimiter, BoundsEveryJointsStep) {

@@ -59,6 +59,18 @@ struct CommandLimits {
   double height_rate = 0.2;                               ///< height slew limit [m/s]
   /// Pelvis height that "no height command" means [m] (set from the generator's squat clip at setup).
   double standing_height = 0.78;
+  /// Crouched velocity envelope (0 = off): at and below this pelvis height [m] the velocity command
+  /// is held inside crouched_max_velocity by an L1 rule, Σ_i |u_i| / m_i ≤ 1 (combinations count
+  /// against each other), scaled along its direction so the robot still goes where it is told,
+  /// only slower. Between the standing height and crouched_height both the limits m_i and the rule
+  /// blend linearly with the crouch f = (standing − h) / (standing − crouched_height) ∈ [0, 1]:
+  /// s = (1 − f) max_i |u_i| / M_i + f Σ_i |u_i| / m_i(f), u ← u / s when s > 1. h is the shaped
+  /// (slewed) height, so the limit moves continuously and the velocity slew keeps the command
+  /// continuous. Why: the default policy falls when stopping from 0.8 m/s forward or 0.5 m/s
+  /// backward at 0.62 m, and in arcs there (docs/controller.md "Crouched velocity envelope").
+  double crouched_height = 0.0;
+  /// |v_x|, |v_y| [m/s], |ω| [rad/s] at crouched_height; each in (0, max_velocity].
+  std::array<double, 3> crouched_max_velocity{0.4, 0.3, 0.6};
   /// Bound on the speed of every joint reference the loop sends [rad/s] (walking peaks near
   /// 3.6 rad/s on the G1 clips); enforced by pmg::ReferenceRateLimiter after the generator.
   double max_reference_speed = 6.0;
@@ -71,6 +83,7 @@ struct CommandCounters {
   std::uint64_t rejected_nan = 0;  ///< commands with NaN/Inf (ignored: the previous valid one is kept)
   std::uint64_t clamped = 0;       ///< commands outside the limits (clamped)
   std::uint64_t stale_ticks = 0;   ///< ticks on which the velocity command was stale (→ zero velocity)
+  std::uint64_t crouch_limited_ticks = 0;  ///< ticks on which the crouched velocity envelope slowed the command
 };
 
 /// Turns raw operator input into the command the generator gets: validated, clamped to the
