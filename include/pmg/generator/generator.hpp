@@ -126,7 +126,9 @@ struct GeneratorParams {
   std::array<double, kNumCommandAxes> max_command{1.5, 0.8, 1.5};
   /// kConsistent: at most this much faster than eq. 12's cadence where an amplitude saturates
   /// (file comment), [1, 2]; 1 = eq. 12's period always. The library's ConsistencyMap is computed
-  /// with the default (pmg::gco::computeConsistencyMap), so a different value only for an ablation.
+  /// with the default (pmg::gco::computeConsistencyMap), so set another value only for an ablation
+  /// or for a policy trained before the cadence existed (controller config generator.max_cadence_ratio).
+  /// Where it acts the amplitude solve runs twice (a few more table look-ups in the tick).
   double max_cadence_ratio = 1.3;
 
   /// Returns an empty string when valid, else what is wrong (field and expected range).
