@@ -65,11 +65,11 @@ def main():
         x = np.arange(len(HEIGHTS)) + (k - (len(grids) - 1) / 2) * width
         bars = ax0.bar(x, shares, width, label=f"{name} (all: {total:.1f} %)")
         for b, v in zip(bars, shares):
-            ax0.text(b.get_x() + b.get_width() / 2, v + 0.5, f"{v:.1f}", ha="center", fontsize=8)
+            ax0.text(b.get_x() + b.get_width() / 2, v + 0.5, f"{v:.1f}", ha="center", fontsize=7, rotation=90, va="bottom")
         crouched = [worst_ratio(r) for r in rows if r["height"] != "0"]
         ax1.hist(np.clip(crouched, 0.5, 1.5), bins=50, range=(0.5, 1.5), histtype="step", lw=1.5, label=name)
     ax0.set_xticks(np.arange(len(HEIGHTS)), [label for _, label in HEIGHTS])
-    ax0.set_ylim(70, 102)
+    ax0.set_ylim(70, 106)
     ax0.set_ylabel("commands within the target on all three axes [%]")
     ax0.set_title("reference-implied velocity vs command, per height command")
     ax0.legend(loc="lower left", fontsize=8)

@@ -41,7 +41,7 @@ struct ConsistencyMapOptions {
   std::vector<double> vy{-0.4, -0.2, 0.0, 0.2, 0.4};               ///< [m/s]
   std::vector<double> wz{-0.8, -0.4, 0.0, 0.4, 0.8};               ///< [rad/s]
   /// Pelvis heights [m]; values <= 0 stand for the squat clip's neutral (the standing height).
-  std::vector<double> height{0.62, 0.70, 0.0};
+  std::vector<double> height{0.62, 0.66, 0.70, 0.0};
   std::vector<double> pitch{0.0, 0.2, 0.4};  ///< torso pitch commands [rad]
   int iterations = 8;          ///< fixed-point iterations u_gen ← u_gen + (u − m(u_gen))
   double max_correction = 1.5; ///< |Δu| bound per axis [m/s, rad/s]
