@@ -413,10 +413,11 @@ class MotionGenerator {
     out_.amplitude_saturated = 0;
     out_.cadence_ratio = 1.0;
     if (p.blending == Blending::kConsistent) {
-      const double rho = solveConsistentAmplitudes(u, period);
-      if (rho < 1.0 && p.max_cadence_ratio > 1.0) {  // a stride at its end: step faster (file comment)
+      const bool cadence = p.max_cadence_ratio > 1.0;
+      const double rho = solveConsistentAmplitudes(u, period, cadence);
+      if (cadence && rho < 1.0) {  // a stride at its end: step faster (file comment)
         period *= std::clamp(rho, 1.0 / p.max_cadence_ratio, 1.0);
-        solveConsistentAmplitudes(u, period);
+        solveConsistentAmplitudes(u, period, false);
         out_.cadence_ratio = out_.period / period;
         out_.period = period;
       }
@@ -589,10 +590,11 @@ class MotionGenerator {
   }
 
   // kConsistent: Gauss–Seidel sweeps for e with Σ_i D_i,s_i(e_i) = u T_u (file comment). Sets
-  // amplitude, clip_direction, alpha (= e) and amplitude_saturated. Returns ρ, the smallest share
-  // of its required displacement u_i T_u that a saturated axis achieves (1 when none saturates).
-  // noexcept, no allocation.
-  double solveConsistentAmplitudes(const std::array<double, kNumCommandAxes>& u, double period) noexcept {
+  // amplitude, clip_direction, alpha (= e) and amplitude_saturated. With @p want_share, returns ρ,
+  // the smallest share of its required displacement u_i T_u that a saturated axis achieves (1 when
+  // none saturates, or without @p want_share). noexcept, no allocation.
+  double solveConsistentAmplitudes(const std::array<double, kNumCommandAxes>& u, double period,
+                                   bool want_share) noexcept {
     const GeneratorModel& m = *model_;
     std::array<const GeneratorModel::DisplacementTable*, kNumCommandAxes> table{};
     std::array<bool, kNumCommandAxes> saturated{};
@@ -627,7 +629,7 @@ class MotionGenerator {
       if (!saturated[i]) continue;
       ++out_.amplitude_saturated;
       const double need = u[i] * period;
-      if (std::fabs(need) < 1e-12) continue;
+      if (!want_share || std::fabs(need) < 1e-12) continue;
       double got = 0.0;
       for (std::size_t j = 0; j < kNumCommandAxes; ++j)
         if (table[j] && out_.amplitude[j] > 0.0) got += tableAt(*table[j], out_.amplitude[j], static_cast<Eigen::Index>(i));
