@@ -187,6 +187,9 @@ def parse_args(argv=None):
     ap.add_argument("--p-stop", type=float, default=None, metavar="P",
                     help="probability that a command drawn after a walking one stands still (EnvConfig.p_stop, "
                          "default 0: stops from a fast walk are rare)")
+    ap.add_argument("--p-posture-walk", type=float, default=None, metavar="P",
+                    help="probability that a walking command also commands a posture, so walking crouched, bent or "
+                         "leaning (EnvConfig.p_posture_walk, default 0.4)")
     ap.add_argument("--command-slew", action="store_true",
                     help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
                          "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
@@ -214,6 +217,8 @@ def parse_args(argv=None):
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
     if args.p_stop is not None and not 0.0 <= args.p_stop <= 1.0:
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
+    if args.p_posture_walk is not None and not 0.0 <= args.p_posture_walk <= 1.0:
+        ap.error(f"--p-posture-walk = {args.p_posture_walk}: expected in [0, 1]")
     weights = {}
     for item in args.reward_weight:
         name, _, value = item.partition("=")
@@ -354,6 +359,9 @@ def main(argv=None):
     if args.p_stop is not None:
         cfg = dataclasses.replace(cfg, p_stop=args.p_stop)
         log("p_stop:", cfg.p_stop)
+    if args.p_posture_walk is not None:
+        cfg = dataclasses.replace(cfg, p_posture_walk=args.p_posture_walk)
+        log("p_posture_walk:", cfg.p_posture_walk)
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,8 @@
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/gco/implied_motion.hpp"
 #include "pmg/clips/clip_io.hpp"
+#include "pmg/controller/commands.hpp"
+#include "pmg/controller/controller_config.hpp"
 
 namespace {
 
@@ -54,6 +57,21 @@ struct Pipeline {
   int u_opt_n = 0;
   int saturated_axes = 0;  ///< most axes at their implied-motion table's last amplitude in a measured tick
 };
+
+/// The command the controller's CommandShaper (its `commands:` limits: ranges, the crouched velocity
+/// envelope) settles to when @p c is held for 5 s: what the generator is given in the product path.
+Command shapedCommand(const pmg::CommandLimits& limits, const Command& c, double dt) {
+  pmg::CommandShaper shaper(limits);
+  pmg::CommandSample s;
+  s.command = {c.u_d.vx, c.u_d.vy, c.u_d.wz, c.u_s.pitch, c.u_s.roll,
+               c.u_s.height > 0.0 ? std::optional<double>(c.u_s.height) : std::nullopt};
+  double now = 0.0;
+  for (int k = 0; k < static_cast<int>(5.0 / dt); ++k, now += dt) {
+    s.velocity_time = s.posture_time = now;
+    shaper.update(s, now, dt);
+  }
+  return {shaper.velocity(), shaper.posture()};
+}
 
 /// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
 FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double dt, int warmup_ticks,
@@ -114,6 +132,7 @@ int main(int argc, char** argv) {
   std::string blending = "consistent";
   double max_cadence_ratio = pmg::GeneratorParams{}.max_cadence_ratio;
   bool envelope = false;
+  std::string controller_path;
   app.add_option("--robot", robot_path, "robot config YAML")->check(CLI::ExistingFile)->capture_default_str();
   app.add_option("--clips", clips_dir, "clip directory")->check(CLI::ExistingDirectory)->capture_default_str();
   app.add_option("--gco-config", gco_config, "GcoOptions YAML (defaults if omitted)")->check(CLI::ExistingFile);
@@ -139,6 +158,14 @@ int main(int argc, char** argv) {
                "the command envelope of issue 12 instead of the grid options: v_x -0.5..1.0, v_y -0.4..0.4, w -0.8..0.8 "
                "and their combinations (9 x 7 x 7 values, mostly off the consistency map's grid), posture pitch "
                "{-0.1, 0, 0.3}, roll {0, 0.15}, height {standing, 0.66, 0.62}");
+  auto* controller_opt = app.add_option(
+      "--controller", controller_path,
+      "evaluate the product path: this controller config's robot, clips, generator and GCO settings, and each "
+      "command shaped by its `commands:` limits (ranges, crouched velocity envelope) as pmg_controller shapes it; "
+      "the target is then checked against the shaped command, and commands the shaper slowed are counted")
+      ->check(CLI::ExistingFile);
+  for (const char* o : {"--robot", "--clips", "--gco-config", "--max-cadence-ratio", "--blending"})
+    controller_opt->excludes(app.get_option(o));
   CLI11_PARSE(app, argc, argv);
   if (envelope) {
     // Mostly between the consistency map's grid points (docs/generator.md), so interpolation is
@@ -152,7 +179,15 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const pmg::RobotConfig robot = pmg::loadRobotConfig(robot_path);
+    std::optional<pmg::ControllerConfig> controller;
+    if (!controller_path.empty()) {
+      controller = pmg::loadControllerConfig(controller_path);
+      robot_path = controller->robot_file;
+      clips_dir = controller->clips_dir;
+      blending = controller->generator.blending == pmg::Blending::kPaper ? "paper" : "consistent";
+      max_cadence_ratio = controller->generator.max_cadence_ratio;
+    }
+    const pmg::RobotConfig robot = controller ? controller->robot : pmg::loadRobotConfig(robot_path);
     pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
     for (const auto& c : clips.dynamic_clips) {
       if (!c.implied.empty()) continue;
@@ -160,13 +195,22 @@ int main(int argc, char** argv) {
       addImpliedMotion(&clips, robot);
       break;
     }
-    pmg::GeneratorParams gen_params;
+    pmg::GeneratorParams gen_params = controller ? controller->generator : pmg::GeneratorParams{};
     gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
     gen_params.max_cadence_ratio = max_cadence_ratio;
     auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot), gen_params);
     std::printf("blending: %s, max cadence ratio %.2f\n", blending.c_str(), max_cadence_ratio);
+    pmg::CommandLimits limits;
+    if (controller) {
+      // As ControllerApp does: "no height command" is the squat clip's neutral height.
+      limits = controller->commands;
+      if (const pmg::StaticClip* squat = gen_model->staticClip(pmg::PostureAxis::kHeight)) limits.standing_height = squat->neutral;
+      if (const std::string e = limits.validate(); !e.empty()) throw std::runtime_error(controller->source_file + ": " + e);
+      std::printf("product path: %s (commands shaped by its limits; crouched envelope %s)\n", controller_path.c_str(),
+                  limits.crouched_height > 0.0 ? "on" : "off");
+    }
     auto legs = LegModel::fromRobotConfig(robot);
-    GcoOptions on = gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config);
+    GcoOptions on = controller ? controller->gco : (gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config));
     on.enabled = true;
     on.dt = dt;
     GcoOptions off = on;
@@ -192,14 +236,15 @@ int main(int argc, char** argv) {
       grid_csv << "vx,vy,wz,pitch,roll,height,stances,speed_without,speed_with,slip_without,slip_with,"
                   "height_err_without,height_err_with,max_height_err_with,implied_vx_with,implied_vx_without,"
                   "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with,cycle_implied_vx,cycle_implied_vy,"
-                  "cycle_implied_wz,within_target,saturated_axes\n";
+                  "cycle_implied_wz,within_target,saturated_axes,target_vx,target_vy,target_wz\n";
     }
     std::vector<double> tick_us, gco_us;
     tick_us.reserve(2000000);
     gco_us.reserve(2000000);
     double sum_slip0 = 0, sum_slipG = 0, sum_spd0 = 0, sum_spdG = 0, sum_h0 = 0, sum_hG = 0, max_hG = 0;
     double sum_cons0 = 0, sum_consG = 0, sum_ss0 = 0, sum_ssG = 0, sum_ds0 = 0, sum_dsG = 0;
-    int n_walk = 0, n_all = 0, n_within = 0, n_outside_saturated = 0;
+    int n_walk = 0, n_all = 0, n_within = 0, n_outside_saturated = 0, n_slowed = 0, n_slowed_within = 0;
+    double slowed_share_sum = 0.0;
     double axis_err[3] = {0, 0, 0}, uopt_err[3] = {0, 0, 0};
     int axis_ok[3] = {0, 0, 0};
     struct Miss { double vx, vy, wz, pitch, roll, h, ix, iy, iw; };
@@ -213,7 +258,12 @@ int main(int argc, char** argv) {
           for (double p : pitch)
             for (double r : roll)
               for (double h : height) {
-                Command c{{a, b, w}, {p, r, h}};
+                const Command user{{a, b, w}, {p, r, h}};
+                // The product path: the generator is given the shaped command, and the target is the
+                // shaped command (what the controller promises); slowed commands are counted apart.
+                const Command c = controller ? shapedCommand(limits, user, dt) : user;
+                const bool slowed = controller && (std::fabs(c.u_d.vx - a) > 1e-9 || std::fabs(c.u_d.vy - b) > 1e-9 ||
+                                                   std::fabs(c.u_d.wz - w) > 1e-9);
                 const FootSlipStats s0 = run(pipe_off, meter_off, c, dt, warm, meas, nullptr, nullptr);
                 const FootSlipStats sG = run(pipe_on, meter_on, c, dt, warm, meas, &tick_us, &gco_us);
                 // Issue 12 target: the stance-implied velocity within ±10 % of the command, or within
@@ -222,7 +272,7 @@ int main(int argc, char** argv) {
                 // consistent blending targets; the slip meter's window means are not whole cycles.
                 const Eigen::Vector3d cyc = cycleImpliedVelocity(pipe_on.gen, cycle_kin, pipe_on.idx, c.u_d, c.u_s);
                 const double implied[3] = {cyc.x(), cyc.y(), cyc.z()};
-                const double cmd[3] = {a, b, w};
+                const double cmd[3] = {c.u_d.vx, c.u_d.vy, c.u_d.wz};
                 const double abs_tol[3] = {0.03, 0.03, 0.05};
                 const Eigen::Vector3d u_opt = pipe_on.u_opt_sum / std::max(1, pipe_on.u_opt_n);
                 for (int ax = 0; ax < 3; ++ax) uopt_err[ax] += std::fabs(u_opt[ax] - cmd[ax]);
@@ -235,6 +285,12 @@ int main(int argc, char** argv) {
                   within = within && ok;
                 }
                 n_within += within ? 1 : 0;
+                if (slowed) {
+                  ++n_slowed;
+                  n_slowed_within += within ? 1 : 0;
+                  const double user_norm = std::hypot(a, b, w);
+                  slowed_share_sum += user_norm > 0 ? std::hypot(cmd[0], cmd[1], cmd[2]) / user_norm : 1.0;
+                }
                 n_outside_saturated += (!within && pipe_on.saturated_axes > 0) ? 1 : 0;
                 if (!within && worst.size() < 400)
                   worst.push_back({a, b, w, p, r, h, implied[0], implied[1], implied[2]});
@@ -248,7 +304,7 @@ int main(int argc, char** argv) {
                 std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f %7.3f %s\n",
                             a, b, w, p, r, h, sG.stances, 1e3 * s0.mean_stance_speed, 1e3 * sG.mean_stance_speed,
                             1e3 * s0.mean_slip_per_stance, 1e3 * sG.mean_slip_per_stance, 1e3 * s0.mean_height_error,
-                            1e3 * sG.mean_height_error, implied[0], implied[1], implied[2], within ? "" : "*");
+                            1e3 * sG.mean_height_error, implied[0], implied[1], implied[2], within ? (slowed ? "s" : "") : (slowed ? "*s" : "*"));
                 if (grid_csv) {
                   grid_csv << a << ',' << b << ',' << w << ',' << p << ',' << r << ',' << h << ',' << sG.stances << ','
                            << s0.mean_stance_speed << ',' << sG.mean_stance_speed << ',' << s0.mean_slip_per_stance
@@ -257,7 +313,8 @@ int main(int argc, char** argv) {
                            << s0.mean_implied_v_x << ',' << s0.mean_single_support_speed << ','
                            << sG.mean_single_support_speed << ',' << s0.mean_double_support_speed << ','
                            << sG.mean_double_support_speed << ',' << implied[0] << ',' << implied[1] << ','
-                           << implied[2] << ',' << (within ? 1 : 0) << ',' << pipe_on.saturated_axes << '\n';
+                           << implied[2] << ',' << (within ? 1 : 0) << ',' << pipe_on.saturated_axes << ',' << cmd[0] << ','
+                           << cmd[1] << ',' << cmd[2] << '\n';
                 }
                 ++n_all;
                 const auto hi = static_cast<std::size_t>(std::find(height.begin(), height.end(), h) - height.begin());
@@ -310,6 +367,11 @@ int main(int argc, char** argv) {
                 n_all, n_within, n_all);
     std::printf("  outside the target: %d commands, %d of them with an amplitude at its table's end (amplitude_saturated)\n",
                 n_all - n_within, n_outside_saturated);
+    if (controller)
+      std::printf("  product path: %d of %d commands slowed by the controller's limits (to %.0f %% of the commanded "
+                  "speed on average; target checked against the shaped command: %d/%d within); %d/%d unslowed within\n",
+                  n_slowed, n_all, n_slowed > 0 ? 100.0 * slowed_share_sum / n_slowed : 100.0, n_slowed_within, n_slowed,
+                  n_within - n_slowed_within, n_all - n_slowed);
     std::printf("  GCO's u' vs command: mean |u' - u|: v_x %.3f m/s   v_y %.3f m/s   w %.3f rad/s (what the full-PMG policy is told)\n",
                 uopt_err[0] / n_all, uopt_err[1] / n_all, uopt_err[2] / n_all);
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)

@@ -3,7 +3,7 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --p-stop parses and a value outside [0, 1] is refused. (An unknown NAME is refused in
+--command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -24,10 +24,14 @@ if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-
     failures.append("--command-slew: off by default, on with the flag")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
     failures.append("--p-stop 0.5 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--p-posture-walk", "0.7"]).p_posture_walk != 0.7:
+    failures.append("--p-posture-walk 0.7 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-stop", "nan"], "--p-stop"),
+                  (["--p-posture-walk", "-0.1"], "--p-posture-walk"),
+                  (["--p-posture-walk", "nan"], "--p-posture-walk"),
                   (["--command-range", "vx=1.0,-0.5"], "--command-range"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
                   (["--command-range", "vy=-0.4"], "--command-range"),
@@ -49,5 +53,5 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 18 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 21 cases as expected")
 sys.exit(1 if failures else 0)
