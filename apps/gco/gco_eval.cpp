@@ -293,7 +293,7 @@ int main(int argc, char** argv) {
                 }
                 n_outside_saturated += (!within && pipe_on.saturated_axes > 0) ? 1 : 0;
                 if (!within && worst.size() < 400)
-                  worst.push_back({a, b, w, p, r, h, implied[0], implied[1], implied[2]});
+                  worst.push_back({cmd[0], cmd[1], cmd[2], p, r, h, implied[0], implied[1], implied[2]});
                 failures += pipe_on.gco.counters().solver_failures;
                 if (pipe_on.gco.counters().solver_failures > 0) {
                   std::printf("  (GCO solver failures for this command: %llu)\n",
@@ -375,7 +375,7 @@ int main(int argc, char** argv) {
     std::printf("  GCO's u' vs command: mean |u' - u|: v_x %.3f m/s   v_y %.3f m/s   w %.3f rad/s (what the full-PMG policy is told)\n",
                 uopt_err[0] / n_all, uopt_err[1] / n_all, uopt_err[2] / n_all);
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)
-      std::printf("    outside: cmd (%.2f, %.2f, %.2f | %.2f %.2f %.2f) implied (%.3f, %.3f, %.3f)\n", worst[i].vx, worst[i].vy,
+      std::printf("    outside: target (%.2f, %.2f, %.2f | %.2f %.2f %.2f) implied (%.3f, %.3f, %.3f)\n", worst[i].vx, worst[i].vy,
                   worst[i].wz, worst[i].pitch, worst[i].roll, worst[i].h, worst[i].ix, worst[i].iy, worst[i].iw);
     std::printf("  GCO solver failures %llu, jump-limited ticks %llu of %llu\n",
                 static_cast<unsigned long long>(failures), static_cast<unsigned long long>(jump_limited),
