@@ -69,7 +69,8 @@ def score(path):
     print(f"cross-coupling beyond {COUPLING_ABS} rad (pitch/roll not commanded, every segment; largest {worst:.3f}): "
           f"{', '.join(coupling) or 'none'}")
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
-    print(f"seeds fallen (summed over segments): {falls}")
+    where = [f"{s['name']} {s['fallen']}" for s in summary["segments"] if s.get("fallen", 0)]
+    print(f"seeds fallen (summed over segments): {falls}" + (f"; in {', '.join(where)}" if where else ""))
 
 
 if __name__ == "__main__":

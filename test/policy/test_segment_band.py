@@ -2,7 +2,8 @@
 """Tests scripts/segment_band.py (ctest segment_band_scores_a_known_summary, label unit) on a
 synthetic pmg_policy_sil summary whose misses are known: backward at 80 % (outside +-15 %), forward
 at 96 % (inside), a crouch 20 mm high (outside 0.015 m), a side-step rolling 0.07 rad and a bent
-walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target.
+walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target, and one seed
+fallen in the backward walk (named with the segment).
 Usage: test_segment_band.py
 """
 import json
@@ -24,7 +25,7 @@ def main():
     summary = {"segments": [
         seg("stand", {}, {}),
         seg("fwd", {"vx": 0.5}, {"vx": 0.48}),
-        seg("back", {"vx": -0.5}, {"vx": -0.40}),
+        {**seg("back", {"vx": -0.5}, {"vx": -0.40}), "fallen": 1},
         seg("left", {"vy": 0.3}, {"vy": 0.29, "roll": -0.07}),
         seg("crouch", {"height": 0.62}, {"height": 0.64}),
         seg("bent_walk", {"vx": 0.3, "pitch": 0.25}, {"vx": 0.3, "pitch": 0.25, "roll": 0.06}),
@@ -44,6 +45,7 @@ def main():
         "torso roll in the side-steps: 0.070-0.070 rad",
         "cross-coupling beyond 0.05 rad (pitch/roll not commanded, every segment; largest 0.070): "
         "left roll -0.070, bent_walk roll +0.060",
+        "seeds fallen (summed over segments): 1; in back 1",
     ]
     missing = [e for e in expect if e not in out]
     for e in missing:
