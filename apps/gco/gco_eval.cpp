@@ -182,10 +182,7 @@ int main(int argc, char** argv) {
     std::optional<pmg::ControllerConfig> controller;
     if (!controller_path.empty()) {
       controller = pmg::loadControllerConfig(controller_path);
-      robot_path = controller->robot_file;
       clips_dir = controller->clips_dir;
-      blending = controller->generator.blending == pmg::Blending::kPaper ? "paper" : "consistent";
-      max_cadence_ratio = controller->generator.max_cadence_ratio;
     }
     const pmg::RobotConfig robot = controller ? controller->robot : pmg::loadRobotConfig(robot_path);
     pmg::ClipLibrary clips = pmg::loadClipLibrary(clips_dir, robot);
@@ -196,10 +193,13 @@ int main(int argc, char** argv) {
       break;
     }
     pmg::GeneratorParams gen_params = controller ? controller->generator : pmg::GeneratorParams{};
-    gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
-    gen_params.max_cadence_ratio = max_cadence_ratio;
+    if (!controller) {
+      gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
+      gen_params.max_cadence_ratio = max_cadence_ratio;
+    }
     auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot), gen_params);
-    std::printf("blending: %s, max cadence ratio %.2f\n", blending.c_str(), max_cadence_ratio);
+    std::printf("blending: %s, max cadence ratio %.2f\n", gen_params.blending == pmg::Blending::kPaper ? "paper" : "consistent",
+                gen_params.max_cadence_ratio);
     pmg::CommandLimits limits;
     if (controller) {
       // As ControllerApp does: "no height command" is the squat clip's neutral height.
