@@ -38,6 +38,13 @@ def load_actor(path):
     return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]], mode
 
 
+def load_reference_settings(path):
+    """The actor's reference settings beyond the paper, as contract keys: upright_walking and
+    sole_levelling (False for actors saved before 2026-11-27, which were trained without both)."""
+    z = np.load(path)
+    return {k: bool(z[k]) if k in z.files else False for k in ("upright_walking", "sole_levelling")}
+
+
 def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
     """Writes the ONNX actor with its contract; robot_yaml: default config/robots/g1/g1.yaml of the
     checkout (relative paths: to the checkout). The contract's kp / kd are the robot config's: a policy
@@ -47,6 +54,7 @@ def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
     if not os.path.isabs(robot_yaml):
         robot_yaml = os.path.join(repo_root(), robot_yaml)
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
+    reference = load_reference_settings(npz)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)
     joints = robot["joints"]
@@ -61,7 +69,7 @@ def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
         kd=[j["kd"] for j in joints], action_scale=action_scale, action_offset=default[:LEG], action_clip=1.0,
         obs_terms=OBS_TERMS, history_length=1, obs_clip=OBS_CLIP,
         pmg={"enabled": True, "gco": mode == "pmg_gco", "mode": "single_gait" if mode == "single_gait" else "pmg",
-             "clips": ",".join(clips), "epsilon": EPSILON},
+             "clips": ",".join(clips), "epsilon": EPSILON, **reference},
         reference_pairs=list(zip(obs, act)))
     info = {"brax_vs_numpy_max_abs": brax_check, "source": os.path.basename(npz),
             "robot": os.path.relpath(robot_yaml, repo_root())}

@@ -82,7 +82,8 @@ def save_params(params, out, env, clip_names):
     norm, policy = params_np[0], params_np[1]
     p = policy["params"]
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
-              "clips": np.array(clip_names), "mode": np.array(env.cfg.mode)}
+              "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
+              "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling)}
     for i in range(len(p)):
         arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
         arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]
@@ -156,6 +157,10 @@ def parse_args(argv=None):
     ap.add_argument("--smoke", action="store_true")
     ap.add_argument("--mode", default="pmg_gco", choices=["pmg_gco", "pmg", "single_gait"],
                     help="Table I configuration: full PMG (GCO), PMG without GCO, single-gait imitation")
+    ap.add_argument("--upright-walking", action="store_true",
+                    help="remove the walking clips' mean waist lean (GeneratorParams::upright_walking)")
+    ap.add_argument("--sole-levelling", action="store_true",
+                    help="level the reference's stance soles before GCO (GcoOptions::sole_levelling; pmg_gco only)")
     ap.add_argument("--blending", default=None, choices=["consistent", "paper"],
                     help="generator blending (default: EnvConfig.blending); paper = the PMG paper's, for the ablation")
     ap.add_argument("--arms", default="teleop", choices=["teleop", "perturb"],
@@ -334,6 +339,7 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, episode_length=args.episode_length)
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
+    cfg = dataclasses.replace(cfg, upright_walking=args.upright_walking, sole_levelling=args.sole_levelling)
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
     if args.tracking_sigma is not None:
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)

@@ -44,18 +44,82 @@ double percentile(std::vector<double> v, double p) {
   return v[i];
 }
 
-/// Generator + GCO with the two stages timed separately (the same calls GeneratorWithGco::step makes).
+/// Generator (+ stance sole levelling when the options enable it) + GCO, the stages timed separately
+/// (the same calls GeneratorWithGco::step makes).
 struct Pipeline {
   Pipeline(std::shared_ptr<const pmg::GeneratorModel> model, std::shared_ptr<const LegModel> legs, const GcoOptions& o)
-      : gen(std::move(model)), gco(legs, o), idx(legs->jointIndices(gen.model().jointSpace().joint_names)) {}
+      : gen(std::move(model)),
+        gco(legs, o),
+        idx(legs->jointIndices(gen.model().jointSpace().joint_names)),
+        levelling(legs, o.sole_levelling, idx),
+        kin(legs),
+        out(gen.output()) {
+    const auto& names = gen.model().jointSpace().joint_names;
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      if (names[j] == "waist_pitch_joint") waist_pitch = static_cast<int>(j);
+      if (names[j] == "waist_roll_joint") waist_roll = static_cast<int>(j);
+    }
+  }
+  /// The reference of the last tick (levelled when enabled).
+  const pmg::GeneratorOutput& output() const { return levelling.enabled() ? out : gen.output(); }
+  void step(const Command& c, double dt) {
+    gen.step(c.u_d, c.u_s, dt);
+    if (levelling.enabled()) {
+      out = gen.output();
+      levelling.apply(gen.model().jointSpace().q_stand, out.q_posture, out.phase, out.contact, dt, &out.q_ref, &out.qd_ref);
+    }
+  }
+  void reset() {
+    gen.reset(0.0);
+    gco.reset();
+    levelling.reset();
+  }
+  /// Reference torso posture beyond the commanded one, per measured tick (docs/policy.md "Reference
+  /// torso pitch"): the waist's pitch/roll away from the posture-only pose q_stand + q_s, and the
+  /// pelvis pitch that puts the stance soles flat (from their mean normal in B) minus the posture-only
+  /// pose's; forward positive [rad].
+  void meterPosture() {
+    const pmg::GeneratorOutput& o = output();
+    const Eigen::VectorXd& q_stand = gen.model().jointSpace().q_stand;
+    if (waist_pitch >= 0) waist_pitch_sum += o.q_ref[waist_pitch] - q_stand[waist_pitch] - o.q_posture[waist_pitch];
+    if (waist_roll >= 0) waist_roll_sum += o.q_ref[waist_roll] - q_stand[waist_roll] - o.q_posture[waist_roll];
+    ++posture_n;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero(), n_post = Eigen::Vector3d::Zero();
+    for (std::size_t f = 0; f < pmg::kNumFeet; ++f) {
+      if (!o.in_contact[f]) continue;
+      LegVector q, qp;
+      for (int j = 0; j < pmg::gco::kLegDofs; ++j) {
+        q(j) = o.q_ref[idx[f][j]];
+        qp(j) = q_stand[idx[f][j]] + o.q_posture[idx[f][j]];
+      }
+      Eigen::Isometry3d X, Xp;
+      if (kin.forward(static_cast<pmg::Foot>(f), q, &X) && kin.forward(static_cast<pmg::Foot>(f), qp, &Xp)) {
+        n += X.linear().col(2);
+        n_post += Xp.linear().col(2);
+      }
+    }
+    if (n.squaredNorm() > 0.0) {
+      sole_pitch_sum += std::atan2(-n.x(), n.z()) - std::atan2(-n_post.x(), n_post.z());
+      ++sole_n;
+    }
+  }
   pmg::MotionGenerator gen;
   Gco gco;
   LegJointIndex idx;
+  SoleLevelling levelling;
+  LegKinematics kin;
+  pmg::GeneratorOutput out;
   GcoInput in;
   GcoResult res;
+  int waist_pitch = -1, waist_roll = -1;
   Eigen::Vector3d u_opt_sum = Eigen::Vector3d::Zero();  ///< Σ u' (v_x, v_y, ω) over the measured ticks
   int u_opt_n = 0;
   int saturated_axes = 0;  ///< most axes at their implied-motion table's last amplitude in a measured tick
+  double waist_pitch_sum = 0.0, waist_roll_sum = 0.0, sole_pitch_sum = 0.0;
+  int posture_n = 0, sole_n = 0;
+  double waistPitch() const { return posture_n ? waist_pitch_sum / posture_n : 0.0; }
+  double waistRoll() const { return posture_n ? waist_roll_sum / posture_n : 0.0; }
+  double solePitch() const { return sole_n ? sole_pitch_sum / sole_n : 0.0; }
 };
 
 /// The command the controller's CommandShaper (its `commands:` limits: ranges, the crouched velocity
@@ -75,17 +139,18 @@ Command shapedCommand(const pmg::CommandLimits& limits, const Command& c, double
 
 /// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
 FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double dt, int warmup_ticks,
-                  int measure_ticks, std::vector<double>* tick_us, std::vector<double>* gco_us) {
-  pipe.gen.reset(0.0);
-  pipe.gco.reset();
+                  int measure_ticks, std::vector<double>* tick_us, std::vector<double>* gco_us, bool posture = false) {
+  pipe.reset();
   meter.reset();
   pipe.u_opt_sum.setZero();
   pipe.u_opt_n = 0;
   pipe.saturated_axes = 0;
+  pipe.waist_pitch_sum = pipe.waist_roll_sum = pipe.sole_pitch_sum = 0.0;
+  pipe.posture_n = pipe.sole_n = 0;
   for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
-    pipe.gen.step(c.u_d, c.u_s, dt);
-    fillFromGenerator(pipe.gen.output(), pipe.idx, c.u_d, c.u_s, &pipe.in);
+    pipe.step(c, dt);
+    fillFromGenerator(pipe.output(), pipe.idx, c.u_d, c.u_s, &pipe.in);
     const auto t1 = std::chrono::steady_clock::now();
     pipe.gco.solve(pipe.in, &pipe.res);
     const auto t2 = std::chrono::steady_clock::now();
@@ -96,6 +161,7 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
       pipe.u_opt_sum += Eigen::Vector3d(pipe.res.u_opt.v_x, pipe.res.u_opt.v_y, pipe.res.u_opt.yaw_rate);
       ++pipe.u_opt_n;
       pipe.saturated_axes = std::max(pipe.saturated_axes, pipe.gen.output().amplitude_saturated);
+      if (posture) pipe.meterPosture();
     }
   }
   return meter.stats();
@@ -158,13 +224,19 @@ int main(int argc, char** argv) {
                "the command envelope of issue 12 instead of the grid options: v_x -0.5..1.0, v_y -0.4..0.4, w -0.8..0.8 "
                "and their combinations (9 x 7 x 7 values, mostly off the consistency map's grid), posture pitch "
                "{-0.1, 0, 0.3}, roll {0, 0.15}, height {standing, 0.66, 0.62}");
+  bool upright_walking = false, sole_levelling = false;
+  app.add_flag("--upright-walking", upright_walking,
+               "remove the walking clips' mean waist lean (GeneratorParams::upright_walking; beyond the paper)");
+  app.add_flag("--sole-levelling", sole_levelling,
+               "level the reference's stance soles before GCO (GcoOptions::sole_levelling; beyond the paper)");
   auto* controller_opt = app.add_option(
       "--controller", controller_path,
       "evaluate the product path: this controller config's robot, clips, generator and GCO settings, and each "
       "command shaped by its `commands:` limits (ranges, crouched velocity envelope) as pmg_controller shapes it; "
       "the target is then checked against the shaped command, and commands the shaper slowed are counted")
       ->check(CLI::ExistingFile);
-  for (const char* o : {"--robot", "--clips", "--gco-config", "--max-cadence-ratio", "--blending"})
+  for (const char* o : {"--robot", "--clips", "--gco-config", "--max-cadence-ratio", "--blending", "--upright-walking",
+                        "--sole-levelling"})
     controller_opt->excludes(app.get_option(o));
   CLI11_PARSE(app, argc, argv);
   if (envelope) {
@@ -196,10 +268,12 @@ int main(int argc, char** argv) {
     if (!controller) {
       gen_params.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
       gen_params.max_cadence_ratio = max_cadence_ratio;
+      gen_params.upright_walking = upright_walking;
     }
     auto gen_model = std::make_shared<const pmg::GeneratorModel>(clips, pmg::generatorJointSpace(robot), gen_params);
-    std::printf("blending: %s, max cadence ratio %.2f\n", gen_params.blending == pmg::Blending::kPaper ? "paper" : "consistent",
-                gen_params.max_cadence_ratio);
+    std::printf("blending: %s, max cadence ratio %.2f, upright walking %s\n",
+                gen_params.blending == pmg::Blending::kPaper ? "paper" : "consistent", gen_params.max_cadence_ratio,
+                gen_params.upright_walking ? "on" : "off");
     pmg::CommandLimits limits;
     if (controller) {
       // As ControllerApp does: "no height command" is the squat clip's neutral height.
@@ -213,6 +287,8 @@ int main(int argc, char** argv) {
     GcoOptions on = controller ? controller->gco : (gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config));
     on.enabled = true;
     on.dt = dt;
+    if (!controller) on.sole_levelling.enabled = sole_levelling;
+    std::printf("stance sole levelling %s\n", on.sole_levelling.enabled ? "on" : "off");
     GcoOptions off = on;
     off.enabled = false;
     Pipeline pipe_on(gen_model, legs, on), pipe_off(gen_model, legs, off);
@@ -236,7 +312,8 @@ int main(int argc, char** argv) {
       grid_csv << "vx,vy,wz,pitch,roll,height,stances,speed_without,speed_with,slip_without,slip_with,"
                   "height_err_without,height_err_with,max_height_err_with,implied_vx_with,implied_vx_without,"
                   "ss_speed_without,ss_speed_with,ds_speed_without,ds_speed_with,cycle_implied_vx,cycle_implied_vy,"
-                  "cycle_implied_wz,within_target,saturated_axes,target_vx,target_vy,target_wz\n";
+                  "cycle_implied_wz,within_target,saturated_axes,target_vx,target_vy,target_wz,"
+                  "waist_pitch_lean,waist_roll_lean,stance_sole_pitch\n";
     }
     std::vector<double> tick_us, gco_us;
     tick_us.reserve(2000000);
@@ -252,6 +329,8 @@ int main(int argc, char** argv) {
     std::vector<double> h_sum0(height.size(), 0.0), h_sumG(height.size(), 0.0);
     std::vector<int> h_n(height.size(), 0);
     std::uint64_t failures = 0, jump_limited = 0, ticks = 0;
+    double lean_sum[3] = {0, 0, 0}, lean_max[3] = {0, 0, 0};  // waist pitch, waist roll, stance-sole pitch
+    int n_lean = 0;
     for (double a : vx)
       for (double b : vy)
         for (double w : wz)
@@ -265,7 +344,16 @@ int main(int argc, char** argv) {
                 const bool slowed = controller && (std::fabs(c.u_d.vx - a) > 1e-9 || std::fabs(c.u_d.vy - b) > 1e-9 ||
                                                    std::fabs(c.u_d.wz - w) > 1e-9);
                 const FootSlipStats s0 = run(pipe_off, meter_off, c, dt, warm, meas, nullptr, nullptr);
-                const FootSlipStats sG = run(pipe_on, meter_on, c, dt, warm, meas, &tick_us, &gco_us);
+                const FootSlipStats sG = run(pipe_on, meter_on, c, dt, warm, meas, &tick_us, &gco_us, true);
+                const bool walking = std::fabs(c.u_d.vx) + std::fabs(c.u_d.vy) + std::fabs(c.u_d.wz) > 1e-9;
+                if (walking) {
+                  const double lean[3] = {pipe_on.waistPitch(), pipe_on.waistRoll(), pipe_on.solePitch()};
+                  for (int k = 0; k < 3; ++k) {
+                    lean_sum[k] += lean[k];
+                    lean_max[k] = std::max(lean_max[k], std::fabs(lean[k]));
+                  }
+                  ++n_lean;
+                }
                 // Issue 12 target: the stance-implied velocity within ±10 % of the command, or within
                 // 0.03 m/s / 0.05 rad/s when that is larger (only commands with complete stances).
                 // Reference-implied motion: the exact cycle mean (cycleImpliedVelocity), the quantity the
@@ -314,7 +402,8 @@ int main(int argc, char** argv) {
                            << sG.mean_single_support_speed << ',' << s0.mean_double_support_speed << ','
                            << sG.mean_double_support_speed << ',' << implied[0] << ',' << implied[1] << ','
                            << implied[2] << ',' << (within ? 1 : 0) << ',' << pipe_on.saturated_axes << ',' << cmd[0] << ','
-                           << cmd[1] << ',' << cmd[2] << '\n';
+                           << cmd[1] << ',' << cmd[2] << ',' << pipe_on.waistPitch() << ',' << pipe_on.waistRoll() << ','
+                           << pipe_on.solePitch() << '\n';
                 }
                 ++n_all;
                 const auto hi = static_cast<std::size_t>(std::find(height.begin(), height.end(), h) - height.begin());
@@ -372,6 +461,12 @@ int main(int argc, char** argv) {
                   "speed on average; target checked against the shaped command: %d/%d within); %d/%d unslowed within\n",
                   n_slowed, n_all, n_slowed > 0 ? 100.0 * slowed_share_sum / n_slowed : 100.0, n_slowed_within, n_slowed,
                   n_within - n_slowed_within, n_all - n_slowed);
+    if (n_lean > 0)
+      std::printf("  reference torso beyond the posture, walking commands (%d; docs/policy.md \"Reference torso pitch\"):\n"
+                  "    waist pitch lean mean %+.3f rad (largest |.| %.3f), waist roll lean mean %+.3f (%.3f), "
+                  "pelvis pitch that puts the stance soles flat mean %+.3f (%.3f)\n",
+                  n_lean, lean_sum[0] / n_lean, lean_max[0], lean_sum[1] / n_lean, lean_max[1], lean_sum[2] / n_lean,
+                  lean_max[2]);
     std::printf("  GCO's u' vs command: mean |u' - u|: v_x %.3f m/s   v_y %.3f m/s   w %.3f rad/s (what the full-PMG policy is told)\n",
                 uopt_err[0] / n_all, uopt_err[1] / n_all, uopt_err[2] / n_all);
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)

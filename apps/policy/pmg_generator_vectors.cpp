@@ -8,7 +8,10 @@
 //
 // Both blendings (GeneratorParams::blending) run the same command schedule from the same initial
 // phase: the top-level "ticks" use "blending" (consistent, the default; GCO runs on it), and
-// "paper": {"blending": "paper", "ticks": [...]} the paper's eqs. 4-7 (the ablation). A file named
+// "paper": {"blending": "paper", "ticks": [...]} the paper's eqs. 4-7 (the ablation), and
+// "levelled": {"sole_levelling": true, "upright_walking": true, "ticks": [...]} the consistent blending
+// with GeneratorParams::upright_walking and the stance soles levelled (GcoOptions::sole_levelling,
+// include/pmg/gco/sole_levelling.hpp). A file named
 // consistency_map.yaml among --clips (or in a --clips folder) is the library's consistency map.
 // The JSON holds everything the port needs: the joint space (from the robot config), the
 // generator parameters, the clips as given to GeneratorModel (missing directions are derived by
@@ -201,6 +204,9 @@ void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const 
     j.num(v);
     j.raw(",");
   }
+  j.key("sole_levelling");
+  std::fprintf(f, "{\"edge_fraction\":%.17g,\"iterations\":%d,\"max_correction\":%.17g},",
+               o.sole_levelling.edge_fraction, o.sole_levelling.iterations, o.sole_levelling.max_correction);
   j.key("limits_lo");
   j.list(std::vector<double>{o.limits.v_x_min, o.limits.v_y_min, o.limits.yaw_rate_min, o.limits.height_min});
   j.raw(",");
@@ -336,6 +342,12 @@ int main(int argc, char** argv) {
     gco_options.enabled = true;
     pmg::gco::GeneratorWithGco gen(model, legs, gco_options);
     pmg::gco::GeneratorWithGco paper_gen(paper_model, legs, gco_options);
+    pmg::gco::GcoOptions levelled_options = gco_options;
+    levelled_options.sole_levelling.enabled = true;
+    pmg::GeneratorParams upright_params = params;
+    upright_params.upright_walking = true;
+    auto upright_model = std::make_shared<const pmg::GeneratorModel>(lib, js, upright_params);
+    pmg::gco::GeneratorWithGco levelled_gen(upright_model, legs, levelled_options);
 
     std::FILE* f = std::fopen(out.c_str(), "w");
     if (f == nullptr) throw std::runtime_error(out + ": cannot open for writing");
@@ -473,10 +485,16 @@ int main(int argc, char** argv) {
     j.raw("{\"blending\":\"paper\",");
     j.key("ticks");
     writeTicks(paper_gen);
+    j.raw("},");
+    // The consistent blending with the stance soles levelled (sole_levelling.hpp).
+    j.key("levelled");
+    j.raw("{\"sole_levelling\":true,\"upright_walking\":true,");
+    j.key("ticks");
+    writeTicks(levelled_gen);
     j.raw("}");
     j.raw("}\n");
     std::fclose(f);
-    std::printf("wrote %d ticks x 2 blendings (consistent, paper), %zu dynamic + %zu static clips%s to %s; "
+    std::printf("wrote %d ticks x 3 (consistent, paper, consistent + upright walking + levelled soles), %zu dynamic + %zu static clips%s to %s; "
                 "consistent: %d ticks with a saturated amplitude, %d playing a clip of the other sign than u_i\n",
                 ticks, lib.dynamic_clips.size(), lib.static_clips.size(),
                 lib.consistency.empty() ? "" : " + consistency map", out.c_str(), saturated_ticks, opposite_ticks);

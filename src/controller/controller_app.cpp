@@ -74,6 +74,8 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
     po.backend = config_.policy_native ? policy::PolicyBackend::kNative : policy::PolicyBackend::kOnnxRuntime;
     po.control_period = 1.0 / config_.loop_rate_hz;
     po.gco = config_.gco.enabled;
+    po.sole_levelling = config_.gco.sole_levelling.enabled;
+    po.upright_walking = config_.generator.upright_walking;
     policy = std::make_unique<policy::PolicyStage>(config_.policy_file, robot, po);
   }
   HalStack stack = makeHalStack(robot, config_.halStack(), std::move(options.backend));

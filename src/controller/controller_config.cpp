@@ -104,6 +104,8 @@ struct GeneratorYaml {
     a->Visit("max_command", &p.max_command, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] the generator accepts");
     a->Visit("max_cadence_ratio", &p.max_cadence_ratio,
              "consistent blending: at most this much faster cadence where a stride saturates, [1, 2]; 1 = PMG eq. 12");
+    a->Visit("upright_walking", &p.upright_walking,
+             "true: the walking clips' mean waist pitch/roll shifted to the standing pose's (no torso lean)");
   }
   std::string validate() const { return p.validate(); }
 };
@@ -236,6 +238,7 @@ struct ControllerYaml {
   TimingYaml timing;
   MujocoYaml mujoco;
   std::optional<bool> gco_enabled;
+  std::optional<bool> sole_levelling;
   GeneratorYaml generator;
   CommandsYaml commands;
   VelocityFeedbackYaml velocity_feedback;
@@ -255,6 +258,7 @@ struct ControllerYaml {
     a->Visit("mujoco", &mujoco, "MuJoCo 2.2 SIL settings");
     a->Visit("gco", &gco, "GCO options YAML", yaml::kPath);
     a->Visit("gco_enabled", &gco_enabled, "false: PMG w/o GCO");
+    a->Visit("sole_levelling", &sole_levelling, "true: level the reference's stance soles (gco.sole_levelling.enabled)");
     a->Visit("generator", &generator, "PMG generator parameters");
     a->Visit("commands", &commands, "command limits");
     a->Visit("velocity_feedback", &velocity_feedback, "closed-loop velocity tracking (docs/controller.md)");
@@ -329,6 +333,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
     c.gco = gco::loadGcoOptionsFile(c.gco_file);  // throws naming the file and field
   }
   if (y.gco_enabled) c.gco.enabled = *y.gco_enabled;
+  if (y.sole_levelling) c.gco.sole_levelling.enabled = *y.sole_levelling;
   c.commands = y.commands.l;
   c.commands.standing_height = c.robot.standing_base_height;
   if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);

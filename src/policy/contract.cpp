@@ -216,6 +216,9 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   }
   // Contracts written before the Table I ablation have no pmg.mode: they were trained on PMG.
   c.pmg.emplace("mode", "pmg");
+  // Contracts written before the sole levelling have no pmg.sole_levelling: trained without it.
+  c.pmg.emplace("sole_levelling", "false");
+  c.pmg.emplace("upright_walking", "false");
 
   const YAML::Node pairs = r.require(root, "reference_pairs", "");
   if (!pairs.IsSequence() || pairs.size() == 0) r.fail("reference_pairs", "expected a non-empty list");

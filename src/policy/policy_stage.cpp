@@ -9,7 +9,9 @@ namespace pmg::policy {
 PolicyStage::PolicyStage(const std::string& onnx_path, const RobotConfig& robot, const PolicyStageOptions& options)
     : options_(options), rng_(options.noise_seed) {
   PolicyRobotSpec spec = makePolicyRobotSpec(robot, options_.control_period);
-  spec.pmg = {{"enabled", "true"}, {"gco", options_.gco ? "true" : "false"}, {"mode", options_.mode}};
+  spec.pmg = {{"enabled", "true"}, {"gco", options_.gco ? "true" : "false"}, {"mode", options_.mode},
+              {"sole_levelling", options_.sole_levelling ? "true" : "false"},
+              {"upright_walking", options_.upright_walking ? "true" : "false"}};
   PolicyRunnerOptions ropt;
   ropt.backend = options_.backend;
   runner_ = std::make_unique<PolicyRunner>(onnx_path, spec, ropt);

@@ -349,6 +349,10 @@ TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
     EXPECT_DOUBLE_EQ(o.limits.yaw_rate_max, d.limits.yaw_rate_max);
     EXPECT_DOUBLE_EQ(o.limits.height_min, d.limits.height_min);
     EXPECT_DOUBLE_EQ(o.limits.height_max, d.limits.height_max);
+    EXPECT_EQ(o.sole_levelling.enabled, d.sole_levelling.enabled);
+    EXPECT_DOUBLE_EQ(o.sole_levelling.edge_fraction, d.sole_levelling.edge_fraction);
+    EXPECT_EQ(o.sole_levelling.iterations, d.sole_levelling.iterations);
+    EXPECT_DOUBLE_EQ(o.sole_levelling.max_correction, d.sole_levelling.max_correction);
   }
 }
 

@@ -61,25 +61,34 @@ TEST(GcoNoAlloc, SolveAndKinematicsAllocateNothingPerTick) {
   EXPECT_EQ(ok, 3 * static_cast<int>(g.ticks.size()));
 }
 
-TEST(GcoNoAlloc, GeneratorPlusGcoTickAllocatesNothing) {
+class GcoNoAllocPipe : public ::testing::TestWithParam<bool> {};
+
+// Both with and without the stance sole levelling (sole_levelling.hpp) of the reference.
+TEST_P(GcoNoAllocPipe, GeneratorPlusGcoTickAllocatesNothing) {
   const RobotConfig& robot = pmg::test::g1Robot();
   const GeneratorJointSpace js = pmg::generatorJointSpace(robot);
   auto model = std::make_shared<const GeneratorModel>(loadClipLibrary(pmg::test::g1ClipDir(), robot), js);
-  GeneratorWithGco pipe(model, LegModel::fromRobotConfig(robot), GcoOptions{});
+  GcoOptions options;
+  options.sole_levelling.enabled = GetParam();
+  GeneratorWithGco pipe(model, LegModel::fromRobotConfig(robot), options);
   pipe.step({0.3, 0.0, 0.0}, {}, 0.01);  // warm-up
   std::optional<pmg::test::AllocationGuard> guard;
   guard.emplace();
   double sum = 0.0;
   for (int k = 0; k < 600; ++k) {
     const double s = k / 600.0;
-    const GcoResult& r = pipe.step({0.9 * s - 0.3, 0.0, 0.5 - s}, {0.0, 0.0, 0.0}, 0.01);
-    sum += r.u_opt.v_x;
+    const GcoResult& r = pipe.step({0.9 * s - 0.3, 0.3 * s, 0.5 - s}, {0.2 * s, 0.0, 0.0}, 0.01);
+    sum += r.u_opt.v_x + pipe.generatorOutput().q_ref.sum();
+    if (k == 300) pipe.reset(0.25);
   }
   const std::size_t allocations = guard->count();
   guard.reset();
   EXPECT_EQ(allocations, 0u);
   EXPECT_TRUE(std::isfinite(sum));
+  if (GetParam()) EXPECT_GT(pipe.soleLevelling().correction(Foot::kLeft).norm() + pipe.soleLevelling().correction(Foot::kRight).norm(), 0.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(SoleLevelling, GcoNoAllocPipe, ::testing::Bool());
 
 }  // namespace
 }  // namespace pmg::gco

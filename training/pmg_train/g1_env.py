@@ -223,6 +223,13 @@ def load_actuator_blocks(path, joint_names):
 class EnvConfig:
     mode: str = "pmg_gco"          # "pmg_gco" | "pmg" | "single_gait" (see the module docstring)
     blending: str = "consistent"   # generator blending: "consistent" | "paper" (ablation); single_gait: paper
+    # Beyond the paper, both off for every policy trained before 2026-11-27 (docs/policy.md
+    # "Reference torso pitch"): the walking clips' mean waist lean removed (GeneratorParams::
+    # upright_walking), and the reference's stance soles levelled before GCO (GcoOptions::
+    # sole_levelling, gco.level_soles; pmg_gco mode only). The controller config must match
+    # (generator.upright_walking, sole_levelling); the ONNX contract records both.
+    upright_walking: bool = False
+    sole_levelling: bool = False
     clips: str = "config/clips/g1"  # clip folder (clips + implied_motion tables + consistency_map.yaml)
     gco_model: str = "training/pmg_train/gco_g1.json"
     mjcf: str = "config/robots/g1/g1_29dof_rev_1_0.xml"
@@ -422,6 +429,10 @@ class G1PmgEnv(Env):
         beside them is the consistency map); None = cfg.clips. Read from the files here."""
         if cfg.mode not in ("pmg_gco", "pmg", "single_gait"):
             raise ValueError(f"EnvConfig.mode = {cfg.mode!r}: expected 'pmg_gco', 'pmg' or 'single_gait'")
+        if cfg.sole_levelling and cfg.mode != "pmg_gco":
+            raise ValueError(f"EnvConfig.sole_levelling: needs mode 'pmg_gco' (it runs with GCO), got {cfg.mode!r}")
+        if cfg.upright_walking and cfg.mode == "single_gait":
+            raise ValueError("EnvConfig.upright_walking: not with mode 'single_gait' (the Table I baseline)")
         if cfg.blending not in pg.BLENDINGS:
             raise ValueError(f"EnvConfig.blending = {cfg.blending!r}: expected one of {pg.BLENDINGS}")
         if cfg.gains not in GAINS:
@@ -448,7 +459,8 @@ class G1PmgEnv(Env):
             self.pmg = pg.GeneratorModel([pg.load_clip_file(clip_files[0])], [], self.js, blending="paper")
             self.pmg.clip_files, self.pmg.map_file = list(clip_files), None
         else:
-            self.pmg = pg.load_library(list(clip_files), self.js, blending=cfg.blending)
+            self.pmg = pg.load_library(list(clip_files), self.js, blending=cfg.blending,
+                                       upright_walking=cfg.upright_walking)
         self.clip_files = list(self.pmg.clip_files)  # the clips (not the consistency map)
         self.consistency_map_file = self.pmg.map_file
         import yaml
@@ -685,6 +697,9 @@ class G1PmgEnv(Env):
         ref = pg.step(self.pmg, phase, command[:3], command[3:], c.control_dt, xp=jnp)
         if c.mode == "pmg":
             return ref, command, gco_state
+        if c.sole_levelling:
+            ref, _, _, gco_state = gco_port.level_soles(self.gco_chains, self.gco_opt, ref, self.js.q_stand,
+                                                        self.js.lower, self.js.upper, gco_state, xp=jnp)
         u_opt, _, _, gco_state = gco_port.step(self.gco_chains, self.gco_opt, ref, command[3:], gco_state, xp=jnp)
         return ref, u_opt.astype(jnp.float32), gco_state
 

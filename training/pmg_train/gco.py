@@ -68,6 +68,11 @@ class GcoOptions:
     hi: np.ndarray
     contact_ramp_time: float
     jump: np.ndarray       # (4,) per-tick bound on the change of u'
+    # Stance sole levelling of the reference (sole_levelling.hpp; SoleLevellingOptions). `enabled`
+    # is the training's choice (EnvConfig.sole_levelling), not the file's.
+    level_edge_fraction: float = 0.5
+    level_iterations: int = 3
+    level_max_correction: float = 0.4
 
     @staticmethod
     def from_doc(doc):
@@ -80,7 +85,9 @@ class GcoOptions:
                           o["w_limit"], np.array(o["limits_lo"], float), np.array(o["limits_hi"], float),
                           o["contact_ramp_time"],
                           np.array([o["max_jump_velocity"], o["max_jump_velocity"], o["max_jump_yaw_rate"],
-                                    o["max_jump_height"]]))
+                                    o["max_jump_height"]]),
+                          *((o["sole_levelling"]["edge_fraction"], int(o["sole_levelling"]["iterations"]),
+                             o["sole_levelling"]["max_correction"]) if "sole_levelling" in o else ()))
 
 
 def load_model(path):
@@ -98,9 +105,9 @@ def _rot(xp, axis, q):
     return c * xp.eye(3) + s * K + (1.0 - c) * xp.outer(k, k)
 
 
-def foot_kinematics(chains: LegChains, foot: int, q, qd, xp=np):
-    """Sole position p_BS_B [m], sole velocity J_v q̇ [m/s] and foot angular velocity J_ω q̇
-    [rad/s] relative to the pelvis, pelvis frame B. q, qd: (6,) chain order [rad], [rad/s]."""
+def _chain_fk(chains: LegChains, foot: int, q, xp=np):
+    """Sole position p_BS_B, foot orientation R_BF and, per revolute joint, its axis and a point on
+    it, all in the pelvis frame B. q: (6,) chain order [rad]."""
     R = xp.eye(3)
     p = xp.zeros(3)
     axes, points = [], []
@@ -117,6 +124,13 @@ def foot_kinematics(chains: LegChains, foot: int, q, qd, xp=np):
             Rs, ps = xp.asarray(pose0[:3, :3]), xp.asarray(pose0[:3, 3])
         p = p + R @ ps
         R = R @ Rs
+    return p, R, axes, points
+
+
+def foot_kinematics(chains: LegChains, foot: int, q, qd, xp=np):
+    """Sole position p_BS_B [m], sole velocity J_v q̇ [m/s] and foot angular velocity J_ω q̇
+    [rad/s] relative to the pelvis, pelvis frame B. q, qd: (6,) chain order [rad], [rad/s]."""
+    p, _, axes, points = _chain_fk(chains, foot, q, xp)
     v = xp.zeros(3)
     w = xp.zeros(3)
     for k in range(len(axes)):
@@ -125,9 +139,72 @@ def foot_kinematics(chains: LegChains, foot: int, q, qd, xp=np):
     return p, v, w
 
 
+def sole_levelling_weight(mu, sigma, phase, edge_fraction, xp=np):
+    """λ_f = clamp((σ − d) / (edge_fraction σ), 0, 1), d = circular |φ − μ| (SoleLevelling::weightAt)."""
+    wrap = lambda x: x - xp.floor(x)
+    d0 = xp.abs(wrap(phase) - wrap(mu))
+    d = xp.minimum(d0, 1.0 - d0)
+    ramp = edge_fraction * sigma
+    return xp.where(ramp > 0.0, xp.clip((sigma - d) / xp.where(ramp > 0.0, ramp, 1.0), 0.0, 1.0), 0.0)
+
+
+def level_soles(chains: LegChains, opt: GcoOptions, gen_out, q_stand, lower, upper, state, xp=np):
+    """Stance sole levelling of one generator tick (pmg::gco::SoleLevelling::apply, sole_levelling.hpp).
+
+    gen_out: the generator port's output (q_ref, qd_ref, q_posture, phase, contact_mu, contact_sigma);
+    q_stand, lower, upper: (n) standing pose and joint limits [rad]; state: the GCO state dict (its
+    "lev_applied" (2, 2) and "have_prev"). Per foot: `level_iterations` Gauss-Newton steps on the
+    ankle pitch/roll offsets δ that turn the sole normal R_BF e_z onto the one of the posture-only
+    pose q_stand + q_posture, bounded to ±level_max_correction and the joint limits; the reference
+    gets λ_f δ_f added (and its finite difference / dt added to q̇, 0 on the first tick).
+    Returns (gen_out with q_ref/qd_ref replaced, δ (2, 2), λ (2,), new state)."""
+    q_ref, qd_ref = xp.asarray(gen_out["q_ref"]), xp.asarray(gen_out["qd_ref"])
+    q_post = xp.asarray(q_stand) + xp.asarray(gen_out["q_posture"])
+    lower, upper = xp.asarray(lower), xp.asarray(upper)
+    deltas, weights = [], []
+    for f in range(NUM_FEET):
+        idx = chains.leg_joint_index[f]
+        q = q_ref[idx]
+        _, R_t, _, _ = _chain_fk(chains, f, q_post[idx], xp)
+        n_target = R_t[:, 2]
+        lo = xp.maximum(-opt.level_max_correction, lower[idx[4:]] - q[4:])
+        hi = xp.minimum(opt.level_max_correction, upper[idx[4:]] - q[4:])
+        delta = xp.zeros(2)
+        for _ in range(opt.level_iterations):
+            qc = xp.concatenate([q[:4], q[4:] + delta])
+            _, R, axes, _ = _chain_fk(chains, f, qc, xp)
+            n = R[:, 2]
+            J = xp.stack([xp.cross(axes[4], n), xp.cross(axes[5], n)], axis=1)  # (3, 2)
+            H = J.T @ J + 1e-9 * xp.eye(2)
+            delta = delta - xp.linalg.solve(H, J.T @ (n - n_target))
+            delta = xp.where(lo <= hi, xp.clip(delta, lo, hi), 0.0)
+        deltas.append(delta)
+        weights.append(sole_levelling_weight(gen_out["contact_mu"][f], gen_out["contact_sigma"][f], gen_out["phase"],
+                                             opt.level_edge_fraction, xp))
+    delta = xp.stack(deltas)
+    lam = xp.stack(weights)
+    applied = lam[:, None] * delta
+    rate = xp.where(state["have_prev"], (applied - state["lev_applied"]) / opt.dt, 0.0)
+    idx = xp.asarray(chains.leg_joint_index)[:, 4:]  # (2, 2): ankle pitch, ankle roll of each foot
+    q_new = q_ref.at[idx.ravel()].add(applied.ravel()) if hasattr(q_ref, "at") else _add_np(q_ref, idx, applied)
+    qd_new = qd_ref.at[idx.ravel()].add(rate.ravel()) if hasattr(qd_ref, "at") else _add_np(qd_ref, idx, rate)
+    out = dict(gen_out)
+    out["q_ref"], out["qd_ref"] = q_new, qd_new
+    new_state = dict(state)
+    new_state["lev_applied"] = applied
+    return out, delta, lam, new_state
+
+
+def _add_np(x, idx, values):
+    y = np.array(x, dtype=float, copy=True)
+    y[np.asarray(idx).ravel()] += np.asarray(values).ravel()
+    return y
+
+
 def initial_state(xp=np):
     """GCO state after construction / reset(): no contact ramps, no previous solution."""
-    return {"s": xp.zeros(2), "x": xp.zeros(4), "u_prev": xp.zeros(4), "have_prev": xp.asarray(False)}
+    return {"s": xp.zeros(2), "x": xp.zeros(4), "u_prev": xp.zeros(4), "have_prev": xp.asarray(False),
+            "lev_applied": xp.zeros((2, 2))}
 
 
 def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
@@ -190,5 +267,5 @@ def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
     u = xp.where(have_prev, xp.clip(u, state["u_prev"] - jump, state["u_prev"] + jump), u)
     x = u - base
     u_opt = xp.stack([u[0], u[1], u[2], xp.asarray(u_s[0], u.dtype), xp.asarray(u_s[1], u.dtype), u[3]])
-    new_state = {"s": s, "x": x, "u_prev": u, "have_prev": xp.asarray(True)}
+    new_state = {"s": s, "x": x, "u_prev": u, "have_prev": xp.asarray(True), "lev_applied": state["lev_applied"]}
     return u_opt, x, s, new_state

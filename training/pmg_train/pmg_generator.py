@@ -37,6 +37,7 @@ BLENDINGS = ("consistent", "paper")
 KCONSISTENT_SWEEPS = 4  # pmg::kConsistentSweeps
 CONSISTENCY_MAP_FILE = "consistency_map.yaml"
 POSTURE_AXES = ("pitch", "roll", "height")
+UPRIGHT_JOINTS = ("waist_pitch_joint", "waist_roll_joint")  # GeneratorParams::upright_walking
 
 
 @dataclasses.dataclass
@@ -156,7 +157,7 @@ class GeneratorModel:
     """Immutable model: 6 dynamic slots (axis x sign), up to 3 static clips (GeneratorModel)."""
 
     def __init__(self, dynamic_clips, static_clips, js: JointSpace, epsilon=0.05, max_command=(1.5, 0.8, 1.5),
-                 blending="consistent", consistency=None, max_cadence_ratio=1.3):
+                 blending="consistent", consistency=None, max_cadence_ratio=1.3, upright_walking=False):
         if blending not in BLENDINGS:
             raise ValueError(f"GeneratorModel.blending = {blending!r}: expected one of {BLENDINGS}")
         if not 1.0 <= max_cadence_ratio <= 2.0:
@@ -179,6 +180,17 @@ class GeneratorModel:
                 self.dynamic[2 * a + 1] = derive(pos)
             if neg is not None and pos is None:
                 self.dynamic[2 * a] = derive(neg)
+        self.upright_walking = bool(upright_walking)
+        if self.upright_walking:  # GeneratorParams::upright_walking
+            for name in UPRIGHT_JOINTS:
+                if name not in js.joint_names:
+                    continue
+                j = js.joint_names.index(name)
+                for k, d in enumerate(self.dynamic):
+                    if d is not None:
+                        q = np.array(d.q, dtype=np.float64, copy=True)
+                        q[:, j] -= q[:, j].mean() - js.q_stand[j]
+                        self.dynamic[k] = dataclasses.replace(d, q=q)
         self.static = [None] * 3
         for s in static_clips:
             if self.static[s.axis] is not None:
@@ -489,7 +501,7 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
     next_phase = wrap_phase(xp, phase + dt / period)
     stack = lambda xs: xp.stack([xp.asarray(x) for x in xs])
     return {"phase": phase, "next_phase": next_phase, "period": period, "cadence_ratio": cadence_ratio,
-            "q_ref": q_ref, "qd_ref": qd_ref,
+            "q_ref": q_ref, "qd_ref": qd_ref, "q_posture": q_post,
             "alpha": stack(alpha), "weight": stack(weight), "amplitude": stack(amp),
             "clip_direction": stack(direction), "amplitude_saturated": xp.sum(stack(saturated).astype(xp.int32)),
             "command_correction": correction, "standing_weight": w_stand, "beta": stack(beta),
@@ -574,7 +586,7 @@ def load_library(clips, js: JointSpace, blending="consistent", **kwargs):
     return model
 
 
-def model_from_vectors(v, blending=None):
+def model_from_vectors(v, blending=None, upright_walking=False):
     """GeneratorModel from a pmg_generator_vectors JSON document (its "blending" unless @p blending)."""
     js = JointSpace(v["joint_names"], np.array(v["q_stand"]), np.array(v["lower"]), np.array(v["upper"]),
                     np.array(v["mirror_index"], int), np.array(v["mirror_sign"], float), v["standing_base_height"])
@@ -592,4 +604,4 @@ def model_from_vectors(v, blending=None):
     cmap = None if m is None else ConsistencyMap([np.atleast_1d(np.array(m[k], float)) for k in MAP_KEYS],
                                                  np.array(m["delta"], float).reshape(-1, 3))
     return GeneratorModel(dyn, sta, js, v["epsilon"], v["max_command"], blending or v.get("blending", "paper"), cmap,
-                          v["max_cadence_ratio"])
+                          v["max_cadence_ratio"], upright_walking)

@@ -24,8 +24,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    observation and reward finite; no episode ends and the pelvis stays above 0.65 m with the trunk
    within 0.3 rad of upright; rewards at most the sum of the positive reward weights, mean > 0;
    the references in the observation equal the float64 NumPy ports (pmg_generator.step at the
-   env's phase and command: q_ref to 1e-4 rad; gco.step from the env's previous GCO state: u' to
-   1e-3) and the phase advances by the port's own update.
+   env's phase and command, then gco.level_soles: q_ref to 1e-4 rad; gco.step from the env's
+   previous GCO state: u' to 1e-3) and the phase advances by the port's own update.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
    effect on; part 1's env is built with a calibrated robot config written into the workdir (left
@@ -142,13 +142,14 @@ def pin_checks(check):
 
 def make_smoke_env(workdir):
     """The env of parts 1-1e (module docstring): the training configuration (full PMG with GCO, the
-    clips as train_pmg.py passes them) with a calibrated robot config written into @p workdir,
-    physically informed gains and HAND_FORCE_CFG. Returns (env, the calibrated config's path)."""
+    clips as train_pmg.py passes them, upright walking and levelled stance soles) with a calibrated
+    robot config written into @p workdir, physically informed gains and HAND_FORCE_CFG. Returns (env, the calibrated config's path)."""
     import jax
     from pmg_train import g1_env
     t0 = time.time()
     cal_path = write_calibrated_robot(workdir)
-    cfg = g1_env.EnvConfig(actuators=cal_path, gains="physically_informed", **HAND_FORCE_CFG)
+    cfg = g1_env.EnvConfig(actuators=cal_path, gains="physically_informed", upright_walking=True, sole_levelling=True,
+                           **HAND_FORCE_CFG)
     env = g1_env.G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")))
     print(f"env built in {time.time() - t0:.1f} s: mode {cfg.mode}, clips {len(env.clip_files)}, "
           f"{len(jax.local_devices())} host devices", flush=True)
@@ -224,6 +225,14 @@ def env_checks(check, env, n_envs, n_steps):
     for t in range(obs.shape[0]):
         for i in range(n_envs):
             ref = pg.step(env.pmg, phase[t, i], command[t, i, :3], command[t, i, 3:], cfg.control_dt)
+            if t == 0:
+                state = gco.initial_state()
+            else:
+                state = {k: np.asarray(v[t - 1, i]).astype(bool if k == "have_prev" else np.float64)
+                         for k, v in gco_states.items()}
+            if cfg.sole_levelling:
+                ref, _, _, state = gco.level_soles(env.gco_chains, env.gco_opt, ref, env.js.q_stand, env.js.lower,
+                                                   env.js.upper, state)
             q_rel = np.asarray(ref["q_ref"])[:g1_env.LEG] - q_default[:g1_env.LEG]
             worst["q_ref"] = max(worst["q_ref"], float(np.abs(priv[t, i, sl["pmg_ref_q_rel"]] - q_rel).max()))
             ph = 2 * math.pi * phase[t, i]
@@ -232,11 +241,6 @@ def env_checks(check, env, n_envs, n_steps):
             if t + 1 < obs.shape[0]:
                 d = abs(float(ref["next_phase"]) - phase[t + 1, i])
                 worst["next_phase"] = max(worst["next_phase"], min(d, 1.0 - d))
-            if t == 0:
-                state = gco.initial_state()
-            else:
-                state = {k: np.asarray(v[t - 1, i]).astype(bool if k == "have_prev" else np.float64)
-                         for k, v in gco_states.items()}
             u_opt, _, _, _ = gco.step(env.gco_chains, env.gco_opt, ref, command[t, i, 3:], state)
             worst["u_opt"] = max(worst["u_opt"], float(np.abs(priv[t, i, sl["command"]] / scale_cmd - u_opt).max()))
     check(worst["q_ref"] < 1e-4, f"leg references in the observation = NumPy generator port "

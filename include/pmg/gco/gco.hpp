@@ -61,6 +61,7 @@
 #include <Eigen/Core>
 
 #include "pmg/gco/leg_kinematics.hpp"
+#include "pmg/gco/sole_levelling.hpp"
 
 namespace pmg::gco {
 
@@ -127,6 +128,10 @@ struct GcoOptions {
   int max_iterations = 20;                 ///< Levenberg-Marquardt iteration cap per tick, 1..100
   double failure_gradient_norm = 1e-6;     ///< HIT_MAX_ITERATIONS with a larger max |gradient| = failure
 
+  /// Stance sole levelling of the reference before GCO (GeneratorWithGco; beyond the paper,
+  /// sole_levelling.hpp). Off by default; independent of `enabled`.
+  SoleLevellingOptions sole_levelling;
+
   /// Throws std::invalid_argument naming the field and its allowed range.
   void validate() const;
 
@@ -154,6 +159,7 @@ struct GcoOptions {
     a->Visit("newton_polish_iterations", &newton_polish_iterations, "0..20");
     a->Visit("max_iterations", &max_iterations, "1..100");
     a->Visit("failure_gradient_norm", &failure_gradient_norm, "");
+    a->Visit("sole_levelling", &sole_levelling, "stance sole levelling of the reference");
   }
 };
 

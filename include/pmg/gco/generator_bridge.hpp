@@ -3,7 +3,10 @@
 /// The complete generator of issue 4: PMG generator tick (eqs. 4-12, pmg::MotionGenerator) followed
 /// by GCO (eqs. 13-19), header-only (target pmg::gco_generator).
 ///
-/// Per 100 Hz tick: MotionGenerator::step(u_d, u_s, dt) -> fillFromGenerator() -> Gco::solve().
+/// Per 100 Hz tick: MotionGenerator::step(u_d, u_s, dt) -> [SoleLevelling::apply() when
+/// GcoOptions::sole_levelling.enabled: the stance soles of q_ref/qd_ref levelled, sole_levelling.hpp]
+/// -> fillFromGenerator() -> Gco::solve(). generatorOutput() is the (levelled) reference the policy
+/// and the controller use.
 /// The policy observes GcoResult::u_opt (u' of eq. 19) instead of the raw command; with
 /// GcoOptions::enabled = false (the "PMG w/o GCO" ablation) u' is the template's own base state.
 /// Setup allocates and may throw; step() is noexcept and allocation-free (test/gco/
@@ -54,12 +57,19 @@ class GeneratorWithGco {
                    const GcoOptions& options)
       : generator_(std::move(generator_model)),
         gco_(legs, options),
-        leg_idx_(legs->jointIndices(generator_.model().jointSpace().joint_names)) {}
+        leg_idx_(legs->jointIndices(generator_.model().jointSpace().joint_names)),
+        levelling_(legs, options.sole_levelling, leg_idx_),
+        output_(generator_.output()) {}  // sizes the levelled copy once
 
   /// One tick: generator at the current phase, then GCO. Returns GCO's result (u' etc.).
   const GcoResult& step(const VelocityCommand& u_d, const PostureCommand& u_s, double dt) noexcept {
     generator_.step(u_d, u_s, dt);
-    fillFromGenerator(generator_.output(), leg_idx_, u_d, u_s, &input_);
+    if (levelling_.enabled()) {
+      output_ = generator_.output();  // same sizes: no allocation
+      levelling_.apply(generator_.model().jointSpace().q_stand, output_.q_posture, output_.phase, output_.contact,
+                       dt, &output_.q_ref, &output_.qd_ref);
+    }
+    fillFromGenerator(generatorOutput(), leg_idx_, u_d, u_s, &input_);
     gco_.solve(input_, &result_);
     return result_;
   }
@@ -68,9 +78,15 @@ class GeneratorWithGco {
   void reset(double phase = 0.0) noexcept {
     generator_.reset(phase);
     gco_.reset();
+    levelling_.reset();
   }
 
-  const GeneratorOutput& generatorOutput() const noexcept { return generator_.output(); }
+  /// The reference of the last tick: the generator's, with the stance soles levelled when
+  /// GcoOptions::sole_levelling.enabled.
+  const GeneratorOutput& generatorOutput() const noexcept {
+    return levelling_.enabled() ? output_ : generator_.output();
+  }
+  const SoleLevelling& soleLevelling() const noexcept { return levelling_; }
   const GcoInput& gcoInput() const noexcept { return input_; }
   const GcoResult& gcoResult() const noexcept { return result_; }
   MotionGenerator& generator() noexcept { return generator_; }
@@ -81,6 +97,8 @@ class GeneratorWithGco {
   MotionGenerator generator_;
   Gco gco_;
   LegJointIndex leg_idx_;
+  SoleLevelling levelling_;
+  GeneratorOutput output_;
   GcoInput input_;
   GcoResult result_;
 };

@@ -115,6 +115,12 @@ class LegKinematics {
   /// Pose X_BS of the sole frame (origin S, axes of F) in B. No allocation.
   bool forward(Foot foot, const LegVector& q, Eigen::Isometry3d* X_BS) noexcept;
 
+  /// Foot orientation R_BF and the angular part of the Jacobian, J_ω (column k = axis of chain
+  /// joint k in B, unit), for one leg's q (chain order [rad]). No allocation. Used by
+  /// SoleLevelling (sole_levelling.hpp): ∂(R_BF e_z)/∂q_k = J_ω,k × (R_BF e_z).
+  bool orientation(Foot foot, const LegVector& q, Eigen::Matrix3d* R_BF,
+                   Eigen::Matrix<double, 3, kLegDofs>* J_w_B) noexcept;
+
   /// Setup-time inverse kinematics (KDL Levenberg-Marquardt) for a target sole pose X_BS,
   /// starting from q_init. Returns the final position error norm [m + rad]; *q receives the
   /// solution clamped to the URDF joint limits.

@@ -130,6 +130,14 @@ struct GeneratorParams {
   /// or for a policy trained before the cadence existed (controller config generator.max_cadence_ratio).
   /// Where it acts the amplitude solve runs twice (a few more table look-ups in the tick).
   double max_cadence_ratio = 1.3;
+  /// Beyond the paper: shift the waist pitch and waist roll of every dynamic clip (derived ones
+  /// included) by a constant so that their mean over the cycle equals the standing pose's
+  /// (q_D,j(φ) −= mean_φ q_D,j − q_stand,j; the oscillation is kept). The captured walks lean the
+  /// torso forward by 0.07–0.28 rad with the waist (mean over the cycle, more when clips are
+  /// superposed above amplitude one; docs/policy.md), which a robot asked for an upright torso must
+  /// undo with its pelvis. Joints named waist_pitch_joint / waist_roll_joint; a robot without them is
+  /// unchanged. The legs, and so the implied-motion tables and the ConsistencyMap, are unchanged.
+  bool upright_walking = false;
 
   /// Returns an empty string when valid, else what is wrong (field and expected range).
   std::string validate() const {
@@ -252,6 +260,16 @@ class GeneratorModel {
       };
       if (pos && !neg) neg = std::make_unique<DynamicClip>(derive(*pos));
       if (neg && !pos) pos = std::make_unique<DynamicClip>(derive(*neg));
+    }
+    if (params_.upright_walking) {
+      for (const char* name : {"waist_pitch_joint", "waist_roll_joint"}) {
+        const auto it = std::find(js_.joint_names.begin(), js_.joint_names.end(), name);
+        if (it == js_.joint_names.end()) continue;
+        const auto j = static_cast<Eigen::Index>(it - js_.joint_names.begin());
+        for (auto& d : dynamic_) {
+          if (d && d->q.rows() > 0) d->q.col(j).array() -= d->q.col(j).mean() - js_.q_stand[j];
+        }
+      }
     }
     for (const auto& s : library.static_clips) static_[static_cast<std::size_t>(s.axis)] = std::make_unique<StaticClip>(s);
     for (std::size_t k = 0; k < dynamic_.size(); ++k)

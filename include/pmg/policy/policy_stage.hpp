@@ -35,6 +35,8 @@ struct PolicyStageOptions {
   PolicyBackend backend = PolicyBackend::kNative;  ///< kNative: allocation-free tick
   double control_period = 0.01;   ///< [s], must equal the contract's
   bool gco = false;               ///< the controller runs GCO (must match the contract)
+  bool sole_levelling = false;    ///< the reference's stance soles are levelled (GcoOptions::sole_levelling; must match)
+  bool upright_walking = false;   ///< the walking clips' waist lean is removed (GeneratorParams::upright_walking; must match)
   /// Reference the actor was trained on (must match the contract's pmg.mode): "pmg" = the PMG
   /// generator on all clips (the controller); "single_gait" = the generator on the forward-walk
   /// clip alone at its nominal speed (the Table I baseline; only pmg_policy_sil runs it).
