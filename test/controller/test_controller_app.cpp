@@ -238,13 +238,17 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
 
 // pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
 // the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
-// also drives teleoperation): the actor keeps the G1 upright and walks it forward on command; the
-// tick allocates nothing.
+// also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:
+// upright walking and levelled stance soles, with the actor fine-tuned on them): the actor keeps the
+// G1 upright and walks it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
   ControllerConfig config = silConfig(test::sourcePath(std::string("config/controller/") + GetParam()));
   ASSERT_FALSE(config.mujoco.gantry.enabled);
+  const bool uplev = std::string(GetParam()) == "g1_sil_policy_uplev.yaml";
+  EXPECT_EQ(config.gco.sole_levelling.enabled, uplev);
+  EXPECT_EQ(config.generator.upright_walking, uplev);
   ControllerApp app(config);
   ASSERT_NE(app.controller().policy(), nullptr);
   CommandSample sample;
@@ -271,7 +275,8 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
-                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml"));
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
+                                                           "g1_sil_policy_uplev.yaml"));
 
 }  // namespace
 }  // namespace pmg

@@ -95,6 +95,33 @@ TEST(Contract, ControllerPmgSettingMissingFromContract) {
   }
 }
 
+// The reference settings beyond the paper (GeneratorParams::upright_walking, GcoOptions::
+// sole_levelling) are contract keys: older contracts read as false, and a policy trained on them
+// (the uplev fine-tune, trained with both) runs only where the controller runs both.
+TEST(Contract, ReferenceSettingsMustMatchTheController) {
+  PolicyRobotSpec s = g1Spec();
+  s.pmg = {{"enabled", "true"}, {"gco", "true"}, {"mode", "pmg"}, {"sole_levelling", "false"}, {"upright_walking", "false"}};
+  EXPECT_NO_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s));  // no keys: false
+  const std::string uplev = pmg::test::sourcePath("training/results/fidelity/upright_level/uplev/g1_pmg_policy_uplev.onnx");
+  try {
+    PolicyRunner runner(uplev, s);
+    FAIL() << "accepted a policy trained with levelled soles on a controller without";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.sole_levelling");
+    EXPECT_NE(std::string(e.what()).find("'true'"), std::string::npos) << e.what();
+  }
+  s.pmg["sole_levelling"] = "true";
+  try {
+    PolicyRunner runner(uplev, s);
+    FAIL() << "accepted a policy trained upright on a controller without";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.upright_walking");
+  }
+  s.pmg["upright_walking"] = "true";
+  EXPECT_NO_THROW(PolicyRunner(uplev, s));
+  EXPECT_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s), ContractError);
+}
+
 TEST(Contract, NumericPmgSettingComparedAsNumber) {
   PolicyRobotSpec s = g1Spec();
   s.pmg["gait_period"] = "0.80";  // same number, different text
