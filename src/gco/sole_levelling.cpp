@@ -84,6 +84,11 @@ bool SoleLevelling::apply(const Eigen::VectorXd& q_stand, const Eigen::VectorXd&
   if (!options_.enabled || q_ref == nullptr || qd_ref == nullptr || !(dt > 0.0)) return false;
   bool ok = true;
   for (std::size_t f = 0; f < kNumFeet && ok; ++f) {
+    if (weight_[f] == 0.0) {  // swing (or a window's edge): nothing is applied, nothing to solve
+      delta_[f].setZero();
+      tilt_before_[f] = tilt_after_[f] = 0.0;
+      continue;
+    }
     LegVector q, q_target;
     for (int j = 0; j < kLegDofs; ++j) {
       const int k = leg_idx_[f][j];

@@ -83,7 +83,8 @@ class SoleLevelling {
   bool enabled() const noexcept { return options_.enabled; }
   const SoleLevellingOptions& options() const noexcept { return options_; }
   double weight(Foot f) const noexcept { return weight_[LegModel::index(f)]; }
-  /// δ_f of the last apply(): (ankle pitch, ankle roll) offsets at full weight [rad].
+  /// δ_f of the last apply(): (ankle pitch, ankle roll) offsets at full weight [rad]; zero where
+  /// λ_f was 0 (not solved there; the tilts below are then 0 too).
   const Eigen::Vector2d& correction(Foot f) const noexcept { return delta_[LegModel::index(f)]; }
   /// Angle between n_f and n*_f before the last apply() [rad] (the tilt the generator produced).
   double tiltBefore(Foot f) const noexcept { return tilt_before_[LegModel::index(f)]; }
