@@ -44,43 +44,24 @@ double percentile(std::vector<double> v, double p) {
   return v[i];
 }
 
-/// Generator (+ stance sole levelling when the options enable it) + GCO, the stages timed separately
-/// (the same calls GeneratorWithGco::step makes).
+/// GeneratorWithGco (generator, stance sole levelling when the options enable it, GCO) with its
+/// two halves timed separately, and the meters of the measured ticks.
 struct Pipeline {
   Pipeline(std::shared_ptr<const pmg::GeneratorModel> model, std::shared_ptr<const LegModel> legs, const GcoOptions& o)
-      : gen(std::move(model)),
-        gco(legs, o),
-        idx(legs->jointIndices(gen.model().jointSpace().joint_names)),
-        levelling(legs, o.sole_levelling, idx),
-        kin(legs),
-        out(gen.output()) {
-    const auto& names = gen.model().jointSpace().joint_names;
+      : g(std::move(model), legs, o), idx(g.legJointIndex()), kin(legs) {
+    const auto& names = g.generator().model().jointSpace().joint_names;
     for (std::size_t j = 0; j < names.size(); ++j) {
       if (names[j] == "waist_pitch_joint") waist_pitch = static_cast<int>(j);
       if (names[j] == "waist_roll_joint") waist_roll = static_cast<int>(j);
     }
-  }
-  /// The reference of the last tick (levelled when enabled).
-  const pmg::GeneratorOutput& output() const { return levelling.enabled() ? out : gen.output(); }
-  void step(const Command& c, double dt) {
-    gen.step(c.u_d, c.u_s, dt);
-    if (levelling.enabled()) {
-      out = gen.output();
-      levelling.apply(gen.model().jointSpace().q_stand, out.q_posture, out.phase, out.contact, dt, &out.q_ref, &out.qd_ref);
-    }
-  }
-  void reset() {
-    gen.reset(0.0);
-    gco.reset();
-    levelling.reset();
   }
   /// Reference torso posture beyond the commanded one, per measured tick (docs/policy.md "Reference
   /// torso pitch"): the waist's pitch/roll away from the posture-only pose q_stand + q_s, and the
   /// pelvis pitch that puts the stance soles flat (from their mean normal in B) minus the posture-only
   /// pose's; forward positive [rad].
   void meterPosture() {
-    const pmg::GeneratorOutput& o = output();
-    const Eigen::VectorXd& q_stand = gen.model().jointSpace().q_stand;
+    const pmg::GeneratorOutput& o = g.generatorOutput();
+    const Eigen::VectorXd& q_stand = g.generator().model().jointSpace().q_stand;
     if (waist_pitch >= 0) waist_pitch_sum += o.q_ref[waist_pitch] - q_stand[waist_pitch] - o.q_posture[waist_pitch];
     if (waist_roll >= 0) waist_roll_sum += o.q_ref[waist_roll] - q_stand[waist_roll] - o.q_posture[waist_roll];
     ++posture_n;
@@ -103,14 +84,9 @@ struct Pipeline {
       ++sole_n;
     }
   }
-  pmg::MotionGenerator gen;
-  Gco gco;
+  GeneratorWithGco g;
   LegJointIndex idx;
-  SoleLevelling levelling;
   LegKinematics kin;
-  pmg::GeneratorOutput out;
-  GcoInput in;
-  GcoResult res;
   int waist_pitch = -1, waist_roll = -1;
   Eigen::Vector3d u_opt_sum = Eigen::Vector3d::Zero();  ///< Σ u' (v_x, v_y, ω) over the measured ticks
   int u_opt_n = 0;
@@ -140,7 +116,7 @@ Command shapedCommand(const pmg::CommandLimits& limits, const Command& c, double
 /// Runs one command for warm-up + measured ticks; meters the measured part and records timings.
 FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double dt, int warmup_ticks,
                   int measure_ticks, std::vector<double>* tick_us, std::vector<double>* gco_us, bool posture = false) {
-  pipe.reset();
+  pipe.g.reset(0.0);
   meter.reset();
   pipe.u_opt_sum.setZero();
   pipe.u_opt_n = 0;
@@ -149,18 +125,17 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
   pipe.posture_n = pipe.sole_n = 0;
   for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
-    pipe.step(c, dt);
-    fillFromGenerator(pipe.output(), pipe.idx, c.u_d, c.u_s, &pipe.in);
+    pipe.g.stepReference(c.u_d, c.u_s, dt);
     const auto t1 = std::chrono::steady_clock::now();
-    pipe.gco.solve(pipe.in, &pipe.res);
+    const GcoResult& res = pipe.g.solveGco();
     const auto t2 = std::chrono::steady_clock::now();
     if (k >= warmup_ticks) {
       if (tick_us) tick_us->push_back(std::chrono::duration<double, std::micro>(t2 - t0).count());
       if (gco_us) gco_us->push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
-      meter.add(pipe.in, pipe.res.u_opt);
-      pipe.u_opt_sum += Eigen::Vector3d(pipe.res.u_opt.v_x, pipe.res.u_opt.v_y, pipe.res.u_opt.yaw_rate);
+      meter.add(pipe.g.gcoInput(), res.u_opt);
+      pipe.u_opt_sum += Eigen::Vector3d(res.u_opt.v_x, res.u_opt.v_y, res.u_opt.yaw_rate);
       ++pipe.u_opt_n;
-      pipe.saturated_axes = std::max(pipe.saturated_axes, pipe.gen.output().amplitude_saturated);
+      pipe.saturated_axes = std::max(pipe.saturated_axes, pipe.g.generatorOutput().amplitude_saturated);
       if (posture) pipe.meterPosture();
     }
   }
@@ -358,7 +333,7 @@ int main(int argc, char** argv) {
                 // 0.03 m/s / 0.05 rad/s when that is larger (only commands with complete stances).
                 // Reference-implied motion: the exact cycle mean (cycleImpliedVelocity), the quantity the
                 // consistent blending targets; the slip meter's window means are not whole cycles.
-                const Eigen::Vector3d cyc = cycleImpliedVelocity(pipe_on.gen, cycle_kin, pipe_on.idx, c.u_d, c.u_s);
+                const Eigen::Vector3d cyc = cycleImpliedVelocity(pipe_on.g.generator(), cycle_kin, pipe_on.idx, c.u_d, c.u_s);
                 const double implied[3] = {cyc.x(), cyc.y(), cyc.z()};
                 const double cmd[3] = {c.u_d.vx, c.u_d.vy, c.u_d.wz};
                 const double abs_tol[3] = {0.03, 0.03, 0.05};
@@ -382,13 +357,13 @@ int main(int argc, char** argv) {
                 n_outside_saturated += (!within && pipe_on.saturated_axes > 0) ? 1 : 0;
                 if (!within && worst.size() < 400)
                   worst.push_back({cmd[0], cmd[1], cmd[2], p, r, h, implied[0], implied[1], implied[2]});
-                failures += pipe_on.gco.counters().solver_failures;
-                if (pipe_on.gco.counters().solver_failures > 0) {
+                failures += pipe_on.g.gco().counters().solver_failures;
+                if (pipe_on.g.gco().counters().solver_failures > 0) {
                   std::printf("  (GCO solver failures for this command: %llu)\n",
-                              static_cast<unsigned long long>(pipe_on.gco.counters().solver_failures));
+                              static_cast<unsigned long long>(pipe_on.g.gco().counters().solver_failures));
                 }
-                jump_limited += pipe_on.gco.counters().jump_limited;
-                ticks += pipe_on.gco.counters().ticks;
+                jump_limited += pipe_on.g.gco().counters().jump_limited;
+                ticks += pipe_on.g.gco().counters().ticks;
                 std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f %7.3f %s\n",
                             a, b, w, p, r, h, sG.stances, 1e3 * s0.mean_stance_speed, 1e3 * sG.mean_stance_speed,
                             1e3 * s0.mean_slip_per_stance, 1e3 * sG.mean_slip_per_stance, 1e3 * s0.mean_height_error,

@@ -10,10 +10,6 @@ namespace pmg::gco {
 namespace {
 constexpr int kAnklePitch = kLegDofs - 2;  // chain order: hip pitch, roll, yaw, knee, ankle pitch, ankle roll
 constexpr int kAnkleRoll = kLegDofs - 1;
-
-double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 }  // namespace
 
 void SoleLevellingOptions::validate() const {
@@ -40,16 +36,11 @@ bool SoleLevelling::solveFoot(std::size_t f, const LegVector& q_target, const Le
   const auto& lim = legs_->jointLimits(foot);
   Eigen::Vector2d delta = Eigen::Vector2d::Zero();
   LegVector qc = q;
-  for (int it = 0; it <= options_.iterations; ++it) {
+  for (int it = 0; it < options_.iterations; ++it) {
     qc(kAnklePitch) = q(kAnklePitch) + delta(0);
     qc(kAnkleRoll) = q(kAnkleRoll) + delta(1);
     if (!kin_.orientation(foot, qc, &R, &Jw)) return false;
     const Eigen::Vector3d n = R.col(2);
-    if (it == 0) tilt_before_[f] = angleBetween(n, n_target);
-    if (it == options_.iterations) {
-      tilt_after_[f] = angleBetween(n, n_target);
-      break;
-    }
     Eigen::Matrix<double, 3, 2> J;
     J.col(0) = Jw.col(kAnklePitch).cross(n);
     J.col(1) = Jw.col(kAnkleRoll).cross(n);
@@ -86,7 +77,6 @@ bool SoleLevelling::apply(const Eigen::VectorXd& q_stand, const Eigen::VectorXd&
   for (std::size_t f = 0; f < kNumFeet && ok; ++f) {
     if (weight_[f] == 0.0) {  // swing (or a window's edge): nothing is applied, nothing to solve
       delta_[f].setZero();
-      tilt_before_[f] = tilt_after_[f] = 0.0;
       continue;
     }
     LegVector q, q_target;

@@ -63,6 +63,13 @@ class GeneratorWithGco {
 
   /// One tick: generator at the current phase, then GCO. Returns GCO's result (u' etc.).
   const GcoResult& step(const VelocityCommand& u_d, const PostureCommand& u_s, double dt) noexcept {
+    stepReference(u_d, u_s, dt);
+    return solveGco();
+  }
+
+  /// step()'s first half: the generator tick, the sole levelling when enabled, and gcoInput().
+  /// (Split for tools that time the two halves, apps/gco/gco_eval.cpp.)
+  void stepReference(const VelocityCommand& u_d, const PostureCommand& u_s, double dt) noexcept {
     generator_.step(u_d, u_s, dt);
     if (levelling_.enabled()) {
       output_ = generator_.output();  // same sizes: no allocation
@@ -70,6 +77,10 @@ class GeneratorWithGco {
                        dt, &output_.q_ref, &output_.qd_ref);
     }
     fillFromGenerator(generatorOutput(), leg_idx_, u_d, u_s, &input_);
+  }
+
+  /// step()'s second half: GCO on gcoInput().
+  const GcoResult& solveGco() noexcept {
     gco_.solve(input_, &result_);
     return result_;
   }

@@ -84,12 +84,8 @@ class SoleLevelling {
   const SoleLevellingOptions& options() const noexcept { return options_; }
   double weight(Foot f) const noexcept { return weight_[LegModel::index(f)]; }
   /// δ_f of the last apply(): (ankle pitch, ankle roll) offsets at full weight [rad]; zero where
-  /// λ_f was 0 (not solved there; the tilts below are then 0 too).
+  /// λ_f was 0 (not solved there).
   const Eigen::Vector2d& correction(Foot f) const noexcept { return delta_[LegModel::index(f)]; }
-  /// Angle between n_f and n*_f before the last apply() [rad] (the tilt the generator produced).
-  double tiltBefore(Foot f) const noexcept { return tilt_before_[LegModel::index(f)]; }
-  /// The same after the correction at full weight [rad] (≈ 0 unless a bound was reached).
-  double tiltAfter(Foot f) const noexcept { return tilt_after_[LegModel::index(f)]; }
 
  private:
   bool solveFoot(std::size_t f, const LegVector& q_target, const LegVector& q) noexcept;
@@ -102,7 +98,6 @@ class SoleLevelling {
   std::array<double, kNumFeet> weight_{};
   std::array<Eigen::Vector2d, kNumFeet> delta_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::array<Eigen::Vector2d, kNumFeet> applied_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-  std::array<double, kNumFeet> tilt_before_{}, tilt_after_{};
 };
 
 }  // namespace pmg::gco
