@@ -32,6 +32,61 @@ std::string interval(const char* key, const std::optional<std::array<double, 2>>
   return "";
 }
 
+
+/// Replaces each named mesh geom of @p xml by a pad: the box bounding its compiled mesh in the
+/// mesh's principal frame (where MuJoCo puts the compiled vertices and the geom's pose). MuJoCo's
+/// own fitting of a primitive to a mesh gives the equivalent-inertia box (too thin: 0.029 m where
+/// the rubber hand's vertices span 0.045 m), and 2.2's `fitaabb` mislocates the box's centre, so the
+/// bounds are taken from the compiled mesh of a probe model. The pads keep the geoms' other
+/// attributes, get @p extra_attrs, and sit in geom group 3, which MuJoCo does not draw by default
+/// (renders show the meshes). @throws ConfigError naming @p key if the probe does not compile.
+std::string withBoundingBoxPads(std::string xml, const std::vector<std::string>& names, const std::string& extra_attrs,
+                                const std::string& robot_mjcf, const std::string& out_mjcf_path, const std::string& key) {
+  const std::string probe = out_mjcf_path + ".pads.xml";
+  {
+    std::ofstream out(probe);
+    if (!out) throw ConfigError(probe + ": cannot write the pads' probe MJCF");
+    out << xml;
+  }
+  MjModelPtr m;
+  try {
+    m = loadMujocoModel(probe);
+  } catch (const std::runtime_error& e) {
+    fs::remove(probe);
+    throw ConfigError(robot_mjcf + ": " + key + ": box: " + e.what());
+  }
+  fs::remove(probe);
+  for (const std::string& name : names) {
+    const int g = mj_name2id(m.get(), mjOBJ_GEOM, name.c_str());
+    const int mesh = g < 0 ? -1 : m->geom_dataid[g];
+    if (mesh < 0) throw ConfigError(robot_mjcf + ": " + key + ": no compiled mesh for " + name);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+    for (int v = 0; v < m->mesh_vertnum[mesh]; ++v) {
+      const float* p = m->mesh_vert + 3 * (m->mesh_vertadr[mesh] + v);
+      const Eigen::Vector3d q(p[0], p[1], p[2]);
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+    const Eigen::Quaterniond q_BG(m->geom_quat[4 * g], m->geom_quat[4 * g + 1], m->geom_quat[4 * g + 2], m->geom_quat[4 * g + 3]);
+    const Eigen::Vector3d c_B =
+        Eigen::Vector3d(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]) + q_BG * (0.5 * (lo + hi));
+    const Eigen::Vector3d h = 0.5 * (hi - lo);
+    const auto open = xml.rfind("<geom", xml.find("name=\"" + name + "\""));
+    const auto close = xml.find("/>", open);
+    std::string geom = xml.substr(open + 5, close - open - 5);
+    for (const char* attr : {"type", "mesh", "rgba", "group", "pos", "quat"}) {  // replaced below
+      const auto a = geom.find(std::string(" ") + attr + "=\"");
+      if (a != std::string::npos) geom.erase(a, geom.find('"', geom.find('"', a) + 1) + 1 - a);
+    }
+    const std::string pad = fmt::format(
+        "<geom{} {}{}type=\"box\" pos=\"{:.6f} {:.6f} {:.6f}\" quat=\"{:.6f} {:.6f} {:.6f} {:.6f}\" "
+        "size=\"{:.6f} {:.6f} {:.6f}\" group=\"3\" rgba=\"0.7 0.7 0.7 1\"/>",
+        geom, extra_attrs, extra_attrs.empty() ? "" : " ", c_B.x(), c_B.y(), c_B.z(), q_BG.w(), q_BG.x(), q_BG.y(),
+        q_BG.z(), h.x(), h.y(), h.z());
+    xml.replace(open, close + 2 - open, pad);
+  }
+  return xml;
+}
 }  // namespace
 
 template <class A>
@@ -94,6 +149,7 @@ void TaskScene::Serialize(A* a) {
   a->Visit("hand_collision_shape", &hand_collision_shape, "the rubber hands' collision geoms: mesh | box");
   a->Visit("hand_torsional_friction", &hand_torsional_friction, "the rubber hands' torsional friction [m], [0, 0.1]");
   a->Visit("wrist_torsional_friction", &wrist_torsional_friction, "the wrist links' torsional friction [m], [0, 0.1]");
+  a->Visit("wrist_collision_shape", &wrist_collision_shape, "the wrist links' collision geoms: mesh | box");
   a->Visit("impratio", &impratio, "MuJoCo option/impratio, [1, 100]");
   a->Visit("cone", &cone, "MuJoCo option/cone: pyramidal | elliptic");
   a->Visit("noslip_iterations", &noslip_iterations, "MuJoCo option/noslip_iterations, [0, 1000]");
@@ -126,6 +182,8 @@ void TaskScene::check() const {
     throw ConfigError(fmt::format("{}: wrist_torsional_friction = {}: expected [0, 0.1] m", where, wrist_torsional_friction));
   if (hand_collision_shape != "mesh" && hand_collision_shape != "box")
     throw ConfigError(fmt::format("{}: hand_collision_shape = '{}': expected mesh | box", where, hand_collision_shape));
+  if (wrist_collision_shape != "mesh" && wrist_collision_shape != "box")
+    throw ConfigError(fmt::format("{}: wrist_collision_shape = '{}': expected mesh | box", where, wrist_collision_shape));
   if (hand_collision_shape != "mesh" && !hand_collision)
     throw ConfigError(fmt::format("{}: hand_collision_shape needs hand_collision: true", where));
   if (!(impratio >= 1.0 && impratio <= 100.0)) throw ConfigError(fmt::format("{}: impratio = {}: expected [1, 100]", where, impratio));
@@ -202,13 +260,13 @@ std::string taskSceneBodies(const TaskScene& scene) {
     const double lx = 0.5 * t.top_size[0] - 0.05, ly = 0.5 * t.top_size[1] - 0.05;
     x << "    <body name=\"task_" << t.name << "\" pos=\"" << t.pos[0] << " " << t.pos[1] << " " << t.height
       << "\" euler=\"0 0 " << t.yaw << "\">\n"
-      << "      <geom name=\"task_" << t.name << "_geom\" type=\"box\" pos=\"0 0 " << -top << "\" size=\""
+      << "      <geom name=\"task_" << t.name << "_geom\" contype=\"3\" conaffinity=\"3\" type=\"box\" pos=\"0 0 " << -top << "\" size=\""
       << 0.5 * t.top_size[0] << " " << 0.5 * t.top_size[1] << " " << top << "\" friction=\"" << t.friction
       << " 0.005 0.0001\" rgba=\"0.55 0.42 0.3 1\"/>\n";
     int leg = 0;
     for (double sx : {-1.0, 1.0})
       for (double sy : {-1.0, 1.0})
-        x << "      <geom name=\"task_" << t.name << "_leg" << leg++ << "\" type=\"box\" pos=\"" << sx * lx << " "
+        x << "      <geom name=\"task_" << t.name << "_leg" << leg++ << "\" contype=\"3\" conaffinity=\"3\" type=\"box\" pos=\"" << sx * lx << " "
           << sy * ly << " " << -(2.0 * top + leg_h) << "\" size=\"0.02 0.02 " << leg_h
           << "\" rgba=\"0.45 0.34 0.24 1\"/>\n";
     x << "    </body>\n";
@@ -222,7 +280,7 @@ std::string taskSceneBodies(const TaskScene& scene) {
     x << "    <body name=\"task_" << o.name << "\" pos=\"" << xw << " " << yw << " " << zw << "\" euler=\"0 0 "
       << t.yaw + o.yaw << "\">\n"
       << "      <joint name=\"task_" << o.name << "_free\" type=\"free\" armature=\"0\" damping=\"0\" frictionloss=\"0\"/>\n"
-      << "      <geom name=\"task_" << o.name << "_geom\" type=\"box\" size=\"" << 0.5 * o.size[0] << " " << 0.5 * o.size[1]
+      << "      <geom name=\"task_" << o.name << "_geom\" contype=\"3\" conaffinity=\"3\" type=\"box\" size=\"" << 0.5 * o.size[0] << " " << 0.5 * o.size[1]
       << " " << 0.5 * o.size[2] << "\" mass=\"" << o.mass << "\" friction=\"" << o.friction
       << " 0.005 0.0001\" rgba=\"" << rgba << "\"/>\n"
       << "    </body>\n";
@@ -262,50 +320,9 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
       geom.insert(5, fmt::format(" name=\"task_{}_hand_collision\" {}", side, contact_attrs));
       xml.insert(at + key.size(), "\n" + geom);
     }
-    if (scene.hand_collision_shape == "box") {
-      // A pad: the box that bounds the hand's mesh in its principal frame (where MuJoCo puts the
-      // compiled mesh's vertices and the geom's pose). MuJoCo's own fitting of a primitive to a
-      // mesh gives the equivalent-inertia box (too thin: 0.029 m where the vertices span 0.045 m), and
-      // 2.2's `fitaabb` mislocates the box's centre, so the bounds are taken from the compiled mesh.
-      // The pads sit in geom group 3, which MuJoCo does not draw by default: renders show the hands.
-      const std::string probe = out_mjcf_path + ".hands.xml";
-      {
-        std::ofstream out(probe);
-        if (!out) throw ConfigError(probe + ": cannot write the hands' probe MJCF");
-        out << xml;
-      }
-      MjModelPtr m;
-      try {
-        m = loadMujocoModel(probe);
-      } catch (const std::runtime_error& e) {
-        fs::remove(probe);
-        throw ConfigError(robot.mjcf_path + ": hand_collision_shape: box: " + e.what());
-      }
-      fs::remove(probe);
-      for (const std::string side : {"left", "right"}) {
-        const std::string name = "task_" + side + "_hand_collision";
-        const int g = mj_name2id(m.get(), mjOBJ_GEOM, name.c_str());
-        const int mesh = g < 0 ? -1 : m->geom_dataid[g];
-        if (mesh < 0) throw ConfigError(robot.mjcf_path + ": hand_collision_shape: no compiled " + side + " hand mesh");
-        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
-        for (int v = 0; v < m->mesh_vertnum[mesh]; ++v) {
-          const float* p = m->mesh_vert + 3 * (m->mesh_vertadr[mesh] + v);
-          const Eigen::Vector3d q(p[0], p[1], p[2]);
-          lo = lo.cwiseMin(q);
-          hi = hi.cwiseMax(q);
-        }
-        const Eigen::Quaterniond q_BG(m->geom_quat[4 * g], m->geom_quat[4 * g + 1], m->geom_quat[4 * g + 2], m->geom_quat[4 * g + 3]);
-        const Eigen::Vector3d c_B = Eigen::Vector3d(m->geom_pos[3 * g], m->geom_pos[3 * g + 1], m->geom_pos[3 * g + 2]) +
-                                    q_BG * (0.5 * (lo + hi));
-        const Eigen::Vector3d h = 0.5 * (hi - lo);
-        const std::string pad = fmt::format(
-            "<geom name=\"task_{}_hand_collision\" {} type=\"box\" pos=\"{:.6f} {:.6f} {:.6f}\" quat=\"{:.6f} {:.6f} {:.6f} {:.6f}\" "
-            "size=\"{:.6f} {:.6f} {:.6f}\" group=\"3\" rgba=\"0.7 0.7 0.7 1\"/>",
-            side, contact_attrs, c_B.x(), c_B.y(), c_B.z(), q_BG.w(), q_BG.x(), q_BG.y(), q_BG.z(), h.x(), h.y(), h.z());
-        const auto open = xml.rfind("<geom", xml.find("name=\"" + name + "\""));  // the mesh copy written above
-        xml.replace(open, xml.find("/>", open) + 2 - open, pad);
-      }
-    }
+    if (scene.hand_collision_shape == "box")
+      xml = withBoundingBoxPads(xml, {"task_left_hand_collision", "task_right_hand_collision"}, "", robot.mjcf_path,
+                                out_mjcf_path, "hand_collision_shape");
   }
   if (scene.wrist_torsional_friction > 0.0) {
     // The wrist links' collision geoms (the robot MJCF's unnamed mesh geoms with the default contact
@@ -318,6 +335,33 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
           throw ConfigError(robot.mjcf_path + ": wrist_torsional_friction: no collision " + geom + " (scene " + scene.source + ")");
         xml.insert(at + 5, fmt::format(" condim=\"4\" friction=\"1 {} 0.0001\"", scene.wrist_torsional_friction));
       }
+  }
+  if (scene.wrist_collision_shape == "box") {
+    // Name the wrist links' collision meshes, then replace each by its bounding box. The boxes
+    // collide with the scene's bodies only (contype/conaffinity 2 against the robot's 1; the
+    // scene's tables and objects are written with 3), so that the six boxes, wider than the round
+    // housings, do not touch each other or the arm.
+    std::vector<std::string> names;
+    for (const std::string side : {"left", "right"})
+      for (const std::string link : {"roll", "pitch", "yaw"}) {
+        const std::string mesh = "mesh=\"" + side + "_wrist_" + link + "_link\"/>";
+        std::size_t at = 0;
+        for (;;) {  // the collision geom: the one without contype="0"
+          at = xml.find(mesh, at);
+          if (at == std::string::npos)
+            throw ConfigError(robot.mjcf_path + ": wrist_collision_shape: no collision geom with " + mesh + " (scene " +
+                              scene.source + ")");
+          const auto open = xml.rfind("<geom", at);
+          if (xml.substr(open, at - open).find("contype=\"0\"") == std::string::npos) {
+            names.push_back("task_" + side + "_wrist_" + link + "_collision");
+            xml.insert(open + 5, " name=\"" + names.back() + "\"");
+            break;
+          }
+          at += mesh.size();
+        }
+      }
+    xml = withBoundingBoxPads(xml, names, "contype=\"2\" conaffinity=\"2\"", robot.mjcf_path, out_mjcf_path,
+                              "wrist_collision_shape");
   }
   if (scene.impratio != 1.0 || scene.cone != "pyramidal" || scene.noslip_iterations != 0) {
     // The scene's contact options, written after <compiler> (the robot's MJCF has no <option> of its own).

@@ -289,5 +289,85 @@ TEST(TaskScene, HandPadsTouchAFlatSideAtSeveralPointsTheMeshAtOne) {
   EXPECT_EQ(contacts[1], 1) << "mesh";
 }
 
+TEST(TaskScene, WristPadsTouchAFlatSideAlongAStripAndNotEachOther) {
+  const test::TempDir dir;
+  TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  scene.wrist_collision_shape = "box";
+  const RobotConfig with_pads = robotWithTaskScene(test::g1Robot(), scene, dir.file("wrist_pads.xml"));
+  scene.wrist_collision_shape = "mesh";
+  const RobotConfig with_meshes = robotWithTaskScene(test::g1Robot(), scene, dir.file("wrist_meshes.xml"));
+  MujocoBackend pads(with_pads, free_standing()), meshes(with_meshes, free_standing());
+  ASSERT_EQ(pads.model()->nq, meshes.model()->nq);
+  ASSERT_EQ(pads.model()->ngeom, meshes.model()->ngeom);
+  // Every wrist link's collision geom became a box that collides with the scene only.
+  for (const std::string side : {"left", "right"})
+    for (const std::string link : {"roll", "pitch", "yaw"}) {
+      const std::string name = "task_" + side + "_wrist_" + link + "_collision";
+      const int g = mj_name2id(pads.model(), mjOBJ_GEOM, name.c_str());
+      ASSERT_GE(g, 0) << name;
+      EXPECT_EQ(pads.model()->geom_type[g], mjGEOM_BOX) << name;
+      EXPECT_EQ(pads.model()->geom_contype[g], 2) << name;
+      const double* h = pads.model()->geom_size + 3 * g;
+      for (int k = 0; k < 3; ++k) EXPECT_TRUE(h[k] > 0.02 && h[k] < 0.06) << name << " half-size " << h[k];
+    }
+  // Standing, nothing touches a pad (the six boxes overlap each other's links, but do not collide).
+  {
+    mjData* d = mj_makeData(pads.model());
+    mju_copy(d->qpos, pads.data()->qpos, pads.model()->nq);
+    mj_forward(pads.model(), d);
+    for (int c = 0; c < d->ncon; ++c)
+      EXPECT_NE(pads.model()->geom_contype[d->contact[c].geom1] + pads.model()->geom_contype[d->contact[c].geom2], 5)
+          << "a wrist pad touches geom " << d->contact[c].geom1 << "/" << d->contact[c].geom2;
+    mj_deleteData(d);
+  }
+  // The box's side pressed 2 mm into a long face of the right wrist-pitch pad: several points (a
+  // strip); the same pose against the mesh: one.
+  std::vector<double> qpos;
+  int contacts[2] = {0, 0};
+  for (int v = 0; v < 2; ++v) {
+    const mjModel* m = (v == 0 ? pads : meshes).model();
+    mjData* d = mj_makeData(m);
+    const int box = mj_name2id(m, mjOBJ_GEOM, "task_box_geom");
+    ASSERT_GE(box, 0);
+    if (v == 0) {
+      mju_copy(d->qpos, pads.data()->qpos, m->nq);
+      mj_kinematics(m, d);
+      const int g = mj_name2id(m, mjOBJ_GEOM, "task_right_wrist_pitch_collision");
+      const double* h = m->geom_size + 3 * g;
+      const int k = h[0] < h[1] ? (h[0] < h[2] ? 0 : 2) : (h[1] < h[2] ? 1 : 2);
+      const double* R = d->geom_xmat + 9 * g;
+      const double offset = h[k] + m->geom_size[3 * box + k] - 0.002;
+      const int adr = m->jnt_qposadr[m->body_jntadr[m->geom_bodyid[box]]];
+      for (int i = 0; i < 3; ++i) d->qpos[adr + i] = d->geom_xpos[3 * g + i] + offset * R[3 * i + k];
+      mju_mat2Quat(d->qpos + adr + 3, R);
+      qpos.assign(d->qpos, d->qpos + m->nq);
+    } else {
+      mju_copy(d->qpos, qpos.data(), m->nq);
+    }
+    mj_forward(m, d);
+    const int pitch_body = mj_name2id(m, mjOBJ_BODY, "right_wrist_pitch_link");
+    for (int c = 0; c < d->ncon; ++c) {
+      const mjContact& con = d->contact[c];
+      const int other = con.geom1 == box ? con.geom2 : con.geom2 == box ? con.geom1 : -1;
+      if (other >= 0 && m->geom_bodyid[other] == pitch_body) ++contacts[v];
+    }
+    mj_deleteData(d);
+  }
+  EXPECT_GE(contacts[0], 3) << "pad";
+  EXPECT_EQ(contacts[1], 1) << "mesh";
+}
+
+TEST(TaskScene, WristCollisionShapeIsChecked) {
+  TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
+  scene.wrist_collision_shape = "capsule";
+  try {
+    scene.check();
+    FAIL() << "accepted wrist_collision_shape = capsule";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("wrist_collision_shape"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("mesh | box"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace pmg

@@ -115,6 +115,16 @@ struct TaskScene {
   /// touches over a patch. For a patch of radius a and friction mu the torque it resists is about
   /// (2/3) mu a N: 0.005 m (MuJoCo's default coefficient) is a = 1 cm at mu = 0.7.
   double wrist_torsional_friction = 0.0;
+  /// The wrist links' collision geoms: "mesh" (default: the robot's own, MuJoCo colliding each
+  /// link's convex hull, one contact point per geom pair through libccd) or "box": each of the six
+  /// links (`*_wrist_{roll,pitch,yaw}_link`) collides as the box bounding its mesh in the mesh's
+  /// principal frame (G1: about 0.056-0.103 x 0.054-0.060 x 0.057-0.060 m). A housing pressed
+  /// into a cardboard side touches it along a strip, which resists the box turning about the
+  /// contact normal; the box-box collider's several points model that strip, the single libccd
+  /// point does not. The boxes overstate the round housings' width (their corners), and are made
+  /// to collide with the scene's tables and objects only (contype/conaffinity 2; the scene's bodies
+  /// get 3): the six boxes would otherwise touch each other. Works with wrist_torsional_friction.
+  std::string wrist_collision_shape = "mesh";
   /// MuJoCo's `option/impratio` for the composed model, [1, 100]: the ratio of the frictional to the
   /// normal constraints' impedance. MuJoCo's default 1 lets an object held by friction creep out of a
   /// squeeze (soft friction constraints slide under a steady load); MuJoCo's documentation
@@ -154,7 +164,9 @@ TaskScene drawTaskTrial(const TaskScene& scene, std::uint64_t seed);
 /// The MJCF `<body>` elements of the scene (tables as static bodies: top and legs; objects with a free joint
 /// that has no armature, damping or friction of its own), object centres at their start pose
 /// resting on the top (1 mm above, to settle). Object poses use the nominal pos / yaw: draw a
-/// trial first for randomised scenes.
+/// trial first for randomised scenes. Every scene geom has contype = conaffinity = 3: it collides
+/// with the robot's geoms (1), as MuJoCo's default would, and with wrist pads (2, see
+/// TaskScene::wrist_collision_shape).
 std::string taskSceneBodies(const TaskScene& scene);
 
 /// The robot's MJCF with the scene's bodies added to its world, written to @p out_mjcf_path (a
