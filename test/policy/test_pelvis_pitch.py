@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """scripts/pelvis_pitch.py on a synthetic pmg_policy_sil output: two segments, the pelvis pitched
 by a known angle (hip links placed by the G1's pelvis geometry, heading along +y), the torso pitch
-given per tick. The script must recover the pelvis pitch and the waist's share per segment."""
+given per tick. The script must recover the pelvis pitch and the waist's share per segment; and
+scripts/plot_pelvis_pitch.py must draw its table and refuse a file that is not one."""
 import math
 import os
 import subprocess
@@ -52,6 +53,20 @@ def main():
             abs(waist - (torso_pitch - pelvis_pitch)) < 1e-6
         print(f"{'ok' if good else 'FAIL'} {name}: torso {torso:+.3f} pelvis {pelvis:+.3f} waist {waist:+.3f}")
         ok &= good
+    # scripts/plot_pelvis_pitch.py draws that table, and refuses a file that is not one.
+    plot = os.path.join(ROOT, "scripts", "plot_pelvis_pitch.py")
+    with tempfile.TemporaryDirectory() as d:
+        table, bad, png = os.path.join(d, "t.txt"), os.path.join(d, "bad.txt"), os.path.join(d, "p.png")
+        with open(table, "w") as f:
+            f.write(out)
+        with open(bad, "w") as f:
+            f.write("not a table\n")
+        r = subprocess.run([sys.executable, plot, png, f"A={table}", "--segments", "walk,bend"], capture_output=True, text=True)
+        drawn = r.returncode == 0 and os.path.getsize(png) > 1000
+        r = subprocess.run([sys.executable, plot, png, f"A={bad}"], capture_output=True, text=True)
+        refused = r.returncode != 0 and "bad.txt" in r.stderr
+        print(f"{'ok' if drawn else 'FAIL'} plot drawn; {'ok' if refused else 'FAIL'} bad table refused ({r.stderr.strip()})")
+        ok &= drawn and refused
     return 0 if ok else 1
 
 
