@@ -242,6 +242,18 @@ TEST(TaskScene, WristTorsionalFrictionReachesTheWristLinksOnly) {
 // touches it at several points (MuJoCo's box-box collider: a contact patch that resists the box
 // turning in the grip), the hand's mesh at one (MuJoCo 2.2's convex collider, libccd), about which a
 // squeezed box pivots. Same robot pose, same box pose (its side 2 mm into the pad's palm face).
+/// Puts the free box geom @p box against pad geom @p pad (kinematics of @p d computed): the box's
+/// axes along the pad's, its side 2 mm into the pad's thinnest face.
+void pressBoxOnPad(const mjModel* m, mjData* d, int pad, int box) {
+  const double* h = m->geom_size + 3 * pad;
+  const int k = h[0] < h[1] ? (h[0] < h[2] ? 0 : 2) : (h[1] < h[2] ? 1 : 2);
+  const double* R = d->geom_xmat + 9 * pad;  // columns: the pad's axes in W
+  const double offset = h[k] + m->geom_size[3 * box + k] - 0.002;
+  const int adr = m->jnt_qposadr[m->body_jntadr[m->geom_bodyid[box]]];
+  for (int i = 0; i < 3; ++i) d->qpos[adr + i] = d->geom_xpos[3 * pad + i] + offset * R[3 * i + k];
+  mju_mat2Quat(d->qpos + adr + 3, R);
+}
+
 TEST(TaskScene, HandPadsTouchAFlatSideAtSeveralPointsTheMeshAtOne) {
   const test::TempDir dir;
   TaskScene scene = loadTaskScene(test::sourcePath("config/tasks/box_scene.yaml"));
@@ -264,13 +276,7 @@ TEST(TaskScene, HandPadsTouchAFlatSideAtSeveralPointsTheMeshAtOne) {
       const int box = mj_name2id(m, mjOBJ_GEOM, "task_box_geom");
       ASSERT_GE(g, 0);
       ASSERT_GE(box, 0);
-      const double* h = m->geom_size + 3 * g;
-      const int k = h[0] < h[1] ? (h[0] < h[2] ? 0 : 2) : (h[1] < h[2] ? 1 : 2);
-      const double* R = d->geom_xmat + 9 * g;  // columns: the pad's axes in W
-      const double offset = h[k] + m->geom_size[3 * box + k] - 0.002;
-      const int adr = m->jnt_qposadr[m->body_jntadr[m->geom_bodyid[box]]];
-      for (int i = 0; i < 3; ++i) d->qpos[adr + i] = d->geom_xpos[3 * g + i] + offset * R[3 * i + k];
-      mju_mat2Quat(d->qpos + adr + 3, R);
+      pressBoxOnPad(m, d, g, box);
       qpos.assign(d->qpos, d->qpos + m->nq);
     } else {
       ASSERT_EQ(static_cast<int>(qpos.size()), m->nq);
@@ -333,13 +339,7 @@ TEST(TaskScene, WristPadsTouchAFlatSideAlongAStripAndNotEachOther) {
       mju_copy(d->qpos, pads.data()->qpos, m->nq);
       mj_kinematics(m, d);
       const int g = mj_name2id(m, mjOBJ_GEOM, "task_right_wrist_pitch_collision");
-      const double* h = m->geom_size + 3 * g;
-      const int k = h[0] < h[1] ? (h[0] < h[2] ? 0 : 2) : (h[1] < h[2] ? 1 : 2);
-      const double* R = d->geom_xmat + 9 * g;
-      const double offset = h[k] + m->geom_size[3 * box + k] - 0.002;
-      const int adr = m->jnt_qposadr[m->body_jntadr[m->geom_bodyid[box]]];
-      for (int i = 0; i < 3; ++i) d->qpos[adr + i] = d->geom_xpos[3 * g + i] + offset * R[3 * i + k];
-      mju_mat2Quat(d->qpos + adr + 3, R);
+      pressBoxOnPad(m, d, g, box);
       qpos.assign(d->qpos, d->qpos + m->nq);
     } else {
       mju_copy(d->qpos, qpos.data(), m->nq);
