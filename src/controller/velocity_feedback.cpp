@@ -272,6 +272,7 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(walking_filter_time_s >= 0.0 && walking_filter_time_s <= 5.0)) return "walking_filter_time_s: expected 0..5 s";
   if (!(walking_settle_s >= 0.0 && walking_settle_s <= 5.0)) return "walking_settle_s: expected 0..5 s";
   if (!(walking_min_command_rad >= 0.0 && walking_min_command_rad <= 0.5)) return "walking_min_command_rad: expected 0..0.5 rad";
+  if (!(walking_deadband_rad >= 0.0 && walking_deadband_rad <= 0.3)) return "walking_deadband_rad: expected 0..0.3 rad";
   if (!(std::isfinite(height_ki) && height_ki >= 0.0 && height_ki <= 20.0)) return "height_ki: expected 0..20 [1/s]";
   if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
     return "max_height_correction_m: expected 0..0.1 m";
@@ -395,10 +396,17 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     // Walking (walking_ki > 0): integrate on the gait-averaged attitude once the posture command is
     // steady, within the walking bound; decay when the robot is told to stand or tilts, so that a
     // lean built against a side-step's sway is not held into the stop.
-    const bool walking = !still && !tilted && config_.walking_ki[i] > 0.0 && std::fabs(cmd[i]) >= config_.walking_min_command_rad;
-    double cw = walking ? c_walk_[i] : c_walk_[i] * decay_keep;
-    if (walking && have_ && ok && p_steady_s_[i] >= config_.walking_settle_s)
-      cw = std::clamp(cw + config_.walking_ki[i] * (cmd[i] - p_walk_hat_[i]) * dt, -config_.walking_max_correction_rad,
+    // Below walking_min_command_rad (an upright walk), with a dead band: only the error beyond it.
+    const bool commanded = std::fabs(cmd[i]) >= config_.walking_min_command_rad;
+    const bool walking = !still && !tilted && config_.walking_ki[i] > 0.0 && (commanded || config_.walking_deadband_rad > 0.0);
+    // Inside the dead band the correction decays as at a stop, so that what one gait needed is not
+    // carried into the next (held, a crouched walk's correction overshot the crouched turn after it).
+    const double e = cmd[i] - p_walk_hat_[i];
+    const double band = commanded ? 0.0 : config_.walking_deadband_rad;
+    const bool inside = !commanded && std::fabs(e) <= band;
+    double cw = walking && !inside ? c_walk_[i] : c_walk_[i] * decay_keep;
+    if (walking && !inside && have_ && ok && p_steady_s_[i] >= config_.walking_settle_s)
+      cw = std::clamp(cw + config_.walking_ki[i] * (e - std::copysign(band, e)) * dt, -config_.walking_max_correction_rad,
                       config_.walking_max_correction_rad);
     const double c = std::clamp(cs + cw, -config_.max_correction_rad, config_.max_correction_rad);
     const double limited = std::clamp(cmd[i] + c, (*range[i])[0], (*range[i])[1]);

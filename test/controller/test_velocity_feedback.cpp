@@ -284,8 +284,9 @@ TEST(VelocityFeedback, BrakingFloorKeepsAGaitUnderARobotThatRunsOnAndStaysContin
   for (std::size_t k = 1; k < on.size(); ++k) {
     largest_rise = std::max(largest_rise, on[k] - on[k - 1]);
     largest_fall = std::max(largest_fall, on[k - 1] - on[k]);
-    if (on[k] > off[k]) EXPECT_LE(on[k], on[k - 1] - VelocityFeedbackConfig{}.brake_decel * 0.01 + 1e-12)
-        << "tick " << k << ": raised, it still falls";
+    if (on[k] > off[k]) {
+      EXPECT_LE(on[k], on[k - 1] - VelocityFeedbackConfig{}.brake_decel * 0.01 + 1e-12) << "tick " << k << ": raised, it still falls";
+    }
     EXPECT_GE(on[k], off[k]);
   }
   EXPECT_LE(largest_rise, 1e-12) << "the floor never raises u_fb above where it was";
@@ -510,6 +511,61 @@ TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
     n = guard.count();
   }
   EXPECT_EQ(n, 0u);
+}
+
+// walking_deadband_rad: an upright walk whose torso leans back 0.07 rad is corrected until the lean
+// is just beyond the band (0.03: inside it the correction decays), and one that leans 0.02 is left
+// alone; at the stop the correction decays.
+TEST(PostureFeedback, WalkingDeadBandCorrectsOnlyALeanBeyondIt) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {0.0, 0.0};
+  c.walking_ki = {0.5, 0.0};
+  c.walking_max_correction_rad = 0.08;
+  c.walking_min_command_rad = 0.05;
+  c.walking_deadband_rad = 0.03;
+  ASSERT_EQ(c.validate(), "");
+  const VelocityCommand walk{0.5, 0.3, 0.5};
+  for (const double lean : {-0.07, -0.02}) {
+    PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+    double torso = lean, t = 0.0, avg = 0.0;
+    int n_avg = 0;
+    for (int k = 0; k < 6000; ++k) {
+      const double sway = 0.03 * std::sin(2.0 * M_PI * 1.4 * t);
+      const PostureCommand& out = fb.update({0.0, 0.0, 0.78}, walk, uprightState(0.0, torso + sway), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch + lean - torso);
+      t += 0.01;
+      if (k >= 5000) {
+        avg += torso;
+        ++n_avg;
+      }
+    }
+    avg /= n_avg;
+    if (lean < -0.05) {
+      // Beyond the band it integrates, inside it decays: the lean settles just beyond the band.
+      EXPECT_LT(avg, -0.03) << "corrected into the band: the correction would decay there";
+      EXPECT_GT(avg, -0.04) << "the lean of 0.07 rad brought to within 0.01 of the band";
+      EXPECT_GT(fb.correction()[0], 0.03);
+      EXPECT_LT(fb.correction()[0], 0.05);
+    } else {
+      EXPECT_EQ(fb.correction()[0], 0.0) << "a lean inside the band is left alone";
+    }
+    // Told to stand: the correction decays, monotonically.
+    double prev = fb.correction()[0];
+    for (int k = 0; k < 300; ++k) {
+      fb.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, torso), 0.01);
+      EXPECT_LE(std::fabs(fb.correction()[0]), std::fabs(prev) + 1e-15);
+      prev = fb.correction()[0];
+    }
+  }
+  // Without the band (0, the default), an upright walk is not integrated at all.
+  c.walking_deadband_rad = 0.0;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  for (int k = 0; k < 3000; ++k) fb.update({0.0, 0.0, 0.78}, walk, uprightState(0.0, -0.2), 0.01);
+  EXPECT_EQ(fb.correction()[0], 0.0);
+  // Out of range: refused, naming the field.
+  c.walking_deadband_rad = 0.4;
+  EXPECT_NE(c.validate().find("walking_deadband_rad"), std::string::npos);
 }
 
 TEST(PostureFeedback, WalkingDecayAfterAStop) {

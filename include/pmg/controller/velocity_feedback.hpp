@@ -244,6 +244,14 @@ struct PostureFeedbackConfig {
   /// [0, 0.5]; 0: always. Walking with the torso upright, the gait's own pitch is left alone (fed
   /// back on bk_vy6, the median stop from 1 m/s grew from 0.50 to 0.62 m; docs/controller.md).
   double walking_min_command_rad = 0.0;
+  /// While walking with |its posture command| below walking_min_command_rad, an axis integrates
+  /// only the part of its error beyond this dead band [rad], [0, 0.3] (e − sign(e)·band), and
+  /// inside the band its correction decays (decay_time_s), so that what one gait needed is not
+  /// carried into the next; 0 (the default): it does not integrate there. For a torso that leans
+  /// beyond the cross-coupling target while walking upright (issue 12: ≤ 0.05 rad) without feeding
+  /// back the gait's ordinary few hundredths of a radian (fed back whole, the median stop from
+  /// 1 m/s grew from 0.50 to 0.62 m).
+  double walking_deadband_rad = 0.0;
   /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
   double height_ki = 0.0;
   /// Largest correction of the height command [m], [0, 0.1].
