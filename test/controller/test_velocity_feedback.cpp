@@ -453,19 +453,26 @@ TEST(PostureFeedback, MeasuresTheTorsoFromTheImuAndTheWaistAndClosesTheLoop) {
   EXPECT_EQ(n, 0u);
 }
 
-// Walking posture feedback (walking_ki): a bent walk whose torso sways about 60 % of the commanded
-// pitch. The walking integrator waits for the command to settle, closes the loop on the
-// gait-averaged pitch within its own bound, leaves an upright walk alone (walking_min_command_rad)
-// and decays when the robot is told to stand, so that the lean is not held into the stop.
-TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
+/// The walking pitch feedback of g1_sil_policy.yaml: pitch gain 0.5, bound 0.08 rad, 1 s low-pass
+/// and settling, upright walks (|u| < 0.05 rad) gated out; standing gains @p ki.
+PostureFeedbackConfig walkingPitchConfig(double ki) {
   PostureFeedbackConfig c;
   c.enabled = true;
-  c.ki = {1.0, 1.0};
+  c.ki = {ki, ki};
   c.walking_ki = {0.5, 0.0};
   c.walking_max_correction_rad = 0.08;
   c.walking_filter_time_s = 1.0;
   c.walking_settle_s = 1.0;
   c.walking_min_command_rad = 0.05;
+  return c;
+}
+
+// Walking posture feedback (walking_ki): a bent walk whose torso sways about 60 % of the commanded
+// pitch. The walking integrator waits for the command to settle, closes the loop on the
+// gait-averaged pitch within its own bound, leaves an upright walk alone (walking_min_command_rad)
+// and decays when the robot is told to stand, so that the lean is not held into the stop.
+TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
+  const PostureFeedbackConfig c = walkingPitchConfig(1.0);
   ASSERT_EQ(c.validate(), "");
   PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
   const VelocityCommand walk{0.3, 0.0, 0.0};
@@ -517,12 +524,7 @@ TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
 // is just beyond the band (0.03: inside it the correction decays), and one that leans 0.02 is left
 // alone; at the stop the correction decays.
 TEST(PostureFeedback, WalkingDeadBandCorrectsOnlyALeanBeyondIt) {
-  PostureFeedbackConfig c;
-  c.enabled = true;
-  c.ki = {0.0, 0.0};
-  c.walking_ki = {0.5, 0.0};
-  c.walking_max_correction_rad = 0.08;
-  c.walking_min_command_rad = 0.05;
+  PostureFeedbackConfig c = walkingPitchConfig(0.0);
   c.walking_deadband_rad = 0.03;
   ASSERT_EQ(c.validate(), "");
   const VelocityCommand walk{0.5, 0.3, 0.5};
