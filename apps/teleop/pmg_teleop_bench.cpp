@@ -890,6 +890,12 @@ struct BoxOperatorConfig : OperatorCommon {
   double carry_clearance_m = 0.08; ///< the box's bottom this far above the place table's top while carrying [m]
   double place_press_m = 0.01;     ///< lowering aims the box's bottom this far below the place top [m]
   double max_lead_m = 0.10;        ///< the controller at most this far (robot scale) beyond the seen hand (anti-windup); 0 = no limit [m]
+  /// > 0: holding the box (lift, carry, lower), the anti-windup bounds the lead's vertical part on
+  /// its own, by this [m], and max_lead_m bounds its horizontal part. 0 (v3): one bound on the
+  /// whole lead, so that a squeeze which has used it up leaves no lead to raise or lower that hand
+  /// (measured: holding, the two wrists stood 5-15 cm apart in height and the box rolled by as much,
+  /// atan(dz / 0.34 m)).
+  double vertical_lead_m = 0.0;
   double hand_pitch_rad = 0.0;     ///< the controllers are turned so that the hands point forward, this far below horizontal (frame T) [rad]
   double turn_s = 1.0;             ///< ... over this long after the grips are squeezed [s]
   double stand_s = 3.0;            ///< lifting: stand up from the crouch and the bend over this long [s]
@@ -936,6 +942,7 @@ struct BoxOperatorConfig : OperatorCommon {
   void Serialize(A* a) {
     OperatorCommon::Serialize(a);
     a->Visit("max_lead_m", &max_lead_m, "[m]");
+    a->Visit("vertical_lead_m", &vertical_lead_m, "[m] (0: within max_lead_m)");
     a->Visit("hand_pitch_rad", &hand_pitch_rad, "[rad]");
     a->Visit("turn_s", &turn_s, "[s]");
     a->Visit("stand_s", &stand_s, "[s]");
@@ -984,6 +991,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(squeeze_m >= 0 && squeeze_m <= 0.1)) return "squeeze_m: expected [0, 0.1] m";
     if (!(lift_speed > 0 && lift_speed <= 0.5)) return "lift_speed: expected (0, 0.5] m/s";
     if (!(max_lead_m >= 0 && max_lead_m <= 1.0)) return "max_lead_m: expected [0, 1] m (0: no limit)";
+    if (!(vertical_lead_m >= 0 && vertical_lead_m <= 0.5)) return "vertical_lead_m: expected [0, 0.5] m (0: within max_lead_m)";
     if (!(std::abs(hand_pitch_rad) <= 0.8)) return "hand_pitch_rad: expected [-0.8, 0.8] rad";
     if (!(turn_s > 0 && turn_s <= 10)) return "turn_s: expected (0, 10] s";
     if (!(stand_s >= 0 && stand_s <= 10)) return "stand_s: expected [0, 10] s (0: at once)";
@@ -1411,9 +1419,17 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         // scale) beyond where the robot's hand is seen: a hand that stalls is not pushed on.
         if (op.max_lead_m > 0) {
           const Vector3d at = controllerAtRobotHandBent(d, torso, shoulder_l, shoulder_r, unyaw, tc, hand_R[h]);
-          const Vector3d lead = hand_H[h] - at;
+          Vector3d lead = hand_H[h] - at;
           const double lim = op.max_lead_m / tc.arm_scale;
-          if (lead.norm() > lim) hand_H[h] = at + lead * (lim / lead.norm());
+          if (op.vertical_lead_m > 0 && (phase == kLift || phase == kCarry || phase == kLower)) {
+            const double lim_z = op.vertical_lead_m / tc.arm_scale;  // the height on its own bound
+            lead.z() = std::clamp(lead.z(), -lim_z, lim_z);
+            const double horizontal = lead.head<2>().norm();
+            if (horizontal > lim) lead.head<2>() *= lim / horizontal;
+            hand_H[h] = at + lead;
+          } else if (lead.norm() > lim) {
+            hand_H[h] = at + lead * (lim / lead.norm());
+          }
         }
       }
     const Vector3d head(vr.head_position[0], vr.head_position[1], vr.head_position[2]);
