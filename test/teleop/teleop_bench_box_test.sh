@@ -82,3 +82,4 @@ expect_refused "$bin" box "$d" bad 'view_noise_m: 0.005\nsqueeze_force: 1\n' bad
 expect_refused "$bin" box "$d" range 'view_noise_m: 0.005\nside_tol_m: 0.5\n' range.yaml side_tol_m 0.2
 expect_refused "$bin" box "$d" range2 'view_noise_m: 0.005\nregrip_in_m: 0.5\n' range2.yaml regrip_in_m 0.3
 expect_refused "$bin" box "$d" range3 'view_noise_m: 0.005\ngrasp_below_top_m: 0.5\n' range3.yaml grasp_below_top_m '\[-0.1, 0.3\]'
+expect_refused "$bin" box "$d" range4 'view_noise_m: 0.005\nvertical_lead_m: 0.9\n' range4.yaml vertical_lead_m '\[0, 0.5\]'
