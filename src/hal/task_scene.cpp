@@ -37,11 +37,17 @@ std::string interval(const char* key, const std::optional<std::array<double, 2>>
 /// mesh's principal frame (where MuJoCo puts the compiled vertices and the geom's pose). MuJoCo's
 /// own fitting of a primitive to a mesh gives the equivalent-inertia box (too thin: 0.029 m where
 /// the rubber hand's vertices span 0.045 m), and 2.2's `fitaabb` mislocates the box's centre, so the
-/// bounds are taken from the compiled mesh of a probe model. The pads keep the geoms' other
-/// attributes, get @p extra_attrs, and sit in geom group 3, which MuJoCo does not draw by default
-/// (renders show the meshes). @throws ConfigError naming @p key if the probe does not compile.
-std::string withBoundingBoxPads(std::string xml, const std::vector<std::string>& names, const std::string& extra_attrs,
-                                const std::string& robot_mjcf, const std::string& out_mjcf_path, const std::string& key) {
+/// bounds are taken from the compiled mesh of one probe model for all @p pads. Each pad keeps its
+/// geom's other attributes, gets the pad's extra attributes, and sits in geom group 3, which MuJoCo
+/// does not draw by default (renders show the meshes). @throws ConfigError naming the scene key if
+/// the probe does not compile or a geom has no compiled mesh.
+struct PadSpec {
+  std::string geom;         ///< the mesh geom's name
+  std::string extra_attrs;  ///< e.g. contype/conaffinity; "" for none
+  std::string key;          ///< the scene key that asked for it (for errors)
+};
+std::string withBoundingBoxPads(std::string xml, const std::vector<PadSpec>& pads, const std::string& robot_mjcf,
+                                const std::string& out_mjcf_path) {
   const std::string probe = out_mjcf_path + ".pads.xml";
   {
     std::ofstream out(probe);
@@ -53,13 +59,15 @@ std::string withBoundingBoxPads(std::string xml, const std::vector<std::string>&
     m = loadMujocoModel(probe);
   } catch (const std::runtime_error& e) {
     fs::remove(probe);
-    throw ConfigError(robot_mjcf + ": " + key + ": box: " + e.what());
+    throw ConfigError(robot_mjcf + ": " + pads.front().key + ": box: " + e.what());
   }
   fs::remove(probe);
-  for (const std::string& name : names) {
+  for (const PadSpec& spec : pads) {
+    const std::string& name = spec.geom;
+    const std::string& extra_attrs = spec.extra_attrs;
     const int g = mj_name2id(m.get(), mjOBJ_GEOM, name.c_str());
     const int mesh = g < 0 ? -1 : m->geom_dataid[g];
-    if (mesh < 0) throw ConfigError(robot_mjcf + ": " + key + ": no compiled mesh for " + name);
+    if (mesh < 0) throw ConfigError(robot_mjcf + ": " + spec.key + ": no compiled mesh for " + name);
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
     for (int v = 0; v < m->mesh_vertnum[mesh]; ++v) {
       const float* p = m->mesh_vert + 3 * (m->mesh_vertadr[mesh] + v);
@@ -300,6 +308,7 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
   } catch (const std::runtime_error& e) {
     throw ConfigError(robot.mjcf_path + ": " + e.what());
   }
+  std::vector<PadSpec> pads;  // mesh geoms to replace by their bounding boxes (one probe compile for all)
   if (scene.hand_collision) {
     // A collision copy of each rubber hand's visual geom: the same mesh and pose, default contact
     // classes, no mass (the visual geom has density 0 too, so the model's inertias are unchanged).
@@ -321,8 +330,8 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
       xml.insert(at + key.size(), "\n" + geom);
     }
     if (scene.hand_collision_shape == "box")
-      xml = withBoundingBoxPads(xml, {"task_left_hand_collision", "task_right_hand_collision"}, "", robot.mjcf_path,
-                                out_mjcf_path, "hand_collision_shape");
+      for (const char* name : {"task_left_hand_collision", "task_right_hand_collision"})
+        pads.push_back({name, "", "hand_collision_shape"});
   }
   if (scene.wrist_torsional_friction > 0.0) {
     // The wrist links' collision geoms (the robot MJCF's unnamed mesh geoms with the default contact
@@ -341,7 +350,6 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
     // collide with the scene's bodies only (contype/conaffinity 2 against the robot's 1; the
     // scene's tables and objects are written with 3), so that the six boxes, wider than the round
     // housings, do not touch each other or the arm.
-    std::vector<std::string> names;
     for (const std::string side : {"left", "right"})
       for (const std::string link : {"roll", "pitch", "yaw"}) {
         const std::string mesh = "mesh=\"" + side + "_wrist_" + link + "_link\"/>";
@@ -353,16 +361,16 @@ RobotConfig robotWithTaskScene(const RobotConfig& robot, const TaskScene& scene,
                               scene.source + ")");
           const auto open = xml.rfind("<geom", at);
           if (xml.substr(open, at - open).find("contype=\"0\"") == std::string::npos) {
-            names.push_back("task_" + side + "_wrist_" + link + "_collision");
-            xml.insert(open + 5, " name=\"" + names.back() + "\"");
+            pads.push_back({"task_" + side + "_wrist_" + link + "_collision", "contype=\"2\" conaffinity=\"2\"",
+                            "wrist_collision_shape"});
+            xml.insert(open + 5, " name=\"" + pads.back().geom + "\"");
             break;
           }
           at += mesh.size();
         }
       }
-    xml = withBoundingBoxPads(xml, names, "contype=\"2\" conaffinity=\"2\"", robot.mjcf_path, out_mjcf_path,
-                              "wrist_collision_shape");
   }
+  if (!pads.empty()) xml = withBoundingBoxPads(xml, pads, robot.mjcf_path, out_mjcf_path);
   if (scene.impratio != 1.0 || scene.cone != "pyramidal" || scene.noslip_iterations != 0) {
     // The scene's contact options, written after <compiler> (the robot's MJCF has no <option> of its own).
     if (xml.find("<option") != std::string::npos)
