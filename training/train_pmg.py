@@ -131,6 +131,20 @@ def _positive_ints(text):
     return sizes
 
 
+def action_scale_from(path):
+    """The leg action scale (12,) of an earlier run, from its train_config.json ("action_scale").
+    Raises SystemExit naming --action-scale-from, the file and the expected form."""
+    try:
+        with open(path) as f:
+            scale = json.load(f).get("action_scale")
+    except (OSError, ValueError, AttributeError) as e:
+        raise SystemExit(f"--action-scale-from {path}: cannot read a train_config.json ({e})")
+    if not (isinstance(scale, list) and len(scale) == 12
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 2 for v in scale)):
+        raise SystemExit(f"--action-scale-from {path}: action_scale must be a list of 12 numbers in (0, 2]")
+    return np.asarray(scale, np.float32)
+
+
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(prog="pmg-train", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter, allow_abbrev=False)
@@ -152,6 +166,11 @@ def parse_args(argv=None):
     ap.add_argument("--devices", type=int, default=0,
                     help="use the first N local JAX devices (0: all of them)")
     ap.add_argument("--restore", default=None, help="params.pkl of an earlier run to start from")
+    ap.add_argument("--action-scale-from", default=None, metavar="TRAIN_CONFIG_JSON",
+                    help="take the leg action scale from this run's train_config.json instead of deriving it from the "
+                         "clips (fine-tuning a restored actor on changed clips keeps the actor's own scale)")
+    ap.add_argument("--clips", default="config/clips/g1", metavar="DIR",
+                    help="clip folder (clips, implied-motion tables, consistency_map.yaml), relative to the checkout")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     ap.add_argument("--smoke", action="store_true")
@@ -332,7 +351,9 @@ def main(argv=None):
     from brax.training.agents.ppo import train as ppo
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn
 
-    clip_files = sorted(glob.glob("config/clips/g1/*.yaml"))
+    clip_files = sorted(glob.glob(os.path.join(args.clips, "*.yaml")))
+    if not clip_files:
+        raise SystemExit(f"--clips {args.clips}: no clip files (*.yaml) there")
     log("clips:", clip_files)
     cfg = EnvConfig(mode=args.mode) if args.arms == "teleop" else EnvConfig(mode=args.mode, p_teleop=0.0, p_payload=0.0)
     if args.episode_length:
@@ -371,7 +392,9 @@ def main(argv=None):
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
-    env = G1PmgEnv(cfg, clip_files)
+    cfg = dataclasses.replace(cfg, clips=args.clips)
+    action_scale = action_scale_from(args.action_scale_from) if args.action_scale_from else None
+    env = G1PmgEnv(cfg, clip_files, action_scale=action_scale)
     clip_files = env.clip_files
     if args.smoke:
         smoke(env, args.out)

@@ -297,6 +297,17 @@ int main(int argc, char** argv) {
                "not by the capture's absolute torso pitch (docs/motion.md; not the shipped set)");
   std::string tracks_dir;
   app.add_option("--sole-tracks-dir", tracks_dir, "also write per-clip sole height/speed CSVs (phase, labels) here");
+  pmg::motion::WalkingHeightOptions walking_height;
+  walking_height.fraction = 0.0;
+  app.add_option("--walking-height", walking_height.fraction,
+                 "raise each walking template's pelvis by this share of its gap to the standing height, legs lengthened "
+                 "by IK (0 = as captured, the shipped set; docs/motion.md \"Walking height\")")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--walking-height-min-knee", walking_height.min_knee,
+                 "--walking-height: smallest knee flexion the raise may leave [rad]")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   // The clip set (built with push_back of named specs: GCC 12 warns falsely on nested brace
@@ -434,6 +445,16 @@ int main(int argc, char** argv) {
       // Stance = the robot sole low and still as the generator plays the clip (the human labels
       // of the retargeting start stance while the robot sole is still up and moving).
       relabelContactsFromRobotFeet(clip, model, robot_contacts);
+      std::string height_note;
+      if (walking_height.fraction > 0.0) {
+        const WalkingHeightReport wh = raiseWalkingHeight(clip, model, robot.defaultPose(), walking_height);
+        height_note = fmt::format("; pelvis raised towards the standing height: mean {:.4f} -> {:.4f} m (standing {:.4f}, share "
+                                  "{:.2f}, knee >= {:.2f} rad, smallest raise {:.4f} m)",
+                                  wh.mean_height_before, wh.mean_height_after, wh.standing_height, walking_height.fraction,
+                                  walking_height.min_knee, wh.min_raise);
+        std::printf("%-20s walking height %.4f -> %.4f m (standing %.4f, smallest raise %.4f m)\n", clip.name.c_str(),
+                    wh.mean_height_before, wh.mean_height_after, wh.standing_height, wh.min_raise);
+      }
       if (!tracks_dir.empty()) writeSoleTracks(clip, model, tracks_dir + "/" + spec.name + "_soles.csv");
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));
       clip.meta.frame_begin = window.begin + offset;
@@ -446,7 +467,8 @@ int main(int argc, char** argv) {
                                     "pelvis; touchdown < {} m above the lower sole, lift-off > {} m; double support only while the "
                                     "soles slide < {}/{} m/s against each other); {}",
                                     spec.notes, res.scale, robot_contacts.enter_height, robot_contacts.exit_height,
-                                    robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st));
+                                    robot_contacts.enter_relative_speed, robot_contacts.exit_relative_speed, statsLine(st)) +
+                        height_note;
       validateClip(clip, robot, spec.name);
       outputs.emplace_back(fs::path(out_dir) / (spec.name + ".yaml"), clipText(clip, implied_ctx));
       if (!csv_dir.empty()) writeRetargetCsv(res, csv_dir + "/" + spec.name + ".csv", window.begin, window.end + 1);

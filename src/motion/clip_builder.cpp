@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -594,6 +595,188 @@ void keepLegDirections(StaticClip& clip, const KinematicModel& model) {
     }
     clip.q.row(i) = q.transpose();
   }
+}
+
+}  // namespace pmg::motion
+
+namespace pmg::motion {
+
+void WalkingHeightOptions::validate() const {
+  if (!(fraction >= 0.0 && fraction <= 1.0))
+    throw std::invalid_argument(fmt::format("WalkingHeightOptions.fraction = {}: expected [0, 1]", fraction));
+  if (!(min_knee >= 0.0 && min_knee <= 1.0))
+    throw std::invalid_argument(fmt::format("WalkingHeightOptions.min_knee = {} rad: expected [0, 1]", min_knee));
+  if (!(smoothing_samples >= 0.0 && smoothing_samples <= 10.0))
+    throw std::invalid_argument(
+        fmt::format("WalkingHeightOptions.smoothing_samples = {}: expected [0, 10] phase samples", smoothing_samples));
+}
+
+namespace {
+
+/// One leg of raiseWalkingHeight: the sole centre's pose in the pelvis frame B, solved over the
+/// leg's six joints (Newton, finite-difference Jacobian on the KDL chain).
+class LegLengthener {
+ public:
+  LegLengthener(LimbChain leg, Eigen::Index knee, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, const std::string& clip)
+      : leg_(std::move(leg)), ws_(leg_), knee_(knee), lower_(lower), upper_(upper), clip_(clip) {
+    if (leg_.joint_index.size() != 6)
+      throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): leg chain to {} has {} joints, expected 6", clip_, leg_.tip_link,
+                                              leg_.joint_index.size()));
+    for (const auto& s : g1SolePoints_F()) p_FS_ += 0.25 * s;
+  }
+
+  /// Sole centre in B [m] and the foot frame's rotation.
+  void sole(const Eigen::VectorXd& q, Eigen::Vector3d& p_BS, Eigen::Matrix3d& R_BF) {
+    Eigen::Isometry3d X_BF;
+    if (!ws_.tipPose(q, X_BF)) throw std::runtime_error(fmt::format("raiseWalkingHeight({}): KDL forward kinematics failed", clip_));
+    p_BS = X_BF * p_FS_;
+    R_BF = X_BF.linear();
+  }
+
+  /// Moves the sole centre of @p q by @p d down along B's z, keeping its x, y and the foot's
+  /// orientation in B. Returns false (q unchanged) if Newton does not converge, a joint leaves its
+  /// limits or the knee ends below @p min_knee (or below its own flexion, if that is already smaller).
+  bool lower(Eigen::VectorXd& q, double d, double min_knee) {
+    Eigen::Vector3d p0;
+    Eigen::Matrix3d R0;
+    sole(q, p0, R0);
+    const Eigen::Vector3d target(p0.x(), p0.y(), p0.z() - d);
+    Eigen::VectorXd x = q;
+    using Vector6d = Eigen::Matrix<double, 6, 1>;
+    auto residual = [&](const Eigen::VectorXd& qq) {
+      Eigen::Vector3d p;
+      Eigen::Matrix3d R;
+      sole(qq, p, R);
+      const Eigen::Matrix3d dR = R * R0.transpose();  // rotation from the original foot, in B
+      Vector6d r;
+      r << p - target, 0.5 * (dR(2, 1) - dR(1, 2)), 0.5 * (dR(0, 2) - dR(2, 0)), 0.5 * (dR(1, 0) - dR(0, 1));
+      return r;
+    };
+    constexpr double kStep = 1e-7;
+    for (int it = 0; it < 30; ++it) {
+      const Vector6d r = residual(x);
+      if (r.norm() < 1e-10) break;
+      Eigen::Matrix<double, 6, 6> J;
+      for (int c = 0; c < 6; ++c) {
+        Eigen::VectorXd xp = x;
+        xp(leg_.joint_index[static_cast<std::size_t>(c)]) += kStep;
+        J.col(c) = (residual(xp) - r) / kStep;
+      }
+      const Vector6d dx = J.fullPivLu().solve(-r);
+      if (!dx.allFinite()) return false;
+      for (int c = 0; c < 6; ++c) x(leg_.joint_index[static_cast<std::size_t>(c)]) += dx(c);
+    }
+    // A knee already straighter than min_knee may stay as it is, not straighten further.
+    if (residual(x).norm() > 1e-8 || x(knee_) < std::min(min_knee, q(knee_)) - 1e-9) return false;
+    for (const int j : leg_.joint_index)
+      if (x(j) < lower_(j) || x(j) > upper_(j)) return false;
+    q = x;
+    return true;
+  }
+
+ private:
+  LimbChain leg_;  // ChainFkWorkspace keeps a pointer to it
+  ChainFkWorkspace ws_;
+  Eigen::Index knee_;
+  Eigen::VectorXd lower_, upper_;
+  std::string clip_;
+  Eigen::Vector3d p_FS_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+WalkingHeightReport raiseWalkingHeight(DynamicClip& clip, const KinematicModel& model, const Eigen::VectorXd& q_stand,
+                                       const WalkingHeightOptions& options) {
+  options.validate();
+  const RobotConfig& robot = model.config();
+  const auto n = static_cast<Eigen::Index>(robot.numJoints());
+  if (clip.q.cols() != n || q_stand.size() != n)
+    throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): clip has {} joints, standing pose {}, robot config {}", clip.name,
+                                            clip.q.cols(), q_stand.size(), n));
+  const std::vector<std::string> names = robot.jointNames();
+  auto index = [&](const std::string& joint) {
+    const auto it = std::find(names.begin(), names.end(), joint);
+    if (it == names.end()) throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): robot has no joint '{}'", clip.name, joint));
+    return static_cast<Eigen::Index>(it - names.begin());
+  };
+  const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
+  LegLengthener left(model.leftLeg(), index("left_knee_joint"), lower, upper, clip.name);
+  LegLengthener right(model.rightLeg(), index("right_knee_joint"), lower, upper, clip.name);
+  auto pelvisHeight = [&](const Eigen::VectorXd& q) {
+    Eigen::Vector3d pl, pr;
+    Eigen::Matrix3d R;
+    left.sole(q, pl, R);
+    right.sole(q, pr, R);
+    return -std::min(pl.z(), pr.z());
+  };
+  const Eigen::Index N = clip.q.rows();
+  WalkingHeightReport rep;
+  rep.standing_height = pelvisHeight(q_stand);
+  for (Eigen::Index k = 0; k < N; ++k) rep.mean_height_before += pelvisHeight(clip.q.row(k).transpose()) / static_cast<double>(N);
+  rep.target_raise = options.fraction * std::max(0.0, rep.standing_height - rep.mean_height_before);
+  rep.mean_height_after = rep.mean_height_before;
+  rep.min_raise = rep.target_raise;
+  if (rep.target_raise <= 0.0 || N == 0) return rep;
+
+  // Largest feasible raise per sample (both legs), by bisection below the target.
+  auto feasible = [&](const Eigen::VectorXd& q0, double d) {
+    Eigen::VectorXd q = q0;
+    return left.lower(q, d, options.min_knee) && right.lower(q, d, options.min_knee);
+  };
+  Eigen::VectorXd d_max(N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const Eigen::VectorXd q0 = clip.q.row(k).transpose();
+    if (feasible(q0, rep.target_raise)) {
+      d_max(k) = rep.target_raise;
+      continue;
+    }
+    double lo = 0.0, hi = rep.target_raise;
+    for (int it = 0; it < 14; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (feasible(q0, mid) ? lo : hi) = mid;
+    }
+    d_max(k) = lo;
+  }
+  // Min-filter over ±w, then a Gaussian truncated at ±w: each smoothed value is an average of
+  // values that are each <= d_max at this sample, so the smoothed raise stays feasible.
+  Eigen::VectorXd d = d_max;
+  const double sigma = options.smoothing_samples;
+  if (sigma > 0.0) {
+    const auto w = static_cast<Eigen::Index>(std::ceil(3.0 * sigma));
+    Eigen::VectorXd eroded(N);
+    for (Eigen::Index k = 0; k < N; ++k) {
+      double m = d_max(k);
+      for (Eigen::Index j = -w; j <= w; ++j) m = std::min(m, d_max(((k + j) % N + N) % N));
+      eroded(k) = m;
+    }
+    for (Eigen::Index k = 0; k < N; ++k) {
+      double sum = 0.0, wsum = 0.0;
+      for (Eigen::Index j = -w; j <= w; ++j) {
+        const double g = std::exp(-0.5 * static_cast<double>(j * j) / (sigma * sigma));
+        sum += g * eroded(((k + j) % N + N) % N);
+        wsum += g;
+      }
+      d(k) = sum / wsum;
+    }
+  }
+  for (Eigen::Index k = 0; k < N; ++k) {
+    Eigen::VectorXd q = clip.q.row(k).transpose();
+    // d(k) <= d_max(k) up to rounding: step down a hair if the exact value is refused.
+    double dk = d(k);
+    for (int it = 0; it < 20 && !feasible(q, dk); ++it) dk *= 0.999;
+    if (!left.lower(q, dk, options.min_knee) || !right.lower(q, dk, options.min_knee))
+      throw std::runtime_error(fmt::format("raiseWalkingHeight({}): no feasible raise at sample {}", clip.name, k));
+    d(k) = dk;
+    clip.q.row(k) = q.transpose();
+  }
+  clip.qd = periodicDerivative(clip.q, clip.period);
+  clip.base_height += d;
+  const Eigen::MatrixXd dz = periodicDerivative(Eigen::MatrixXd(d), clip.period);
+  clip.v_base.col(2) += dz.col(0);
+  rep.min_raise = d.minCoeff();
+  rep.mean_height_after = 0.0;
+  for (Eigen::Index k = 0; k < N; ++k) rep.mean_height_after += pelvisHeight(clip.q.row(k).transpose()) / static_cast<double>(N);
+  return rep;
 }
 
 }  // namespace pmg::motion

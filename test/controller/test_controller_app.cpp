@@ -239,7 +239,8 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
 // pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
 // the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
 // also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:
-// upright walking and levelled stance soles, with the actor fine-tuned on them): the actor keeps the
+// upright walking and levelled stance soles, with the actor fine-tuned on them), and
+// g1_sil_policy_walking_height.yaml (the raised walking templates and their actor): the actor keeps the
 // G1 upright and walks it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
@@ -276,7 +277,7 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
-                                                           "g1_sil_policy_uplev.yaml"));
+                                                           "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml"));
 
 }  // namespace
 }  // namespace pmg

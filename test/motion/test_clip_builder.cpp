@@ -237,6 +237,81 @@ TEST(ClipBuilder, KeepLegDirectionsShortensWithoutTurningTheLegs) {
   EXPECT_THROW(keepLegDirections(wrong, model), std::invalid_argument);
 }
 
+// raiseWalkingHeight on the shipped side-step (its pelvis 24 mm below the standing pose's): both
+// soles move down together by the per-sample raise, keeping their place and orientation in the
+// pelvis frame; the knees keep their bound and the joints their limits; the raise is smooth in phase.
+TEST(ClipBuilder, RaiseWalkingHeightLengthensBothLegsAlikeAndKeepsTheFeetInPlace) {
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const KinematicModel model(robot);
+  const DynamicClip before = readDynamicClip(pmg::test::g1ClipDir() + "/walk_lateral_left.yaml", robot);
+  DynamicClip clip = before;
+  WalkingHeightOptions opt;
+  opt.min_knee = 0.05;
+  const WalkingHeightReport rep = raiseWalkingHeight(clip, model, robot.defaultPose(), opt);
+  EXPECT_GT(rep.standing_height - rep.mean_height_before, 0.015);  // the capture walks low
+  EXPECT_NEAR(rep.target_raise, rep.standing_height - rep.mean_height_before, 1e-12);
+  EXPECT_GT(rep.mean_height_after - rep.mean_height_before, 0.008);
+  EXPECT_LE(rep.mean_height_after, rep.standing_height + 1e-9);
+
+  const std::vector<std::string> names = robot.jointNames();
+  auto idx = [&](const std::string& j) { return static_cast<Eigen::Index>(std::find(names.begin(), names.end(), j) - names.begin()); };
+  Eigen::Vector3d p_FS = Eigen::Vector3d::Zero();
+  for (const auto& s : g1SolePoints_F()) p_FS += 0.25 * s;
+  const LimbChain legs[2] = {model.leftLeg(), model.rightLeg()};
+  ChainFkWorkspace ws[2] = {ChainFkWorkspace(legs[0]), ChainFkWorkspace(legs[1])};
+  const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
+  const Eigen::Index N = clip.q.rows();
+  Eigen::VectorXd d(N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const Eigen::VectorXd q0 = before.q.row(k).transpose(), q1 = clip.q.row(k).transpose();
+    double dz[2];
+    for (int f = 0; f < 2; ++f) {
+      Eigen::Isometry3d X0, X1;
+      ASSERT_TRUE(ws[f].tipPose(q0, X0) && ws[f].tipPose(q1, X1));
+      const Eigen::Vector3d p0 = X0 * p_FS, p1 = X1 * p_FS;
+      EXPECT_NEAR(p1.x(), p0.x(), 1e-6) << "sample " << k;  // the sole keeps its place
+      EXPECT_NEAR(p1.y(), p0.y(), 1e-6) << "sample " << k;
+      EXPECT_TRUE(X1.linear().isApprox(X0.linear(), 1e-6)) << "sample " << k;  // and its orientation
+      dz[f] = p0.z() - p1.z();
+      const std::string side = f == 0 ? "left_" : "right_";
+      const Eigen::Index knee = idx(side + "knee_joint");
+      EXPECT_GE(q1(knee), std::min(opt.min_knee, q0(knee)) - 1e-9) << "sample " << k;
+      for (const std::string j : {"hip_pitch_joint", "hip_roll_joint", "hip_yaw_joint", "knee_joint", "ankle_pitch_joint", "ankle_roll_joint"}) {
+        EXPECT_GE(q1(idx(side + j)), lower(idx(side + j)));
+        EXPECT_LE(q1(idx(side + j)), upper(idx(side + j)));
+      }
+    }
+    EXPECT_NEAR(dz[0], dz[1], 1e-6) << "sample " << k;  // relative sole heights (contacts) unchanged
+    d(k) = dz[0];
+    EXPECT_GE(d(k), -1e-9);
+    EXPECT_LE(d(k), rep.target_raise + 1e-9);
+    EXPECT_NEAR(clip.base_height(k) - before.base_height(k), d(k), 1e-6);
+    // Only the legs change.
+    for (Eigen::Index j = 0; j < q0.size(); ++j) {
+      const std::string& n = names[static_cast<std::size_t>(j)];
+      if (n.find("hip_") == std::string::npos && n.find("knee") == std::string::npos && n.find("ankle_") == std::string::npos)
+        EXPECT_EQ(q1(j), q0(j)) << n;
+    }
+  }
+  EXPECT_NEAR(d.minCoeff(), rep.min_raise, 1e-6);
+  // Smooth in phase: unsmoothed, the knee-limited raise jumps by up to 6 mm from one sample to the next.
+  for (Eigen::Index k = 0; k < N; ++k) EXPECT_LT(std::abs(d((k + 1) % N) - d(k)), 0.004) << "sample " << k;
+  EXPECT_TRUE(clip.qd.isApprox(periodicDerivative(clip.q, clip.period)));
+  EXPECT_EQ(clip.contact[0].mu, before.contact[0].mu);
+
+  DynamicClip same = before;
+  WalkingHeightOptions off;
+  off.fraction = 0.0;
+  raiseWalkingHeight(same, model, robot.defaultPose(), off);
+  EXPECT_EQ(same.q, before.q);
+  for (auto bad : {WalkingHeightOptions{1.5, 0.15, 2.0}, WalkingHeightOptions{1.0, -0.1, 2.0}, WalkingHeightOptions{1.0, 0.15, 11.0}}) {
+    DynamicClip c = before;
+    EXPECT_THROW(raiseWalkingHeight(c, model, robot.defaultPose(), bad), std::invalid_argument);
+  }
+  DynamicClip c = before;
+  EXPECT_THROW(raiseWalkingHeight(c, model, Eigen::VectorXd::Zero(3), opt), std::invalid_argument);
+}
+
 // Cycle closing in swing (CycleClosing::kInSwing): a one-shot motion whose last stance differs from
 // its first. A leg joint that drifts is corrected only while its foot is in swing, so the closed
 // clip moves that joint exactly as the capture did during the foot's stances (no sliding added in

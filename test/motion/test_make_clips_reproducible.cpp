@@ -1,5 +1,5 @@
 // pmg_make_clips is reproducible: two runs give byte-identical files, and they match the shipped
-// set in config/clips/g1 (values within 1e-4; bytes may differ only if another compiler/CPU
+// set in config/clips/g1 (and, with --walking-height, config/clips/g1_walking_height) (values within 1e-4; bytes may differ only if another compiler/CPU
 // rounds the solver differently in the 6th decimal). Slow (two full runs): label "sil".
 #include <cstdlib>
 #include <filesystem>
@@ -33,30 +33,27 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
-  const pmg::test::TempDir tmp_dir;  // removed at the end, also when an assertion stops the test
-  const fs::path tmp = tmp_dir.path();
-  for (const char* run : {"a", "b"}) {
-    fs::create_directories(tmp / run);
-    const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  }
+// Compares every file of the shipped set @p shipped with the fresh run @p fresh (and, when given,
+// byte for byte with a second fresh run @p again); returns the number of files compared.
+int expectMatchesShippedSet(const fs::path& shipped, const fs::path& fresh_dir, const fs::path& again = {}) {
   const pmg::RobotConfig& robot = pmg::test::g1Robot();
   int files = 0;
-  for (const auto& e : fs::directory_iterator(pmg::test::g1ClipDir())) {
+  for (const auto& e : fs::directory_iterator(shipped)) {
     if (!e.is_regular_file()) continue;
     const std::string name = e.path().filename().string();
     SCOPED_TRACE(name);
     ++files;
-    EXPECT_EQ(slurp(tmp / "a" / name), slurp(tmp / "b" / name)) << "not deterministic";
+    if (!again.empty()) EXPECT_EQ(slurp(fresh_dir / name), slurp(again / name)) << "not deterministic";
     if (e.path().extension() != ".yaml") continue;
+    const fs::path tmp_a = fresh_dir;
     if (name == pmg::kConsistencyMapFile) {  // not a clip: the map of the set, compared as numbers
-      const auto a = pmg::readConsistencyMap((tmp / "a" / name).string()), s = pmg::readConsistencyMap(e.path().string());
-      ASSERT_EQ(a.delta.rows(), s.delta.rows());
+      const auto a = pmg::readConsistencyMap((tmp_a / name).string()), s = pmg::readConsistencyMap(e.path().string());
+      EXPECT_EQ(a.delta.rows(), s.delta.rows());
+      if (a.delta.rows() != s.delta.rows()) continue;
       EXPECT_LT((a.delta - s.delta).cwiseAbs().maxCoeff(), 1e-4);
       continue;
     }
-    const std::string fresh = (tmp / "a" / name).string();
+    const std::string fresh = (tmp_a / name).string();
     if (pmg::readClipKind(fresh) == pmg::ClipKind::kDynamic) {
       const auto a = pmg::readDynamicClip(fresh, robot), s = pmg::readDynamicClip(e.path().string(), robot);
       EXPECT_LT((a.q - s.q).cwiseAbs().maxCoeff(), 1e-4);
@@ -68,7 +65,40 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
       EXPECT_LT((a.values - s.values).cwiseAbs().maxCoeff(), 1e-4);
     }
   }
-  EXPECT_GE(files, 11);  // 9 clips + consistency_map.yaml + report.md
+  return files;
+}
+
+TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
+  const pmg::test::TempDir tmp_dir;  // removed at the end, also when an assertion stops the test
+  const fs::path tmp = tmp_dir.path();
+  for (const char* run : {"a", "b"}) {
+    fs::create_directories(tmp / run);
+    const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  EXPECT_GE(expectMatchesShippedSet(pmg::test::g1ClipDir(), tmp / "a", tmp / "b"), 11);  // 9 clips + map + report.md
+}
+
+// --walking-height (docs/motion.md "Walking height"): the set config/clips/g1_walking_height is this
+// run's output, and its walking templates carry the pelvis higher than the captured ones.
+TEST(MakeClips, WalkingHeightSetMatchesTheShippedOneAndWalksTaller) {
+  const pmg::test::TempDir tmp_dir;
+  const fs::path out = tmp_dir.path() / "wh";
+  fs::create_directories(out);
+  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --walking-height 1.0 --walking-height-min-knee 0.05 --out " +
+                          out.string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const fs::path shipped = fs::path(pmg::test::g1ClipDir()).parent_path() / "g1_walking_height";
+  EXPECT_GE(expectMatchesShippedSet(shipped, out), 11);
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
+  for (const char* clip : {"walk_forward", "walk_backward", "walk_lateral_left", "walk_lateral_right"}) {
+    SCOPED_TRACE(clip);
+    const auto raised = pmg::readDynamicClip((out / (std::string(clip) + ".yaml")).string(), robot);
+    const auto captured = pmg::readDynamicClip(pmg::test::g1ClipDir() + "/" + clip + ".yaml", robot);
+    EXPECT_GT(raised.base_height.mean() - captured.base_height.mean(), 0.004);
+  }
+  const auto bend = pmg::readStaticClip((out / "bend.yaml").string(), robot);
+  EXPECT_EQ(bend.q, pmg::readStaticClip(pmg::test::g1ClipDir() + "/bend.yaml", robot).q) << "postures unchanged";
 }
 
 // Torso pitch (feet flat) of the standing pose plus the bend template's offset at command p

@@ -3,7 +3,8 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused. (An unknown NAME is refused in
+--command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused;
+--clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -53,5 +54,27 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 21 cases as expected")
+if train_pmg.parse_args(["--out", "/tmp/x", "--clips", "config/clips/other"]).clips != "config/clips/other":
+    failures.append("--clips not parsed")
+# --action-scale-from: the scale of an earlier run's train_config.json; a bad file is refused naming the flag.
+import json  # noqa: E402
+import tempfile  # noqa: E402
+with tempfile.TemporaryDirectory() as tmp:
+    good = os.path.join(tmp, "good.json")
+    with open(good, "w") as f:
+        json.dump({"action_scale": [0.5] * 6 + [0.25] * 6}, f)
+    if list(train_pmg.action_scale_from(good)) != [0.5] * 6 + [0.25] * 6:
+        failures.append("--action-scale-from: the scale of a valid train_config.json not returned")
+    for name, doc in (("short", {"action_scale": [0.5] * 11}), ("zero", {"action_scale": [0.0] * 12}),
+                      ("missing", {"argv": []}), ("text", "not json")):
+        bad = os.path.join(tmp, name + ".json")
+        with open(bad, "w") as f:
+            f.write(doc if isinstance(doc, str) else json.dumps(doc))
+        try:
+            train_pmg.action_scale_from(bad)
+            failures.append(f"--action-scale-from {name}: accepted")
+        except SystemExit as e:
+            if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
+                failures.append(f"--action-scale-from {name}: message {e.code!r}")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 27 cases as expected")
 sys.exit(1 if failures else 0)

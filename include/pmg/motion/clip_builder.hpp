@@ -222,3 +222,49 @@ namespace pmg::motion {
 void keepLegDirections(StaticClip& clip, const KinematicModel& model);
 
 }  // namespace pmg::motion
+
+namespace pmg::motion {
+
+/// Options of raiseWalkingHeight. Units: m, rad, phase samples.
+struct WalkingHeightOptions {
+  /// Share of the gap between the standing pelvis height and the clip's cycle-mean pelvis height
+  /// to close, [0, 1]; 0 leaves the clip as it is.
+  double fraction = 1.0;
+  /// Smallest knee flexion [rad] the raise may leave in either leg, [0, 1]: a leg straighter than
+  /// this cannot lengthen further, so the raise shrinks where a knee is near straight (heel strike).
+  double min_knee = 0.15;
+  /// σ [phase samples] of the truncated circular Gaussian that smooths the per-sample raise (after
+  /// a min-filter of ±3σ, so the smoothed raise never exceeds what each sample allows), [0, 10].
+  double smoothing_samples = 2.0;
+  /// @throws std::invalid_argument naming the field and its range.
+  void validate() const;
+};
+
+/// What raiseWalkingHeight did to one clip [m].
+struct WalkingHeightReport {
+  double standing_height = 0.0;  ///< pelvis above the lower sole centre in the standing pose
+  double mean_height_before = 0.0;  ///< cycle mean of the same in the clip, before
+  double mean_height_after = 0.0;   ///< and after
+  double target_raise = 0.0;     ///< fraction × (standing − mean before), >= 0
+  double min_raise = 0.0;        ///< the smallest per-sample raise applied (knee-limited samples)
+};
+
+/// Raises the pelvis of a walking template towards the standing height (beyond the paper; issue 12:
+/// the captured gaits carry the pelvis 10–35 mm below the standing pose's, so a robot that
+/// tracks them walks below a commanded standing height). Per phase sample k the pelvis rises by
+/// d_k: both sole centres move d_k down along the pelvis z axis (the clip's pelvis is level), keeping
+/// their horizontal place and their orientation in the pelvis frame, by solving each leg's six joints
+/// (Newton on the KDL chain of @p model, finite-difference Jacobian); no other joint changes.
+/// d_k = the target raise, or less where a knee would straighten beyond options.min_knee or a joint
+/// would leave its limits (bisection), then min-filtered and smoothed (options.smoothing_samples).
+/// The relative sole heights, and so the contact labels, are unchanged; base_height gains d_k,
+/// v_base z its phase derivative, and q̇ is recomputed (periodicDerivative). Pelvis height of a
+/// pose = the height of the pelvis above the lower of the two sole centres (g1SolePoints_F mean).
+/// @param q_stand the standing pose (n, config order) [rad]. @throws std::invalid_argument if the
+/// clip's or q_stand's joint count differs from the robot's, a leg chain has not 6 joints, the knee
+/// joint is missing, or the options
+/// are out of range; std::runtime_error if forward kinematics fails.
+WalkingHeightReport raiseWalkingHeight(DynamicClip& clip, const KinematicModel& model, const Eigen::VectorXd& q_stand,
+                                       const WalkingHeightOptions& options = {});
+
+}  // namespace pmg::motion
