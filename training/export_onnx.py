@@ -8,6 +8,7 @@ import-free here), reference pairs from a float32 NumPy forward pass of the expo
 Check the result as the controller would: build*/bin/pmg_policy_check --model <onnx>.
 """
 import argparse
+import glob
 import json
 import os
 import sys
@@ -17,7 +18,7 @@ import yaml
 
 # Run in place (python3 training/export_onnx.py) as well as installed (pmg-export-onnx): pmg_train sits beside this file.
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pmg_train.contract import actor_forward, actor_graph, make_contract, save_onnx  # noqa: E402
+from pmg_train.contract import actor_forward, actor_graph, clips_digest, make_contract, save_onnx  # noqa: E402
 from pmg_train.paths import repo_root  # noqa: E402
 
 LEG = 12
@@ -38,14 +39,27 @@ def load_actor(path):
     return z["obs_mean"], z["obs_std"], layers, z["action_scale"], [str(c) for c in z["clips"]], mode
 
 
-def load_reference_settings(path):
+def load_reference_settings(path, clips_dir=None):
     """The actor's reference settings beyond the paper, as contract keys: upright_walking and
-    sole_levelling (False for actors saved before 2026-11-27, which were trained without both)."""
+    sole_levelling (False for actors saved before 2026-11-27, which were trained without both), and
+    clips_digest, the digest of the clips it was trained on (saved with the actor since 2026-11-27;
+    for an older actor, computed from @p clips_dir when given, else left out: the controller then
+    does not check the clips)."""
     z = np.load(path)
-    return {k: bool(z[k]) if k in z.files else False for k in ("upright_walking", "sole_levelling")}
+    out = {k: bool(z[k]) if k in z.files else False for k in ("upright_walking", "sole_levelling")}
+    if "clips_digest" in z.files:
+        out["clips_digest"] = str(z["clips_digest"])
+        if clips_dir and clips_digest(sorted(glob.glob(os.path.join(clips_dir, "*.yaml")))) != out["clips_digest"]:
+            raise SystemExit(f"--clips {clips_dir}: not the clips {path} was trained on (digest differs)")
+    elif clips_dir:
+        files = sorted(glob.glob(os.path.join(clips_dir, "*.yaml")))
+        if not files:
+            raise SystemExit(f"--clips {clips_dir}: no clip files (*.yaml) there")
+        out["clips_digest"] = clips_digest(files)
+    return out
 
 
-def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
+def export(npz, out_path, brax_check=None, robot_yaml=None, training=None, clips_dir=None):
     """Writes the ONNX actor with its contract; robot_yaml: default config/robots/g1/g1.yaml of the
     checkout (relative paths: to the checkout). The contract's kp / kd are the robot config's: a policy
     trained with physically informed gains is exported with config/robots/g1/g1_pig.yaml. @p training:
@@ -54,7 +68,7 @@ def export(npz, out_path, brax_check=None, robot_yaml=None, training=None):
     if not os.path.isabs(robot_yaml):
         robot_yaml = os.path.join(repo_root(), robot_yaml)
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
-    reference = load_reference_settings(npz)
+    reference = load_reference_settings(npz, clips_dir)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)
     joints = robot["joints"]
@@ -86,8 +100,11 @@ def main(argv=None):
     ap.add_argument("--robot", default=None,
                     help="robot config whose kp/kd the contract carries (default config/robots/g1/g1.yaml; "
                          "config/robots/g1/g1_pig.yaml for a policy trained with --gains physically_informed)")
+    ap.add_argument("--clips", default=None, metavar="DIR",
+                    help="the clip folder the actor was trained on: its digest goes into the contract "
+                         "(pmg.clips_digest) for an actor saved without one, and is checked against one saved")
     a = ap.parse_args(argv)
-    export(a.npz, a.out, robot_yaml=a.robot)
+    export(a.npz, a.out, robot_yaml=a.robot, clips_dir=a.clips)
 
 
 if __name__ == "__main__":

@@ -74,8 +74,10 @@ def export_robot_yaml(cfg):
 
 
 def save_params(params, out, env, clip_names):
-    """params.pkl (full Brax tree, numpy leaves: resume) + actor.npz (plain arrays: export)."""
+    """params.pkl (full Brax tree, numpy leaves: resume) + actor.npz (plain arrays: export; with the
+    digest of the clips trained on, the contract's pmg.clips_digest)."""
     import jax
+    from pmg_train.contract import clips_digest
     params_np = jax.tree_util.tree_map(np.asarray, params)
     with open(os.path.join(out, "params.pkl"), "wb") as f:
         pickle.dump(params_np, f)
@@ -83,7 +85,8 @@ def save_params(params, out, env, clip_names):
     p = policy["params"]
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
               "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
-              "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling)}
+              "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling),
+              "clips_digest": np.array(clips_digest(env.clip_files))}
     for i in range(len(p)):
         arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
         arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]

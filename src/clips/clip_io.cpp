@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -572,6 +574,30 @@ ConsistencyMap readConsistencyMap(const std::string& path) {
     }
     return m;
   });
+}
+
+std::string clipsDigest(const ClipLibrary& library) {
+  std::vector<std::pair<std::string, const Eigen::MatrixXd*>> clips;
+  for (const DynamicClip& c : library.dynamic_clips) clips.emplace_back(c.name, &c.q);
+  for (const StaticClip& c : library.static_clips) clips.emplace_back(c.name, &c.q);
+  std::sort(clips.begin(), clips.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  auto byte = [&h](unsigned char b) {
+    h ^= b;
+    h *= 0x100000001b3ULL;
+  };
+  for (const auto& [name, q] : clips) {
+    for (const char ch : name) byte(static_cast<unsigned char>(ch));
+    for (Eigen::Index i = 0; i < q->rows(); ++i)
+      for (Eigen::Index j = 0; j < q->cols(); ++j) {
+        const auto v = static_cast<std::int64_t>(std::floor((*q)(i, j) * 1e4 + 0.5));
+        const auto u = static_cast<std::uint64_t>(v);
+        for (int k = 0; k < 8; ++k) byte(static_cast<unsigned char>((u >> (8 * k)) & 0xffU));
+      }
+  }
+  char out[17];
+  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+  return std::string("fnv1a64:") + out;  // the prefix keeps the contract check from reading it as a number
 }
 
 }  // namespace pmg

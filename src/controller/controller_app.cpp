@@ -76,6 +76,7 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
     po.gco = config_.gco.enabled;
     po.sole_levelling = config_.gco.sole_levelling.enabled;
     po.upright_walking = config_.generator.upright_walking;
+    po.clips_digest = clipsDigest(clips);
     policy = std::make_unique<policy::PolicyStage>(config_.policy_file, robot, po);
   }
   HalStack stack = makeHalStack(robot, config_.halStack(), std::move(options.backend));

@@ -307,6 +307,9 @@ void checkContract(const PolicyContract& c, const PolicyRobotSpec& robot, const 
 
   for (const auto& [key, want] : robot.pmg) {
     const auto it = c.pmg.find(key);
+    // The clips' digest is checked where the contract has one: actors exported before 2026-11-27
+    // carry none.
+    if (it == c.pmg.end() && key == "clips_digest") continue;
     if (it == c.pmg.end()) r.fail("pmg." + key, "missing, controller runs with '" + want + "'");
     bool same = it->second == want;
     if (!same) {

@@ -12,6 +12,7 @@ PolicyStage::PolicyStage(const std::string& onnx_path, const RobotConfig& robot,
   spec.pmg = {{"enabled", "true"}, {"gco", options_.gco ? "true" : "false"}, {"mode", options_.mode},
               {"sole_levelling", options_.sole_levelling ? "true" : "false"},
               {"upright_walking", options_.upright_walking ? "true" : "false"}};
+  if (!options_.clips_digest.empty()) spec.pmg["clips_digest"] = options_.clips_digest;
   PolicyRunnerOptions ropt;
   ropt.backend = options_.backend;
   runner_ = std::make_unique<PolicyRunner>(onnx_path, spec, ropt);

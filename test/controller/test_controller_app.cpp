@@ -13,6 +13,7 @@
 #include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
 #include "pmg/controller/controller_app.hpp"
+#include "pmg/policy/contract.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "temp_dir.hpp"
 
@@ -273,6 +274,20 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
   EXPECT_EQ(allocations, 0u);
   std::printf("[ SIL ] %s: walked %.2f m forward in 5.5 s, lowest pelvis %.2f m\n", GetParam(),
               app.controller().lastState().base_position[0], min_height);
+}
+
+// The controller refuses to start an actor on clips other than those it was trained on
+// (pmg.clips_digest, docs/policy.md "The contract"): wh6hs, trained on the raised walking
+// templates, on the captured ones; its own config starts (PolicyConfigTest).
+TEST(ControllerApp, RefusesAPolicyOnClipsItWasNotTrainedOn) {
+  ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy_walking_height.yaml"));
+  config.clips_dir = test::sourcePath("config/clips/g1");
+  try {
+    ControllerApp app(config);
+    FAIL() << "started wh6hs on the captured clips";
+  } catch (const policy::ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.clips_digest") << e.what();
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,

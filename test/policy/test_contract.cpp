@@ -1,7 +1,10 @@
 // Contract parsing and checking: every bad_*.onnx model breaks one field and must be refused
 // with a ContractError that names that field.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
+#include "pmg/clips/clip_io.hpp"
 #include "pmg/policy/contract.hpp"
 #include "pmg/policy/policy_runner.hpp"
 #include "test_policy_common.hpp"
@@ -120,6 +123,46 @@ TEST(Contract, ReferenceSettingsMustMatchTheController) {
   s.pmg["upright_walking"] = "true";
   EXPECT_NO_THROW(PolicyRunner(uplev, s));
   EXPECT_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s), ContractError);
+}
+
+// pmg.clips_digest (pmg::clipsDigest): a policy whose contract names the clips it was trained on
+// runs only on those clips (wh6hs, trained on the raised walking templates, is refused on the
+// captured ones); a contract without the key (bk_vy6, exported before it existed) is not checked.
+// wh6hs's digest was written by the training side (training/pmg_train/contract.py), so its
+// acceptance also shows that the two implementations agree. The digest ignores changes below the
+// 1e-4 rounding and sees a joint moved by 2e-4 rad.
+TEST(Contract, ClipsDigestMustMatchWhereTheContractHasOne) {
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const ClipLibrary raised_clips = loadClipLibrary(pmg::test::sourcePath("config/clips/g1_walking_height"), robot);
+  const std::string raised = clipsDigest(raised_clips);
+  const std::string captured = clipsDigest(loadClipLibrary(pmg::test::g1ClipDir(), robot));
+  EXPECT_NE(raised, captured);
+  EXPECT_EQ(raised.rfind("fnv1a64:", 0), 0u);
+  EXPECT_EQ(raised.size(), 24u);
+  ClipLibrary moved = raised_clips;
+  moved.dynamic_clips[0].q(10, 3) += 2e-4;
+  EXPECT_NE(clipsDigest(moved), raised);
+  moved = raised_clips;
+  const double v = moved.dynamic_clips[0].q(10, 3);
+  const double rounded = std::floor(v * 1e4 + 0.5) / 1e4;  // stay inside the same rounding cell
+  moved.dynamic_clips[0].q(10, 3) = rounded + 0.3 * (v - rounded);
+  ASSERT_NE(moved.dynamic_clips[0].q(10, 3), v);
+  EXPECT_EQ(clipsDigest(moved), raised);
+
+  PolicyRobotSpec s = g1Spec();
+  s.pmg = {{"enabled", "true"}, {"gco", "true"}, {"mode", "pmg"}, {"sole_levelling", "false"}, {"upright_walking", "false"},
+           {"clips_digest", raised}};
+  const std::string wh6hs = pmg::test::sourcePath("config/policies/g1_pmg_policy_wh6hs.onnx");
+  EXPECT_NO_THROW(PolicyRunner(wh6hs, s));
+  s.pmg["clips_digest"] = captured;
+  try {
+    PolicyRunner runner(wh6hs, s);
+    FAIL() << "accepted a policy trained on the raised walking templates on the captured ones";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.clips_digest");
+    EXPECT_NE(std::string(e.what()).find(raised), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s));  // no key
 }
 
 TEST(Contract, NumericPmgSettingComparedAsNumber) {

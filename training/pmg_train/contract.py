@@ -155,3 +155,34 @@ def actor_graph(mean, std, layers, n_act, name="pmg_actor"):
     return helper.make_graph(
         nodes, name, [helper.make_tensor_value_info(INPUT_NAME, TensorProto.FLOAT, [1, n_obs])],
         [helper.make_tensor_value_info(OUTPUT_NAME, TensorProto.FLOAT, [1, n_act])], initializer=inits)
+
+
+def clips_digest(clip_files):
+    """Digest of the clips' joint data, the contract's pmg.clips_digest (equal to the C++
+    pmg::clipsDigest, include/pmg/clips/clip_io.hpp): FNV-1a 64-bit over every clip file's clip
+    (dynamic and static; consistency_map.yaml and other kinds skipped) in the order of the clips'
+    names: the name's bytes, then each q value (row-major) as the int64 floor(q * 1e4 + 0.5) in 8
+    little-endian bytes; "fnv1a64:" and 16 hex digits."""
+    clips = []
+    for path in clip_files:
+        with open(path) as f:
+            doc = yaml.safe_load(f)
+        if not isinstance(doc, dict) or doc.get("kind") not in ("dynamic", "static"):
+            continue
+        clips.append((str(doc["name"]), np.asarray(doc["q"], np.float64)))
+    if not clips:
+        raise ValueError(f"clips_digest: no clip among {clip_files}")
+    clips.sort(key=lambda c: c[0].encode())
+    h = 0xcbf29ce484222325
+    mask = (1 << 64) - 1
+
+    def feed(data):
+        nonlocal h
+        for b in data:
+            h = ((h ^ b) * 0x100000001b3) & mask
+
+    for name, q in clips:
+        feed(name.encode())
+        v = np.floor(q * 1e4 + 0.5).astype(np.int64)
+        feed(v.astype("<i8").tobytes())
+    return f"fnv1a64:{h:016x}"

@@ -51,7 +51,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
-   model passes onnx.checker and carries the pmg.contract; progress.jsonl reached the step count
+   model passes onnx.checker and carries the pmg.contract, whose pmg.clips_digest names the clips
+   trained on; progress.jsonl reached the step count
    with finite metrics; both devices were used.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
@@ -609,6 +610,12 @@ def ppo_checks(check, workdir, obs):
     check("pmg.contract" in meta and brax_diff is not None and brax_diff < 1e-4,
           f"ONNX export: checker passes, pmg.contract present, exported actor = Brax inference "
           f"(max |diff| {brax_diff})")
+    import glob
+    import yaml
+    from pmg_train.contract import clips_digest
+    digest = (yaml.safe_load(meta.get("pmg.contract", "{}")) or {}).get("pmg", {}).get("clips_digest")
+    want = clips_digest(sorted(glob.glob(os.path.join(REPO, "config", "clips", "g1", "*.yaml"))))
+    check(digest == want, f"the contract names the clips trained on: pmg.clips_digest {digest} (config/clips/g1: {want})")
     if obs is None:  # PPO part alone: observations around the normaliser's statistics
         obs = mean + std * np.random.default_rng(0).standard_normal((4,) + mean.shape)
         where = "observations drawn from the normaliser's statistics"

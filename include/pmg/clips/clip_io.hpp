@@ -64,4 +64,13 @@ ClipLibrary loadClipLibrary(const std::string& directory, const RobotConfig& rob
 ClipLibrary loadClipLibrary(const std::vector<std::string>& files, const RobotConfig& robot,
                             const ClipValidationOptions& options = {});
 
+/// Digest of a clip library's joint data, the policy contract's `pmg.clips_digest`: a policy is run
+/// only on the clips it was trained on (docs/policy.md "The contract"). FNV-1a 64-bit over every
+/// clip, dynamic and static, in the order of their names: the name's bytes, then each q value
+/// (row-major) as the int64 floor(q · 1e4 + 0.5) in 8 little-endian bytes. Returned as
+/// "fnv1a64:" and 16 lower-case hex digits. The file formatting does not enter it; a joint value moved by more than
+/// 1e-4 rad changes it (up to hash collisions). The training side computes the same
+/// (training/pmg_train/contract.py clips_digest).
+std::string clipsDigest(const ClipLibrary& library);
+
 }  // namespace pmg

@@ -41,6 +41,10 @@ struct PolicyStageOptions {
   /// generator on all clips (the controller); "single_gait" = the generator on the forward-walk
   /// clip alone at its nominal speed (the Table I baseline; only pmg_policy_sil runs it).
   std::string mode = "pmg";
+  /// pmg::clipsDigest of the clips the controller runs. Compared with the contract's
+  /// pmg.clips_digest where the contract has one (actors exported since 2026-11-27); empty = not
+  /// checked.
+  std::string clips_digest;
   /// Gaussian sensor noise on the observation (evaluation as in training); 0 = none.
   double noise_gyro = 0, noise_gravity = 0, noise_q = 0, noise_qd = 0;
   unsigned noise_seed = 0;
