@@ -51,7 +51,8 @@ def main():
         if "=" not in spec:
             sys.exit(f"{spec}: expected LABEL=summary.json")
         label, path = spec.split("=", 1)
-        series.append((label, {n: (c, a) for n, c, a in read_segments(path)}, [n for n, _, _ in read_segments(path)]))
+        segments = read_segments(path)
+        series.append((label, {n: (c, a) for n, c, a in segments}, [n for n, _, _ in segments]))
     first = series[0]
     if args.segments:
         segs = [s for s in args.segments.split(",") if s]

@@ -47,15 +47,17 @@ def load_reference_settings(path, clips_dir=None):
     does not check the clips)."""
     z = np.load(path)
     out = {k: bool(z[k]) if k in z.files else False for k in ("upright_walking", "sole_levelling")}
-    if "clips_digest" in z.files:
-        out["clips_digest"] = str(z["clips_digest"])
-        if clips_dir and clips_digest(sorted(glob.glob(os.path.join(clips_dir, "*.yaml")))) != out["clips_digest"]:
-            raise SystemExit(f"--clips {clips_dir}: not the clips {path} was trained on (digest differs)")
-    elif clips_dir:
+    saved = str(z["clips_digest"]) if "clips_digest" in z.files else None
+    if clips_dir:
         files = sorted(glob.glob(os.path.join(clips_dir, "*.yaml")))
         if not files:
             raise SystemExit(f"--clips {clips_dir}: no clip files (*.yaml) there")
-        out["clips_digest"] = clips_digest(files)
+        given = clips_digest(files)
+        if saved is not None and given != saved:
+            raise SystemExit(f"--clips {clips_dir}: not the clips {path} was trained on (digest differs)")
+        saved = given
+    if saved is not None:
+        out["clips_digest"] = saved
     return out
 
 

@@ -148,10 +148,10 @@ FootContact contactModel(const std::vector<bool>& in_contact) {
   return {mu, std::min(0.5, 0.5 * best_len / M)};
 }
 
-Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_samples) {
+Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_samples, double truncate_sigmas) {
   if (sigma_samples <= 0.0) return x;
   const Eigen::Index M = x.rows();
-  const int half = static_cast<int>(std::ceil(4.0 * sigma_samples));
+  const int half = static_cast<int>(std::ceil(truncate_sigmas * sigma_samples));
   std::vector<double> w(static_cast<std::size_t>(2 * half + 1));
   double sum = 0.0;
   for (int j = -half; j <= half; ++j) {
@@ -693,11 +693,10 @@ WalkingHeightReport raiseWalkingHeight(DynamicClip& clip, const KinematicModel& 
   if (clip.q.cols() != n || q_stand.size() != n)
     throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): clip has {} joints, standing pose {}, robot config {}", clip.name,
                                             clip.q.cols(), q_stand.size(), n));
-  const std::vector<std::string> names = robot.jointNames();
   auto index = [&](const std::string& joint) {
-    const auto it = std::find(names.begin(), names.end(), joint);
-    if (it == names.end()) throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): robot has no joint '{}'", clip.name, joint));
-    return static_cast<Eigen::Index>(it - names.begin());
+    const int i = robot.jointIndex(joint);
+    if (i < 0) throw std::invalid_argument(fmt::format("raiseWalkingHeight({}): robot has no joint '{}'", clip.name, joint));
+    return static_cast<Eigen::Index>(i);
   };
   const Eigen::VectorXd lower = robot.lowerLimits(), upper = robot.upperLimits();
   LegLengthener left(model.leftLeg(), index("left_knee_joint"), lower, upper, clip.name);
@@ -718,22 +717,24 @@ WalkingHeightReport raiseWalkingHeight(DynamicClip& clip, const KinematicModel& 
   rep.min_raise = rep.target_raise;
   if (rep.target_raise <= 0.0 || N == 0) return rep;
 
-  // Largest feasible raise per sample (both legs), by bisection below the target.
-  auto feasible = [&](const Eigen::VectorXd& q0, double d) {
-    Eigen::VectorXd q = q0;
+  // Largest feasible raise per sample (both legs), by bisection below the target. @p q: the pose
+  // raised by d when feasible.
+  Eigen::VectorXd solved;
+  auto feasible = [&](const Eigen::VectorXd& q0, double d, Eigen::VectorXd& q) {
+    q = q0;
     return left.lower(q, d, options.min_knee) && right.lower(q, d, options.min_knee);
   };
   Eigen::VectorXd d_max(N);
   for (Eigen::Index k = 0; k < N; ++k) {
     const Eigen::VectorXd q0 = clip.q.row(k).transpose();
-    if (feasible(q0, rep.target_raise)) {
+    if (feasible(q0, rep.target_raise, solved)) {
       d_max(k) = rep.target_raise;
       continue;
     }
     double lo = 0.0, hi = rep.target_raise;
     for (int it = 0; it < 14; ++it) {
       const double mid = 0.5 * (lo + hi);
-      (feasible(q0, mid) ? lo : hi) = mid;
+      (feasible(q0, mid, solved) ? lo : hi) = mid;
     }
     d_max(k) = lo;
   }
@@ -742,32 +743,27 @@ WalkingHeightReport raiseWalkingHeight(DynamicClip& clip, const KinematicModel& 
   Eigen::VectorXd d = d_max;
   const double sigma = options.smoothing_samples;
   if (sigma > 0.0) {
-    const auto w = static_cast<Eigen::Index>(std::ceil(3.0 * sigma));
+    constexpr double kTruncate = 3.0;  // the Gaussian's reach, in σ
+    const auto w = static_cast<Eigen::Index>(std::ceil(kTruncate * sigma));
     Eigen::VectorXd eroded(N);
     for (Eigen::Index k = 0; k < N; ++k) {
       double m = d_max(k);
       for (Eigen::Index j = -w; j <= w; ++j) m = std::min(m, d_max(((k + j) % N + N) % N));
       eroded(k) = m;
     }
-    for (Eigen::Index k = 0; k < N; ++k) {
-      double sum = 0.0, wsum = 0.0;
-      for (Eigen::Index j = -w; j <= w; ++j) {
-        const double g = std::exp(-0.5 * static_cast<double>(j * j) / (sigma * sigma));
-        sum += g * eroded(((k + j) % N + N) % N);
-        wsum += g;
-      }
-      d(k) = sum / wsum;
-    }
+    d = circularGaussianSmooth(eroded, sigma, kTruncate).col(0);
   }
   for (Eigen::Index k = 0; k < N; ++k) {
-    Eigen::VectorXd q = clip.q.row(k).transpose();
     // d(k) <= d_max(k) up to rounding: step down a hair if the exact value is refused.
     double dk = d(k);
-    for (int it = 0; it < 20 && !feasible(q, dk); ++it) dk *= 0.999;
-    if (!left.lower(q, dk, options.min_knee) || !right.lower(q, dk, options.min_knee))
-      throw std::runtime_error(fmt::format("raiseWalkingHeight({}): no feasible raise at sample {}", clip.name, k));
+    bool ok = feasible(clip.q.row(k).transpose(), dk, solved);
+    for (int it = 0; it < 20 && !ok; ++it) {
+      dk *= 0.999;
+      ok = feasible(clip.q.row(k).transpose(), dk, solved);
+    }
+    if (!ok) throw std::runtime_error(fmt::format("raiseWalkingHeight({}): no feasible raise at sample {}", clip.name, k));
     d(k) = dk;
-    clip.q.row(k) = q.transpose();
+    clip.q.row(k) = solved.transpose();
   }
   clip.qd = periodicDerivative(clip.q, clip.period);
   clip.base_height += d;

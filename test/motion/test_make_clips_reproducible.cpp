@@ -45,15 +45,14 @@ int expectMatchesShippedSet(const fs::path& shipped, const fs::path& fresh_dir, 
     ++files;
     if (!again.empty()) EXPECT_EQ(slurp(fresh_dir / name), slurp(again / name)) << "not deterministic";
     if (e.path().extension() != ".yaml") continue;
-    const fs::path tmp_a = fresh_dir;
     if (name == pmg::kConsistencyMapFile) {  // not a clip: the map of the set, compared as numbers
-      const auto a = pmg::readConsistencyMap((tmp_a / name).string()), s = pmg::readConsistencyMap(e.path().string());
+      const auto a = pmg::readConsistencyMap((fresh_dir / name).string()), s = pmg::readConsistencyMap(e.path().string());
       EXPECT_EQ(a.delta.rows(), s.delta.rows());
       if (a.delta.rows() != s.delta.rows()) continue;
       EXPECT_LT((a.delta - s.delta).cwiseAbs().maxCoeff(), 1e-4);
       continue;
     }
-    const std::string fresh = (tmp_a / name).string();
+    const std::string fresh = (fresh_dir / name).string();
     if (pmg::readClipKind(fresh) == pmg::ClipKind::kDynamic) {
       const auto a = pmg::readDynamicClip(fresh, robot), s = pmg::readDynamicClip(e.path().string(), robot);
       EXPECT_LT((a.q - s.q).cwiseAbs().maxCoeff(), 1e-4);

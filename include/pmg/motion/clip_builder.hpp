@@ -105,8 +105,8 @@ DynamicClip buildDynamicClip(const RobotMotion& motion, const ContactSequence& c
                              const RobotConfig& robot, const DynamicClipOptions& options);
 
 /// Periodic helpers (exposed for tests). Circular Gaussian smoothing of the rows of @p x
-/// (M × d) with σ in samples; σ = 0 returns x.
-Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_samples);
+/// (M × d) with σ in samples, the kernel cut at ±ceil(truncate_sigmas · σ) samples; σ = 0 returns x.
+Eigen::MatrixXd circularGaussianSmooth(const Eigen::MatrixXd& x, double sigma_samples, double truncate_sigmas = 4.0);
 /// Periodic Catmull-Rom resampling of M samples (rows, at phases k/M) to N samples at phases k/N.
 Eigen::MatrixXd resamplePeriodic(const Eigen::MatrixXd& x, int num_samples);
 /// Central difference in phase of N periodic samples, divided by the period: (x[k+1] − x[k−1]) / (2 T / N).
