@@ -992,7 +992,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(lift_speed > 0 && lift_speed <= 0.5)) return "lift_speed: expected (0, 0.5] m/s";
     if (!(max_lead_m >= 0 && max_lead_m <= 1.0)) return "max_lead_m: expected [0, 1] m (0: no limit)";
     if (!(vertical_lead_m >= 0 && vertical_lead_m <= 0.5)) return "vertical_lead_m: expected [0, 0.5] m (0: within max_lead_m)";
-    if (!(std::abs(hand_pitch_rad) <= 0.8)) return "hand_pitch_rad: expected [-0.8, 0.8] rad";
+    if (!(std::abs(hand_pitch_rad) <= 1.6)) return "hand_pitch_rad: expected [-1.6, 1.6] rad (1.6: the hands pointing down)";
     if (!(turn_s > 0 && turn_s <= 10)) return "turn_s: expected (0, 10] s";
     if (!(stand_s >= 0 && stand_s <= 10)) return "stand_s: expected [0, 10] s (0: at once)";
     if (!(max_raise_m >= 0 && max_raise_m <= 0.3)) return "max_raise_m: expected [0, 0.3] m";
