@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Checks the crouched velocity envelope through the product path (ctest
-pmg_policy_sil_crouched_envelope, label sil): the default config (g1_sil_policy.yaml) runs
+pmg_policy_sil_crouched_envelope, label sil): the previous default config (g1_sil_policy_bk_vy6.yaml,
+the actor whose falls the envelope was made for; the default's wh6g did not fall here without it) runs
 test/data/policy/eval_crouched_corners.yaml (0.9 m/s forward with a 0.3 m/s side-step crouched to
 0.66 m, 0.8 m/s forward crouched to 0.62 m, stops) with the envelope off and on
 (pmg_policy_sil --crouched-envelope off|on --seeds 2 --restart-after-fall).
