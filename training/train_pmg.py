@@ -217,6 +217,9 @@ def parse_args(argv=None):
     ap.add_argument("--p-posture-walk", type=float, default=None, metavar="P",
                     help="probability that a walking command also commands a posture, so walking crouched, bent or "
                          "leaning (EnvConfig.p_posture_walk, default 0.4)")
+    ap.add_argument("--p-combined", type=float, default=None, metavar="P",
+                    help="probability that a drawn command combines velocity axes (EnvConfig.p_combined, default 0.4; "
+                         "with p_single_axis 0.4 the rest stands still, so at most 0.6)")
     ap.add_argument("--command-slew", action="store_true",
                     help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
                          "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
@@ -246,6 +249,8 @@ def parse_args(argv=None):
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
     if args.p_posture_walk is not None and not 0.0 <= args.p_posture_walk <= 1.0:
         ap.error(f"--p-posture-walk = {args.p_posture_walk}: expected in [0, 1]")
+    if args.p_combined is not None and not 0.0 <= args.p_combined <= 0.6:
+        ap.error(f"--p-combined = {args.p_combined}: expected in [0, 0.6] (p_single_axis 0.4 + p_combined <= 1)")
     weights = {}
     for item in args.reward_weight:
         name, _, value = item.partition("=")
@@ -392,6 +397,9 @@ def main(argv=None):
     if args.p_posture_walk is not None:
         cfg = dataclasses.replace(cfg, p_posture_walk=args.p_posture_walk)
         log("p_posture_walk:", cfg.p_posture_walk)
+    if args.p_combined is not None:
+        cfg = dataclasses.replace(cfg, p_combined=args.p_combined)
+        log("p_combined:", cfg.p_combined)
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)

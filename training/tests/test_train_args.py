@@ -3,7 +3,8 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused;
+--command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused,
+and --p-combined parses and a value outside [0, 0.6] is refused;
 --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
@@ -27,12 +28,16 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
     failures.append("--p-stop 0.5 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-posture-walk", "0.7"]).p_posture_walk != 0.7:
     failures.append("--p-posture-walk 0.7 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--p-combined", "0.5"]).p_combined != 0.5:
+    failures.append("--p-combined 0.5 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-stop", "nan"], "--p-stop"),
                   (["--p-posture-walk", "-0.1"], "--p-posture-walk"),
                   (["--p-posture-walk", "nan"], "--p-posture-walk"),
+                  (["--p-combined", "0.7"], "--p-combined"),
+                  (["--p-combined", "nan"], "--p-combined"),
                   (["--command-range", "vx=1.0,-0.5"], "--command-range"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
                   (["--command-range", "vy=-0.4"], "--command-range"),
@@ -76,5 +81,5 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 27 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 30 cases as expected")
 sys.exit(1 if failures else 0)
