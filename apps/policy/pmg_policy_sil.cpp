@@ -60,7 +60,9 @@
 // the first).
 // Writes <out>/seed<k>.csv (per tick; *_ref: the reference's implied motion as above, vx/vy/wz nan
 // without a stance foot; *_uopt: u'; episode: 0, then 1, 2, ... after each restart, whose first
-// 2 s overlap the fallen episode's times), <out>/frames<k>.csv and <out>/summary.json.
+// 2 s overlap the fallen episode's times; fb_held_ticks / fb_decayed_ticks: the velocity feedback's
+// cumulative ticks without integration because leg odometry was rejected / the pelvis tilted),
+// <out>/frames<k>.csv and <out>/summary.json.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -369,7 +371,9 @@ int main(int argc, char** argv) {
           // the velocity command after the feedback (= the command when off) and leg odometry (nan when off)
           csv << ",vx_fb,vy_fb,wz_fb,vx_est,vy_est,wz_est,pitch_fb,roll_fb";
           // the pelvis tilt from vertical (the IMU's attitude) that the feedback's tilt guards read [rad]
-          csv << ",pelvis_tilt,episode\n";
+          // the velocity feedback's cumulative ticks held (leg odometry rejected: no integration) and
+          // decayed (pelvis tilted), 0 when off: their per-tick increments show where it cannot act
+          csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
@@ -500,7 +504,9 @@ int main(int argc, char** argv) {
           for (int i = 0; i < 3; ++i) csv << ',' << fb[static_cast<std::size_t>(i)];
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << fb[3] << ',' << fb[4];
-          csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << '\n';
+          const pmg::VelocityFeedback* vfb = controller.velocityFeedback();
+          csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << ','
+              << (vfb ? vfb->heldTicks() : 0) << ',' << (vfb ? vfb->decayedTicks() : 0) << '\n';
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
             for (int b = 1; b < m->nbody; ++b)
