@@ -13,6 +13,7 @@ estimate within 0.01 m of the truth), no fall, and the feedback's own leg-odomet
 the simulator's truth in every walking segment.
 Usage: check_sil_velocity_feedback.py OFF_DIR ON_DIR
 """
+import csv
 import json
 import sys
 
@@ -66,6 +67,21 @@ def main(off_dir, on_dir):
     checks["the mean miss over the velocity segments is smaller with the feedback"] = \
         sum(miss_on) / len(miss_on) < sum(miss_off) / len(miss_off)
     print(f"mean miss: off {sum(miss_off) / len(miss_off):.3f}, on {sum(miss_on) / len(miss_on):.3f}")
+    # The per-tick CSV counts the ticks on which the feedback could not integrate (fb_held_ticks: leg
+    # odometry rejected; fb_decayed_ticks: pelvis tilted): cumulative, never decreasing, none when off,
+    # and held somewhere in a run that walks (touchdowns give odometry samples beyond the gate).
+    for label, out in (("off", off_dir), ("on", on_dir)):
+        with open(f"{out}/seed0.csv") as f:
+            rows = list(csv.DictReader(f))
+        held = [int(r["fb_held_ticks"]) for r in rows]
+        decayed = [int(r["fb_decayed_ticks"]) for r in rows]
+        print(f"{label}: fb_held_ticks {held[-1]}, fb_decayed_ticks {decayed[-1]} of {len(rows)} ticks")
+        checks[f"{label}: the hold/decay counters never decrease"] = \
+            all(b >= a for a, b in zip(held, held[1:])) and all(b >= a for a, b in zip(decayed, decayed[1:]))
+        if label == "off":
+            checks["off: no tick held or decayed"] = held[-1] == 0 and decayed[-1] == 0
+        else:
+            checks["on: some ticks held, fewer than half"] = 0 < held[-1] < len(rows) / 2
     for k, ok in checks.items():
         print(("ok   " if ok else "FAIL ") + k)
     return 0 if all(checks.values()) else 1
