@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
 """A stop, seen side by side in several pmg_policy_sil runs (docs/controller.md "Braking steps").
 
-One column per run, for one seed: top, the forward velocity (the shaped command u, the command the
-generator got u_fb, the achieved v_x and the estimate); bottom, the torso pitch. A fall ends the
-trace and is marked.
+One column per run, for one seed: top, the velocity along --axis (the shaped command u, the command
+the generator got u_fb, the achieved velocity and the estimate); bottom, the torso pitch (--axis vx)
+or roll (--axis vy). A fall ends the trace and is marked; with --restart-after-fall runs only the
+first episode is drawn.
 
-  python3 scripts/plot_stop.py --run "LABEL=OUT_DIR" [--run ...] [--seed 0] [--t0 17] [--t1 22] --out PNG
-(OUT_DIR: pmg_policy_sil --out, e.g. with --commands training/results/fidelity/fast20s_ft2/stop/fast_fwd.yaml.)
+  python3 scripts/plot_stop.py --run "LABEL=OUT_DIR[@SEED]" [--run ...] [--seed 0] [--t0 17] [--t1 22]
+      [--axis vx|vy] [--title TEXT] --out PNG
+(OUT_DIR: pmg_policy_sil --out, e.g. with --commands training/results/fidelity/fast20s_ft2/stop/fast_fwd.yaml;
+@SEED: that run's seed instead of --seed.)
 """
 import argparse
 import csv
@@ -19,11 +22,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def series(path, t0, t1):
-    cols = {k: [] for k in ("t", "vx_cmd", "vx_fb", "vx", "vx_est", "pitch")}
+def series(path, t0, t1, axis):
+    keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", "pitch" if axis == "vx" else "roll")
+    cols = {k: [] for k in keys}
     for row in csv.DictReader(open(path)):
         t = float(row["t"])
-        if t < t0 or t > t1:
+        if t < t0 or t > t1 or row.get("episode", "0") != "0":
             continue
         for k in cols:
             v = row[k]
@@ -37,29 +41,41 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--t0", type=float, default=17.0)
     ap.add_argument("--t1", type=float, default=22.0)
+    ap.add_argument("--axis", choices=("vx", "vy"), default="vx")
+    ap.add_argument("--title", default="Stopping from 1.0 m/s")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
+    v, att = a.axis, ("pitch" if a.axis == "vx" else "roll")
     runs = []
     for item in a.run:
         label, sep, d = item.partition("=")
         if not sep:
-            raise SystemExit(f"--run {item!r}: expected LABEL=OUT_DIR")
-        path = os.path.join(d, f"seed{a.seed}.csv")
+            raise SystemExit(f"--run {item!r}: expected LABEL=OUT_DIR[@SEED]")
+        seed = a.seed
+        if "@" in d:
+            d, _, seed_text = d.rpartition("@")
+            try:
+                seed = int(seed_text)
+            except ValueError:
+                raise SystemExit(f"--run {item!r}: SEED {seed_text!r} is not an integer")
+        path = os.path.join(d, f"seed{seed}.csv")
         if not os.path.exists(path):
-            raise SystemExit(f"{path}: no such file (pmg_policy_sil --out with seed {a.seed})")
+            raise SystemExit(f"{path}: no such file (pmg_policy_sil --out with seed {seed})")
         fall = None
         for r in json.load(open(os.path.join(d, "summary.json")))["runs"]:
-            if r["seed"] == a.seed and r["fell"]:
+            if r["seed"] == seed and r["fell"]:
                 fall = r["fall_time_s"]
-        runs.append((label, series(path, a.t0, a.t1), fall))
+        runs.append((label, seed, series(path, a.t0, a.t1, v), fall))
+    one_seed = all(seed == a.seed for _, seed, _, _ in runs)
+    runs = [(label if one_seed else f"{label}, seed {seed}", s, fall) for label, seed, s, fall in runs]
     fig, ax = plt.subplots(2, len(runs), figsize=(4.2 * len(runs), 5.6), sharex=True, sharey="row", squeeze=False)
     for j, (label, s, fall) in enumerate(runs):
         top, bottom = ax[0][j], ax[1][j]
-        top.plot(s["t"], s["vx_cmd"], "k--", lw=1.2, label="command u")
-        top.plot(s["t"], s["vx_fb"], color="tab:orange", lw=1.2, label="to the generator u_fb")
-        top.plot(s["t"], s["vx"], color="tab:blue", lw=1.0, label="achieved")
-        top.plot(s["t"], s["vx_est"], color="tab:green", lw=0.8, alpha=0.7, label="estimate")
-        bottom.plot(s["t"], s["pitch"], color="tab:red", lw=1.0)
+        top.plot(s["t"], s[f"{v}_cmd"], "k--", lw=1.2, label="command u")
+        top.plot(s["t"], s[f"{v}_fb"], color="tab:orange", lw=1.2, label="to the generator u_fb")
+        top.plot(s["t"], s[v], color="tab:blue", lw=1.0, label="achieved")
+        top.plot(s["t"], s[f"{v}_est"], color="tab:green", lw=0.8, alpha=0.7, label="estimate")
+        bottom.plot(s["t"], s[att], color="tab:red", lw=1.0)
         title = label + (f"\nfell at {fall:.1f} s" if fall is not None else "\nstays up")
         top.set_title(title, fontsize=10)
         for axis in (top, bottom):
@@ -67,10 +83,10 @@ def main():
             if fall is not None:
                 axis.axvline(fall, color="red", lw=0.8, ls=":")
         bottom.set_xlabel("t [s]")
-    ax[0][0].set_ylabel("v_x [m/s] (heading frame)")
-    ax[1][0].set_ylabel("torso pitch [rad]")
-    ax[0][0].legend(fontsize=8, loc="lower left")
-    fig.suptitle(f"Stopping from 1.0 m/s, seed {a.seed}", fontsize=11)
+    ax[0][0].set_ylabel(f"v_{v[1]} [m/s] (heading frame)")
+    ax[1][0].set_ylabel(f"torso {att} [rad]")
+    ax[0][0].legend(fontsize=8, loc="lower left" if v == "vx" else "upper left")
+    fig.suptitle(f"{a.title}, seed {a.seed}" if one_seed else a.title, fontsize=11)
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
     print(f"wrote {a.out}")
