@@ -8,7 +8,9 @@ segment and over seeds; written by `pmg_policy_sil`) and prints, per commanded v
 segments whose achieved value is within the band
     |achieved - command| <= max(0.15 |command|, tol),  tol = 0.05 m/s (v_x, v_y), 0.08 rad/s (omega)
 (issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the posture segments
-against pitch / roll within 0.03 rad and height within 0.015 m, the torso roll in the side-steps
+against pitch / roll within 0.03 rad and height within 0.015 m, for each missed velocity segment
+the share of its window in which the velocity feedback was held or decayed (when the summary has
+it), the torso roll in the side-steps
 and, in every segment, the torso pitch or roll that it does not command (cross-coupling, target
 <= 0.05 rad). Frames: commands and achieved velocities in the robot's
 heading frame, as pmg_policy_sil writes them. Exit status 2 on a file without `segments`.
@@ -35,6 +37,7 @@ def score(path):
     segs = [s for s in summary["segments"] if s.get("achieved")]
     print(f"== {path}")
     total_in = total = 0
+    missed = {}
     for axis, tol in VEL_ABS.items():
         hit, miss = [], []
         for s in segs:
@@ -42,10 +45,19 @@ def score(path):
             if abs(cmd) < 1e-9:
                 continue
             (hit if in_band(cmd, ach, tol) else miss).append(f"{s['name']} ({ach:+.3f} of {cmd:+.3f})")
+            if not in_band(cmd, ach, tol):
+                missed[s["name"]] = s
         total_in += len(hit)
         total += len(hit) + len(miss)
         print(f"{axis}: {len(hit)}/{len(hit) + len(miss)} in band; misses: {', '.join(miss) or 'none'}")
     print(f"velocity segments in band: {total_in}/{total}")
+    # Where the velocity feedback was on (pmg_policy_sil's feedback_*_fraction), how much of each
+    # missed segment's window it could not integrate: held (leg odometry rejected) or decayed (tilt).
+    fb = [f"{name} held {s['feedback_held_fraction']:.0%} decayed {s['feedback_decayed_fraction']:.0%}"
+          for name, s in missed.items() if s.get("feedback_held_fraction") is not None
+          and s.get("feedback_decayed_fraction") is not None]
+    if fb:
+        print(f"velocity feedback in the missed segments (share of the window not integrated): {', '.join(fb)}")
     posture_miss = []
     standing = neutral_height(summary["segments"])
     for s in segs:

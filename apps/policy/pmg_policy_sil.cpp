@@ -50,6 +50,8 @@
 //              --crouched-envelope off drops commands.crouched_height)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
+//   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
+//              velocity feedback did not integrate: leg odometry rejected / pelvis tilted (null when off)
 //   ratio, reference_ratio   achieved/command and reference/command for vx, vy, wz where
 //              |command| >= 0.05 (m/s or rad/s), else null
 // printed as a table and written to summary.json "segments" (per seed under runs[k].segments).
@@ -127,6 +129,7 @@ struct SegmentSeed {
   AxisMeans achieved, reference, u_prime, feedback, estimate;
   long ticks = 0;         // ticks in the window
   long stance_ticks = 0;  // of which the reference had a stance foot
+  long fb_held = 0, fb_decayed = 0;  // of which the velocity feedback held (odometry rejected) / decayed (tilt)
   double first_t = kNaN, last_t = kNaN;  // first and last tick in the window [s]
   bool fell = false;      // the robot fell during this segment
 };
@@ -381,6 +384,7 @@ int main(int argc, char** argv) {
         }
         std::atomic<bool> stop{false};
         double fall_time = -1;
+        std::uint64_t prev_held = 0, prev_decayed = 0;  // the velocity feedback's counters at the last tick
         const auto observe = [&](double t_local, const pmg::TickStatus& status, std::size_t local_segment) {
           const double t = t_local + offset;  // script time
           // the script's segment (npos: the stand before a restart)
@@ -467,6 +471,12 @@ int main(int argc, char** argv) {
               est[5] = pf->measuredHeight();
             }
           }
+          const pmg::VelocityFeedback* vfb = controller.velocityFeedback();
+          const std::uint64_t fb_held = vfb ? vfb->heldTicks() : 0, fb_decayed = vfb ? vfb->decayedTicks() : 0;
+          const long held_now = static_cast<long>(fb_held - std::min(fb_held, prev_held));
+          const long decayed_now = static_cast<long>(fb_decayed - std::min(fb_decayed, prev_decayed));
+          prev_held = fb_held;
+          prev_decayed = fb_decayed;
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];
             if (fallen) ss.fell = true;
@@ -475,6 +485,8 @@ int main(int argc, char** argv) {
               if (ss.ticks++ == 0) ss.first_t = t;
               ss.last_t = t;
               if (std::isfinite(ref[0])) ++ss.stance_ticks;
+              ss.fb_held += held_now;
+              ss.fb_decayed += decayed_now;
               for (int i = 0; i < kAxes; ++i) {
                 ss.achieved.add(i, ach[static_cast<std::size_t>(i)]);
                 ss.reference.add(i, ref[static_cast<std::size_t>(i)]);
@@ -504,9 +516,8 @@ int main(int argc, char** argv) {
           for (int i = 0; i < 3; ++i) csv << ',' << fb[static_cast<std::size_t>(i)];
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << fb[3] << ',' << fb[4];
-          const pmg::VelocityFeedback* vfb = controller.velocityFeedback();
-          csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << ','
-              << (vfb ? vfb->heldTicks() : 0) << ',' << (vfb ? vfb->decayedTicks() : 0) << '\n';
+          csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << ',' << fb_held << ',' << fb_decayed
+              << '\n';
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
             for (int b = 1; b < m->nbody; ++b)
@@ -553,6 +564,7 @@ int main(int argc, char** argv) {
     struct SegmentResult {
       Axes achieved, reference, u_prime, feedback, estimate;
       int seeds = 0, fallen = 0;
+      long ticks = 0, fb_held = 0, fb_decayed = 0;  // over the seeds that covered the window
     };
     std::vector<SegmentResult> seg_results(windows.size());
     for (std::size_t k = 0; k < windows.size(); ++k) {
@@ -569,6 +581,9 @@ int main(int argc, char** argv) {
           continue;
         }
         ++res.seeds;
+        res.ticks += ss.ticks;
+        res.fb_held += ss.fb_held;
+        res.fb_decayed += ss.fb_decayed;
         const Axes ma = ss.achieved.mean(), mr = ss.reference.mean(), mu = ss.u_prime.mean();
         const Axes mf = ss.feedback.mean(), me = ss.estimate.mean();
         for (int i = 0; i < kAxes; ++i) {
@@ -642,6 +657,7 @@ int main(int argc, char** argv) {
        << ", \"pitch\": " << acc[3] / S << ", \"height\": " << acc[4] / S << ", \"foot_slip\": " << acc[5] / S
        << ", \"falls\": " << falls << "}, \"segment_window\": 0.6, \"ratio_min_command\": " << kRatioMinCommand
        << ", \"segments\": [";
+    const bool fb_on = base.velocity_feedback.enabled;
     for (std::size_t k = 0; k < windows.size(); ++k) {
       const SegmentWindow& w = windows[k];
       const SegmentResult& res = seg_results[k];
@@ -650,7 +666,10 @@ int main(int argc, char** argv) {
          << "], \"seeds\": " << res.seeds << ", \"fallen\": " << res.fallen << ", \"command\": " << jaxes(w.command)
          << ", \"reference\": " << jaxes(res.reference) << ", \"achieved\": " << jaxes(res.achieved)
          << ", \"u_prime\": " << jaxes(res.u_prime) << ", \"u_feedback\": " << jaxes(res.feedback)
-         << ", \"estimate\": " << jaxes(res.estimate) << ", \"ratio\": " << jaxes(ratios(res.achieved, w.command), 3)
+         << ", \"estimate\": " << jaxes(res.estimate)
+         << ", \"feedback_held_fraction\": " << jnum(fb_on && res.ticks > 0 ? static_cast<double>(res.fb_held) / res.ticks : kNaN)
+         << ", \"feedback_decayed_fraction\": " << jnum(fb_on && res.ticks > 0 ? static_cast<double>(res.fb_decayed) / res.ticks : kNaN)
+         << ", \"ratio\": " << jaxes(ratios(res.achieved, w.command), 3)
          << ", \"reference_ratio\": " << jaxes(ratios(res.reference, w.command), 3) << "}";
     }
     js << "]}\n";

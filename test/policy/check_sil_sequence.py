@@ -25,7 +25,8 @@ import yaml
 
 AXES = ["vx", "vy", "wz", "pitch", "roll", "height"]
 SEGMENT_KEYS = {"name", "t_begin", "t_end", "window", "seeds", "fallen", "command", "reference", "achieved",
-                "u_prime", "u_feedback", "estimate", "ratio", "reference_ratio"}
+                "u_prime", "u_feedback", "estimate", "ratio", "reference_ratio", "feedback_held_fraction",
+                "feedback_decayed_fraction"}
 
 BOUNDS = {"lin_vel": 0.18, "yaw_vel": 0.25, "roll": 0.07, "pitch": 0.08, "height": 0.012}
 
@@ -63,6 +64,11 @@ def check_segments(out, summary, seeds):
         checks[f"{name}: keys"] = good
         if not good:
             continue
+        # The share of the window the velocity feedback did not integrate: a fraction when it is on, null when off.
+        fractions = (s["feedback_held_fraction"], s["feedback_decayed_fraction"])
+        checks[f"{name}: feedback held/decayed fractions"] = (
+            all(isinstance(x, (int, float)) and 0.0 <= x <= 1.0 for x in fractions) if summary["velocity_feedback"]
+            else all(x is None for x in fractions))
         checks[f"{name}: script's name, time, command"] = (
             name == sc["name"] and abs(s["t_begin"] - sc["t"]) < 1e-9 and
             all(abs(s["command"][a] - sc[a]) < 1e-9 for a in AXES))

@@ -2,8 +2,9 @@
 """Tests scripts/segment_band.py (ctest segment_band_scores_a_known_summary, label unit) on a
 synthetic pmg_policy_sil summary whose misses are known: backward at 80 % (outside +-15 %), forward
 at 96 % (inside), a crouch 20 mm high (outside 0.015 m), a side-step rolling 0.07 rad and a bent
-walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target, and one seed
-fallen in the backward walk (named with the segment).
+walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target, one seed
+fallen in the backward walk (named with the segment), and the velocity feedback held for 25 % and
+decayed for 40 % of the backward walk's window (named with the missed segment).
 Usage: test_segment_band.py
 """
 import json
@@ -25,7 +26,8 @@ def main():
     summary = {"segments": [
         seg("stand", {}, {}),
         seg("fwd", {"vx": 0.5}, {"vx": 0.48}),
-        {**seg("back", {"vx": -0.5}, {"vx": -0.40}), "fallen": 1},
+        {**seg("back", {"vx": -0.5}, {"vx": -0.40}), "fallen": 1, "feedback_held_fraction": 0.25,
+         "feedback_decayed_fraction": 0.4},
         seg("left", {"vy": 0.3}, {"vy": 0.29, "roll": -0.07}),
         seg("crouch", {"height": 0.62}, {"height": 0.64}),
         seg("bent_walk", {"vx": 0.3, "pitch": 0.25}, {"vx": 0.3, "pitch": 0.25, "roll": 0.06}),
@@ -46,6 +48,7 @@ def main():
         "cross-coupling beyond 0.05 rad (pitch/roll not commanded, every segment; largest 0.070): "
         "left roll -0.070, bent_walk roll +0.060",
         "seeds fallen (summed over segments): 1; in back 1",
+        "velocity feedback in the missed segments (share of the window not integrated): back held 25% decayed 40%",
     ]
     missing = [e for e in expect if e not in out]
     for e in missing:
