@@ -44,8 +44,10 @@ def score(path):
             cmd, ach = s["command"][axis], s["achieved"][axis]
             if abs(cmd) < 1e-9:
                 continue
-            (hit if in_band(cmd, ach, tol) else miss).append(f"{s['name']} ({ach:+.3f} of {cmd:+.3f})")
-            if not in_band(cmd, ach, tol):
+            if in_band(cmd, ach, tol):
+                hit.append(s["name"])
+            else:
+                miss.append(f"{s['name']} ({ach:+.3f} of {cmd:+.3f})")
                 missed[s["name"]] = s
         total_in += len(hit)
         total += len(hit) + len(miss)
