@@ -214,6 +214,11 @@ def parse_args(argv=None):
     ap.add_argument("--p-stop", type=float, default=None, metavar="P",
                     help="probability that a command drawn after a walking one stands still (EnvConfig.p_stop, "
                          "default 0: stops from a fast walk are rare)")
+    ap.add_argument("--stop-keeps-posture", type=float, default=None, metavar="P",
+                    help="probability that a stop (--p-stop) keeps the walking goal's posture, so the robot stops "
+                         "where it is crouched or bent (EnvConfig.p_stop_keep_posture, default 0: drawn anew)")
+    ap.add_argument("--push-vel", default=None, metavar="LO,HI",
+                    help="range of the pushes' horizontal velocity change [m/s] (EnvConfig.push_vel, default 0,0.4)")
     ap.add_argument("--p-posture-walk", type=float, default=None, metavar="P",
                     help="probability that a walking command also commands a posture, so walking crouched, bent or "
                          "leaning (EnvConfig.p_posture_walk, default 0.4)")
@@ -247,6 +252,16 @@ def parse_args(argv=None):
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
     if args.p_stop is not None and not 0.0 <= args.p_stop <= 1.0:
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
+    if args.stop_keeps_posture is not None and not 0.0 <= args.stop_keeps_posture <= 1.0:
+        ap.error(f"--stop-keeps-posture = {args.stop_keeps_posture}: expected in [0, 1]")
+    if args.push_vel is not None:
+        try:
+            lo, hi = (float(x) for x in args.push_vel.split(","))
+        except ValueError:
+            lo = hi = math.nan
+        if not 0.0 <= lo <= hi <= 2.0:
+            ap.error(f"--push-vel = {args.push_vel}: expected LO,HI with 0 <= LO <= HI <= 2 m/s")
+        args.push_vel = (lo, hi)
     if args.p_posture_walk is not None and not 0.0 <= args.p_posture_walk <= 1.0:
         ap.error(f"--p-posture-walk = {args.p_posture_walk}: expected in [0, 1]")
     if args.p_combined is not None and not 0.0 <= args.p_combined <= 0.6:
@@ -394,6 +409,12 @@ def main(argv=None):
     if args.p_stop is not None:
         cfg = dataclasses.replace(cfg, p_stop=args.p_stop)
         log("p_stop:", cfg.p_stop)
+    if args.stop_keeps_posture is not None:
+        cfg = dataclasses.replace(cfg, p_stop_keep_posture=args.stop_keeps_posture)
+        log("p_stop_keep_posture:", cfg.p_stop_keep_posture)
+    if args.push_vel is not None:
+        cfg = dataclasses.replace(cfg, push_vel=args.push_vel)
+        log("push_vel:", cfg.push_vel)
     if args.p_posture_walk is not None:
         cfg = dataclasses.replace(cfg, p_posture_walk=args.p_posture_walk)
         log("p_posture_walk:", cfg.p_posture_walk)

@@ -263,6 +263,10 @@ class EnvConfig:
     # probability (its posture drawn as usual). 0 (the default, as every policy so far): about 20 %
     # of the draws stand, so a stop from a fast walk (>= 0.8 m/s) is rare (about 1 % of the segment changes).
     p_stop: float = 0.0
+    # A stop keeps the walking goal's posture with this probability (else its posture is drawn as
+    # usual). 0 (the default, as every policy so far): a stop at the same crouch, the user letting go
+    # of the stick while crouched, is rare, about 1 in 3 stops from a crouched walk.
+    p_stop_keep_posture: float = 0.0
     p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
     p_posture_stand: float = 0.75  # posture commanded while standing
     p_posture_axis: float = 0.6    # each posture axis set in a commanded posture (at least one)
@@ -899,7 +903,10 @@ class G1PmgEnv(Env):
         if c.p_stop > 0:
             walked = jnp.any(info["command_goal"][:3] != 0.0)
             stop = jnp.logical_and(walked, jax.random.uniform(jax.random.fold_in(k_cmd, 7)) < c.p_stop)
-            goal = jnp.where(stop, goal.at[:3].set(0.0), goal)
+            keep = jax.random.uniform(jax.random.fold_in(k_cmd, 8)) < c.p_stop_keep_posture
+            stopped = goal.at[:3].set(0.0)
+            stopped = jnp.where(keep, stopped.at[3:].set(info["command_goal"][3:]), stopped)
+            goal = jnp.where(stop, stopped, goal)
         info["command_goal"] = jnp.where(resample, goal, info["command_goal"])
         info["command"] = self._shape_command(info["command"], info["command_goal"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])

@@ -46,8 +46,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 1d. Command slew (EnvConfig.command_slew, in 1c's env): every step the command the generator, the
    observation and the rewards get moves towards the drawn goal by exactly the slew-limited step
    (max_accel [m/s^2, rad/s^2] and posture/height rates x dt), and the goals are redrawn per segment.
-1e. Stops (EnvConfig.p_stop = 1, in 1c's env): every goal drawn after a walking goal has zero
-   velocity.
+1e. Stops (EnvConfig.p_stop = 1, p_stop_keep_posture = 1, in 1c's env): every goal drawn after a
+   walking goal has zero velocity and keeps the walking goal's posture (pitch, roll, height).
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -281,7 +281,7 @@ def env_checks(check, env, n_envs, n_steps):
 # 1c-1e: hand forces on both teleoperated arms, 25-step segments, command slew, stops (pushes as in
 # training: the first comes after push_interval, 4 s at least, beyond these episodes).
 HAND_FORCE_CFG = dict(p_hand_force=1.0, p_teleop=1.0, p_teleop_arm=1.0, command_resample=25, command_slew=True,
-                      p_stop=1.0)
+                      p_stop=1.0, p_stop_keep_posture=1.0)
 CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
 CAL_KNEE_UNCERTAINTY = {"kp_scale": 0.02, "delay_s": 0.0004, "fc_Nm": 0.001}  # pmg_calib_joints-style
 CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
@@ -536,7 +536,7 @@ def hand_force_checks(check, env, reset, step, n_steps=50):
         goals.add(tuple(np.round(goal, 4)))
         if int(st.info["step"]) % c.command_resample == 0 and np.any(goal_before[:3] != 0.0):
             stops += 1
-            stop_ok &= bool(np.all(goal[:3] == 0.0))
+            stop_ok &= bool(np.all(goal[:3] == 0.0) and np.all(goal[3:] == goal_before[3:]))
         twin_free &= bool(np.all(np.asarray(st0.pipeline_state.xfrc_applied) == 0.0))
         hf = np.asarray(st.info["hf"], np.float64)
         xf = np.asarray(st.pipeline_state.xfrc_applied, np.float64)
@@ -553,7 +553,8 @@ def hand_force_checks(check, env, reset, step, n_steps=50):
           f"command slew: command = command + clip(goal - command, +-rate dt) every step (max |diff| {cmd_err:.1e}), "
           f"largest step {cmd_moved:.4f} <= rate dt {np.round(rate, 4).tolist()}, {len(goals)} goals drawn")
     check(stops >= 1 and stop_ok,
-          f"stops (p_stop = 1): {stops} resample(s) after a walking goal, each new goal's velocity zero: {stop_ok}")
+          f"stops (p_stop = 1, p_stop_keep_posture = 1): {stops} resample(s) after a walking goal, each new goal's "
+          f"velocity zero and its posture the walking goal's: {stop_ok}")
     check(applied_ok and largest > 1.0,
           f"hand forces: xfrc_applied on the two wrist_yaw_link bodies = the env's applied force (largest "
           f"{largest:.1f} N after {n_steps} steps), zero torque, zero on every other body")

@@ -3,7 +3,8 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --p-stop and --p-posture-walk parse and a value outside [0, 1] is refused,
+--command-slew is off unless given; --p-stop, --stop-keeps-posture and --p-posture-walk parse and a value outside
+[0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
 and --p-combined parses and a value outside [0, 0.6] is refused;
 --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
@@ -26,6 +27,10 @@ if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-
     failures.append("--command-slew: off by default, on with the flag")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
     failures.append("--p-stop 0.5 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--stop-keeps-posture", "0.6"]).stop_keeps_posture != 0.6:
+    failures.append("--stop-keeps-posture 0.6 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--push-vel", "0.1,0.6"]).push_vel != (0.1, 0.6):
+    failures.append("--push-vel 0.1,0.6 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-posture-walk", "0.7"]).p_posture_walk != 0.7:
     failures.append("--p-posture-walk 0.7 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-combined", "0.5"]).p_combined != 0.5:
@@ -34,6 +39,13 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_s
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-stop", "nan"], "--p-stop"),
+                  (["--stop-keeps-posture", "1.2"], "--stop-keeps-posture"),
+                  (["--stop-keeps-posture", "nan"], "--stop-keeps-posture"),
+                  (["--push-vel", "0.6,0.1"], "--push-vel"),
+                  (["--push-vel", "0.4"], "--push-vel"),
+                  (["--push-vel", "0,0.4,1"], "--push-vel"),
+                  (["--push-vel", "-0.1,0.4"], "--push-vel"),
+                  (["--push-vel", "0,nan"], "--push-vel"),
                   (["--p-posture-walk", "-0.1"], "--p-posture-walk"),
                   (["--p-posture-walk", "nan"], "--p-posture-walk"),
                   (["--p-combined", "0.7"], "--p-combined"),
