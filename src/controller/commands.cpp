@@ -37,6 +37,12 @@ std::string CommandLimits::validate() const {
       if (!(finitePositive(crouched_max_velocity[i]) && crouched_max_velocity[i] <= max_velocity[i]))
         return "commands.crouched_max_velocity: expected each in (0, max_velocity]";
   }
+  if (!(std::isfinite(walking_min_height) && (walking_min_height == 0.0 || (walking_min_height >= height_range[0] &&
+                                                                              walking_min_height <= standing_height))))
+    return "commands.walking_min_height: expected 0 (off) or a height in [" + std::to_string(height_range[0]) + ", " +
+           std::to_string(standing_height) + "] m";
+  if (!(std::isfinite(walking_min_height_hold_s) && walking_min_height_hold_s >= 0.0 && walking_min_height_hold_s <= 10.0))
+    return "commands.walking_min_height_hold_s: expected in [0, 10] s";
   if (!finitePositive(max_reference_speed) || max_reference_speed > 50)
     return "commands.max_reference_speed: expected in (0, 50] rad/s";
   return {};
@@ -60,6 +66,7 @@ void CommandShaper::reset() noexcept {
   target_ = {};
   posture_ = {0.0, 0.0, limits_.standing_height};
   posture_target_ = posture_;
+  last_walking_time_ = -1e9;
 }
 
 void CommandShaper::update(const CommandSample& s, double now, double dt) noexcept {
@@ -96,6 +103,18 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
     ++counters_.stale_ticks;
     target_ = {};
   }
+  // Walking height floor (CommandLimits::walking_min_height): walking, and for the hold after it,
+  // the height goal is at least the floor; the height slew below keeps the change continuous.
+  double height_goal = posture_target_.height;
+  if (limits_.walking_min_height > 0.0) {
+    const bool walking = target_.vx != 0.0 || target_.vy != 0.0 || target_.wz != 0.0 || velocity_.vx != 0.0 ||
+                         velocity_.vy != 0.0 || velocity_.wz != 0.0;
+    if (walking) last_walking_time_ = now;
+    if (now - last_walking_time_ <= limits_.walking_min_height_hold_s && height_goal < limits_.walking_min_height) {
+      height_goal = limits_.walking_min_height;
+      ++counters_.height_floor_ticks;
+    }
+  }
   // Crouched velocity envelope (CommandLimits::crouched_height), on the shaped height.
   VelocityCommand goal = target_;
   if (limits_.crouched_height > 0.0) {
@@ -121,7 +140,7 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
   velocity_.wz = slew(velocity_.wz, goal.wz, limits_.max_acceleration[2] * dt);
   posture_.pitch = slew(posture_.pitch, posture_target_.pitch, limits_.posture_rate * dt);
   posture_.roll = slew(posture_.roll, posture_target_.roll, limits_.posture_rate * dt);
-  posture_.height = slew(posture_.height, posture_target_.height, limits_.height_rate * dt);
+  posture_.height = slew(posture_.height, height_goal, limits_.height_rate * dt);
 }
 
 void ReferenceRateLimiter::reset(const double* q, int n) noexcept {

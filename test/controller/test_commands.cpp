@@ -185,6 +185,60 @@ TEST(CommandLimits, ValidateNamesTheField) {
   l.crouched_height = 0.62;
   l.crouched_max_velocity = {1.5, 0.3, 0.6};  // beyond max_velocity
   EXPECT_NE(l.validate().find("commands.crouched_max_velocity"), std::string::npos);
+  for (double h : {0.3, 0.8, std::nan(""), -0.1}) {  // below height_range, above standing, NaN, negative
+    l = CommandLimits{};
+    l.walking_min_height = h;
+    EXPECT_NE(l.validate().find("commands.walking_min_height:"), std::string::npos) << h;
+  }
+  l = CommandLimits{};
+  l.walking_min_height = 0.66;
+  EXPECT_EQ(l.validate(), "");
+  l.walking_min_height_hold_s = 11.0;
+  EXPECT_NE(l.validate().find("commands.walking_min_height_hold_s"), std::string::npos);
+}
+
+// The walking height floor (CommandLimits::walking_min_height): crouched to 0.62 m the robot walks at
+// the floor, stands at the floor for the hold after the stop, then crouches to 0.62 m; a height above
+// the floor and a crouch without walking pass; the shaped height never steps.
+TEST(CommandShaper, WalkingHeightFloorRaisesACrouchedWalkAndHoldsAfterTheStop) {
+  CommandLimits limits;
+  limits.walking_min_height = 0.66;
+  limits.walking_min_height_hold_s = 1.5;
+  CommandShaper shaper(limits);
+  const double dt = 0.01, step = limits.height_rate * dt;
+  double t = 0.0, prev_h = shaper.posture().height, largest_step = 0.0;
+  CommandSample s;
+  const auto run = [&](double vx, std::optional<double> h, double seconds) {
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / dt)); ++k, t += dt) {
+      s.command.vx = vx;
+      s.command.height = h;
+      s.posture_time = s.velocity_time = t;
+      shaper.update(s, t, dt);
+      largest_step = std::max(largest_step, std::fabs(shaper.posture().height - prev_h));
+      prev_h = shaper.posture().height;
+    }
+  };
+  run(0.0, 0.62, 3.0);  // a crouch without walking: as deep as commanded
+  EXPECT_NEAR(shaper.posture().height, 0.62, 1e-12);
+  EXPECT_EQ(shaper.counters().height_floor_ticks, 0u);
+  run(0.3, 0.62, 3.0);  // walking crouched: raised to the floor
+  EXPECT_NEAR(shaper.posture().height, 0.66, 1e-12);
+  EXPECT_NEAR(shaper.velocity().vx, 0.3, 1e-12);
+  EXPECT_GT(shaper.counters().height_floor_ticks, 0u);
+  // Stop: the velocity slews to zero in 0.3 s; the floor holds 1.5 s after that.
+  double lowest_in_hold = 1.0;
+  const double stop_t = t;
+  while (t < stop_t + 0.3 + 1.5 - 0.05) {
+    run(0.0, 0.62, dt);
+    lowest_in_hold = std::min(lowest_in_hold, shaper.posture().height);
+  }
+  EXPECT_NEAR(shaper.velocity().vx, 0.0, 1e-12);
+  EXPECT_NEAR(lowest_in_hold, 0.66, 1e-12) << "held at the floor after the stop";
+  run(0.0, 0.62, 1.0);
+  EXPECT_NEAR(shaper.posture().height, 0.62, 1e-12) << "then crouched as commanded";
+  run(0.5, 0.70, 3.0);  // above the floor: unchanged
+  EXPECT_NEAR(shaper.posture().height, 0.70, 1e-12);
+  EXPECT_LE(largest_step, step + 1e-12) << "the shaped height never steps";
 }
 
 TEST(ReferenceRateLimiter, BoundsEveryJointsStep) {
