@@ -47,7 +47,8 @@
 //   u_feedback vx, vy, wz, pitch, roll (and height, when posture_feedback.height_ki > 0) after the
 //              velocity and posture feedback: what the generator got (the shaped command when off;
 //              --velocity-feedback / --posture-feedback on|off override the config;
-//              --crouched-envelope off drops commands.crouched_height)
+//              --crouched-envelope off drops commands.crouched_height, --walking-height-floor off
+//              commands.walking_min_height)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -237,6 +238,10 @@ int main(int argc, char** argv) {
   app.add_option("--crouched-envelope", crouched_envelope,
                  "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string walking_height_floor;
+  app.add_option("--walking-height-floor", walking_height_floor,
+                 "off: no walking height floor (commands.walking_min_height 0); default: the controller config's")
+      ->check(CLI::IsMember({"on", "off"}));
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -261,6 +266,9 @@ int main(int argc, char** argv) {
     if (crouched_envelope == "off") base.commands.crouched_height = 0.0;
     if (crouched_envelope == "on" && !(base.commands.crouched_height > 0.0))
       throw pmg::ConfigError(controller_path + ": --crouched-envelope on: commands.crouched_height is 0 (off) there");
+    if (walking_height_floor == "off") base.commands.walking_min_height = 0.0;
+    if (walking_height_floor == "on" && !(base.commands.walking_min_height > 0.0))
+      throw pmg::ConfigError(controller_path + ": --walking-height-floor on: commands.walking_min_height is 0 (off) there");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
