@@ -255,8 +255,10 @@ int main(int argc, char** argv) {
       limits = controller->commands;
       if (const pmg::StaticClip* squat = gen_model->staticClip(pmg::PostureAxis::kHeight)) limits.standing_height = squat->neutral;
       if (const std::string e = limits.validate(); !e.empty()) throw std::runtime_error(controller->source_file + ": " + e);
-      std::printf("product path: %s (commands shaped by its limits; crouched envelope %s)\n", controller_path.c_str(),
-                  limits.crouched_height > 0.0 ? "on" : "off");
+      char floor[32] = "off";
+      if (limits.walking_min_height > 0.0) std::snprintf(floor, sizeof floor, "%.3f m", limits.walking_min_height);
+      std::printf("product path: %s (commands shaped by its limits; crouched envelope %s; walking height floor %s)\n",
+                  controller_path.c_str(), limits.crouched_height > 0.0 ? "on" : "off", floor);
     }
     auto legs = LegModel::fromRobotConfig(robot);
     GcoOptions on = controller ? controller->gco : (gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config));
