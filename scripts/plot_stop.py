@@ -3,11 +3,12 @@
 
 One column per run, for one seed: top, the velocity along --axis (the shaped command u, the command
 the generator got u_fb, the achieved velocity and the estimate); bottom, the torso pitch (--axis vx)
-or roll (--axis vy). A fall ends the trace and is marked; with --restart-after-fall runs only the
-first episode is drawn.
+or roll (--axis vy); with --height a third row, the pelvis height (the script's command, the
+generator's base height, achieved). A fall ends the trace and is marked; with --restart-after-fall
+runs only the first episode is drawn.
 
   python3 scripts/plot_stop.py --run "LABEL=OUT_DIR[@SEED]" [--run ...] [--seed 0] [--t0 17] [--t1 22]
-      [--axis vx|vy] [--title TEXT] --out PNG
+      [--axis vx|vy] [--height] [--title TEXT] --out PNG
 (OUT_DIR: pmg_policy_sil --out, e.g. with --commands training/results/fidelity/fast20s_ft2/stop/fast_fwd.yaml;
 @SEED: that run's seed instead of --seed.)
 """
@@ -23,7 +24,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def series(path, t0, t1, axis):
-    keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", "pitch" if axis == "vx" else "roll")
+    keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", "pitch" if axis == "vx" else "roll",
+            "height_cmd", "height_ref", "height")
     cols = {k: [] for k in keys}
     for row in csv.DictReader(open(path)):
         t = float(row["t"])
@@ -42,6 +44,7 @@ def main():
     ap.add_argument("--t0", type=float, default=17.0)
     ap.add_argument("--t1", type=float, default=22.0)
     ap.add_argument("--axis", choices=("vx", "vy"), default="vx")
+    ap.add_argument("--height", action="store_true", help="a third row: the pelvis height")
     ap.add_argument("--title", default="Stopping from 1.0 m/s")
     ap.add_argument("--out", required=True)
     a = ap.parse_args()
@@ -68,7 +71,9 @@ def main():
         runs.append((label, seed, series(path, a.t0, a.t1, v), fall))
     one_seed = all(seed == a.seed for _, seed, _, _ in runs)
     runs = [(label if one_seed else f"{label}, seed {seed}", s, fall) for label, seed, s, fall in runs]
-    fig, ax = plt.subplots(2, len(runs), figsize=(4.2 * len(runs), 5.6), sharex=True, sharey="row", squeeze=False)
+    rows = 3 if a.height else 2
+    fig, ax = plt.subplots(rows, len(runs), figsize=(4.2 * len(runs), 2.8 * rows), sharex=True, sharey="row",
+                           squeeze=False)
     for j, (label, s, fall) in enumerate(runs):
         top, bottom = ax[0][j], ax[1][j]
         top.plot(s["t"], s[f"{v}_cmd"], "k--", lw=1.2, label="command u")
@@ -76,15 +81,24 @@ def main():
         top.plot(s["t"], s[v], color="tab:blue", lw=1.0, label="achieved")
         top.plot(s["t"], s[f"{v}_est"], color="tab:green", lw=0.8, alpha=0.7, label="estimate")
         bottom.plot(s["t"], s[att], color="tab:red", lw=1.0)
+        if a.height:
+            h = ax[2][j]
+            h.plot(s["t"], s["height_cmd"], "k--", lw=1.2, label="command")
+            h.plot(s["t"], s["height_ref"], color="tab:orange", lw=1.2, label="generator base height")
+            h.plot(s["t"], s["height"], color="tab:blue", lw=1.0, label="achieved")
+            bottom = h
         title = label + (f"\nfell at {fall:.1f} s" if fall is not None else "\nstays up")
         top.set_title(title, fontsize=10)
-        for axis in (top, bottom):
+        for axis in ax[:, j]:
             axis.grid(alpha=0.3)
             if fall is not None:
                 axis.axvline(fall, color="red", lw=0.8, ls=":")
         bottom.set_xlabel("t [s]")
     ax[0][0].set_ylabel(f"v_{v[1]} [m/s] (heading frame)")
     ax[1][0].set_ylabel(f"torso {att} [rad]")
+    if a.height:
+        ax[2][0].set_ylabel("pelvis height [m]")
+        ax[2][0].legend(fontsize=8, loc="upper left")
     ax[0][0].legend(fontsize=8, loc="lower left" if v == "vx" else "upper left")
     fig.suptitle(f"{a.title}, seed {a.seed}" if one_seed else a.title, fontsize=11)
     fig.tight_layout()
