@@ -406,21 +406,12 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
     if args.hand_forces is not None:
         cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
-    if args.p_stop is not None:
-        cfg = dataclasses.replace(cfg, p_stop=args.p_stop)
-        log("p_stop:", cfg.p_stop)
-    if args.stop_keeps_posture is not None:
-        cfg = dataclasses.replace(cfg, p_stop_keep_posture=args.stop_keeps_posture)
-        log("p_stop_keep_posture:", cfg.p_stop_keep_posture)
-    if args.push_vel is not None:
-        cfg = dataclasses.replace(cfg, push_vel=args.push_vel)
-        log("push_vel:", cfg.push_vel)
-    if args.p_posture_walk is not None:
-        cfg = dataclasses.replace(cfg, p_posture_walk=args.p_posture_walk)
-        log("p_posture_walk:", cfg.p_posture_walk)
-    if args.p_combined is not None:
-        cfg = dataclasses.replace(cfg, p_combined=args.p_combined)
-        log("p_combined:", cfg.p_combined)
+    # Command-mix and push overrides (flag -> EnvConfig field), logged as set.
+    for flag, field in (("p_stop", "p_stop"), ("stop_keeps_posture", "p_stop_keep_posture"), ("push_vel", "push_vel"),
+                        ("p_posture_walk", "p_posture_walk"), ("p_combined", "p_combined")):
+        if getattr(args, flag) is not None:
+            cfg = dataclasses.replace(cfg, **{field: getattr(args, flag)})
+            log(f"{field}:", getattr(cfg, field))
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
