@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/controller/commands.hpp"
@@ -225,13 +226,26 @@ TEST(CommandShaper, WalkingHeightFloorRaisesACrouchedWalkAndHoldsAfterTheStop) {
   EXPECT_NEAR(shaper.posture().height, 0.66, 1e-12);
   EXPECT_NEAR(shaper.velocity().vx, 0.3, 1e-12);
   EXPECT_GT(shaper.counters().height_floor_ticks, 0u);
-  // Stop: the velocity slews to zero in 0.3 s; the floor holds 1.5 s after that.
+  // Stop: the velocity slews to zero in 0.3 s; the floor holds 1.5 s after that. The shaper's tick
+  // runs on the 100 Hz loop: with the floor acting it allocates nothing.
   double lowest_in_hold = 1.0;
   const double stop_t = t;
-  while (t < stop_t + 0.3 + 1.5 - 0.05) {
-    run(0.0, 0.62, dt);
-    lowest_in_hold = std::min(lowest_in_hold, shaper.posture().height);
+  std::size_t allocations = 0;
+  {
+    test::AllocationGuard guard;
+    while (t < stop_t + 0.3 + 1.5 - 0.05) {
+      s.command.vx = 0.0;
+      s.command.height = 0.62;
+      s.posture_time = s.velocity_time = t;
+      shaper.update(s, t, dt);
+      largest_step = std::max(largest_step, std::fabs(shaper.posture().height - prev_h));
+      prev_h = shaper.posture().height;
+      lowest_in_hold = std::min(lowest_in_hold, shaper.posture().height);
+      t += dt;
+    }
+    allocations = guard.count();
   }
+  EXPECT_EQ(allocations, 0u);
   EXPECT_NEAR(shaper.velocity().vx, 0.0, 1e-12);
   EXPECT_NEAR(lowest_in_hold, 0.66, 1e-12) << "held at the floor after the stop";
   run(0.0, 0.62, 1.0);
