@@ -86,14 +86,13 @@ def main():
             h.plot(s["t"], s["height_cmd"], "k--", lw=1.2, label="command")
             h.plot(s["t"], s["height_ref"], color="tab:orange", lw=1.2, label="generator base height")
             h.plot(s["t"], s["height"], color="tab:blue", lw=1.0, label="achieved")
-            bottom = h
         title = label + (f"\nfell at {fall:.1f} s" if fall is not None else "\nstays up")
         top.set_title(title, fontsize=10)
         for axis in ax[:, j]:
             axis.grid(alpha=0.3)
             if fall is not None:
                 axis.axvline(fall, color="red", lw=0.8, ls=":")
-        bottom.set_xlabel("t [s]")
+        ax[-1][j].set_xlabel("t [s]")
     ax[0][0].set_ylabel(f"v_{v[1]} [m/s] (heading frame)")
     ax[1][0].set_ylabel(f"torso {att} [rad]")
     if a.height:

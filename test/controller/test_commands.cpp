@@ -234,14 +234,8 @@ TEST(CommandShaper, WalkingHeightFloorRaisesACrouchedWalkAndHoldsAfterTheStop) {
   {
     test::AllocationGuard guard;
     while (t < stop_t + 0.3 + 1.5 - 0.05) {
-      s.command.vx = 0.0;
-      s.command.height = 0.62;
-      s.posture_time = s.velocity_time = t;
-      shaper.update(s, t, dt);
-      largest_step = std::max(largest_step, std::fabs(shaper.posture().height - prev_h));
-      prev_h = shaper.posture().height;
+      run(0.0, 0.62, dt);
       lowest_in_hold = std::min(lowest_in_hold, shaper.posture().height);
-      t += dt;
     }
     allocations = guard.count();
   }

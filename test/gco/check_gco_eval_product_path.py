@@ -39,9 +39,9 @@ def run(extra, sub):
 def envelope_vx(controller_path, vx, height):
     """The shaped v_x of a single-axis command at a shaped height (CommandLimits::crouched_height docstring):
     s = (1 - f) |u| / M + f |u| / m(f), m(f) = M + f (m_crouched - M), f = (standing - h) / (standing - crouched)."""
-    cmd = yaml.safe_load(open(controller_path))["commands"]
-    clips = yaml.safe_load(open(controller_path))["clips"]
-    squat = yaml.safe_load(open(os.path.join(os.path.dirname(controller_path), clips, "squat.yaml")))
+    config = yaml.safe_load(open(controller_path))
+    cmd = config["commands"]
+    squat = yaml.safe_load(open(os.path.join(os.path.dirname(controller_path), config["clips"], "squat.yaml")))
     standing = float(squat["neutral"])
     h = max(height, float(cmd.get("walking_min_height", 0.0)))
     f = min(max((standing - h) / (standing - float(cmd["crouched_height"])), 0.0), 1.0)
