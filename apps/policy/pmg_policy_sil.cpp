@@ -230,6 +230,10 @@ int main(int argc, char** argv) {
   app.add_option("--velocity-feedback", velocity_feedback,
                  "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string feedforward;
+  app.add_option("--feedforward", feedforward,
+                 "command-response feed-forward (velocity_feedback.feedforward; default: the controller config's)")
+      ->check(CLI::IsMember({"on", "off"}));
   std::string posture_feedback;
   app.add_option("--posture-feedback", posture_feedback,
                  "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)")
@@ -262,6 +266,11 @@ int main(int argc, char** argv) {
     if (base.policy_file.empty()) throw pmg::ConfigError(controller_path + ": policy.model: missing (or give --model)");
     base.policy_native = native;
     if (!velocity_feedback.empty()) base.velocity_feedback.enabled = velocity_feedback == "on";
+    if (feedforward == "off") base.velocity_feedback.feedforward.enabled = false;
+    if (feedforward == "on") {
+      if (!base.velocity_feedback.enabled || !base.velocity_feedback.feedforward.enabled)
+        throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
+    }
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     if (crouched_envelope == "off") base.commands.crouched_height = 0.0;
     if (crouched_envelope == "on" && !(base.commands.crouched_height > 0.0))
@@ -634,6 +643,7 @@ int main(int argc, char** argv) {
     int falls = 0;
     js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
+       << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";

@@ -132,8 +132,43 @@ struct CommandsYaml {
   }
 };
 
+struct ResponseAxisYaml {
+  CommandResponseAxis a;
+  template <class A>
+  void Serialize(A* ar) {
+    ar->Visit("gain_positive", &a.gain_positive, "achieved / commanded for a positive command on this axis alone, 0.3..3");
+    ar->Visit("gain_negative", &a.gain_negative, "achieved / commanded for a negative command on this axis alone, 0.3..3");
+    ar->Visit("gain_per_magnitude", &a.gain_per_magnitude,
+              "change of that gain per unit |u_j| of v_x, v_y, w, -3..3; the axis's own entry 0");
+    ar->Visit("gain_per_command", &a.gain_per_command,
+              "change of that gain per unit u_j (signed) of v_x, v_y, w, -3..3; the axis's own entry 0");
+    ar->Visit("drift", &a.drift, "velocity on this axis per unit command on v_x, v_y, w, -1..1; the axis's own entry 0");
+  }
+};
+
+struct FeedforwardYaml {
+  CommandResponseModel m;
+  ResponseAxisYaml vx, vy, wz;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("enabled", &m.enabled, "command-response feed-forward in front of the integral correction");
+    a->Visit("vx", &vx, "response of v_x (scripts/fit_command_response.py writes this block)");
+    a->Visit("vy", &vy, "response of v_y");
+    a->Visit("wz", &wz, "response of the yaw rate w");
+    a->Visit("max_correction", &m.max_correction, "|u_ff - u| at most v_x, v_y [m/s], w [rad/s], each 0..1");
+    a->Visit("min_gain", &m.min_gain, "the inverse divides by at least this modelled gain, 0.3..1");
+    a->Visit("iterations", &m.iterations, "Gauss-Seidel sweeps of the inverse, 1..50");
+  }
+  CommandResponseModel model() const {
+    CommandResponseModel out = m;
+    out.axes = {vx.a, vy.a, wz.a};
+    return out;
+  }
+};
+
 struct VelocityFeedbackYaml {
   VelocityFeedbackConfig f;
+  FeedforwardYaml feedforward;
   template <class A>
   void Serialize(A* a) {
     a->Visit("enabled", &f.enabled, "integral correction of the velocity command on leg odometry");
@@ -152,6 +187,7 @@ struct VelocityFeedbackYaml {
     a->Visit("brake_ratio", &f.brake_ratio, "braking steps: gait floor at this share of the estimated v_x, v_y, [0, 1); 0 = off");
     a->Visit("brake_decel", &f.brake_decel, "the floor lets the reference decelerate at least this fast, (0, min(5, brake_rate)] m/s^2");
     a->Visit("brake_rate", &f.brake_rate, "largest change of the floor per second, (0, 10] m/s^2");
+    a->Visit("feedforward", &feedforward, "identified command response, inverted in front of the correction (docs/controller.md)");
   }
 };
 
@@ -342,6 +378,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.commands.standing_height = c.robot.standing_base_height;
   if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);
   c.velocity_feedback = y.velocity_feedback.f;
+  c.velocity_feedback.feedforward = y.velocity_feedback.feedforward.model();
   if (const std::string e = c.velocity_feedback.validate(); !e.empty()) fail("velocity_feedback", e);
   c.posture_feedback = y.posture_feedback.f;
   if (const std::string e = c.posture_feedback.validate(); !e.empty()) fail("posture_feedback", e);

@@ -32,6 +32,70 @@ Eigen::Matrix3d headingFromBody(const Eigen::Matrix3d& R_WB) noexcept {
 double tiltFromVertical(const Eigen::Matrix3d& R_WB) noexcept { return std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0)); }
 }  // namespace
 
+std::string CommandResponseModel::validate() const {
+  static const char* kName[3] = {"vx", "vy", "wz"};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const CommandResponseAxis& a = axes[i];
+    const std::string at = std::string(kName[i]) + ".";
+    if (!(a.gain_positive >= 0.3 && a.gain_positive <= 3.0)) return at + "gain_positive: expected 0.3..3";
+    if (!(a.gain_negative >= 0.3 && a.gain_negative <= 3.0)) return at + "gain_negative: expected 0.3..3";
+    for (std::size_t j = 0; j < 3; ++j) {
+      const std::string idx = "[" + std::to_string(j) + "]";
+      if (j == i) {
+        if (a.gain_per_magnitude[j] != 0.0) return at + "gain_per_magnitude" + idx + ": expected 0 (the axis itself)";
+        if (a.gain_per_command[j] != 0.0) return at + "gain_per_command" + idx + ": expected 0 (the axis itself)";
+        if (a.drift[j] != 0.0) return at + "drift" + idx + ": expected 0 (the axis itself)";
+        continue;
+      }
+      if (!(a.gain_per_magnitude[j] >= -3.0 && a.gain_per_magnitude[j] <= 3.0))
+        return at + "gain_per_magnitude" + idx + ": expected -3..3";
+      if (!(a.gain_per_command[j] >= -3.0 && a.gain_per_command[j] <= 3.0))
+        return at + "gain_per_command" + idx + ": expected -3..3";
+      if (!(a.drift[j] >= -1.0 && a.drift[j] <= 1.0)) return at + "drift" + idx + ": expected -1..1";
+    }
+    if (!(max_correction[i] >= 0.0 && max_correction[i] <= 1.0))
+      return "max_correction[" + std::to_string(i) + "]: expected 0..1 (m/s, rad/s)";
+  }
+  if (!(min_gain >= 0.3 && min_gain <= 1.0)) return "min_gain: expected 0.3..1";
+  if (iterations < 1 || iterations > 50) return "iterations: expected 1..50";
+  return {};
+}
+
+std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>& u) const noexcept {
+  std::array<double, 3> v{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const CommandResponseAxis& a = axes[i];
+    double gain = u[i] >= 0.0 ? a.gain_positive : a.gain_negative;
+    double drift = 0.0;
+    for (std::size_t j = 0; j < 3; ++j) {
+      if (j == i) continue;
+      gain += a.gain_per_magnitude[j] * std::fabs(u[j]) + a.gain_per_command[j] * u[j];
+      drift += a.drift[j] * u[j];
+    }
+    v[i] = gain * u[i] + drift;
+  }
+  return v;
+}
+
+std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& u) const noexcept {
+  std::array<double, 3> x = u;
+  for (int sweep = 0; sweep < iterations; ++sweep) {
+    for (std::size_t i = 0; i < 3; ++i) {
+      const CommandResponseAxis& a = axes[i];
+      double r = u[i];
+      double gain = 0.0;
+      for (std::size_t j = 0; j < 3; ++j) {
+        if (j == i) continue;
+        r -= a.drift[j] * x[j];
+        gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
+      }
+      gain += r >= 0.0 ? a.gain_positive : a.gain_negative;
+      x[i] = std::clamp(r / std::max(min_gain, gain), u[i] - max_correction[i], u[i] + max_correction[i]);
+    }
+  }
+  return x;
+}
+
 std::string VelocityFeedbackConfig::validate() const {
   static const char* kAxis[3] = {"v_x", "v_y", "yaw rate"};
   for (std::size_t i = 0; i < 3; ++i)
@@ -53,6 +117,7 @@ std::string VelocityFeedbackConfig::validate() const {
   if (!(brake_rate > 0.0 && brake_rate <= 10.0)) return "brake_rate: expected (0, 10] m/s^2";
   if (!(brake_decel > 0.0 && brake_decel <= std::min(5.0, brake_rate)))
     return "brake_decel: expected (0, min(5, brake_rate)] m/s^2";
+  if (const std::string e = feedforward.validate(); !e.empty()) return "feedforward." + e;
   return {};
 }
 
@@ -181,6 +246,7 @@ VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::sh
 
 void VelocityFeedback::reset() noexcept {
   c_ = {0.0, 0.0, 0.0};
+  u_ff_ = {0.0, 0.0, 0.0};
   u_anchor_ = {0.0, 0.0, 0.0};
   steady_ = {0.0, 0.0, 0.0};
   brake_ = {0.0, 0.0};
@@ -208,7 +274,11 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     ++held_ticks_;
   }
   const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
+  const std::array<double, 3> u_user{u.vx, u.vy, u.wz};
+  u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user) : u_user;
   for (std::size_t i = 0; i < 3; ++i) {
+    // The feed-forward stays inside the limits (a command already beyond them is passed on).
+    u_ff_[i] = std::clamp(u_ff_[i], std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));
     const double bound = config_.max_ratio * std::fabs(u[i]);
     double c = c_[i] * keep;
     if (std::fabs(u[i] - u_anchor_[i]) > std::max(config_.steady_band, 0.05 * std::fabs(u_anchor_[i]))) {
@@ -221,13 +291,13 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     if (est_.valid && !hold && !decay && settled) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
     c = std::clamp(c, -bound, bound);
     // Anti-windup: the correction never holds more than the limits let through.
-    const double limited = std::clamp(u[i] + c, std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));
-    c_[i] = limited - u[i];
+    const double limited = std::clamp(u_ff_[i] + c, std::min(lo_[i], u_ff_[i]), std::max(hi_[i], u_ff_[i]));
+    c_[i] = limited - u_ff_[i];
   }
   const VelocityCommand previous = u_fb_prev_;
-  u_fb_.vx = u.vx + c_[0];
-  u_fb_.vy = u.vy + c_[1];
-  u_fb_.wz = u.wz + c_[2];
+  u_fb_.vx = u_ff_[0] + c_[0];
+  u_fb_.vy = u_ff_[1] + c_[1];
+  u_fb_.wz = u_ff_[2] + c_[2];
   if (config_.brake_ratio > 0.0) {
     // Braking floor (VelocityFeedbackConfig::brake_ratio), per linear axis, as a magnitude f >= 0
     // along its direction s: the floor's direction is kept until it is back at zero.

@@ -588,6 +588,22 @@ std::vector<Case> allCases() {
       {"ctrl_velocity_feedback_brake_decel_above_rate", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_decel: 2.0\n  brake_rate: 1.0\n"; }),
        error({"velocity_feedback", "brake_decel", "brake_rate"})},
+      {"ctrl_velocity_feedback_feedforward_gain_out_of_range", Kind::kControllerConfig,
+       text([] {
+         return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    vy: {gain_positive: 5.0}\n";
+       }),
+       error({"velocity_feedback", "feedforward.vy.gain_positive", "0.3..3"})},
+      {"ctrl_velocity_feedback_feedforward_own_drift", Kind::kControllerConfig,
+       text([] {
+         return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    wz: {drift: [0.1, 0.0, 0.2]}\n";
+       }),
+       error({"velocity_feedback", "feedforward.wz.drift[2]", "the axis itself"})},
+      {"ctrl_velocity_feedback_feedforward_nan_correction", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    max_correction: [0.3, .nan, 0.4]\n"; }),
+       error({"feedforward.max_correction[1]", "finite"})},
+      {"ctrl_velocity_feedback_feedforward_typo_key", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    vx: {gain: 1.0}\n"; }),
+       error({"gain"})},
       {"ctrl_velocity_feedback_nan_band", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  stance_band_m: .nan\n"; }),
        error({"stance_band_m"})},

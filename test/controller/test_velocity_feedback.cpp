@@ -319,6 +319,120 @@ TEST(VelocityFeedback, BrakingFloorKeepsAGaitUnderARobotThatRunsOnAndStaysContin
   EXPECT_EQ(fb.brakeFloor()[1], 0.0);
 }
 
+// A response model of the kind scripts/fit_command_response.py fits: backward and sideways slower
+// than commanded, a turn that slows a side-step and a forward walk (more so when they point
+// opposite ways), a turn that drifts sideways.
+CommandResponseModel coupledModel() {
+  CommandResponseModel m;
+  m.enabled = true;
+  m.axes[0] = {0.95, 0.8, {0.0, 0.0, -0.25}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+  m.axes[1] = {0.9, 0.85, {-0.2, 0.0, -0.4}, {0.0, 0.0, 0.1}, {0.0, 0.0, 0.05}};
+  m.axes[2] = {0.9, 0.9, {-0.2, 0.0, 0.0}, {0.0, -0.15, 0.0}, {0.0, 0.0, 0.0}};
+  m.max_correction = {0.3, 0.25, 0.4};
+  m.iterations = 12;
+  return m;
+}
+
+TEST(CommandResponseModel, InverseAchievesTheCommandIsContinuousAndStandsStill) {
+  const CommandResponseModel m = coupledModel();
+  ASSERT_EQ(m.validate(), "");
+  const std::array<double, 3> zero = m.invert({0.0, 0.0, 0.0});
+  EXPECT_EQ(zero, (std::array<double, 3>{0.0, 0.0, 0.0})) << "a robot told to stand is not moved";
+  // Over the issue-12 envelope (steps of 0.1 m/s, 0.2 rad/s): where no bound acts, the model
+  // achieves exactly the command; where one acts, the feed-forward sits on it.
+  int exact = 0, bounded = 0;
+  for (double vx = -0.5; vx <= 1.0 + 1e-9; vx += 0.1)
+    for (double vy = -0.4; vy <= 0.4 + 1e-9; vy += 0.1)
+      for (double wz = -0.8; wz <= 0.8 + 1e-9; wz += 0.2) {
+        const std::array<double, 3> u{vx, vy, wz};
+        const std::array<double, 3> x = m.invert(u);
+        const std::array<double, 3> v = m.achieved(x);
+        bool at_bound = false;
+        for (std::size_t i = 0; i < 3; ++i) {
+          ASSERT_LE(std::fabs(x[i] - u[i]), m.max_correction[i] + 1e-12);
+          at_bound = at_bound || std::fabs(std::fabs(x[i] - u[i]) - m.max_correction[i]) < 1e-9;
+          // The other bound: a modelled gain below min_gain is taken as min_gain.
+          const CommandResponseAxis& a = m.axes[i];
+          double gain = x[i] >= 0.0 ? a.gain_positive : a.gain_negative;
+          for (std::size_t j = 0; j < 3; ++j) gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
+          at_bound = at_bound || gain < m.min_gain + 1e-9;
+        }
+        if (at_bound) {
+          ++bounded;
+          continue;
+        }
+        ++exact;
+        for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(v[i], u[i], 1e-4) << vx << " " << vy << " " << wz << " axis " << i;
+      }
+  EXPECT_GT(exact, 500);
+  EXPECT_GT(bounded, 0) << "the grid reaches the bound somewhere (fast diagonal turns)";
+  // Continuous: a command swept finely through zero and through sign changes of every axis moves
+  // the feed-forward by a bounded multiple of its own step (the model's gain is at least min_gain).
+  const int n = 4000;
+  const auto sweep = [n](int k) {
+    const double s = -1.0 + 2.0 * k / n;
+    return std::array<double, 3>{0.5 * s + 0.25 * (s > 0 ? s : 0.0), 0.4 * s, -0.8 * s};
+  };
+  std::array<double, 3> prev = m.invert(sweep(0));
+  for (int k = 1; k <= n; ++k) {
+    const std::array<double, 3> x = m.invert(sweep(k));
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_LT(std::fabs(x[i] - prev[i]), 10.0 * (2.0 / n)) << "k " << k << " axis " << i;
+    prev = x;
+  }
+  // Identity model: the feed-forward is the command.
+  CommandResponseModel id;
+  id.enabled = true;
+  EXPECT_EQ(id.invert({0.3, -0.2, 0.5}), (std::array<double, 3>{0.3, -0.2, 0.5}));
+  // Validation names the field.
+  CommandResponseModel bad = m;
+  bad.axes[1].gain_per_magnitude[1] = 0.1;
+  EXPECT_NE(bad.validate().find("vy.gain_per_magnitude[1]"), std::string::npos) << bad.validate();
+  bad = m;
+  bad.iterations = 0;
+  EXPECT_NE(bad.validate().find("iterations"), std::string::npos);
+}
+
+// A plant whose steady response is the coupled model, with the integrator held throughout (as in
+// the grid's diag_turn, where the estimator rejects or the pelvis tilts for most of the segment):
+// the feedback alone leaves the side-step short, the feed-forward brings it to the command.
+TEST(VelocityFeedback, FeedforwardReachesACoupledCommandWhileTheIntegratorIsHeld) {
+  Legs legs;
+  const CommandResponseModel model = coupledModel();
+  const auto run = [&](bool feedforward, bool hold) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.envelope_min = {-0.65, -0.5, -1.0};
+    c.envelope_max = {1.0, 0.5, 1.0};
+    c.feedforward = model;
+    c.feedforward.enabled = feedforward;
+    VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+    std::array<double, 3> v{};
+    BaseVelocityEstimate est;
+    const VelocityCommand u{0.4, 0.25, 0.4};
+    for (int k = 0; k < 800; ++k) {
+      const VelocityCommand& out = fb.correct(u, est, 0.01, hold);
+      const std::array<double, 3> target = model.achieved({out.vx, out.vy, out.wz});
+      for (std::size_t i = 0; i < 3; ++i) v[i] += 0.01 / 0.3 * (target[i] - v[i]);
+      est.valid = true;
+      est.stance_feet = 1;
+      est.v_x = v[0];
+      est.v_y = v[1];
+      est.yaw_rate = v[2];
+    }
+    return std::make_pair(v, fb.feedforward());
+  };
+  const auto [held_off, ff_off] = run(false, true);
+  EXPECT_LT(held_off[1], 0.2) << "without the feed-forward the side-step is short: " << held_off[1];
+  EXPECT_EQ(ff_off, (std::array<double, 3>{0.4, 0.25, 0.4}));
+  const auto [held_on, ff_on] = run(true, true);
+  const std::array<double, 3> u{0.4, 0.25, 0.4};
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(held_on[i], u[i], 0.005) << i;
+  EXPECT_GT(ff_on[1], 0.3);
+  EXPECT_LE(ff_on[1], 0.5) << "inside envelope_max";
+  // Integrating as well: still the command, no overshoot from the two together.
+  const auto [both, ff_both] = run(true, false);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(both[i], u[i], 0.005) << i;
+}
+
 TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) {
   Legs legs;
   VelocityFeedbackConfig c = enabledConfig();
@@ -359,6 +473,7 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   Legs legs;
   VelocityFeedbackConfig c = enabledConfig();
   c.brake_ratio = 0.8;  // the braking floor's path too
+  c.feedforward = coupledModel();  // and the feed-forward's inverse
   VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
   gco::LegVector q[2], qd[2];
   q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;

@@ -10,7 +10,10 @@
 /// velocity command then makes the achieved velocity meet the user's command u in steady state:
 ///
 ///   e_i = u_i − v̂_i,   c_i ← clamp(c_i + k_i e_i dt, −r |u_i|, r |u_i|)   (once u_i is steady),
-///   u_fb,i = clamp(u_i + c_i, envelope_i ∩ ±max_velocity_i)            (i = v_x, v_y, ω)
+///   u_fb,i = clamp(u_ff,i + c_i, envelope_i ∩ ±max_velocity_i)         (i = v_x, v_y, ω)
+///
+/// with u_ff = u, or with a feed-forward (CommandResponseModel) the command that an identified
+/// model of the robot's response says achieves u.
 ///
 /// u_fb goes to the generator (and, through GCO's u' or directly, to the actor's observation); u
 /// is what the user commanded and what every evaluation compares against. The bound r |u_i| makes
@@ -34,6 +37,56 @@
 #include "pmg/hal/types.hpp"
 
 namespace pmg {
+
+/// One axis i of CommandResponseModel (i = v_x, v_y, ω).
+struct CommandResponseAxis {
+  /// Achieved ÷ commanded on this axis for a positive / a negative command on it alone [-],
+  /// [0.3, 3].
+  double gain_positive = 1.0;
+  double gain_negative = 1.0;
+  /// Change of that gain per unit |u_j| of each axis j = (v_x [1/(m/s)], v_y [1/(m/s)],
+  /// ω [1/(rad/s)]), [-3, 3]; the axis's own entry must be 0. A turn that slows a side-step is a
+  /// negative entry.
+  std::array<double, 3> gain_per_magnitude{0.0, 0.0, 0.0};
+  /// Change of that gain per unit u_j, signed (the same units), [-3, 3]; own entry 0. A side-step
+  /// to the left achieved better while turning left than while turning right is a positive entry.
+  std::array<double, 3> gain_per_command{0.0, 0.0, 0.0};
+  /// Velocity achieved on this axis per unit command on axis j (a drift) [-], [-1, 1]; own entry 0.
+  std::array<double, 3> drift{0.0, 0.0, 0.0};
+};
+
+/// `velocity_feedback.feedforward:` an identified model of the steady velocity the robot achieves
+/// for a command (the policy with the velocity feedback, flat ground), and its inverse, used as a
+/// feed-forward in front of the integral correction (beyond the paper; issue 12, docs/controller.md
+/// "Command-response feed-forward"). Per axis i, with u⁺ = max(u, 0), u⁻ = min(u, 0):
+///
+///   v_i(u) = (g⁺_i u_i⁺ + g⁻_i u_i⁻) + u_i Σ_{j≠i} (m_ij |u_j| + s_ij u_j) + Σ_{j≠i} d_ij u_j
+///
+/// g = gain_positive/negative, m = gain_per_magnitude, s = gain_per_command, d = drift. The coefficients come from a
+/// calibration sweep in the SIL, fitted by least squares (scripts/fit_command_response.py, which
+/// writes this block). Units: v_x, v_y [m/s], ω [rad/s], in the heading frame H.
+struct CommandResponseModel {
+  bool enabled = false;
+  std::array<CommandResponseAxis, 3> axes{};
+  /// |u_ff,i − u_i| at most this [m/s, m/s, rad/s], each 0..1: how far the feed-forward may move
+  /// a command.
+  std::array<double, 3> max_correction{0.3, 0.2, 0.4};
+  /// The inverse divides by an axis's modelled gain; it is taken as at least this [-], [0.3, 1].
+  double min_gain = 0.5;
+  /// Gauss–Seidel sweeps of the inverse, 1..50 (a fixed number: the cost is bounded and the result
+  /// a continuous function of u).
+  int iterations = 8;
+  /// Empty when valid, else "<field>: expected ..." for the first bad field.
+  std::string validate() const;
+  /// v(u) above. noexcept, no allocation.
+  std::array<double, 3> achieved(const std::array<double, 3>& u) const noexcept;
+  /// The command u_ff with v(u_ff) = u: `iterations` Gauss–Seidel sweeps from u_ff = u, each axis
+  /// solved exactly for the others' values (u_ff,i = (u_i − Σ d_ij u_ff,j) / max(min_gain, g_i +
+  /// Σ (m_ij |u_ff,j| + s_ij u_ff,j)), the gain g⁺ or g⁻ by the sign of the numerator) and kept within
+  /// u_i ± max_correction_i. Continuous in u; u = 0 gives 0 (a robot told to stand is not moved).
+  /// noexcept, no allocation.
+  std::array<double, 3> invert(const std::array<double, 3>& u) const noexcept;
+};
 
 /// `velocity_feedback:` of the controller config.
 struct VelocityFeedbackConfig {
@@ -81,6 +134,9 @@ struct VelocityFeedbackConfig {
   double brake_ratio = 0.0;
   double brake_decel = 0.2;  ///< chosen on the stop script (docs/controller.md "Braking steps")
   double brake_rate = 1.0;
+  /// Feed-forward (off unless feedforward.enabled): the correction is added to u_ff =
+  /// feedforward.invert(u) instead of to u; the integral still drives the estimate to u.
+  CommandResponseModel feedforward{};
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
@@ -187,6 +243,8 @@ class VelocityFeedback {
   const VelocityCommand& command() const noexcept { return u_fb_; }
   /// The correction c (v_x, v_y, ω) of the last update.
   const std::array<double, 3>& correction() const noexcept { return c_; }
+  /// The feed-forward command u_ff of the last update (= u when feedforward is off).
+  const std::array<double, 3>& feedforward() const noexcept { return u_ff_; }
   /// The braking floor (v_x, v_y [m/s] in H; 0: none) of the last update (config brake_ratio).
   const std::array<double, 2>& brakeFloor() const noexcept { return brake_; }
   /// Ticks on which the braking floor raised the command so far.
@@ -203,6 +261,7 @@ class VelocityFeedback {
   BaseVelocityEstimator estimator_;
   std::array<double, 3> lo_, hi_;
   std::array<double, 3> c_{};
+  std::array<double, 3> u_ff_{};
   std::array<double, 3> u_anchor_{}, steady_{};
   std::array<double, 2> brake_{};
   BaseVelocityEstimate est_;

@@ -1,0 +1,215 @@
+#!/usr/bin/env python3
+"""Fit the command-response feed-forward (velocity_feedback.feedforward) to a calibration sweep.
+
+Reads pmg_policy_sil summaries (summary.json: per seed and segment the command and the achieved
+velocity, the mean over the last 60 % of the segment), keeps the walking segments no seed fell in,
+leaves out a seed's segment more than UPSET off its command (a stumble, not a response; each is
+printed), averages the seeds of each command, and fits per axis i (v_x, v_y, w, heading frame) by least squares
+
+  v_i = g+_i u_i+ + g-_i u_i- + u_i sum_{j!=i} (m_ij |u_j| + s_ij u_j) + sum_{j!=i} d_ij u_j
+
+(include/pmg/controller/velocity_feedback.hpp, CommandResponseModel). Which terms an axis gets is
+chosen by K-fold cross-validation over the commands of these summaries alone (SETS below):
+evaluation scripts are never read here. Writes the YAML block to paste under velocity_feedback:, a
+report of the cross-validated errors, and prints both.
+
+  python3 scripts/fit_command_response.py out/response/summary.json [more summaries] --out FILE.yaml \
+      [--plot FIT.png] [--check HELD_OUT_SUMMARY.json ...]
+"""
+import argparse
+import json
+import sys
+
+import numpy as np
+
+AXES = ("vx", "vy", "wz")
+# Term groups of an axis's model: G gains (always), M gain per magnitude, S gain per signed command,
+# D drift. The candidate sets, simplest first (a tie keeps the simpler one).
+SETS = ("G", "G+M", "G+S", "G+D", "G+M+D", "G+S+D", "G+M+S+D")
+# Validation ranges of CommandResponseModel (velocity_feedback.cpp).
+GAIN_RANGE = (0.3, 3.0)
+COUPLING_RANGE = (-3.0, 3.0)
+DRIFT_RANGE = (-1.0, 1.0)
+MIN_WALK = (0.05, 0.05, 0.1)  # a segment walks when some |u_i| is at least this
+
+
+UPSET = 0.4  # a seed's segment this far from its command on some axis [m/s, rad/s] is an upset, not a response
+
+
+def load(paths):
+    """Per seed, the walking segments without a fall or an upset; a command is one sample (the mean of its seeds)."""
+    by_command = {}
+    dropped = {"fall": 0, "upset": 0}
+    for p in paths:
+        with open(p) as f:
+            d = json.load(f)
+        fallen = {s["name"]: s.get("fallen", 0) for s in d["segments"]}
+        commands = {s["name"]: tuple(float(s["command"][a]) for a in AXES) for s in d["segments"]}
+        for run in d["runs"]:
+            for s in run["segments"]:
+                u = commands[s["name"]]
+                if all(abs(u[i]) < MIN_WALK[i] for i in range(3)):
+                    continue
+                v = [s["achieved"][a] for a in AXES]
+                if fallen[s["name"]] > 0 or any(x is None for x in v):
+                    dropped["fall"] += 1
+                    continue
+                if any(abs(v[i] - u[i]) > UPSET for i in range(3)):
+                    dropped["upset"] += 1
+                    print(f"# upset left out: {p} seed {run['seed']} {s['name']} command {u} achieved "
+                          f"({v[0]:.3f}, {v[1]:.3f}, {v[2]:.3f})")
+                    continue
+                acc = by_command.setdefault(u, [np.zeros(3), 0])
+                acc[0] += np.array(v, float)
+                acc[1] += 1
+    U = np.array([list(u) for u in by_command], float)
+    V = np.array([acc[0] / acc[1] for acc in by_command.values()], float)
+    return U, V, dropped
+
+
+def features(U, i, groups):
+    ui = U[:, i]
+    cols = [np.maximum(ui, 0.0), np.minimum(ui, 0.0)]
+    labels = [("gain_positive", None), ("gain_negative", None)]
+    others = [j for j in range(3) if j != i]
+    for g, name, col in (("M", "gain_per_magnitude", lambda j: ui * np.abs(U[:, j])),
+                         ("S", "gain_per_command", lambda j: ui * U[:, j]),
+                         ("D", "drift", lambda j: U[:, j])):
+        if g in groups:
+            for j in others:
+                cols.append(col(j))
+                labels.append((name, j))
+    return np.stack(cols, axis=1), labels
+
+
+def fit(U, y, i, groups):
+    X, labels = features(U, i, groups)
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    return coef, labels
+
+
+def cv_predict(U, y, i, groups, folds):
+    """Cross-validated predictions: folds over commands (each sample is one command, its seeds
+    averaged), a fixed shuffle; every command predicted by the fit on the other folds."""
+    idx = np.random.default_rng(i).permutation(len(y))
+    pred = np.empty(len(y))
+    for k in range(folds):
+        test = idx[k::folds]
+        train = np.setdiff1d(idx, test)
+        coef, _ = fit(U[train], y[train], i, groups)
+        X, _ = features(U[test], i, groups)
+        pred[test] = X @ coef
+    return pred
+
+
+def rmse(e):
+    return float(np.sqrt(np.mean(np.asarray(e) ** 2)))
+
+
+def plot(path, U, V, cv_pred, check):
+    """Per axis: achieved against predicted, the identity (v = u) in grey, the model's
+    cross-validated predictions in colour, and held-out evaluation segments (--check) as crosses."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    units = ("v_x [m/s]", "v_y [m/s]", "yaw rate [rad/s]")
+    fig, axs = plt.subplots(1, 3, figsize=(15, 5))
+    for i, ax in enumerate(axs):
+        y = V[:, i]
+        ax.scatter(U[:, i], y, s=10, c="0.7", label=f"identity v = u (RMSE {rmse(U[:, i] - y):.3f})")
+        ax.scatter(cv_pred[i], y, s=10, c="C0", label=f"model, cross-validated (RMSE {rmse(cv_pred[i] - y):.3f})")
+        if check is not None:
+            Uc, Vc, pc = check
+            ax.scatter(Uc[:, i], Vc[:, i], marker="x", c="0.4", label=f"held out, identity (RMSE {rmse(Uc[:, i] - Vc[:, i]):.3f})")
+            ax.scatter(pc[:, i], Vc[:, i], marker="x", c="C3", label=f"held out, model (RMSE {rmse(pc[:, i] - Vc[:, i]):.3f})")
+        lo, hi = ax.get_xlim()
+        ax.plot([lo, hi], [lo, hi], "k--", lw=0.8)
+        ax.set_xlabel(f"predicted {units[i]}")
+        ax.set_ylabel(f"achieved {units[i]}")
+        ax.set_title(AXES[i])
+        ax.legend(fontsize=7, loc="upper left")
+        ax.grid(alpha=0.3)
+    fig.suptitle("Command-response model: achieved against predicted, per walking command (heading frame)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
+def predict(block, U):
+    out = np.zeros_like(U)
+    for i, a in enumerate(AXES):
+        e = block[a]
+        gain = np.where(U[:, i] >= 0.0, e["gain_positive"], e["gain_negative"])
+        drift = np.zeros(len(U))
+        for j in range(3):
+            if j == i:
+                continue
+            gain = gain + e["gain_per_magnitude"][j] * np.abs(U[:, j]) + e["gain_per_command"][j] * U[:, j]
+            drift += e["drift"][j] * U[:, j]
+        out[:, i] = gain * U[:, i] + drift
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("summaries", nargs="+")
+    ap.add_argument("--out", required=True, help="YAML block (feedforward:) to write")
+    ap.add_argument("--folds", type=int, default=6)
+    ap.add_argument("--max-correction", default="0.3,0.2,0.4", help="v_x, v_y [m/s], w [rad/s]")
+    ap.add_argument("--plot", default=None, help="write achieved-against-predicted scatter plots here (PNG)")
+    ap.add_argument("--check", nargs="*", default=None,
+                    help="held-out summaries (feed-forward off) to report the model's error on; never used to fit")
+    args = ap.parse_args()
+    U, V, dropped = load(args.summaries)
+    if len(U) < 3 * args.folds:
+        sys.exit(f"fit_command_response: {len(U)} usable walking commands in {args.summaries}; need at least {3 * args.folds}")
+    report = [f"# {len(U)} walking commands (seed segments left out: {dropped['fall']} with a fall, {dropped['upset']} upsets "
+              f"more than {UPSET} off their command), {args.folds}-fold cross-validation over commands",
+              "# axis: RMSE of the identity (v = u) | of each term set (G gains, M per magnitude, S per signed command, D drift), "
+              "cross-validated [m/s or rad/s]"]
+    block = {}
+    cv_best = []
+    for i, a in enumerate(AXES):
+        y = V[:, i]
+        ident = float(np.sqrt(np.mean((U[:, i] - y) ** 2)))
+        preds = [cv_predict(U, y, i, groups, args.folds) for groups in SETS]
+        scores = [rmse(p - y) for p in preds]
+        best = int(np.argmin(scores))
+        cv_best.append(preds[best])
+        coef, labels = fit(U, y, i, SETS[best])
+        report.append(f"# {a}: identity {ident:.4f} | " + " | ".join(f"{SETS[k]} {scores[k]:.4f}" for k in range(len(SETS)))
+                      + f"  -> {SETS[best]}")
+        entry = {"gain_positive": 1.0, "gain_negative": 1.0, "gain_per_magnitude": [0.0] * 3,
+                 "gain_per_command": [0.0] * 3, "drift": [0.0] * 3}
+        for c, (name, j) in zip(coef, labels):
+            if j is None:
+                entry[name] = float(np.clip(c, *GAIN_RANGE))
+            else:
+                entry[name][j] = float(np.clip(c, *(DRIFT_RANGE if name == "drift" else COUPLING_RANGE)))
+        block[a] = entry
+    mc = [float(x) for x in args.max_correction.split(",")]
+    lines = ["feedforward:", "  enabled: true"]
+    for a in AXES:
+        e = block[a]
+        fmt = lambda xs: "[" + ", ".join(f"{x:.3f}" for x in xs) + "]"  # noqa: E731
+        lines.append(f"  {a}: {{gain_positive: {e['gain_positive']:.3f}, gain_negative: {e['gain_negative']:.3f}, "
+                     f"gain_per_magnitude: {fmt(e['gain_per_magnitude'])}, gain_per_command: {fmt(e['gain_per_command'])}, "
+                     f"drift: {fmt(e['drift'])}}}")
+    lines.append(f"  max_correction: [{mc[0]}, {mc[1]}, {mc[2]}]")
+    text = "\n".join(report + lines) + "\n"
+    with open(args.out, "w") as f:
+        f.write(text)
+    print(text, end="")
+    check = None
+    if args.check:
+        Uc, Vc, _ = load(args.check)
+        check = (Uc, Vc, predict(block, Uc))
+        for i, a in enumerate(AXES):
+            print(f"# held out ({len(Uc)} commands): {a} RMSE identity {rmse(Uc[:, i] - Vc[:, i]):.4f}, "
+                  f"model {rmse(check[2][:, i] - Vc[:, i]):.4f}")
+    if args.plot:
+        plot(args.plot, U, V, cv_best, check)
+
+
+if __name__ == "__main__":
+    main()
