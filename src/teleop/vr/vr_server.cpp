@@ -246,7 +246,8 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     }
     srv_->count([](VrServerStats& s) { ++s.ws_sessions; });
     srv_->event("client #" + std::to_string(id_) + " connected from " + peer_);
-    window_start_ = now;
+    // The rate window starts at the session's first message (window_start_ is the epoch until then),
+    // not at the handshake: a burst right after a slow handshake is counted in one window.
     doRead();
     scheduleStatus();
   }
