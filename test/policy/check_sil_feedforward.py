@@ -17,27 +17,16 @@ vx_fb..wz_fb: what the generator got, u_fb = u_ff + c):
 - no fall.
 Usage: check_sil_feedforward.py CONFIG OFF_DIR ON_DIR
 """
-import csv
-import json
 import math
+import os
 import sys
 
 import yaml
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sil_run import rows, window  # noqa: E402
+
 AX = ("vx", "vy", "wz")
-
-
-def rows(out):
-    with open(f"{out}/summary.json") as f:
-        s = json.load(f)
-    with open(f"{out}/seed0.csv") as f:
-        return s, [{k: (v if k in ("segment", "mode") else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
-
-
-def window(rs, name, t0, t1):
-    seg = [r for r in rs if r["segment"] == name]
-    start = seg[0]["t"]
-    return [r for r in seg if t0 <= r["t"] - start < t1]
 
 
 def inverse(ff, u, lo, hi):

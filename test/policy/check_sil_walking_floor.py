@@ -15,23 +15,11 @@ the pelvis height achieved):
 - on, no fall.
 Usage: check_sil_walking_floor.py OFF_DIR ON_DIR
 """
-import csv
-import json
+import os
 import sys
 
-
-def rows(out):
-    with open(f"{out}/summary.json") as f:
-        s = json.load(f)
-    with open(f"{out}/seed0.csv") as f:
-        return s, [{k: (v if k in ("segment", "mode") else float(v)) for k, v in r.items()} for r in csv.DictReader(f)]
-
-
-def window(rs, name, t0, t1):
-    """Rows of segment NAME whose time since the segment's first row lies in [t0, t1) s."""
-    seg = [r for r in rs if r["segment"] == name]
-    start = seg[0]["t"]
-    return [r for r in seg if t0 <= r["t"] - start < t1]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sil_run import rows, window  # noqa: E402
 
 
 def mean(rs, key):
