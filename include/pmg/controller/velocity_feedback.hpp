@@ -62,9 +62,10 @@ struct CommandResponseAxis {
 ///
 ///   v_i(u) = (g⁺_i u_i⁺ + g⁻_i u_i⁻) + u_i Σ_{j≠i} (m_ij |u_j| + s_ij u_j) + Σ_{j≠i} d_ij u_j
 ///
-/// g = gain_positive/negative, m = gain_per_magnitude, s = gain_per_command, d = drift. The coefficients come from a
-/// calibration sweep in the SIL, fitted by least squares (scripts/fit_command_response.py, which
-/// writes this block). Units: v_x, v_y [m/s], ω [rad/s], in the heading frame H.
+/// g = gain_positive/negative, m = gain_per_magnitude, s = gain_per_command, d = drift. The
+/// coefficients come from a calibration sweep in the SIL, fitted by least squares
+/// (scripts/fit_command_response.py, which writes this block). Units: v_x, v_y [m/s], ω [rad/s], in
+/// the heading frame H.
 struct CommandResponseModel {
   bool enabled = false;
   std::array<CommandResponseAxis, 3> axes{};
@@ -134,8 +135,9 @@ struct VelocityFeedbackConfig {
   double brake_ratio = 0.0;
   double brake_decel = 0.2;  ///< chosen on the stop script (docs/controller.md "Braking steps")
   double brake_rate = 1.0;
-  /// Feed-forward (off unless feedforward.enabled): the correction is added to u_ff =
-  /// feedforward.invert(u) instead of to u; the integral still drives the estimate to u.
+  /// Feed-forward (off unless feedforward.enabled, and only while the feedback is enabled): the
+  /// correction is added to u_ff = feedforward.invert(u) instead of to u; the integral still drives
+  /// the estimate to u.
   CommandResponseModel feedforward{};
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
