@@ -13,6 +13,7 @@
 #include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
 #include "pmg/common/config_error.hpp"
+#include "pmg/controller/controller_config.hpp"
 #include "pmg/controller/velocity_feedback.hpp"
 
 namespace pmg {
@@ -390,6 +391,56 @@ TEST(CommandResponseModel, InverseAchievesTheCommandIsContinuousAndStandsStill) 
   bad = m;
   bad.iterations = 0;
   EXPECT_NE(bad.validate().find("iterations"), std::string::npos);
+}
+
+// The model shipped in the default config (a re-fit must keep these): over the issue-12 envelope,
+// every inverse within its bound and where no bound acts exact, no modelled gain below min_gain
+// (the fit's coefficients describe the actor, not the floor), 0 -> 0, and continuous along lines
+// through the envelope's corners.
+TEST(CommandResponseModel, ShippedModelIsWellConditionedOverTheEnvelope) {
+  const ControllerConfig config = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  const CommandResponseModel& m = config.velocity_feedback.feedforward;
+  ASSERT_TRUE(config.velocity_feedback.enabled);
+  ASSERT_TRUE(m.enabled);
+  EXPECT_EQ(m.invert({0.0, 0.0, 0.0}), (std::array<double, 3>{0.0, 0.0, 0.0}));
+  int exact = 0, total = 0;
+  double largest_move[3] = {0.0, 0.0, 0.0};
+  for (double vx = -0.5; vx <= 1.0 + 1e-9; vx += 0.05)
+    for (double vy = -0.4; vy <= 0.4 + 1e-9; vy += 0.05)
+      for (double wz = -0.8; wz <= 0.8 + 1e-9; wz += 0.1) {
+        const std::array<double, 3> u{vx, vy, wz};
+        const std::array<double, 3> x = m.invert(u);
+        bool bounded = false;
+        for (std::size_t i = 0; i < 3; ++i) {
+          ASSERT_LE(std::fabs(x[i] - u[i]), m.max_correction[i] + 1e-12);
+          bounded = bounded || std::fabs(std::fabs(x[i] - u[i]) - m.max_correction[i]) < 1e-9;
+          largest_move[i] = std::max(largest_move[i], std::fabs(x[i] - u[i]));
+          const CommandResponseAxis& a = m.axes[i];
+          double gain = x[i] >= 0.0 ? a.gain_positive : a.gain_negative;
+          for (std::size_t j = 0; j < 3; ++j) gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
+          EXPECT_GT(gain, m.min_gain) << "modelled gain of axis " << i << " at u " << vx << " " << vy << " " << wz;
+        }
+        ++total;
+        if (bounded) continue;
+        ++exact;
+        const std::array<double, 3> v = m.achieved(x);
+        for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(v[i], u[i], 1e-4) << vx << " " << vy << " " << wz << " axis " << i;
+      }
+  EXPECT_GT(exact, total / 2) << "the bound acts on most of the envelope: the model is far from the robot";
+  std::printf("shipped feed-forward: %d of %d envelope commands inverted exactly; largest move %.3f %.3f %.3f\n", exact, total,
+              largest_move[0], largest_move[1], largest_move[2]);
+  // Continuous: along the diagonals through the envelope's corners, no jump.
+  const int n = 2000;
+  for (const std::array<double, 3>& dir : {std::array<double, 3>{1.0, 0.4, 0.8}, std::array<double, 3>{1.0, -0.4, 0.8},
+                                           std::array<double, 3>{-0.5, 0.4, 0.8}, std::array<double, 3>{-0.5, -0.4, -0.8}}) {
+    std::array<double, 3> prev = m.invert({0.0, 0.0, 0.0});
+    for (int k = 1; k <= n; ++k) {
+      const double s = static_cast<double>(k) / n;
+      const std::array<double, 3> x = m.invert({dir[0] * s, dir[1] * s, dir[2] * s});
+      for (std::size_t i = 0; i < 3; ++i) EXPECT_LT(std::fabs(x[i] - prev[i]), 4.0 * std::fabs(dir[i]) / n + 1e-9) << k;
+      prev = x;
+    }
+  }
 }
 
 // A plant whose steady response is the coupled model, with the integrator held throughout (as in
