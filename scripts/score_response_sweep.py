@@ -17,10 +17,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from fit_command_response import AXES, UPSET  # noqa: E402  (what an upset is, one definition)
 from plot_segments import VEL_ABS, VEL_REL  # noqa: E402  (the band, one definition)
-
-AXES = ("vx", "vy", "wz")
-UPSET = 0.4  # as scripts/fit_command_response.py
 
 
 def score(path):
