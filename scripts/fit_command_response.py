@@ -155,7 +155,8 @@ def main():
     ap.add_argument("summaries", nargs="+")
     ap.add_argument("--out", required=True, help="YAML block (feedforward:) to write")
     ap.add_argument("--folds", type=int, default=6)
-    ap.add_argument("--max-correction", default="0.3,0.2,0.4", help="v_x, v_y [m/s], w [rad/s]")
+    ap.add_argument("--max-correction", default="0.15,0.1,0.15",
+                    help="the bound written into the block: v_x, v_y [m/s], w [rad/s] (the shipped one, chosen on tuning runs)")
     ap.add_argument("--plot", default=None, help="write achieved-against-predicted scatter plots here (PNG)")
     ap.add_argument("--check", nargs="*", default=None,
                     help="held-out summaries (feed-forward off) to report the model's error on; never used to fit")
@@ -171,7 +172,7 @@ def main():
     cv_best = []
     for i, a in enumerate(AXES):
         y = V[:, i]
-        ident = float(np.sqrt(np.mean((U[:, i] - y) ** 2)))
+        ident = rmse(U[:, i] - y)
         preds = [cv_predict(U, y, i, groups, args.folds) for groups in SETS]
         scores = [rmse(p - y) for p in preds]
         best = int(np.argmin(scores))

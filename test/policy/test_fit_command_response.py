@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Tests scripts/fit_command_response.py (ctest fit_command_response_finds_a_hidden_coupling, label
+unit) on synthetic pmg_policy_sil summaries with a known response hidden in them:
+- v_x: 0.95 of a forward command, 0.8 of a backward one, nothing else;
+- v_y: 0.9 / 0.85, the gain falling by 0.4 per rad/s of |w| (a turn slows the side-step), and a
+  drift of -0.06 per rad/s of w;
+- w: 0.9 either way, the gain falling by 0.2 per m/s of |v_x|;
+each seed's value with Gaussian noise (0.01), 120 random commands in two summaries of 2 seeds each,
+one seed's segment an upset (achieved far from the command) and one segment with a fall.
+The fit must recover every hidden coefficient within 0.05 (the gains) or 0.06 (the couplings),
+choose the terms that carry them and no coupling of v_x's beyond 0.05, report the upset and the
+fall as left out, and write a block that the controller's keys accept (its max_correction given).
+Usage: test_fit_command_response.py
+"""
+import os
+import random
+import re
+import subprocess
+import sys
+import tempfile
+
+import json
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+AX = ("vx", "vy", "wz")
+
+
+def truth(u):
+    vx, vy, wz = u
+    ax = (0.95 if vx >= 0 else 0.8) * vx
+    ay = ((0.9 if vy >= 0 else 0.85) - 0.4 * abs(wz)) * vy - 0.06 * wz
+    aw = (0.9 - 0.2 * abs(vx)) * wz
+    return [ax, ay, aw]
+
+
+def summary(rng, n, first_name, upset=False, fall=False):
+    segs, runs = [], [{"seed": s, "segments": []} for s in range(2)]
+    for k in range(n):
+        u = [rng.uniform(-0.5, 1.0), rng.uniform(-0.4, 0.4), rng.uniform(-0.8, 0.8)]
+        name = f"r{first_name + k:03d}"
+        per_seed = []
+        for s in range(2):
+            v = [x + rng.gauss(0.0, 0.01) for x in truth(u)]
+            if upset and k == 3 and s == 1:
+                v = [-0.9, 0.6, 0.0]
+            per_seed.append(v)
+            runs[s]["segments"].append({"name": name, "achieved": dict(zip(AX, v))})
+        mean = [sum(v[i] for v in per_seed) / 2 for i in range(3)]
+        segs.append({"name": name, "seeds": 2, "fallen": 1 if (fall and k == 5) else 0,
+                     "command": {**dict(zip(AX, u)), "pitch": 0, "roll": 0, "height": 0.78},
+                     "achieved": {**dict(zip(AX, mean)), "pitch": 0, "roll": 0, "height": 0.78}})
+    return {"segments": segs, "runs": runs}
+
+
+def main():
+    rng = random.Random(7)
+    failures = []
+    with tempfile.TemporaryDirectory() as d:
+        paths = []
+        for i, s in enumerate((summary(rng, 60, 0, upset=True), summary(rng, 60, 60, fall=True))):
+            paths.append(os.path.join(d, f"s{i}.json"))
+            with open(paths[-1], "w") as f:
+                json.dump(s, f)
+        out_yaml = os.path.join(d, "ff.yaml")
+        out = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/fit_command_response.py"), *paths,
+                              "--out", out_yaml, "--max-correction", "0.15,0.1,0.15"],
+                             capture_output=True, text=True, check=True).stdout
+        print(out)
+        text = open(out_yaml).read()
+
+    def coeffs(axis):
+        m = re.search(rf"  {axis}: \{{gain_positive: ([-\d.]+), gain_negative: ([-\d.]+), gain_per_magnitude: \[([^\]]*)\], "
+                      rf"gain_per_command: \[([^\]]*)\], drift: \[([^\]]*)\]\}}", text)
+        assert m, f"no {axis} line in:\n{text}"
+        vec = lambda s: [float(x) for x in s.split(",")]  # noqa: E731
+        return float(m.group(1)), float(m.group(2)), vec(m.group(3)), vec(m.group(4)), vec(m.group(5))
+
+    want = {"vx": (0.95, 0.8, [0, 0, 0], [0, 0, 0], [0, 0, 0]),
+            "vy": (0.9, 0.85, [0, 0, -0.4], [0, 0, 0], [0, 0, -0.06]),
+            "wz": (0.9, 0.9, [-0.2, 0, 0], [0, 0, 0], [0, 0, 0])}
+    for axis, (gp, gn, mag, cmd, drift) in want.items():
+        got = coeffs(axis)
+        if abs(got[0] - gp) > 0.05 or abs(got[1] - gn) > 0.05:
+            failures.append(f"{axis}: gains {got[0]:.3f} / {got[1]:.3f}, hidden {gp} / {gn}")
+        for name, g, w in (("gain_per_magnitude", got[2], mag), ("gain_per_command", got[3], cmd), ("drift", got[4], drift)):
+            for j in range(3):
+                if abs(g[j] - w[j]) > 0.06:
+                    failures.append(f"{axis}.{name}[{j}] {g[j]:.3f}, hidden {w[j]}")
+    if not re.search(r"# vy: .*-> G\+M\+D$|# vy: .*-> G\+M\+S\+D$", out, re.M):
+        failures.append("v_y's terms do not include both the per-magnitude gain and the drift")
+    if "upset left out" not in out or "1 upsets" not in out:
+        failures.append("the upset is not reported as left out")
+    if "2 with a fall" not in out:
+        failures.append("the fallen segment's two seeds are not reported as left out")
+    if "max_correction: [0.15, 0.1, 0.15]" not in text or "enabled: true" not in text:
+        failures.append("the block lacks enabled or the given max_correction")
+    if failures:
+        print("FAIL\n  " + "\n  ".join(failures))
+        sys.exit(1)
+    print("OK")
+
+
+if __name__ == "__main__":
+    main()
