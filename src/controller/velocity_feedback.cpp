@@ -343,6 +343,7 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(walking_settle_s >= 0.0 && walking_settle_s <= 5.0)) return "walking_settle_s: expected 0..5 s";
   if (!(walking_min_command_rad >= 0.0 && walking_min_command_rad <= 0.5)) return "walking_min_command_rad: expected 0..0.5 rad";
   if (!(walking_deadband_rad >= 0.0 && walking_deadband_rad <= 0.3)) return "walking_deadband_rad: expected 0..0.3 rad";
+  if (!(walking_crouch_m >= 0.0 && walking_crouch_m <= 0.2)) return "walking_crouch_m: expected 0..0.2 m";
   if (!(std::isfinite(height_ki) && height_ki >= 0.0 && height_ki <= 20.0)) return "height_ki: expected 0..20 [1/s]";
   if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
     return "max_height_correction_m: expected 0..0.1 m";
@@ -378,6 +379,9 @@ PostureFeedback::PostureFeedback(const PostureFeedbackConfig& config, const Robo
                         "] m, standing " + std::to_string(standing_height_) + " m)");
     legs_ = std::make_unique<gco::LegKinematics>(std::move(legs));
   }
+  if (config_.walking_crouch_m > 0.0 && !(standing_height_ > 0.0))
+    throw ConfigError("posture_feedback.walking_crouch_m: the crouched-walk feedback needs the standing height (got " +
+                      std::to_string(standing_height_) + " m)");
 }
 
 PostureFeedback::~PostureFeedback() = default;
@@ -451,6 +455,9 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   const double decay_keep = std::max(0.0, 1.0 - dt / config_.decay_time_s);
   const double keep = decay ? decay_keep : 1.0;
   const double cmd[2] = {u.pitch, u.roll};
+  // Crouched (walking_crouch_m): an upright crouched walk's lean is fed back whole.
+  const bool crouched = config_.walking_crouch_m > 0.0 && standing_height_ > 0.0 && u.height > 0.0 &&
+                        u.height <= standing_height_ - config_.walking_crouch_m;
   const std::array<double, 2>* range[2] = {&pitch_range_, &roll_range_};
   for (std::size_t i = 0; i < 2; ++i) {
     if (std::fabs(cmd[i] - p_settled_[i]) > 0.01) {
@@ -459,16 +466,27 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     } else {
       p_steady_s_[i] += dt;
     }
-    // Standing: integrate on the fast low-pass while still, decay otherwise.
-    double cs = c_stand_[i] * keep;
-    if (have_ && ok && !decay) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
-    cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Walking (walking_ki > 0): integrate on the gait-averaged attitude once the posture command is
     // steady, within the walking bound; decay when the robot is told to stand or tilts, so that a
     // lean built against a side-step's sway is not held into the stop.
     // Below walking_min_command_rad (an upright walk), with a dead band: only the error beyond it.
-    const bool commanded = std::fabs(cmd[i]) >= config_.walking_min_command_rad;
+    // A crouched walk with an upright command (walking_crouch_m) counts as commanded.
+    const bool upright_crouch = crouched && std::fabs(cmd[i]) < config_.walking_min_command_rad;
+    const bool commanded = std::fabs(cmd[i]) >= config_.walking_min_command_rad || upright_crouch;
     const bool walking = !still && !tilted && config_.walking_ki[i] > 0.0 && (commanded || config_.walking_deadband_rad > 0.0);
+    // Standing: integrate on the fast low-pass while still, decay otherwise; walking crouched with an
+    // upright command, what the still crouch needed is held (the torso leans back crouched whether
+    // it walks or not), and the walking integrator adds what the gait needs on top. A commanded bend
+    // is not held (held, a 0.4 rad bend walked crouched at 0.66 m fell at the stop).
+    double cs = c_stand_[i] * keep;
+    if (walking && upright_crouch) {
+      // Held within the walking bound; what lies beyond it decays.
+      const double wm = config_.walking_max_correction_rad;
+      const double mag = std::fabs(c_stand_[i]);
+      cs = std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
+    }
+    if (have_ && ok && !decay) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
+    cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Inside the dead band the correction decays as at a stop, so that what one gait needed is not
     // carried into the next (held, a crouched walk's correction overshot the crouched turn after it).
     const double e = cmd[i] - p_walk_hat_[i];

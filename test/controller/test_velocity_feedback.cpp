@@ -736,6 +736,114 @@ TEST(PostureFeedback, WalkingDeadBandCorrectsOnlyALeanBeyondIt) {
   EXPECT_NE(c.validate().find("walking_deadband_rad"), std::string::npos);
 }
 
+// walking_crouch_m: a robot whose torso leans back 0.06 rad when crouched still and 0.10 when it
+// walks crouched (the actor's lean in issue 12's `crouch_walk`). Standing crouched, the standing
+// integrator corrects the 0.06. Walking crouched, that correction is held (within the walking
+// bound), not dropped at the first step, and the walking integrator adds the rest: the
+// gait-averaged torso comes upright. Without the
+// key the crouched walk is an upright-command walk, left alone, and it leans back. An upright walk
+// (or one crouched less than the key) is left alone either way.
+TEST(PostureFeedback, CrouchedWalkFeedsBackItsLeanAndHoldsTheStillCrouchsCorrection) {
+  PostureFeedbackConfig c = walkingPitchConfig(1.0);
+  c.walking_crouch_m = 0.03;
+  ASSERT_EQ(c.validate(), "");
+  const std::array<double, 2> heights{0.45, 0.85};
+  const VelocityCommand walk{0.4, 0.0, 0.0};
+  struct Run {
+    double min_correction_walking = 1.0;  ///< smallest correction after the first step [rad]
+    double mean_torso = 0.0;              ///< gait-averaged torso pitch over the walk's last 5 s [rad]
+    double correction = 0.0;              ///< at the end of the walk [rad]
+  };
+  auto run = [&](const PostureFeedbackConfig& cfg, double height) {
+    PostureFeedback fb(cfg, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    const double crouch = 0.78 - height;
+    double torso = 0.0, t = 0.0;
+    Run r;
+    auto step = [&](const VelocityCommand& v, bool walking) {
+      const double lean = crouch > 0.02 ? (walking ? -0.10 : -0.06) : (walking ? -0.02 : 0.0);
+      const double sway = walking ? 0.04 * std::sin(2.0 * M_PI * 1.4 * t) : 0.0;
+      const PostureCommand& out = fb.update({0.0, 0.0, height}, v, uprightState(0.0, torso + sway), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch + lean - torso);
+      t += 0.01;
+    };
+    for (int k = 0; k < 2000; ++k) step({}, false);  // 20 s crouched still
+    for (int k = 0; k < 2000; ++k) {                  // 20 s crouched walk
+      step(walk, true);
+      r.min_correction_walking = std::min(r.min_correction_walking, fb.correction()[0]);
+      if (k >= 1500) r.mean_torso += torso / 500.0;
+    }
+    r.correction = fb.correction()[0];
+    return r;
+  };
+  // Crouched 0.10 m (the grid's crouch_walk at 0.68 m).
+  const Run on = run(c, 0.68);
+  EXPECT_GT(on.min_correction_walking, 0.06) << "the still crouch's correction (0.075) was dropped at the first step";
+  EXPECT_NEAR(on.mean_torso, 0.0, 0.01) << "the crouched walk still leans";
+  EXPECT_NEAR(on.correction, 0.125, 0.01) << "0.075 held + 0.05 walking";
+  PostureFeedbackConfig off = c;
+  off.walking_crouch_m = 0.0;
+  const Run without = run(off, 0.68);
+  EXPECT_LT(without.mean_torso, -0.09) << "without the key a crouched walk is left alone";
+  EXPECT_LT(std::fabs(without.correction), 1e-3);
+  // A still crouch that needed more than the walking bound (0.08): walking, what lies beyond the
+  // bound decays (decay_time_s, 0.5 s) and the rest is held, without a jump.
+  {
+    PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    double torso = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      const PostureCommand& out = fb.update({0.0, 0.0, 0.68}, {}, uprightState(0.0, torso), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch - 0.115 - torso);
+    }
+    const double still = fb.correction()[0];
+    EXPECT_NEAR(still, 0.14375, 0.002);
+    double prev = still, largest_step = 0.0;
+    for (int k = 0; k < 150; ++k) {
+      fb.update({0.0, 0.0, 0.68}, walk, uprightState(0.0, 0.0), 0.01);  // walking, upright on the average
+      largest_step = std::max(largest_step, std::fabs(fb.correction()[0] - prev));
+      prev = fb.correction()[0];
+    }
+    EXPECT_LT(largest_step, 0.002) << "the correction jumped";
+    EXPECT_LT(fb.correction()[0], 0.08 + 0.07 * std::exp(-1.5 / 0.5)) << "the excess over the walking bound decays";
+    EXPECT_GT(fb.correction()[0], 0.07) << "the part within the walking bound is held";
+  }
+  // A commanded bend walked crouched is a commanded walk as before: the still pose's correction is
+  // not held into it (it decays while the walking integrator starts from zero).
+  {
+    PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    double torso = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      const PostureCommand& out = fb.update({0.25, 0.0, 0.68}, {}, uprightState(0.0, torso), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch - torso);
+    }
+    EXPECT_NEAR(fb.correction()[0], 0.0625, 0.002);
+    for (int k = 0; k < 100; ++k) {
+      const PostureCommand& out = fb.update({0.25, 0.0, 0.68}, walk, uprightState(0.0, torso), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch - torso);
+    }
+    EXPECT_LT(fb.correction()[0], 0.05) << "a bent walk held the still pose's correction";
+  }
+  // Crouched less than the key (0.02 m), or upright: the walk's pitch is left alone.
+  for (const double h : {0.76, 0.78}) {
+    const Run upright = run(c, h);
+    EXPECT_LT(std::fabs(upright.correction), 1e-3) << "height " << h;
+  }
+  // Allocation-free, crouched walking.
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+  const LowState lean = uprightState(0.0, -0.1);
+  std::size_t n = 0;
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, 0.68}, walk, lean, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  // Out of range, and without a standing height: refused, naming the field.
+  PostureFeedbackConfig bad = c;
+  bad.walking_crouch_m = 0.3;
+  EXPECT_NE(bad.validate().find("walking_crouch_m"), std::string::npos);
+  EXPECT_THROW(PostureFeedback(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}), ConfigError);
+}
+
 TEST(PostureFeedback, WalkingDecayAfterAStop) {
   PostureFeedbackConfig c;
   c.enabled = true;

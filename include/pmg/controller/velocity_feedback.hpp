@@ -313,6 +313,13 @@ struct PostureFeedbackConfig {
   /// back the gait's ordinary few hundredths of a radian (fed back whole, the median stop from
   /// 1 m/s grew from 0.50 to 0.62 m).
   double walking_deadband_rad = 0.0;
+  /// While walking crouched, with the height command at least this far below the standing height
+  /// [m], [0, 0.2], an axis integrates as if its posture command were at least
+  /// walking_min_command_rad (the whole error, no dead band); 0 (the default): off. A crouched
+  /// walk leans the torso back 0.05-0.10 rad that nobody commanded (issue 12's cross-coupling,
+  /// `crouch_walk`), where an upright walk's gait pitch is a few hundredths; this feeds back the
+  /// first and leaves the second alone. Needs the standing height (the shaper's).
+  double walking_crouch_m = 0.0;
   /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
   double height_ki = 0.0;
   /// Largest correction of the height command [m], [0, 0.1].
