@@ -313,12 +313,16 @@ struct PostureFeedbackConfig {
   /// back the gait's ordinary few hundredths of a radian (fed back whole, the median stop from
   /// 1 m/s grew from 0.50 to 0.62 m).
   double walking_deadband_rad = 0.0;
-  /// While walking crouched, with the height command at least this far below the standing height
-  /// [m], [0, 0.2], an axis integrates as if its posture command were at least
-  /// walking_min_command_rad (the whole error, no dead band); 0 (the default): off. A crouched
-  /// walk leans the torso back 0.05-0.10 rad that nobody commanded (issue 12's cross-coupling,
-  /// `crouch_walk`), where an upright walk's gait pitch is a few hundredths; this feeds back the
-  /// first and leaves the second alone. Needs the standing height (the shaper's).
+  /// While walking crouched with an upright command (|posture command| below
+  /// walking_min_command_rad), with the height command at least this far below the standing height
+  /// [m], [0, 0.2], an axis integrates as if its posture command were commanded (the whole error,
+  /// no dead band), and the standing integrator's correction is held instead of decaying, up to
+  /// walking_max_correction_rad (any part beyond decays at decay_time_s); 0 (the default): off. A
+  /// crouched walk leans the torso back 0.05-0.10 rad that nobody commanded (issue 12's
+  /// cross-coupling, `crouch_walk`), and the still crouch leans too, where an upright walk's gait
+  /// pitch is a few hundredths; this feeds back the first and leaves the second alone. A commanded
+  /// bend is not held (held, a 0.4 rad bend walked at 0.66 m fell at the stop). Needs the standing
+  /// height (the shaper's: the squat clip's neutral); the constructor throws ConfigError without it.
   double walking_crouch_m = 0.0;
   /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
   double height_ki = 0.0;
@@ -341,7 +345,9 @@ struct PostureFeedbackConfig {
 /// with walking_ki > 0 a second integrator c_w acts while walking, once the posture command has been
 /// steady for walking_settle_s: c_w ← clamp(c_w + k_w (u_p − p̄) dt, ±walking_max_correction_rad) on
 /// the slower low-pass p̄ (walking_filter_time_s), and decays while standing; the correction is
-/// clamp(c_p + c_w, ±max_correction_rad).
+/// clamp(c_p + c_w, ±max_correction_rad). With walking_crouch_m, an upright-command walk crouched
+/// that far below standing counts as commanded, and c_p is held (within the walking bound) while it
+/// walks instead of decaying.
 /// With height_ki > 0 the pelvis height gets the same treatment: ĥ = the height of the pelvis (B
 /// origin) above the lower stance sole, −min_f (R_WB p_BS,f)_z on the KDL leg chains (flat ground
 /// assumed: the Table I Height measure on a level floor), low-passed alike;
