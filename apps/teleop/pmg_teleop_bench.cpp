@@ -877,6 +877,12 @@ struct BoxOperatorConfig : OperatorCommon {
   double stand_off_far_m = 0.35;   ///< pelvis distance from the pick table's near edge while raising the hands [m]
   double stand_off_m = 0.10;       ///< ... while grasping [m]
   double place_stand_off_m = 0.10; ///< pelvis distance from the place table's near edge while placing [m]
+  /// Carrying, the pelvis is held this much further back than its place at the pick table until it
+  /// is seen within carry_align_m of the place table's centre line, and only then walks in to
+  /// place_stand_off_m: sideways first, then in, so that the trunk does not run along the place
+  /// table's near edge [m]; 0: straight to the place (the diagonal path of v3).
+  double carry_back_m = 0.0;
+  double carry_align_m = 0.05;  ///< [m], see carry_back_m
   double carry_speed = 0.15;       ///< walking speed with the box [m/s]
   double crouch_m = 0.18;          ///< headset lowered this much while grasping (beyond 0.03 m: the robot squats)
   double look_down_rad = 0.70;     ///< headset pitch while grasping (beyond 0.25 rad: the torso bends)
@@ -971,6 +977,8 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("stand_off_far_m", &stand_off_far_m, "[m]");
     a->Visit("stand_off_m", &stand_off_m, "[m]");
     a->Visit("place_stand_off_m", &place_stand_off_m, "[m]");
+    a->Visit("carry_back_m", &carry_back_m, "[m]");
+    a->Visit("carry_align_m", &carry_align_m, "[m]");
     a->Visit("carry_speed", &carry_speed, "[m/s]");
     a->Visit("crouch_m", &crouch_m, "[m]");
     a->Visit("look_down_rad", &look_down_rad, "[rad]");
@@ -1013,6 +1021,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
     if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
     if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
+    if (!(carry_back_m >= 0 && carry_back_m <= 0.5)) return "carry_back_m: expected [0, 0.5] m";
+    if (!(carry_align_m > 0 && carry_align_m <= 0.5)) return "carry_align_m: expected (0, 0.5] m";
     if (!(crouch_m >= 0 && crouch_m <= 0.4)) return "crouch_m: expected [0, 0.4] m";
     if (!(look_down_rad >= 0 && look_down_rad <= 1.2)) return "look_down_rad: expected [0, 1.2] rad";
     if (!(hover_m >= 0 && hover_m <= 0.3)) return "hover_m: expected [0, 0.3] m";
@@ -1323,7 +1333,11 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         grip = true;
         raiseBox();
         holding(carry_x, lift_z, half_w - op.squeeze_m);
-        const bool there = walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.carry_speed) < op.arrive_tol_m;
+        // Sideways first, then in (carry_back_m): held back from the tables until in line with the place top.
+        Eigen::Vector2d place_at(place_near_x - op.place_stand_off_m, place.pos[1]);
+        if (op.carry_back_m > 0 && std::abs(pelvis_W.y() - place_at.y()) > op.carry_align_m)
+          place_at.x() = std::min(place_at.x(), pick_near_x - op.stand_off_m - op.carry_back_m);
+        const bool there = walkTo(place_at, op.carry_speed) < op.arrive_tol_m && place_at.x() == place_near_x - op.place_stand_off_m;
         if ((there && t - phase_t0 > 1.0) || t - phase_t0 > 25.0) phase = kLower, phase_t0 = t, walk_integral.setZero();
         break;
       }

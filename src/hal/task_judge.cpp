@@ -94,7 +94,8 @@ TaskVerdict judgeBox(const TaskScene& scene, const std::string& object, const st
     v.failure = "not_lifted";
   } else if (!(carry >= c.min_carry_m)) {
     v.failure = "not_carried";
-  } else if (tilt > c.max_tilt_rad) {
+  } else if (tilt > c.max_tilt_rad && end.v_W.norm() <= c.rest_speed) {
+    // Set down on its side (at rest); a box still moving at the end (held) is not placed, however it hangs.
     v.failure = "tipped";
   } else if (!over_place || std::abs(bottom_end - tq.height) > c.place_tol_m || end.v_W.norm() > c.rest_speed) {
     v.failure = "not_placed";

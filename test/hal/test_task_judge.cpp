@@ -90,6 +90,11 @@ TEST(TaskJudge, BoxIsLiftedCarriedAndPlacedWithoutDropping) {
   EXPECT_EQ(judgeBox(scene, "box", "pick_table", "place_table", carry(0.30, placed, 0.0, 0.1), false).failure,
             "not_placed");  // still moving
   EXPECT_EQ(judgeBox(scene, "box", "pick_table", "place_table", carry(0.30, placed, 0.5), false).failure, "tipped");
+  // Still in the hands when the trial ends, hanging turned: not placed (not tipped: it was never set down).
+  EXPECT_EQ(judgeBox(scene, "box", "pick_table", "place_table", carry(0.30, placed + Eigen::Vector3d(0, 0, 0.08), 0.5, 0.3),
+                     false)
+                .failure,
+            "not_placed");
   auto dropped = carry(0.30, placed);
   dropped[35].state.v_W.z() = -1.5;  // let go above the table
   EXPECT_EQ(judgeBox(scene, "box", "pick_table", "place_table", dropped, false).failure, "dropped");

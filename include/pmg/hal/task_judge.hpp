@@ -37,6 +37,7 @@ struct TaskVerdict {
   bool success = false;
   /// "" on success, else the first failure class: "loss_of_balance", "left_the_table" (wipe),
   /// "too_short" (wipe), "dropped", "not_lifted", "not_carried", "tipped", "not_placed" (box), in this order of precedence.
+  /// "tipped": at rest at the end, turned beyond max_tilt_rad; a box still moving at the end (still held) is "not_placed".
   std::string failure;
   std::string detail;    ///< the measured numbers behind the verdict, for the report
   double measure = 0.0;  ///< wipe: lateral path length [m]; box: largest lift of the bottom [m]
