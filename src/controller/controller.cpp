@@ -152,7 +152,9 @@ TickStatus Controller::tick(double now) noexcept {
   if (active) {
     const VelocityCommand& u_d = feedback_ ? feedback_->update(shaper_.velocity(), state_, dt_) : shaper_.velocity();
     const PostureCommand& u_s =
-        posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_) : shaper_.posture();
+        posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_,
+                                                      feedback_ ? &feedback_->lastEstimate() : nullptr)
+                          : shaper_.posture();
     const gco::GcoResult& g =
         fixed_generator_ ? pmg_->step(fixed_u_d_, PostureCommand{0.0, 0.0, config_.commands.standing_height}, dt_)
                          : pmg_->step(u_d, u_s, dt_);

@@ -334,6 +334,8 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
   if (!(still_velocity >= 0.0 && still_velocity <= 1.0)) return "still_velocity: expected 0..1 m/s";
+  if (!(still_measured_velocity >= 0.0 && still_measured_velocity <= 2.0))
+    return "still_measured_velocity: expected 0..2 m/s";
   for (std::size_t i = 0; i < 2; ++i)
     if (!(std::isfinite(walking_ki[i]) && walking_ki[i] >= 0.0 && walking_ki[i] <= 5.0))
       return std::string("walking_ki[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") + "): expected 0..5 [1/s]";
@@ -434,7 +436,7 @@ bool PostureFeedback::torsoAttitude(const LowState& state, double* pitch, double
 }
 
 const PostureCommand& PostureFeedback::update(const PostureCommand& u, const VelocityCommand& v,
-                                              const LowState& state, double dt) noexcept {
+                                              const LowState& state, double dt, const BaseVelocityEstimate* v_est) noexcept {
   u_fb_ = u;
   if (!config_.enabled) return u_fb_;
   double pitch = 0.0, roll = 0.0, tilt = 0.0;
@@ -450,6 +452,10 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   }
   const bool still = std::fabs(v.vx) < config_.still_velocity && std::fabs(v.vy) < config_.still_velocity &&
                      std::fabs(v.wz) < 2.0 * config_.still_velocity;
+  // Told to stand but still moving (still_measured_velocity): the standing correction is held.
+  const bool moving = config_.still_measured_velocity > 0.0 && v_est && v_est->valid &&
+                      (std::fabs(v_est->v_x) >= config_.still_measured_velocity ||
+                       std::fabs(v_est->v_y) >= config_.still_measured_velocity);
   const bool tilted = ok && tilt > config_.max_tilt_rad;
   const bool decay = !still || tilted;
   const double decay_keep = std::max(0.0, 1.0 - dt / config_.decay_time_s);
@@ -479,13 +485,15 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     // it walks or not), and the walking integrator adds what the gait needs on top. A commanded bend
     // is not held (held, a 0.4 rad bend walked crouched at 0.66 m fell at the stop).
     double cs = c_stand_[i] * keep;
+    const bool hold_stand = still && moving && !tilted;
+    if (hold_stand) cs = c_stand_[i];
     if (walking && upright_crouch) {
       // Held within the walking bound; what lies beyond it decays.
       const double wm = config_.walking_max_correction_rad;
       const double mag = std::fabs(c_stand_[i]);
       cs = std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
-    if (have_ && ok && !decay) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
+    if (have_ && ok && !decay && !hold_stand) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
     cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Inside the dead band the correction decays as at a stop, so that what one gait needed is not
     // carried into the next (held, a crouched walk's correction overshot the crouched turn after it).

@@ -844,6 +844,59 @@ TEST(PostureFeedback, CrouchedWalkFeedsBackItsLeanAndHoldsTheStillCrouchsCorrect
   EXPECT_THROW(PostureFeedback(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}), ConfigError);
 }
 
+// still_measured_velocity: told to stand but still running (the estimate above the threshold), the
+// standing correction is held, neither integrated nor decayed; once the robot is seen still, or
+// without an estimate (or an invalid one), it integrates as before.
+TEST(PostureFeedback, StandingCorrectionIsHeldWhileTheRobotStillMoves) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.still_measured_velocity = 0.3;
+  ASSERT_EQ(c.validate(), "");
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  const LowState short_of_bend = uprightState(0.0, 0.3);  // torso at 0.3 rad, told 0.4
+  BaseVelocityEstimate running;
+  running.valid = true;
+  running.stance_feet = 1;
+  running.v_x = 1.5;
+  BaseVelocityEstimate stopped = running;
+  stopped.v_x = 0.1;
+  // Builds a correction while still.
+  for (int k = 0; k < 50; ++k) fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &stopped);
+  const double built = fb.correction()[0];
+  EXPECT_GT(built, 0.02);
+  // Commanded still, but running: held exactly.
+  for (int k = 0; k < 300; ++k) fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &running);
+  EXPECT_EQ(fb.correction()[0], built) << "integrated while the robot ran on";
+  // An invalid estimate, or none: as before (integrates).
+  running.valid = false;
+  fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &running);
+  EXPECT_GT(fb.correction()[0], built);
+  const double after_invalid = fb.correction()[0];
+  fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, nullptr);
+  EXPECT_GT(fb.correction()[0], after_invalid);
+  // Seen still again: integrates.
+  const double before = fb.correction()[0];
+  for (int k = 0; k < 50; ++k) fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &stopped);
+  EXPECT_GT(fb.correction()[0], before);
+  // Off (0, the default): integrates while running too.
+  c.still_measured_velocity = 0.0;
+  PostureFeedback off(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  running.valid = true;
+  for (int k = 0; k < 50; ++k) off.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &running);
+  EXPECT_GT(off.correction()[0], 0.02);
+  // Allocation-free; out of range refused, naming the field.
+  std::size_t n = 0;
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) fb.update({0.4, 0.0, 0.78}, {}, short_of_bend, 0.01, &running);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  c.still_measured_velocity = 2.5;
+  EXPECT_NE(c.validate().find("still_measured_velocity"), std::string::npos);
+}
+
 TEST(PostureFeedback, WalkingDecayAfterAStop) {
   PostureFeedbackConfig c;
   c.enabled = true;
