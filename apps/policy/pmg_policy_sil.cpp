@@ -47,8 +47,8 @@
 //   u_feedback vx, vy, wz, pitch, roll (and height, when posture_feedback.height_ki > 0) after the
 //              velocity and posture feedback: what the generator got (the shaped command when off;
 //              --velocity-feedback / --posture-feedback on|off override the config;
-//              --crouched-envelope off drops commands.crouched_height, --walking-height-floor off
-//              commands.walking_min_height)
+//              --crouched-envelope off drops commands.crouched_height, --bent-envelope off
+//              commands.bent_pitch, --walking-height-floor off commands.walking_min_height)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -242,6 +242,10 @@ int main(int argc, char** argv) {
   app.add_option("--crouched-envelope", crouched_envelope,
                  "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string bent_envelope;
+  app.add_option("--bent-envelope", bent_envelope,
+                 "off: no bent velocity envelope (commands.bent_pitch 0); default: the controller config's")
+      ->check(CLI::IsMember({"on", "off"}));
   std::string walking_height_floor;
   app.add_option("--walking-height-floor", walking_height_floor,
                  "off: no walking height floor (commands.walking_min_height 0); default: the controller config's")
@@ -275,6 +279,9 @@ int main(int argc, char** argv) {
     if (crouched_envelope == "off") base.commands.crouched_height = 0.0;
     if (crouched_envelope == "on" && !(base.commands.crouched_height > 0.0))
       throw pmg::ConfigError(controller_path + ": --crouched-envelope on: commands.crouched_height is 0 (off) there");
+    if (bent_envelope == "off") base.commands.bent_pitch = 0.0;
+    if (bent_envelope == "on" && !(base.commands.bent_pitch > 0.0))
+      throw pmg::ConfigError(controller_path + ": --bent-envelope on: commands.bent_pitch is 0 (off) there");
     if (walking_height_floor == "off") base.commands.walking_min_height = 0.0;
     if (walking_height_floor == "on" && !(base.commands.walking_min_height > 0.0))
       throw pmg::ConfigError(controller_path + ": --walking-height-floor on: commands.walking_min_height is 0 (off) there");
@@ -645,7 +652,7 @@ int main(int argc, char** argv) {
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
-       << ", \"crouched_height\": " << base.commands.crouched_height << ", \"commands\": " << jstr(commands)
+       << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];

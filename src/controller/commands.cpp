@@ -37,6 +37,13 @@ std::string CommandLimits::validate() const {
       if (!(finitePositive(crouched_max_velocity[i]) && crouched_max_velocity[i] <= max_velocity[i]))
         return "commands.crouched_max_velocity: expected each in (0, max_velocity]";
   }
+  if (!(std::isfinite(bent_pitch) && bent_pitch >= 0.0 && bent_pitch <= pitch_range[1]))
+    return "commands.bent_pitch: expected 0 (off) or a torso pitch in (0, pitch_range max = " +
+           std::to_string(pitch_range[1]) + "] rad";
+  if (bent_pitch > 0.0)
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!(finitePositive(bent_max_velocity[i]) && bent_max_velocity[i] <= max_velocity[i]))
+        return "commands.bent_max_velocity: expected each in (0, max_velocity]";
   if (!(std::isfinite(walking_min_height) && (walking_min_height == 0.0 || (walking_min_height >= height_range[0] &&
                                                                               walking_min_height <= standing_height))))
     return "commands.walking_min_height: expected 0 (off) or a height in [" + std::to_string(height_range[0]) + ", " +
@@ -115,25 +122,37 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
       ++counters_.height_floor_ticks;
     }
   }
-  // Crouched velocity envelope (CommandLimits::crouched_height), on the shaped height.
+  // Crouched (CommandLimits::crouched_height) and bent (CommandLimits::bent_pitch) velocity envelopes,
+  // on the shaped height and pitch: the larger scale wins, applied along the command's direction.
   VelocityCommand goal = target_;
+  const double t[3] = {target_.vx, target_.vy, target_.wz};
+  double crouch_scale = 0.0, bent_scale = 0.0;
   if (limits_.crouched_height > 0.0) {
     const double f = std::clamp((limits_.standing_height - posture_.height) /
                                     (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
     if (f > 0.0) {
-      const double t[3] = {target_.vx, target_.vy, target_.wz};
       double box = 0.0, l1 = 0.0;
       for (std::size_t i = 0; i < 3; ++i) {
         const double M = limits_.max_velocity[i], m = M + f * (limits_.crouched_max_velocity[i] - M);
         box = std::max(box, std::fabs(t[i]) / M);
         l1 += std::fabs(t[i]) / m;
       }
-      const double scale = (1.0 - f) * box + f * l1;
-      if (scale > 1.0) {
-        goal = {target_.vx / scale, target_.vy / scale, target_.wz / scale};
-        ++counters_.crouch_limited_ticks;
-      }
+      crouch_scale = (1.0 - f) * box + f * l1;
     }
+  }
+  if (limits_.bent_pitch > 0.0) {
+    const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
+    if (f > 0.0)
+      for (std::size_t i = 0; i < 3; ++i) {
+        const double M = limits_.max_velocity[i], m = M + f * (limits_.bent_max_velocity[i] - M);
+        bent_scale = std::max(bent_scale, std::fabs(t[i]) / m);
+      }
+  }
+  const double scale = std::max(crouch_scale, bent_scale);
+  if (scale > 1.0) {
+    goal = {target_.vx / scale, target_.vy / scale, target_.wz / scale};
+    if (crouch_scale > 1.0) ++counters_.crouch_limited_ticks;
+    if (bent_scale > 1.0) ++counters_.bent_limited_ticks;
   }
   velocity_.vx = slew(velocity_.vx, goal.vx, limits_.max_acceleration[0] * dt);
   velocity_.vy = slew(velocity_.vy, goal.vy, limits_.max_acceleration[1] * dt);

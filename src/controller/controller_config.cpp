@@ -126,6 +126,8 @@ struct CommandsYaml {
     a->Visit("crouched_height", &l.crouched_height,
              "0 (off) or the pelvis height [m] at which crouched_max_velocity holds fully (L1 rule)");
     a->Visit("crouched_max_velocity", &l.crouched_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at crouched_height");
+    a->Visit("bent_pitch", &l.bent_pitch, "0 (off) or the torso pitch [rad] at which bent_max_velocity holds fully (per axis)");
+    a->Visit("bent_max_velocity", &l.bent_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at bent_pitch");
     a->Visit("walking_min_height", &l.walking_min_height,
              "0 (off) or the lowest pelvis height [m] while walking and walking_min_height_hold_s after");
     a->Visit("walking_min_height_hold_s", &l.walking_min_height_hold_s, "how long the walking height floor holds after a stop, 0..10 s");

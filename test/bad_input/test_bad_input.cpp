@@ -616,6 +616,11 @@ std::vector<Case> allCases() {
                     "crouched_max_velocity: [2.0, 0.3, 0.6]");
        }),
        error({"commands", "crouched_max_velocity", "(0, max_velocity]"})},
+      {"ctrl_commands_bent_pitch_beyond_pitch_range", Kind::kControllerConfig,
+       text([] {
+         return sub(controllerText("g1_sil_policy.yaml"), "bent_pitch: 0.4 ", "bent_pitch: 0.9 ");
+       }),
+       error({"commands", "bent_pitch", "pitch_range max"})},
       {"ctrl_generator_cadence_ratio_out_of_range", Kind::kControllerConfig,
        text([] { return sub(controllerText("g1_sil.yaml"), "generator:\n", "generator:\n  max_cadence_ratio: 2.5\n"); }),
        error({"generator", "max_cadence_ratio", "[1, 2]"})},

@@ -168,6 +168,81 @@ TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
   EXPECT_NEAR(plain.velocity().vx, 0.6, 1e-12);
 }
 
+// The bent velocity envelope (CommandLimits::bent_pitch): upright and leaning back a fast walk
+// passes; bending to bent_pitch while it is held slows it along its direction to bent_max_velocity,
+// per axis, counted, never faster than the slew limits; half bent the limit is halfway; straightening
+// gives the command back; crouched too, the tighter envelope wins; off, nothing is limited.
+TEST(CommandShaper, BentEnvelopeSlowsAFastWalkWhileTheTorsoIsBent) {
+  CommandLimits limits;
+  limits.standing_height = 0.78;
+  limits.max_velocity = {1.0, 0.4, 0.8};
+  limits.bent_pitch = 0.4;
+  limits.bent_max_velocity = {0.6, 0.4, 0.8};
+  CommandShaper shaper(limits);
+  CommandSample s = velocity(1.0, 0.0, 0.4, 0.0);
+  const double dt = 0.01;
+  double t = 0.0, largest[3] = {0, 0, 0};
+  VelocityCommand prev = shaper.velocity();
+  const auto run = [&](double pitch, std::optional<double> h, double seconds) {
+    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
+      s.command.pitch = pitch;
+      s.command.height = h;
+      s.posture_time = s.velocity_time = t;
+      shaper.update(s, t, dt);
+      const VelocityCommand& v = shaper.velocity();
+      largest[0] = std::max(largest[0], std::fabs(v.vx - prev.vx));
+      largest[1] = std::max(largest[1], std::fabs(v.vy - prev.vy));
+      largest[2] = std::max(largest[2], std::fabs(v.wz - prev.wz));
+      prev = v;
+    }
+  };
+  run(0.0, std::nullopt, 2.0);
+  EXPECT_NEAR(shaper.velocity().vx, 1.0, 1e-12) << "upright: the walk passes unchanged";
+  run(-0.1, std::nullopt, 2.0);
+  EXPECT_NEAR(shaper.velocity().vx, 1.0, 1e-12) << "leaning back: not limited";
+  EXPECT_EQ(shaper.counters().bent_limited_ticks, 0u);
+  run(0.4, std::nullopt, 3.0);
+  ASSERT_NEAR(shaper.posture().pitch, 0.4, 1e-12);
+  EXPECT_NEAR(shaper.velocity().vx, 0.6, 1e-9) << "bent: v_x at bent_max_velocity";
+  EXPECT_NEAR(shaper.velocity().wz / shaper.velocity().vx, 0.4, 1e-9) << "the direction is kept";
+  EXPECT_GT(shaper.counters().bent_limited_ticks, 0u);
+  EXPECT_EQ(shaper.counters().crouch_limited_ticks, 0u);
+  EXPECT_EQ(shaper.counters().clamped, 0u) << "inside max_velocity: not a clamp";
+  run(0.2, std::nullopt, 3.0);
+  EXPECT_NEAR(shaper.velocity().vx, 0.8, 1e-9) << "half bent: the limit is halfway";
+  run(0.0, std::nullopt, 3.0);
+  EXPECT_NEAR(shaper.velocity().vx, 1.0, 1e-12) << "straightening gives the command back";
+  for (int i = 0; i < 3; ++i) EXPECT_LE(largest[i], limits.max_acceleration[static_cast<std::size_t>(i)] * dt + 1e-12);
+
+  // Bent and crouched: the tighter of the two envelopes holds.
+  CommandLimits both = limits;
+  both.crouched_height = 0.62;
+  both.crouched_max_velocity = {0.3, 0.3, 0.6};
+  CommandShaper crouched(both);
+  s = velocity(1.0, 0.0, 0.0, 0.0);
+  for (int k = 0; k < 600; ++k) {
+    s.command.pitch = 0.4;
+    s.command.height = 0.62;
+    s.posture_time = s.velocity_time = k * dt;
+    crouched.update(s, k * dt, dt);
+  }
+  EXPECT_NEAR(crouched.velocity().vx, 0.3, 1e-9) << "the crouched envelope is the tighter";
+  EXPECT_GT(crouched.counters().crouch_limited_ticks, 0u);
+
+  // Off (bent_pitch 0, the default): bent 0.4 rad the walk passes.
+  CommandLimits off = limits;
+  off.bent_pitch = 0.0;
+  CommandShaper plain(off);
+  s = velocity(1.0, 0.0, 0.0, 0.0);
+  for (int k = 0; k < 400; ++k) {
+    s.command.pitch = 0.4;
+    s.posture_time = s.velocity_time = k * dt;
+    plain.update(s, k * dt, dt);
+  }
+  EXPECT_NEAR(plain.velocity().vx, 1.0, 1e-12);
+  EXPECT_EQ(plain.counters().bent_limited_ticks, 0u);
+}
+
 TEST(CommandLimits, ValidateNamesTheField) {
   CommandLimits l;
   EXPECT_EQ(l.validate(), "");
@@ -186,6 +261,18 @@ TEST(CommandLimits, ValidateNamesTheField) {
   l.crouched_height = 0.62;
   l.crouched_max_velocity = {1.5, 0.3, 0.6};  // beyond max_velocity
   EXPECT_NE(l.validate().find("commands.crouched_max_velocity"), std::string::npos);
+  for (double p : {-0.1, 0.7, std::nan("")}) {  // negative, beyond pitch_range, NaN
+    l = CommandLimits{};
+    l.bent_pitch = p;
+    EXPECT_NE(l.validate().find("commands.bent_pitch:"), std::string::npos) << p;
+  }
+  l = CommandLimits{};
+  l.bent_pitch = 0.4;
+  EXPECT_EQ(l.validate(), "");
+  l.bent_max_velocity = {1.2, 0.4, 0.8};  // beyond max_velocity
+  EXPECT_NE(l.validate().find("commands.bent_max_velocity"), std::string::npos);
+  l.bent_max_velocity = {0.0, 0.4, 0.8};
+  EXPECT_NE(l.validate().find("commands.bent_max_velocity"), std::string::npos);
   for (double h : {0.3, 0.8, std::nan(""), -0.1}) {  // below height_range, above standing, NaN, negative
     l = CommandLimits{};
     l.walking_min_height = h;

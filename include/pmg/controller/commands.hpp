@@ -71,6 +71,19 @@ struct CommandLimits {
   double crouched_height = 0.0;
   /// |v_x|, |v_y| [m/s], |ω| [rad/s] at crouched_height; each in (0, max_velocity].
   std::array<double, 3> crouched_max_velocity{0.4, 0.3, 0.6};
+  /// Bent velocity envelope (0 = off): torso pitch [rad], in (0, pitch_range max], at and beyond
+  /// which the velocity command is held inside bent_max_velocity, per axis, scaled along its
+  /// direction (s = max_i |u_i| / m_i(f), u ← u / s when s > 1). The limits blend linearly with the
+  /// bend f = clamp(pitch / bent_pitch, 0, 1): m_i(f) = M_i + f (b_i − M_i), where pitch is the
+  /// shaped (slewed) pitch command, so the limit moves continuously and the velocity slew keeps the
+  /// command continuous; upright and leaning back (pitch ≤ 0) nothing is limited. Applied together
+  /// with the crouched envelope: the larger of the two scales wins. Why: bent 0.4 rad at 1.0 m/s the
+  /// default policy could not stop (posture_walks.yaml, 24 seeds: 11 still walked faster than
+  /// 0.3 m/s 1–3 s after the stop command, one ran away at 2 m/s and fell), while from 0.6 m/s
+  /// bent, and from 1.0 m/s upright, every seed stopped (docs/controller.md "Bent velocity envelope").
+  double bent_pitch = 0.0;
+  /// |v_x|, |v_y| [m/s], |ω| [rad/s] at bent_pitch; each in (0, max_velocity].
+  std::array<double, 3> bent_max_velocity{0.6, 0.4, 0.8};
   /// Walking height floor (0 = off) [m], in [height_range min, standing height]: while the robot is
   /// told to walk (velocity target or shaped velocity not zero) and for walking_min_height_hold_s
   /// after both are zero, the height goal is at least this; below it the robot stands, crouched as
@@ -95,6 +108,7 @@ struct CommandCounters {
   std::uint64_t stale_ticks = 0;   ///< ticks on which the velocity command was stale (→ zero velocity)
   std::uint64_t crouch_limited_ticks = 0;  ///< ticks on which the crouched velocity envelope slowed the command
   std::uint64_t height_floor_ticks = 0;    ///< ticks on which the walking height floor raised the height goal
+  std::uint64_t bent_limited_ticks = 0;    ///< ticks on which the bent velocity envelope slowed the command
 };
 
 /// Turns raw operator input into the command the generator gets: validated, clamped to the
