@@ -22,6 +22,44 @@ CommandSample velocity(double vx, double vy, double wz, double t) {
   return s;
 }
 
+/// The envelope tests' limits: standing at 0.78 m, |v| at most (1.0, 0.4, 0.8), the rest default.
+CommandLimits envelopeLimits() {
+  CommandLimits limits;
+  limits.standing_height = 0.78;
+  limits.max_velocity = {1.0, 0.4, 0.8};
+  return limits;
+}
+
+/// Drives a CommandShaper at 100 Hz with one held velocity command and a posture set per call,
+/// recording the largest per-tick step of the shaped velocity on each axis.
+struct HeldCommandRun {
+  CommandShaper& shaper;
+  CommandSample sample;
+  double dt = 0.01, t = 0.0;
+  double largest[3] = {0, 0, 0};
+  VelocityCommand prev{};
+  HeldCommandRun(CommandShaper& sh, double vx, double vy, double wz) : shaper(sh), sample(velocity(vx, vy, wz, 0.0)) {
+    prev = shaper.velocity();
+  }
+  void operator()(double pitch, std::optional<double> height, double seconds) {
+    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
+      sample.command.pitch = pitch;
+      sample.command.height = height;
+      sample.posture_time = sample.velocity_time = t;
+      shaper.update(sample, t, dt);
+      const VelocityCommand& v = shaper.velocity();
+      largest[0] = std::max(largest[0], std::fabs(v.vx - prev.vx));
+      largest[1] = std::max(largest[1], std::fabs(v.vy - prev.vy));
+      largest[2] = std::max(largest[2], std::fabs(v.wz - prev.wz));
+      prev = v;
+    }
+  }
+  /// Every axis' largest step within its slew limit (max_acceleration × dt).
+  void expectWithinSlew(const CommandLimits& limits) const {
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_LE(largest[i], limits.max_acceleration[i] * dt + 1e-12) << "axis " << i;
+  }
+};
+
 TEST(CommandShaper, SlewLimitsTheVelocityStep) {
   CommandShaper shaper(CommandLimits{});
   CommandSample s = velocity(1.0, 0.0, 1.0, 0.0);
@@ -114,28 +152,12 @@ TEST(CommandShaper, HeightNoneToValueAndBackIsSlewed) {
 // crouched to crouched_height, it is slowed along its direction until Σ|u_i|/m_i = 1 and counted;
 // crouching while the arc is held never steps the velocity faster than the slew limits.
 TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
-  CommandLimits limits;
-  limits.standing_height = 0.78;
-  limits.max_velocity = {1.0, 0.4, 0.8};
+  CommandLimits limits = envelopeLimits();
   limits.crouched_height = 0.62;
   limits.crouched_max_velocity = {0.3, 0.3, 0.6};
   CommandShaper shaper(limits);
-  CommandSample s = velocity(0.6, 0.2, 0.4, 0.0);
-  const double dt = 0.01;
-  double t = 0.0, largest[3] = {0, 0, 0};
-  VelocityCommand prev = shaper.velocity();
-  const auto run = [&](std::optional<double> h, double seconds) {
-    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
-      s.command.height = h;
-      s.posture_time = s.velocity_time = t;
-      shaper.update(s, t, dt);
-      const VelocityCommand& v = shaper.velocity();
-      largest[0] = std::max(largest[0], std::fabs(v.vx - prev.vx));
-      largest[1] = std::max(largest[1], std::fabs(v.vy - prev.vy));
-      largest[2] = std::max(largest[2], std::fabs(v.wz - prev.wz));
-      prev = v;
-    }
-  };
+  HeldCommandRun hold(shaper, 0.6, 0.2, 0.4);
+  const auto run = [&](std::optional<double> h, double seconds) { hold(0.0, h, seconds); };
   run(std::nullopt, 2.0);
   EXPECT_NEAR(shaper.velocity().vx, 0.6, 1e-12) << "standing: the arc passes unchanged";
   EXPECT_NEAR(shaper.velocity().wz, 0.4, 1e-12);
@@ -149,9 +171,7 @@ TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
   EXPECT_NEAR(v.wz / v.vx, 0.4 / 0.6, 1e-9);
   EXPECT_GT(shaper.counters().crouch_limited_ticks, 0u);
   EXPECT_EQ(shaper.counters().clamped, 0u) << "inside max_velocity: not a clamp";
-  EXPECT_LE(largest[0], limits.max_acceleration[0] * dt + 1e-12);
-  EXPECT_LE(largest[1], limits.max_acceleration[1] * dt + 1e-12);
-  EXPECT_LE(largest[2], limits.max_acceleration[2] * dt + 1e-12);
+  hold.expectWithinSlew(limits);
   run(std::nullopt, 3.0);
   EXPECT_NEAR(shaper.velocity().vx, 0.6, 1e-12) << "standing up gives the command back";
 
@@ -159,12 +179,7 @@ TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
   CommandLimits off = limits;
   off.crouched_height = 0.0;
   CommandShaper plain(off);
-  s = velocity(0.6, 0.2, 0.4, 0.0);
-  for (int k = 0; k < 400; ++k) {
-    s.command.height = 0.62;
-    s.posture_time = s.velocity_time = k * dt;
-    plain.update(s, k * dt, dt);
-  }
+  HeldCommandRun(plain, 0.6, 0.2, 0.4)(0.0, 0.62, 4.0);
   EXPECT_NEAR(plain.velocity().vx, 0.6, 1e-12);
 }
 
@@ -173,29 +188,11 @@ TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
 // per axis, counted, never faster than the slew limits; half bent the limit is halfway; straightening
 // gives the command back; crouched too, the tighter envelope wins; off, nothing is limited.
 TEST(CommandShaper, BentEnvelopeSlowsAFastWalkWhileTheTorsoIsBent) {
-  CommandLimits limits;
-  limits.standing_height = 0.78;
-  limits.max_velocity = {1.0, 0.4, 0.8};
+  CommandLimits limits = envelopeLimits();
   limits.bent_pitch = 0.4;
   limits.bent_max_velocity = {0.6, 0.4, 0.8};
   CommandShaper shaper(limits);
-  CommandSample s = velocity(1.0, 0.0, 0.4, 0.0);
-  const double dt = 0.01;
-  double t = 0.0, largest[3] = {0, 0, 0};
-  VelocityCommand prev = shaper.velocity();
-  const auto run = [&](double pitch, std::optional<double> h, double seconds) {
-    for (int k = 0; k < static_cast<int>(seconds / dt); ++k, t += dt) {
-      s.command.pitch = pitch;
-      s.command.height = h;
-      s.posture_time = s.velocity_time = t;
-      shaper.update(s, t, dt);
-      const VelocityCommand& v = shaper.velocity();
-      largest[0] = std::max(largest[0], std::fabs(v.vx - prev.vx));
-      largest[1] = std::max(largest[1], std::fabs(v.vy - prev.vy));
-      largest[2] = std::max(largest[2], std::fabs(v.wz - prev.wz));
-      prev = v;
-    }
-  };
+  HeldCommandRun run(shaper, 1.0, 0.0, 0.4);
   run(0.0, std::nullopt, 2.0);
   EXPECT_NEAR(shaper.velocity().vx, 1.0, 1e-12) << "upright: the walk passes unchanged";
   run(-0.1, std::nullopt, 2.0);
@@ -212,20 +209,14 @@ TEST(CommandShaper, BentEnvelopeSlowsAFastWalkWhileTheTorsoIsBent) {
   EXPECT_NEAR(shaper.velocity().vx, 0.8, 1e-9) << "half bent: the limit is halfway";
   run(0.0, std::nullopt, 3.0);
   EXPECT_NEAR(shaper.velocity().vx, 1.0, 1e-12) << "straightening gives the command back";
-  for (int i = 0; i < 3; ++i) EXPECT_LE(largest[i], limits.max_acceleration[static_cast<std::size_t>(i)] * dt + 1e-12);
+  run.expectWithinSlew(limits);
 
   // Bent and crouched: the tighter of the two envelopes holds.
   CommandLimits both = limits;
   both.crouched_height = 0.62;
   both.crouched_max_velocity = {0.3, 0.3, 0.6};
   CommandShaper crouched(both);
-  s = velocity(1.0, 0.0, 0.0, 0.0);
-  for (int k = 0; k < 600; ++k) {
-    s.command.pitch = 0.4;
-    s.command.height = 0.62;
-    s.posture_time = s.velocity_time = k * dt;
-    crouched.update(s, k * dt, dt);
-  }
+  HeldCommandRun(crouched, 1.0, 0.0, 0.0)(0.4, 0.62, 6.0);
   EXPECT_NEAR(crouched.velocity().vx, 0.3, 1e-9) << "the crouched envelope is the tighter";
   EXPECT_GT(crouched.counters().crouch_limited_ticks, 0u);
 
@@ -233,12 +224,7 @@ TEST(CommandShaper, BentEnvelopeSlowsAFastWalkWhileTheTorsoIsBent) {
   CommandLimits off = limits;
   off.bent_pitch = 0.0;
   CommandShaper plain(off);
-  s = velocity(1.0, 0.0, 0.0, 0.0);
-  for (int k = 0; k < 400; ++k) {
-    s.command.pitch = 0.4;
-    s.posture_time = s.velocity_time = k * dt;
-    plain.update(s, k * dt, dt);
-  }
+  HeldCommandRun(plain, 1.0, 0.0, 0.0)(0.4, std::nullopt, 4.0);
   EXPECT_NEAR(plain.velocity().vx, 1.0, 1e-12);
   EXPECT_EQ(plain.counters().bent_limited_ticks, 0u);
 }
@@ -261,11 +247,17 @@ TEST(CommandLimits, ValidateNamesTheField) {
   l.crouched_height = 0.62;
   l.crouched_max_velocity = {1.5, 0.3, 0.6};  // beyond max_velocity
   EXPECT_NE(l.validate().find("commands.crouched_max_velocity"), std::string::npos);
-  for (double p : {-0.1, 0.7, std::nan("")}) {  // negative, beyond pitch_range, NaN
-    l = CommandLimits{};
-    l.bent_pitch = p;
-    EXPECT_NE(l.validate().find("commands.bent_pitch:"), std::string::npos) << p;
-  }
+  // Each value set alone on default limits is refused with the field's name.
+  const auto rejects = [](double CommandLimits::*field, std::initializer_list<double> values, const char* name) {
+    for (double v : values) {
+      CommandLimits bad;
+      bad.*field = v;
+      EXPECT_NE(bad.validate().find(name), std::string::npos) << name << " = " << v;
+    }
+  };
+  rejects(&CommandLimits::bent_pitch, {-0.1, 0.7, std::nan("")}, "commands.bent_pitch:");  // negative, beyond pitch_range, NaN
+  rejects(&CommandLimits::walking_min_height, {0.3, 0.8, std::nan(""), -0.1},  // below height_range, above standing, NaN, negative
+          "commands.walking_min_height:");
   l = CommandLimits{};
   l.bent_pitch = 0.4;
   EXPECT_EQ(l.validate(), "");
@@ -273,11 +265,6 @@ TEST(CommandLimits, ValidateNamesTheField) {
   EXPECT_NE(l.validate().find("commands.bent_max_velocity"), std::string::npos);
   l.bent_max_velocity = {0.0, 0.4, 0.8};
   EXPECT_NE(l.validate().find("commands.bent_max_velocity"), std::string::npos);
-  for (double h : {0.3, 0.8, std::nan(""), -0.1}) {  // below height_range, above standing, NaN, negative
-    l = CommandLimits{};
-    l.walking_min_height = h;
-    EXPECT_NE(l.validate().find("commands.walking_min_height:"), std::string::npos) << h;
-  }
   l = CommandLimits{};
   l.walking_min_height = 0.66;
   EXPECT_EQ(l.validate(), "");
