@@ -98,8 +98,8 @@ struct Pipeline {
   double solePitch() const { return sole_n ? sole_pitch_sum / sole_n : 0.0; }
 };
 
-/// The command the controller's CommandShaper (its `commands:` limits: ranges, the crouched velocity
-/// envelope) settles to when @p c is held for 5 s: what the generator is given in the product path.
+/// The command the controller's CommandShaper (its `commands:` limits: ranges, the crouched and bent
+/// velocity envelopes) settles to when @p c is held for 5 s: what the generator is given in the product path.
 Command shapedCommand(const pmg::CommandLimits& limits, const Command& c, double dt) {
   pmg::CommandShaper shaper(limits);
   pmg::CommandSample s;
@@ -257,8 +257,10 @@ int main(int argc, char** argv) {
       if (const std::string e = limits.validate(); !e.empty()) throw std::runtime_error(controller->source_file + ": " + e);
       char floor[32] = "off";
       if (limits.walking_min_height > 0.0) std::snprintf(floor, sizeof floor, "%.3f m", limits.walking_min_height);
-      std::printf("product path: %s (commands shaped by its limits; crouched envelope %s; walking height floor %s)\n",
-                  controller_path.c_str(), limits.crouched_height > 0.0 ? "on" : "off", floor);
+      std::printf("product path: %s (commands shaped by its limits; crouched envelope %s; bent envelope %s; walking height "
+                  "floor %s)\n",
+                  controller_path.c_str(), limits.crouched_height > 0.0 ? "on" : "off", limits.bent_pitch > 0.0 ? "on" : "off",
+                  floor);
     }
     auto legs = LegModel::fromRobotConfig(robot);
     GcoOptions on = controller ? controller->gco : (gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config));
