@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scripts/stop_speed.py: on two synthetic seeds, one that stops and one that walks on, the mean speed
 1-3 s into the stop is found per seed on the segment's own axis, the seed beyond the threshold is
-counted, a seed that fell before the segment is nan and not counted, and a missing segment or an empty
+counted (on the name's axis, or the one --axis names), a seed that fell before the segment is nan and not counted, and a missing segment or an empty
 directory ends with exit status 2 naming it."""
 import csv
 import os
@@ -50,6 +50,9 @@ def main():
         r = run(d, "stop_side", "--from-s", "0", "--to-s", "1")
         assert r.returncode == 0, r.stderr
         assert "stop_side 1 of 2" in r.stdout.splitlines()[-1], r.stdout
+        # --axis vy for every segment: stop_fwd's v_y is 0.4 in seed 1 from 2 s on (1-3 s into it)
+        r = run(d, "stop_fwd", "--axis", "vy")
+        assert r.returncode == 0 and "stop_fwd 1 of 2" in r.stdout.splitlines()[-1], r.stdout
         r = run(d, "stop_back")
         assert r.returncode == 2 and "stop_back" in r.stderr, r
     with tempfile.TemporaryDirectory() as d:
