@@ -37,7 +37,7 @@ std::string CommandLimits::validate() const {
       if (!(finitePositive(crouched_max_velocity[i]) && crouched_max_velocity[i] <= max_velocity[i]))
         return "commands.crouched_max_velocity: expected each in (0, max_velocity]";
   }
-  if (!(std::isfinite(bent_pitch) && bent_pitch >= 0.0 && bent_pitch <= pitch_range[1]))
+  if (!(std::isfinite(bent_pitch) && (bent_pitch == 0.0 || (bent_pitch > 0.0 && bent_pitch <= pitch_range[1]))))
     return "commands.bent_pitch: expected 0 (off) or a torso pitch in (0, pitch_range max = " +
            std::to_string(pitch_range[1]) + "] rad";
   if (bent_pitch > 0.0)
