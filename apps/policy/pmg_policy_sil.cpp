@@ -276,15 +276,15 @@ int main(int argc, char** argv) {
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
-    if (crouched_envelope == "off") base.commands.crouched_height = 0.0;
-    if (crouched_envelope == "on" && !(base.commands.crouched_height > 0.0))
-      throw pmg::ConfigError(controller_path + ": --crouched-envelope on: commands.crouched_height is 0 (off) there");
-    if (bent_envelope == "off") base.commands.bent_pitch = 0.0;
-    if (bent_envelope == "on" && !(base.commands.bent_pitch > 0.0))
-      throw pmg::ConfigError(controller_path + ": --bent-envelope on: commands.bent_pitch is 0 (off) there");
-    if (walking_height_floor == "off") base.commands.walking_min_height = 0.0;
-    if (walking_height_floor == "on" && !(base.commands.walking_min_height > 0.0))
-      throw pmg::ConfigError(controller_path + ": --walking-height-floor on: commands.walking_min_height is 0 (off) there");
+    // A commands: key whose 0 means off, switched by --OPTION off|on ("on" keeps the config's value).
+    const auto commandsSwitch = [&](const std::string& choice, double* key, const char* option, const char* name) {
+      if (choice == "off") *key = 0.0;
+      if (choice == "on" && !(*key > 0.0))
+        throw pmg::ConfigError(controller_path + ": " + option + " on: commands." + name + " is 0 (off) there");
+    };
+    commandsSwitch(crouched_envelope, &base.commands.crouched_height, "--crouched-envelope", "crouched_height");
+    commandsSwitch(bent_envelope, &base.commands.bent_pitch, "--bent-envelope", "bent_pitch");
+    commandsSwitch(walking_height_floor, &base.commands.walking_min_height, "--walking-height-floor", "walking_min_height");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();

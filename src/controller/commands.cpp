@@ -126,6 +126,10 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
   // on the shaped height and pitch: the larger scale wins, applied along the command's direction.
   VelocityCommand goal = target_;
   const double t[3] = {target_.vx, target_.vy, target_.wz};
+  // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
+  const auto blended = [this](std::size_t i, double f, const std::array<double, 3>& at_full) {
+    return limits_.max_velocity[i] + f * (at_full[i] - limits_.max_velocity[i]);
+  };
   double crouch_scale = 0.0, bent_scale = 0.0;
   if (limits_.crouched_height > 0.0) {
     const double f = std::clamp((limits_.standing_height - posture_.height) /
@@ -133,9 +137,8 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
     if (f > 0.0) {
       double box = 0.0, l1 = 0.0;
       for (std::size_t i = 0; i < 3; ++i) {
-        const double M = limits_.max_velocity[i], m = M + f * (limits_.crouched_max_velocity[i] - M);
-        box = std::max(box, std::fabs(t[i]) / M);
-        l1 += std::fabs(t[i]) / m;
+        box = std::max(box, std::fabs(t[i]) / limits_.max_velocity[i]);
+        l1 += std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
       }
       crouch_scale = (1.0 - f) * box + f * l1;
     }
@@ -143,10 +146,7 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
   if (limits_.bent_pitch > 0.0) {
     const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
     if (f > 0.0)
-      for (std::size_t i = 0; i < 3; ++i) {
-        const double M = limits_.max_velocity[i], m = M + f * (limits_.bent_max_velocity[i] - M);
-        bent_scale = std::max(bent_scale, std::fabs(t[i]) / m);
-      }
+      for (std::size_t i = 0; i < 3; ++i) bent_scale = std::max(bent_scale, std::fabs(t[i]) / blended(i, f, limits_.bent_max_velocity));
   }
   const double scale = std::max(crouch_scale, bent_scale);
   if (scale > 1.0) {

@@ -457,6 +457,7 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
                       (std::fabs(v_est->v_x) >= config_.still_measured_velocity ||
                        std::fabs(v_est->v_y) >= config_.still_measured_velocity);
   const bool tilted = ok && tilt > config_.max_tilt_rad;
+  const bool hold_stand = still && moving && !tilted;  // the standing correction neither integrates nor decays
   const bool decay = !still || tilted;
   const double decay_keep = std::max(0.0, 1.0 - dt / config_.decay_time_s);
   const double keep = decay ? decay_keep : 1.0;
@@ -484,9 +485,7 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     // upright command, what the still crouch needed is held (the torso leans back crouched whether
     // it walks or not), and the walking integrator adds what the gait needs on top. A commanded bend
     // is not held (held, a 0.4 rad bend walked crouched at 0.66 m fell at the stop).
-    double cs = c_stand_[i] * keep;
-    const bool hold_stand = still && moving && !tilted;
-    if (hold_stand) cs = c_stand_[i];
+    double cs = hold_stand ? c_stand_[i] : c_stand_[i] * keep;
     if (walking && upright_crouch) {
       // Held within the walking bound; what lies beyond it decays.
       const double wm = config_.walking_max_correction_rad;

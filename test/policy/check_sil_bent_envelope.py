@@ -13,6 +13,7 @@ walks on at 0.7-0.9 m/s through the stop segment, until it is told to straighten
 - no fall.
 Usage: check_sil_bent_envelope.py OFF_DIR ON_DIR
 """
+import json
 import os
 import sys
 
@@ -35,13 +36,14 @@ def still_after(rs, t_stop, limit=0.15, span=0.5):
 
 
 def main(off_dir, on_dir):
-    s_off, _ = rows(off_dir, 2)
-    s_on, _ = rows(on_dir, 2)
-    seeds = [r["seed"] for r in s_on["runs"]]
+    with open(f"{off_dir}/summary.json") as f:
+        s_off = json.load(f)
+    with open(f"{on_dir}/summary.json") as f:
+        s_on = json.load(f)
     stop_off, stop_on = seg(s_off, "bent_stop"), seg(s_on, "bent_stop")
     walk_on = seg(s_on, "bent_fwd")
     t_stop = stop_on["t_begin"]
-    still = [still_after(rows(on_dir, k)[1], t_stop) for k in seeds]
+    still = [still_after(rows(on_dir, r["seed"])[1], t_stop) for r in s_on["runs"]]
     print(f"stop segment v_x: off {stop_off['achieved']['vx']:+.3f}, on {stop_on['achieved']['vx']:+.3f}; on: bent walk "
           f"{walk_on['achieved']['vx']:+.3f} of {walk_on['command']['vx']:+.3f}, still {still} s after the stop, "
           f"falls off {sum(len(r['falls_s']) for r in s_off['runs'])}, "
