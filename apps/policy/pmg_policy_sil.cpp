@@ -64,8 +64,9 @@
 // Writes <out>/seed<k>.csv (per tick; *_ref: the reference's implied motion as above, vx/vy/wz nan
 // without a stance foot; *_uopt: u'; episode: 0, then 1, 2, ... after each restart, whose first
 // 2 s overlap the fallen episode's times; fb_held_ticks / fb_decayed_ticks: the velocity feedback's
-// cumulative ticks without integration because leg odometry was rejected / the pelvis tilted),
-// <out>/frames<k>.csv and <out>/summary.json.
+// cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
+// upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
+// runs[k].upsets_s lists the script times it latched), <out>/frames<k>.csv and <out>/summary.json.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -193,6 +194,7 @@ struct Totals {
   double survived = 0;                // [s] until the first fall (or the end)
   std::vector<double> falls;          // [s] script time of every fall (more than one with restarts)
   int restarts = 0;
+  std::vector<double> upsets;         // [s] script time of every upset the guard latched on
   std::vector<SegmentSeed> segments;  // (script segments)
 };
 
@@ -246,6 +248,11 @@ int main(int argc, char** argv) {
   app.add_option("--bent-envelope", bent_envelope,
                  "off: no bent velocity envelope (commands.bent_pitch 0); default: the controller config's")
       ->check(CLI::IsMember({"on", "off"}));
+  std::string upset_guard;
+  app.add_option("--upset-guard", upset_guard,
+                 "on: the upset guard (velocity_feedback.upset_guard, with the config's thresholds or the defaults; needs the "
+                 "velocity feedback), off: none; default: the controller config's")
+      ->check(CLI::IsMember({"on", "off"}));
   std::string walking_height_floor;
   app.add_option("--walking-height-floor", walking_height_floor,
                  "off: no walking height floor (commands.walking_min_height 0); default: the controller config's")
@@ -276,6 +283,9 @@ int main(int argc, char** argv) {
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
+    if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
+    if (const std::string e = base.velocity_feedback.validate(); !e.empty())
+      throw pmg::ConfigError(controller_path + ": velocity_feedback." + e);
     // A commands: key whose 0 means off, switched by --OPTION off|on ("on" keeps the config's value).
     const auto commandsSwitch = [&](const std::string& choice, double* key, const char* option, const char* name) {
       if (choice == "off") *key = 0.0;
@@ -400,7 +410,10 @@ int main(int argc, char** argv) {
           // the pelvis tilt from vertical (the IMU's attitude) that the feedback's tilt guards read [rad]
           // the velocity feedback's cumulative ticks held (leg odometry rejected: no integration) and
           // decayed (pelvis tilted), 0 when off: their per-tick increments show where it cannot act
-          csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks\n";
+          // upset_hold: 1 while the upset guard holds the velocity command at zero
+          // vx_leg, vy_leg, leg_feet: the leg-odometry sample of the tick (before the estimator's gate;
+          // nan/0 without a stance foot), leg_rejected: 1 when the gate rejected it
+          csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks,upset_hold,vx_leg,vy_leg,leg_feet,leg_rejected\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
@@ -409,6 +422,7 @@ int main(int argc, char** argv) {
         std::atomic<bool> stop{false};
         double fall_time = -1;
         std::uint64_t prev_held = 0, prev_decayed = 0;  // the velocity feedback's counters at the last tick
+        std::uint64_t prev_upsets = 0;                  // the upset guard's count at the last tick
         const auto observe = [&](double t_local, const pmg::TickStatus& status, std::size_t local_segment) {
           const double t = t_local + offset;  // script time
           // the script's segment (npos: the stand before a restart)
@@ -501,6 +515,9 @@ int main(int argc, char** argv) {
           const long decayed_now = static_cast<long>(fb_decayed - std::min(fb_decayed, prev_decayed));
           prev_held = fb_held;
           prev_decayed = fb_decayed;
+          const pmg::UpsetGuard& guard = controller.upsetGuard();
+          if (guard.upsets() > prev_upsets) tot.upsets.push_back(t);
+          prev_upsets = guard.upsets();
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];
             if (fallen) ss.fell = true;
@@ -541,7 +558,14 @@ int main(int argc, char** argv) {
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << fb[3] << ',' << fb[4];
           csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << ',' << fb_held << ',' << fb_decayed
-              << '\n';
+              << ',' << (guard.latched() ? 1 : 0);
+          {
+            const double nan = std::numeric_limits<double>::quiet_NaN();
+            const pmg::BaseVelocityEstimate* leg = vfb ? &vfb->estimator().lastLegOdometry() : nullptr;
+            const bool leg_ok = leg && leg->valid;
+            csv << ',' << (leg_ok ? leg->v_x : nan) << ',' << (leg_ok ? leg->v_y : nan) << ',' << (leg ? leg->stance_feet : 0)
+                << ',' << (vfb && vfb->estimator().rejecting() ? 1 : 0) << '\n';
+          }
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
             for (int b = 1; b < m->nbody; ++b)
@@ -576,6 +600,11 @@ int main(int argc, char** argv) {
                   seed, tot.fell ? "FELL" : "ok", tot.survived, tot.lin / n, tot.yaw / n, tot.roll / n, tot.pitch / n,
                   tot.height / n, tot.slip / std::max<long>(1, tot.slip_n), held, pmg::toString(rs.final_mode),
                   pmg::toString(rs.fault));
+      if (!tot.upsets.empty()) {
+        std::printf(" | %zu upsets at", tot.upsets.size());
+        for (double f : tot.upsets) std::printf(" %.2f", f);
+        std::printf(" s");
+      }
       if (tot.restarts > 0) {
         std::printf(" | %d restarts, falls at", tot.restarts);
         for (double f : tot.falls) std::printf(" %.2f", f);
@@ -652,6 +681,7 @@ int main(int argc, char** argv) {
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
+       << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
@@ -666,6 +696,8 @@ int main(int argc, char** argv) {
          << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts
          << ", \"falls_s\": [";
       for (std::size_t f = 0; f < t.falls.size(); ++f) js << (f ? ", " : "") << jnum(t.falls[f]);
+      js << "], \"upsets_s\": [";
+      for (std::size_t f = 0; f < t.upsets.size(); ++f) js << (f ? ", " : "") << jnum(t.upsets[f]);
       js << "]"
          << ", \"segments\": [";
       for (std::size_t k = 0; k < windows.size(); ++k) {

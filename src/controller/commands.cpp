@@ -74,9 +74,10 @@ void CommandShaper::reset() noexcept {
   posture_ = {0.0, 0.0, limits_.standing_height};
   posture_target_ = posture_;
   last_walking_time_ = -1e9;
+  held_ = false;
 }
 
-void CommandShaper::update(const CommandSample& s, double now, double dt) noexcept {
+void CommandShaper::update(const CommandSample& s, double now, double dt, bool hold_velocity) noexcept {
   const Command& u = s.command;
   if (s.velocity_time >= 0 && s.velocity_time != last_velocity_time_) {
     last_velocity_time_ = s.velocity_time;
@@ -154,6 +155,12 @@ void CommandShaper::update(const CommandSample& s, double now, double dt) noexce
     if (crouch_scale > 1.0) ++counters_.crouch_limited_ticks;
     if (bent_scale > 1.0) ++counters_.bent_limited_ticks;
   }
+  if (hold_velocity) {  // UpsetGuard: to zero at the slew limits below
+    goal = {};
+    ++counters_.upset_hold_ticks;
+    if (!held_) ++counters_.upsets;
+  }
+  held_ = hold_velocity;
   velocity_.vx = slew(velocity_.vx, goal.vx, limits_.max_acceleration[0] * dt);
   velocity_.vy = slew(velocity_.vy, goal.vy, limits_.max_acceleration[1] * dt);
   velocity_.wz = slew(velocity_.wz, goal.wz, limits_.max_acceleration[2] * dt);

@@ -24,6 +24,7 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
       telemetry_(telemetry),
       input_counters_(input_counters),
       shaper_(config.commands),
+      upset_guard_(config.velocity_feedback.upset_guard),
       limiter_(config.commands.max_reference_speed) {
   const RobotConfig& robot = config_.robot;
   const int n = static_cast<int>(robot.numJoints());
@@ -128,13 +129,17 @@ TickStatus Controller::tick(double now) noexcept {
       input = &teleop_sample_;
     }
   }
-  shaper_.update(*input, now, dt_);
+  // Upset guard (velocity_feedback.upset_guard): on the last tick's shaped command and estimate.
+  const bool hold_velocity =
+      active && feedback_ && upset_guard_.update(shaper_.velocity(), shaper_.target(), feedback_->lastEstimate(), dt_);
+  shaper_.update(*input, now, dt_, hold_velocity);
   ever_active_ = ever_active_ || active;
   if (active && prev_mode_ != Mode::kActive) {
     // Entering active from the standing pose: the generator, the actor and the command start
     // from rest; the reference limiter starts from the standing pose the supervisor held.
     status.entered_active = true;
     shaper_.reset();
+    upset_guard_.reset();
     if (feedback_) feedback_->reset();
     if (posture_feedback_) posture_feedback_->reset();
     pmg_->reset(0.0);
@@ -143,6 +148,7 @@ TickStatus Controller::tick(double now) noexcept {
   }
   if (!active) {  // the command takes effect only while the loop drives the motors
     shaper_.reset();
+    upset_guard_.reset();
     if (feedback_) feedback_->reset();
     if (posture_feedback_) posture_feedback_->reset();
   }

@@ -26,13 +26,15 @@ std::string RunSummary::text() const {
   os << line;
   std::snprintf(line, sizeof line,
                 "deadline misses %lld; commands: NaN rejected %llu, clamped %llu, stale ticks %llu, "
-                "crouch-limited ticks %llu, bent-limited ticks %llu, height-floor ticks %llu; reference limiter acted on %llu "
-                "ticks\n",
+                "crouch-limited ticks %llu, bent-limited ticks %llu, height-floor ticks %llu, upsets %llu (held %llu ticks); "
+                "reference limiter acted on %llu ticks\n",
                 static_cast<long long>(deadline_misses), static_cast<unsigned long long>(commands.rejected_nan),
                 static_cast<unsigned long long>(commands.clamped), static_cast<unsigned long long>(commands.stale_ticks),
                 static_cast<unsigned long long>(commands.crouch_limited_ticks),
                 static_cast<unsigned long long>(commands.bent_limited_ticks),
                 static_cast<unsigned long long>(commands.height_floor_ticks),
+                static_cast<unsigned long long>(commands.upsets),
+                static_cast<unsigned long long>(commands.upset_hold_ticks),
                 static_cast<unsigned long long>(reference_limited_ticks));
   os << line;
   os << "LCM command packets: accepted " << lcm_input[0] << ", rejected " << lcm_rejected;

@@ -168,9 +168,23 @@ struct FeedforwardYaml {
   }
 };
 
+struct UpsetGuardYaml {
+  UpsetGuardConfig g;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("enabled", &g.enabled, "hold the velocity command at zero while the robot moves far off it (docs/controller.md)");
+    a->Visit("max_error", &g.max_error, "an axis is off its command beyond this |u - v| (v_x, v_y [m/s], w [rad/s]), each (0, 3]");
+    a->Visit("trigger_s", &g.trigger_s, "an upset: one axis off this long without a break, (0, 5] s");
+    a->Visit("settle_velocity", &g.settle_velocity, "settled: |v_x|, |v_y| below this, |w| below twice it, (0, 1] m/s");
+    a->Visit("settle_s", &g.settle_s, "settled this long, [0, 10] s");
+    a->Visit("rearm_band", &g.rearm_band, "released once settled and the operator's command within this of zero, [0, 0.3]");
+  }
+};
+
 struct VelocityFeedbackYaml {
   VelocityFeedbackConfig f;
   FeedforwardYaml feedforward;
+  UpsetGuardYaml upset_guard;
   template <class A>
   void Serialize(A* a) {
     a->Visit("enabled", &f.enabled, "integral correction of the velocity command on leg odometry");
@@ -190,6 +204,7 @@ struct VelocityFeedbackYaml {
     a->Visit("brake_decel", &f.brake_decel, "the floor lets the reference decelerate at least this fast, (0, min(5, brake_rate)] m/s^2");
     a->Visit("brake_rate", &f.brake_rate, "largest change of the floor per second, (0, 10] m/s^2");
     a->Visit("feedforward", &feedforward, "identified command response, inverted in front of the correction (docs/controller.md)");
+    a->Visit("upset_guard", &upset_guard, "hold the velocity command at zero after an upset (docs/controller.md)");
   }
 };
 
@@ -383,6 +398,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);
   c.velocity_feedback = y.velocity_feedback.f;
   c.velocity_feedback.feedforward = y.velocity_feedback.feedforward.model();
+  c.velocity_feedback.upset_guard = y.velocity_feedback.upset_guard.g;
   if (const std::string e = c.velocity_feedback.validate(); !e.empty()) fail("velocity_feedback", e);
   c.posture_feedback = y.posture_feedback.f;
   if (const std::string e = c.posture_feedback.validate(); !e.empty()) fail("posture_feedback", e);

@@ -118,7 +118,63 @@ std::string VelocityFeedbackConfig::validate() const {
   if (!(brake_decel > 0.0 && brake_decel <= std::min(5.0, brake_rate)))
     return "brake_decel: expected (0, min(5, brake_rate)] m/s^2";
   if (const std::string e = feedforward.validate(); !e.empty()) return "feedforward." + e;
+  if (const std::string e = upset_guard.validate(); !e.empty()) return "upset_guard." + e;
+  if (upset_guard.enabled && !enabled) return "upset_guard.enabled: needs velocity_feedback.enabled (the guard runs on its estimate)";
   return {};
+}
+
+std::string UpsetGuardConfig::validate() const {
+  static const char* kAxis[3] = {"v_x [m/s]", "v_y [m/s]", "yaw rate [rad/s]"};
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(max_error[i] > 0.0 && max_error[i] <= 3.0))
+      return "max_error[" + std::to_string(i) + "] (" + kAxis[i] + "): expected (0, 3]";
+  if (!(trigger_s > 0.0 && trigger_s <= 5.0)) return "trigger_s: expected (0, 5] s";
+  if (!(settle_velocity > 0.0 && settle_velocity <= 1.0)) return "settle_velocity: expected (0, 1] m/s";
+  if (!(settle_s >= 0.0 && settle_s <= 10.0)) return "settle_s: expected [0, 10] s";
+  if (!(rearm_band >= 0.0 && rearm_band <= 0.3)) return "rearm_band: expected [0, 0.3] (m/s, rad/s)";
+  return {};
+}
+
+UpsetGuard::UpsetGuard(const UpsetGuardConfig& config) : config_(config) {
+  if (const std::string e = config.validate(); !e.empty()) throw ConfigError("velocity_feedback.upset_guard." + e);
+}
+
+void UpsetGuard::reset() noexcept {
+  off_s_ = {};
+  settled_s_ = 0.0;
+  latched_ = false;
+}
+
+bool UpsetGuard::update(const VelocityCommand& u, const VelocityCommand& target, const BaseVelocityEstimate& est,
+                        double dt) noexcept {
+  if (!config_.enabled) return false;
+  const double v[3] = {est.v_x, est.v_y, est.yaw_rate};
+  const bool valid = est.valid && std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+  if (!latched_) {
+    if (!valid) return false;  // neither counts nor breaks a run
+    const double cmd[3] = {u.vx, u.vy, u.wz};
+    bool upset = false;
+    for (std::size_t i = 0; i < 3; ++i) {
+      off_s_[i] = std::fabs(cmd[i] - v[i]) > config_.max_error[i] ? off_s_[i] + dt : 0.0;
+      upset = upset || off_s_[i] >= config_.trigger_s;
+    }
+    if (!upset) return false;
+    latched_ = true;
+    settled_s_ = 0.0;
+    ++upsets_;
+    return true;
+  }
+  if (valid) {
+    const double s = config_.settle_velocity;
+    settled_s_ = (std::fabs(v[0]) < s && std::fabs(v[1]) < s && std::fabs(v[2]) < 2.0 * s) ? settled_s_ + dt : 0.0;
+  }
+  const double b = config_.rearm_band;
+  const bool neutral = std::fabs(target.vx) <= b && std::fabs(target.vy) <= b && std::fabs(target.wz) <= b;
+  if (settled_s_ >= config_.settle_s && neutral) {
+    reset();
+    return false;
+  }
+  return true;
 }
 
 LegOdometry::LegOdometry(std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx,
@@ -192,6 +248,7 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
   const BaseVelocityEstimate& leg = last_leg_;
   // Prediction from the IMU: the specific force rotated into W plus gravity is the acceleration of
   // the IMU; in the turning heading frame H, dv_H/dt = R_HW a_W - w_z e_z x v_H.
+  const double a = config_.odometry_time_s > 0.0 ? std::min(1.0, dt / config_.odometry_time_s) : 1.0;
   if (initialized_ && imu_ok) {
     tilt_ = tiltFromVertical(R_WB);
     const Eigen::Matrix3d R_HB = headingFromBody(R_WB);
@@ -209,7 +266,6 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
   // phase) is rejected, unless the rejections have lasted max_rejected_s (then the estimate
   // restarts from it).
   if (leg.valid) {
-    const double a = config_.odometry_time_s > 0.0 ? std::min(1.0, dt / config_.odometry_time_s) : 1.0;
     const double innovation = std::hypot(leg.v_x - v_[0], leg.v_y - v_[1]);
     // Rejected for max_rejected_s: the IMU-only prediction has drifted; restart from the legs.
     const bool restart = !initialized_ || static_cast<double>(rejected_run_) * dt >= config_.max_rejected_s;

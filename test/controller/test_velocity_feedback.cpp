@@ -1037,5 +1037,126 @@ TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyon
 
 // Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.
 
+
+BaseVelocityEstimate estimateOf(double vx, double vy, double wz) {
+  BaseVelocityEstimate e;
+  e.valid = true;
+  e.stance_feet = 1;
+  e.v_x = vx;
+  e.v_y = vy;
+  e.yaw_rate = wz;
+  return e;
+}
+
+UpsetGuardConfig guardConfig() {
+  UpsetGuardConfig g;
+  g.enabled = true;
+  g.max_error = {0.8, 0.4, 0.7};
+  g.trigger_s = 0.7;
+  g.settle_velocity = 0.15;
+  g.settle_s = 1.0;
+  g.rearm_band = 0.05;
+  return g;
+}
+
+TEST(UpsetGuard, LatchesOnlyAfterAnAxisStaysOffItsCommandForTriggerS) {
+  UpsetGuard guard(guardConfig());
+  const VelocityCommand u{1.0, 0.0, 0.0};
+  const double dt = 0.01;
+  // Lagging a walk's start (0.7 m/s short of v_x, within its 0.8 bound) never trips it.
+  for (int k = 0; k < 500; ++k) EXPECT_FALSE(guard.update(u, u, estimateOf(0.3, 0.0, 0.0), dt));
+  // Sideways at 0.5 m/s (beyond v_y's 0.4) for 0.6 s, then back on track: a break resets the run.
+  for (int k = 0; k < 60; ++k) EXPECT_FALSE(guard.update(u, u, estimateOf(0.9, 0.5, 0.0), dt));
+  EXPECT_FALSE(guard.update(u, u, estimateOf(0.9, 0.1, 0.0), dt));
+  // Invalid estimates neither count nor break a run.
+  int k = 0;
+  for (; k < 69; ++k) ASSERT_FALSE(guard.update(u, u, estimateOf(0.9, 0.5, 0.0), dt)) << k;
+  BaseVelocityEstimate invalid = estimateOf(0.9, 5.0, 0.0);
+  invalid.valid = false;
+  for (int j = 0; j < 50; ++j) EXPECT_FALSE(guard.update(u, u, invalid, dt));
+  EXPECT_TRUE(guard.update(u, u, estimateOf(0.9, 0.5, 0.0), dt)) << "0.70 s off its command";
+  EXPECT_TRUE(guard.latched());
+  EXPECT_EQ(guard.upsets(), 1u);
+  // The yaw axis alone trips it too (a fresh guard).
+  UpsetGuard spin(guardConfig());
+  bool tripped = false;
+  for (int j = 0; j < 80 && !tripped; ++j) tripped = spin.update({0.0, 0.0, 0.0}, {}, estimateOf(0.0, 0.0, -0.9), dt);
+  EXPECT_TRUE(tripped);
+}
+
+TEST(UpsetGuard, HoldsUntilTheRobotSettlesAndTheOperatorLetsGo) {
+  UpsetGuard guard(guardConfig());
+  const double dt = 0.01;
+  const VelocityCommand walk{1.0, 0.0, 0.0};
+  for (int k = 0; k < 70; ++k) guard.update(walk, walk, estimateOf(-0.5, 0.0, 0.0), dt);
+  ASSERT_TRUE(guard.latched());
+  // Settled for 2 s, but the operator still commands 1.0 m/s: held.
+  for (int k = 0; k < 200; ++k) EXPECT_TRUE(guard.update({}, walk, estimateOf(0.02, 0.0, 0.0), dt));
+  // The operator lets go while the robot still moves: held until it has settled for settle_s.
+  for (int k = 0; k < 50; ++k) EXPECT_TRUE(guard.update({}, {}, estimateOf(0.4, 0.0, 0.0), dt));
+  int released_at = -1;
+  for (int k = 0; k < 300 && released_at < 0; ++k)
+    if (!guard.update({}, {}, estimateOf(0.05, -0.05, 0.1), dt)) released_at = k;
+  EXPECT_NEAR(released_at, 100, 1) << "released after 1.0 s settled with the stick neutral";
+  EXPECT_FALSE(guard.latched());
+  EXPECT_EQ(guard.upsets(), 1u);
+  // Disabled: never holds.
+  UpsetGuardConfig off = guardConfig();
+  off.enabled = false;
+  UpsetGuard none(off);
+  for (int k = 0; k < 300; ++k) EXPECT_FALSE(none.update(walk, walk, estimateOf(-1.0, 1.0, 2.0), dt));
+}
+
+TEST(UpsetGuard, TheShaperTakesTheVelocityToZeroContinuouslyAndCountsTheUpset) {
+  CommandLimits limits;
+  limits.max_acceleration = {1.0, 1.0, 2.0};
+  CommandShaper shaper(limits);
+  UpsetGuard guard(guardConfig());
+  CommandSample s;
+  s.command.vx = 1.0;
+  const double dt = 0.01;
+  double prev_vx = 0.0;
+  bool held_once = false;
+  test::AllocationGuard alloc;
+  for (int k = 0; k < 600; ++k) {
+    const double t = k * dt;
+    s.velocity_time = s.posture_time = t;
+    // The robot follows for 2 s, then staggers sideways at 0.8 m/s while told to walk on.
+    const BaseVelocityEstimate est = t < 2.0 ? estimateOf(shaper.velocity().vx, 0.0, 0.0) : estimateOf(0.2, 0.8, 0.0);
+    const bool hold = guard.update(shaper.velocity(), shaper.target(), est, dt);
+    held_once = held_once || hold;
+    shaper.update(s, t, dt, hold);
+    ASSERT_LE(std::fabs(shaper.velocity().vx - prev_vx), limits.max_acceleration[0] * dt + 1e-12) << "at " << t;
+    prev_vx = shaper.velocity().vx;
+  }
+  EXPECT_EQ(alloc.count(), 0u);
+  EXPECT_TRUE(held_once);
+  EXPECT_EQ(shaper.velocity().vx, 0.0) << "held at zero while the operator still commands 1.0 m/s";
+  EXPECT_EQ(shaper.target().vx, 1.0) << "the operator's command is kept (the re-arm looks at it)";
+  EXPECT_EQ(shaper.counters().upsets, 1u);
+  EXPECT_GT(shaper.counters().upset_hold_ticks, 200u);
+}
+
+TEST(UpsetGuard, ConfigRefusesValuesOutOfRangeNamingTheField) {
+  UpsetGuardConfig g = guardConfig();
+  EXPECT_EQ(g.validate(), "");
+  g.max_error[1] = 0.0;
+  EXPECT_NE(g.validate().find("max_error[1] (v_y"), std::string::npos) << g.validate();
+  g = guardConfig();
+  g.trigger_s = 6.0;
+  EXPECT_NE(g.validate().find("trigger_s"), std::string::npos);
+  g = guardConfig();
+  g.rearm_band = -0.1;
+  EXPECT_NE(g.validate().find("rearm_band"), std::string::npos);
+  EXPECT_THROW(UpsetGuard{g}, ConfigError);
+  // The guard runs on the velocity feedback's estimate: enabled without it is refused.
+  VelocityFeedbackConfig f;
+  f.enabled = false;
+  f.upset_guard = guardConfig();
+  EXPECT_NE(f.validate().find("upset_guard.enabled: needs velocity_feedback.enabled"), std::string::npos) << f.validate();
+  f.enabled = true;
+  EXPECT_EQ(f.validate(), "");
+}
+
 }  // namespace
 }  // namespace pmg

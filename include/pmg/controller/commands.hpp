@@ -109,6 +109,8 @@ struct CommandCounters {
   std::uint64_t crouch_limited_ticks = 0;  ///< ticks on which the crouched velocity envelope slowed the command
   std::uint64_t height_floor_ticks = 0;    ///< ticks on which the walking height floor raised the height goal
   std::uint64_t bent_limited_ticks = 0;    ///< ticks on which the bent velocity envelope slowed the command
+  std::uint64_t upsets = 0;               ///< times the velocity command was held at zero after an upset (UpsetGuard)
+  std::uint64_t upset_hold_ticks = 0;     ///< ticks on which it was held
 };
 
 /// Turns raw operator input into the command the generator gets: validated, clamped to the
@@ -118,11 +120,16 @@ struct CommandCounters {
 class CommandShaper {
  public:
   explicit CommandShaper(CommandLimits limits);
-  /// @param sample newest input; @param now controller time [s]; @param dt tick [s].
-  void update(const CommandSample& sample, double now, double dt) noexcept;
+  /// @param sample newest input; @param now controller time [s]; @param dt tick [s];
+  /// @param hold_velocity the velocity command goes to zero at the slew limits whatever the operator
+  /// commands (UpsetGuard latched); the posture goes on.
+  void update(const CommandSample& sample, double now, double dt, bool hold_velocity = false) noexcept;
   /// Zero velocity, neutral posture, standing height at once (only when the motors do not follow
   /// the references: before the loop enters kActive).
   void reset() noexcept;
+  /// The operator's velocity command as clamped to the limits, before the envelopes and the slew
+  /// (zero while stale) (heading frame).
+  const VelocityCommand& target() const noexcept { return target_; }
   /// Shaped velocity u_d (heading frame).
   const VelocityCommand& velocity() const noexcept { return velocity_; }
   /// Shaped posture u_s; height always a value [m] (resolved).
@@ -142,6 +149,7 @@ class CommandShaper {
   double last_velocity_time_ = -2.0, last_posture_time_ = -2.0;
   double last_walking_time_ = -1e9;  ///< controller time the robot was last told to walk [s]
   bool stale_ = true;
+  bool held_ = false;
   CommandCounters counters_;
 };
 
