@@ -272,6 +272,9 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
     if (restart || innovation <= config_.gate_mps) {
       v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
       v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
+      // The yaw rate (the gyro's) moves with the accepted samples only: held while the gate
+      // rejects, and taken from one sample on a restart. Measured and kept: docs/controller.md
+      // "Velocity estimate".
       v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
       initialized_ = true;
       rejected_run_ = 0;

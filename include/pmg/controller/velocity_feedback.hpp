@@ -250,7 +250,12 @@ class LegOdometry {
 /// measurement with time constant odometry_time_s; a measurement more than gate_mps from the
 /// prediction is rejected (touchdown and lift-off transients, slips, flight phases); once the
 /// rejections have lasted max_rejected_s the estimate restarts from the legs' measurement. The yaw
-/// rate is the gyro's, low-passed alike.
+/// rate is the gyro's (rotated into W), low-passed alike and moved only with the accepted samples:
+/// held while the gate rejects, taken from one sample on a restart. Measured against the
+/// simulator (docs/controller.md "Velocity estimate"): RMS error on the envelope grid about 0.10 m/s
+/// (v_x), 0.08 m/s (v_y), 0.23 rad/s (yaw rate); an ungated yaw rate and a 5 mm stance band are
+/// more accurate, but the integral loop tuned on this estimate then upset more often at the
+/// envelope's fast combined corners, so they are not the default.
 class BaseVelocityEstimator {
  public:
   /// Setup: allocates; throws std::invalid_argument if legs is null.
