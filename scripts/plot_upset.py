@@ -35,7 +35,8 @@ def main(off_dir, on_dir, seed, t0, t1, out):
         ax.plot(t, col("wz"), lw=0.8, alpha=0.7, label="yaw rate achieved [rad/s]")
         if "upset_hold" in rs[0]:
             hold = [float(r["upset_hold"]) > 0 for r in rs]
-            ax.fill_between(t, -4, 4, where=hold, color="orange", alpha=0.2, label="guard holds")
+            if any(hold):
+                ax.fill_between(t, -4, 4, where=hold, color="orange", alpha=0.2, label="guard holds")
         if t[-1] < t1 - 0.05:
             ax.axvline(t[-1], color="r", lw=2, label="fall")
         ax.set_ylim(-4, 4)

@@ -515,9 +515,10 @@ int main(int argc, char** argv) {
           const long decayed_now = static_cast<long>(fb_decayed - std::min(fb_decayed, prev_decayed));
           prev_held = fb_held;
           prev_decayed = fb_decayed;
-          const pmg::UpsetGuard& guard = controller.upsetGuard();
-          if (guard.upsets() > prev_upsets) tot.upsets.push_back(t);
-          prev_upsets = guard.upsets();
+          const pmg::UpsetGuard* guard = controller.upsetGuard();
+          const std::uint64_t upsets = guard ? guard->upsets() : 0;
+          if (upsets > prev_upsets) tot.upsets.push_back(t);
+          prev_upsets = upsets;
           if (segment < windows.size()) {
             SegmentSeed& ss = tot.segments[segment];
             if (fallen) ss.fell = true;
@@ -558,7 +559,7 @@ int main(int argc, char** argv) {
           for (int i = 0; i < 3; ++i) csv << ',' << est[static_cast<std::size_t>(i)];
           csv << ',' << fb[3] << ',' << fb[4];
           csv << ',' << std::acos(std::clamp(Rb[8], -1.0, 1.0)) << ',' << episode << ',' << fb_held << ',' << fb_decayed
-              << ',' << (guard.latched() ? 1 : 0);
+              << ',' << (guard && guard->latched() ? 1 : 0);
           {
             const double nan = std::numeric_limits<double>::quiet_NaN();
             const pmg::BaseVelocityEstimate* leg = vfb ? &vfb->estimator().lastLegOdometry() : nullptr;

@@ -24,7 +24,6 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
       telemetry_(telemetry),
       input_counters_(input_counters),
       shaper_(config.commands),
-      upset_guard_(config.velocity_feedback.upset_guard),
       limiter_(config.commands.max_reference_speed) {
   const RobotConfig& robot = config_.robot;
   const int n = static_cast<int>(robot.numJoints());
@@ -62,6 +61,9 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   if (config_.velocity_feedback.enabled)
     feedback_ = std::make_unique<VelocityFeedback>(config_.velocity_feedback, pmg_->gco().legModel(),
                                                    pmg_->legJointIndex(), L.max_velocity);
+  if (config_.velocity_feedback.enabled && config_.velocity_feedback.upset_guard.enabled)
+    upset_guard_ = std::make_unique<UpsetGuard>(config_.velocity_feedback.upset_guard, pmg_->gco().legModel(),
+                                                pmg_->legJointIndex(), config_.velocity_feedback);
   if (config_.posture_feedback.enabled)
     posture_feedback_ =
         std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range, L.height_range,
@@ -129,9 +131,9 @@ TickStatus Controller::tick(double now) noexcept {
       input = &teleop_sample_;
     }
   }
-  // Upset guard (velocity_feedback.upset_guard): on the last tick's shaped command and estimate.
-  const bool hold_velocity =
-      active && feedback_ && upset_guard_.update(shaper_.velocity(), shaper_.target(), feedback_->lastEstimate(), dt_);
+  // Upset guard (velocity_feedback.upset_guard): the last tick's shaped command against its own
+  // estimate of this tick's state.
+  const bool hold_velocity = active && upset_guard_ && upset_guard_->update(shaper_.velocity(), shaper_.target(), state_, dt_);
   shaper_.update(*input, now, dt_, hold_velocity);
   ever_active_ = ever_active_ || active;
   if (active && prev_mode_ != Mode::kActive) {
@@ -139,7 +141,7 @@ TickStatus Controller::tick(double now) noexcept {
     // from rest; the reference limiter starts from the standing pose the supervisor held.
     status.entered_active = true;
     shaper_.reset();
-    upset_guard_.reset();
+    if (upset_guard_) upset_guard_->reset();
     if (feedback_) feedback_->reset();
     if (posture_feedback_) posture_feedback_->reset();
     pmg_->reset(0.0);
@@ -148,7 +150,7 @@ TickStatus Controller::tick(double now) noexcept {
   }
   if (!active) {  // the command takes effect only while the loop drives the motors
     shaper_.reset();
-    upset_guard_.reset();
+    if (upset_guard_) upset_guard_->reset();
     if (feedback_) feedback_->reset();
     if (posture_feedback_) posture_feedback_->reset();
   }

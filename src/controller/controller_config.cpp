@@ -178,6 +178,7 @@ struct UpsetGuardYaml {
     a->Visit("settle_velocity", &g.settle_velocity, "settled: |v_x|, |v_y| below this, |w| below twice it, (0, 1] m/s");
     a->Visit("settle_s", &g.settle_s, "settled this long, [0, 10] s");
     a->Visit("rearm_band", &g.rearm_band, "released once settled and the operator's command within this of zero, [0, 0.3]");
+    a->Visit("stance_band_m", &g.stance_band_m, "the guard's own estimate: soles within this height of the lowest are in stance, (0, 0.1] m");
   }
 };
 
@@ -194,6 +195,7 @@ struct VelocityFeedbackYaml {
     a->Visit("envelope_max", &f.envelope_max, "v_x, v_y [m/s], w [rad/s] above which no correction pushes (training range)");
     a->Visit("stance_band_m", &f.stance_band_m, "soles within this height of the lowest are in stance, (0, 0.1] m");
     a->Visit("odometry_time_s", &f.odometry_time_s, "time constant of the leg-odometry correction, 0..2 s");
+    a->Visit("yaw_rate_gated", &f.yaw_rate_gated, "the yaw rate moves only with accepted leg samples (true, tuned on) or is the gyro's every tick");
     a->Visit("gate_mps", &f.gate_mps, "leg-odometry samples further than this from the IMU prediction are rejected, (0, 5] m/s");
     a->Visit("max_rejected_s", &f.max_rejected_s, "after this long of rejections a sample is believed, 0..5 s");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");

@@ -132,6 +132,7 @@ std::string UpsetGuardConfig::validate() const {
   if (!(settle_velocity > 0.0 && settle_velocity <= 1.0)) return "settle_velocity: expected (0, 1] m/s";
   if (!(settle_s >= 0.0 && settle_s <= 10.0)) return "settle_s: expected [0, 10] s";
   if (!(rearm_band >= 0.0 && rearm_band <= 0.3)) return "rearm_band: expected [0, 0.3] (m/s, rad/s)";
+  if (!(stance_band_m > 0.0 && stance_band_m <= 0.1)) return "stance_band_m: expected (0, 0.1] m";
   return {};
 }
 
@@ -139,10 +140,36 @@ UpsetGuard::UpsetGuard(const UpsetGuardConfig& config) : config_(config) {
   if (const std::string e = config.validate(); !e.empty()) throw ConfigError("velocity_feedback.upset_guard." + e);
 }
 
+namespace {
+VelocityFeedbackConfig guardEstimateConfig(const VelocityFeedbackConfig& feedback, const UpsetGuardConfig& guard) {
+  VelocityFeedbackConfig c = feedback;
+  c.stance_band_m = guard.stance_band_m;
+  c.yaw_rate_gated = false;
+  return c;
+}
+}  // namespace
+
+UpsetGuard::UpsetGuard(const UpsetGuardConfig& config, std::shared_ptr<const gco::LegModel> legs,
+                       const gco::LegJointIndex& leg_idx, const VelocityFeedbackConfig& feedback)
+    : UpsetGuard(config) {
+  estimator_ = std::make_unique<BaseVelocityEstimator>(std::move(legs), leg_idx, guardEstimateConfig(feedback, config));
+}
+
+UpsetGuard::~UpsetGuard() = default;
+
 void UpsetGuard::reset() noexcept {
   off_s_ = {};
   settled_s_ = 0.0;
   latched_ = false;
+  if (estimator_) estimator_->reset();
+  est_ = BaseVelocityEstimate{};
+}
+
+bool UpsetGuard::update(const VelocityCommand& u, const VelocityCommand& target, const LowState& state,
+                        double dt) noexcept {
+  if (!config_.enabled || !estimator_) return false;
+  est_ = estimator_->update(state, dt);
+  return update(u, target, est_, dt);
 }
 
 bool UpsetGuard::update(const VelocityCommand& u, const VelocityCommand& target, const BaseVelocityEstimate& est,
@@ -260,6 +287,8 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
       v_[0] = vx;
       v_[1] = vy;
     }
+    // Ungated (yaw_rate_gated false): the gyro's yaw rate low-passed on every tick.
+    if (!config_.yaw_rate_gated && std::isfinite(wz)) v_[2] += a * (wz - v_[2]);
   }
   // Correction by leg odometry, gated: a measurement further than gate_mps from the prediction
   // (a swing foot taken for a stance foot at touchdown or lift-off, a slipping foot, a flight
@@ -272,10 +301,9 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
     if (restart || innovation <= config_.gate_mps) {
       v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
       v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
-      // The yaw rate (the gyro's) moves with the accepted samples only: held while the gate
-      // rejects, and taken from one sample on a restart. Measured and kept: docs/controller.md
-      // "Velocity estimate".
-      v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
+      // Gated (yaw_rate_gated, the default): the yaw rate (the gyro's) moves with the accepted
+      // samples only, held while the gate rejects and taken from one sample on a restart.
+      if (config_.yaw_rate_gated || !initialized_) v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
       initialized_ = true;
       rejected_run_ = 0;
       ++accepted_;

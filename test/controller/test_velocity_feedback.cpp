@@ -520,6 +520,69 @@ TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) 
   EXPECT_NEAR(e.v_x, odo.estimate(spike).v_x, 1e-9);
 }
 
+TEST(BaseVelocityEstimator, UngatedYawRateFollowsTheGyroWhileTheLegsAreRejected) {
+  Legs legs;
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;
+  qd[0].setZero();
+  qd[1].setZero();
+  LowState still = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  still.imu.acc = {0.0, 0.0, 9.81};
+  // A stance-leg spike the gate rejects, while the robot turns at 0.5 rad/s (gyro).
+  qd[0] << 3.0, 0.0, 0.0, -4.0, 1.0, 0.0;
+  LowState turning = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, 0.5));
+  turning.imu.acc = still.imu.acc;
+  double yaw[2] = {0.0, 0.0};
+  for (int gated = 0; gated < 2; ++gated) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.yaw_rate_gated = gated == 1;
+    c.max_rejected_s = 5.0;  // no restart within the test
+    BaseVelocityEstimator est(legs.model, legs.idx, c);
+    for (int k = 0; k < 20; ++k) est.update(still, 0.01);
+    BaseVelocityEstimate e;
+    for (int k = 0; k < 50; ++k) e = est.update(turning, 0.01);
+    ASSERT_TRUE(est.rejecting());
+    yaw[gated] = e.yaw_rate;
+  }
+  EXPECT_NEAR(yaw[0], 0.5, 0.01) << "ungated: the gyro's 0.5 rad/s after 5 time constants";
+  EXPECT_NEAR(yaw[1], 0.0, 1e-9) << "gated (the default): held at the last accepted value";
+}
+
+TEST(UpsetGuard, OwnEstimateJudgesTheRobotStateWithoutAllocating) {
+  Legs legs;
+  UpsetGuardConfig g;
+  g.enabled = true;
+  g.max_error = {0.8, 0.4, 0.3};
+  g.trigger_s = 0.3;
+  UpsetGuard guard(g, legs.model, legs.idx, enabledConfig());
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;
+  qd[0].setZero();
+  qd[1].setZero();
+  // Standing still but spinning at 1 rad/s (gyro) while told to stand: the yaw axis is 1 rad/s off.
+  LowState s = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, 1.0));
+  s.imu.acc = {0.0, 0.0, 9.81};
+  bool held = false;
+  std::size_t n = 0;
+  {
+    test::AllocationGuard alloc;
+    for (int k = 0; k < 60 && !held; ++k) held = guard.update(VelocityCommand{}, VelocityCommand{}, s, 0.01);
+    n = alloc.count();
+  }
+  EXPECT_EQ(n, 0u);
+  EXPECT_TRUE(held);
+  EXPECT_TRUE(guard.lastEstimate().valid);
+  EXPECT_NEAR(guard.lastEstimate().yaw_rate, 1.0, 0.1);
+  // Judging on given estimates only (the first constructor), a LowState is not enough: never holds.
+  UpsetGuard plain(g);
+  for (int k = 0; k < 60; ++k) EXPECT_FALSE(plain.update(VelocityCommand{}, VelocityCommand{}, s, 0.01));
+  guard.reset();
+  EXPECT_FALSE(guard.latched());
+  EXPECT_FALSE(guard.lastEstimate().valid);
+}
+
 TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   Legs legs;
   VelocityFeedbackConfig c = enabledConfig();

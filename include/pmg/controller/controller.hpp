@@ -94,7 +94,8 @@ class Controller {
   const CommandShaper& commands() const noexcept { return shaper_; }
   /// The velocity feedback stage (config velocity_feedback.enabled), or nullptr.
   const VelocityFeedback* velocityFeedback() const noexcept { return feedback_.get(); }
-  const UpsetGuard& upsetGuard() const noexcept { return upset_guard_; }
+  /// The upset guard (velocity_feedback.upset_guard.enabled), or nullptr.
+  const UpsetGuard* upsetGuard() const noexcept { return upset_guard_.get(); }
   /// The posture feedback stage (config posture_feedback.enabled), or nullptr.
   const PostureFeedback* postureFeedback() const noexcept { return posture_feedback_.get(); }
   const ReferenceRateLimiter& referenceLimiter() const noexcept { return limiter_; }
@@ -123,7 +124,7 @@ class Controller {
   const LcmInputCounters* input_counters_;
   CommandShaper shaper_;
   std::unique_ptr<VelocityFeedback> feedback_;
-  UpsetGuard upset_guard_;  ///< velocity_feedback.upset_guard (disabled: a no-op)
+  std::unique_ptr<UpsetGuard> upset_guard_;  ///< velocity_feedback.upset_guard (nullptr when off)
   std::unique_ptr<PostureFeedback> posture_feedback_;
   ReferenceRateLimiter limiter_;
   GeneratorOutput ref_out_;  // generator output with the rate-limited reference (preallocated)
