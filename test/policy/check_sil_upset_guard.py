@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks the upset guard through the product path (ctest pmg_policy_sil_upset_guard, label sil): the
 default config with velocity_feedback.upset_guard made so tight (max_error 0.1 m/s, 0.1 m/s,
-0.2 rad/s; trigger_s 0.3 s; settle 0.5 s) that a walk's start trips it, runs
+0.3 rad/s; trigger_s 0.2 s; settle 0.5 s) that a walk's start trips it, runs
 test/data/policy/eval_upset_guard.yaml (two 0.6 m/s walks with a stand between) with the guard off
 and on (pmg_policy_sil --upset-guard off|on --seeds 1).
 Off: both walks reach 0.6 m/s and no upset is listed. On:
