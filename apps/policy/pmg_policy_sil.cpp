@@ -151,6 +151,13 @@ std::string jnum(double x) {
   return b;
 }
 
+/// JSON list of times [s].
+std::string jtimes(const std::vector<double>& ts) {
+  std::string o = "[";
+  for (std::size_t i = 0; i < ts.size(); ++i) o += (i ? ", " : "") + jnum(ts[i]);
+  return o + "]";
+}
+
 /// JSON string literal (quotes, backslashes and control characters escaped).
 std::string jstr(const std::string& s) {
   std::string o = "\"";
@@ -228,35 +235,27 @@ int main(int argc, char** argv) {
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
-  std::string velocity_feedback;
-  app.add_option("--velocity-feedback", velocity_feedback,
-                 "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string feedforward;
-  app.add_option("--feedforward", feedforward,
-                 "command-response feed-forward (velocity_feedback.feedforward; default: the controller config's)")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string posture_feedback;
-  app.add_option("--posture-feedback", posture_feedback,
-                 "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string crouched_envelope;
-  app.add_option("--crouched-envelope", crouched_envelope,
-                 "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string bent_envelope;
-  app.add_option("--bent-envelope", bent_envelope,
-                 "off: no bent velocity envelope (commands.bent_pitch 0); default: the controller config's")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string upset_guard;
-  app.add_option("--upset-guard", upset_guard,
-                 "on: the upset guard (velocity_feedback.upset_guard, with the config's thresholds or the defaults; needs the "
-                 "velocity feedback), off: none; default: the controller config's")
-      ->check(CLI::IsMember({"on", "off"}));
-  std::string walking_height_floor;
-  app.add_option("--walking-height-floor", walking_height_floor,
-                 "off: no walking height floor (commands.walking_min_height 0); default: the controller config's")
-      ->check(CLI::IsMember({"on", "off"}));
+  // The on|off switches; empty: the controller config's setting.
+  std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, upset_guard,
+      walking_height_floor;
+  const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
+    app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
+  };
+  onOff("--velocity-feedback", &velocity_feedback,
+        "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)");
+  onOff("--feedforward", &feedforward,
+        "command-response feed-forward (velocity_feedback.feedforward; default: the controller config's)");
+  onOff("--posture-feedback", &posture_feedback,
+        "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)");
+  onOff("--crouched-envelope", &crouched_envelope,
+        "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's");
+  onOff("--bent-envelope", &bent_envelope,
+        "off: no bent velocity envelope (commands.bent_pitch 0); default: the controller config's");
+  onOff("--upset-guard", &upset_guard,
+        "on: the upset guard (velocity_feedback.upset_guard, with the config's thresholds or the defaults; needs the "
+        "velocity feedback), off: none; default: the controller config's");
+  onOff("--walking-height-floor", &walking_height_floor,
+        "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -695,11 +694,7 @@ int main(int argc, char** argv) {
          << ", \"lin_vel\": " << vals[0] << ", \"yaw_vel\": " << vals[1] << ", \"roll\": " << vals[2] << ", \"pitch\": " << vals[3]
          << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5]
          << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts
-         << ", \"falls_s\": [";
-      for (std::size_t f = 0; f < t.falls.size(); ++f) js << (f ? ", " : "") << jnum(t.falls[f]);
-      js << "], \"upsets_s\": [";
-      for (std::size_t f = 0; f < t.upsets.size(); ++f) js << (f ? ", " : "") << jnum(t.upsets[f]);
-      js << "]"
+         << ", \"falls_s\": " << jtimes(t.falls) << ", \"upsets_s\": " << jtimes(t.upsets)
          << ", \"segments\": [";
       for (std::size_t k = 0; k < windows.size(); ++k) {
         const SegmentSeed& ss = t.segments[k];
