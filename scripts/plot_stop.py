@@ -3,7 +3,7 @@
 
 One column per run, for one seed: top, the velocity along --axis (the shaped command u, the command
 the generator got u_fb, the achieved velocity and the estimate); bottom, the torso pitch (--axis vx)
-or roll (--axis vy); with --height a third row, the pelvis height (the script's command, the
+or roll (--axis vy): commanded, sent to the actor after the posture feedback, achieved; with --height a third row, the pelvis height (the script's command, the
 generator's base height, achieved). A fall ends the trace and is marked; with --restart-after-fall
 runs only the first episode is drawn.
 
@@ -24,7 +24,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def series(path, t0, t1, axis):
-    keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", "pitch" if axis == "vx" else "roll",
+    att = "pitch" if axis == "vx" else "roll"
+    keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", att, f"{att}_cmd", f"{att}_fb",
             "height_cmd", "height_ref", "height")
     cols = {k: [] for k in keys}
     for row in csv.DictReader(open(path)):
@@ -80,7 +81,9 @@ def main():
         top.plot(s["t"], s[f"{v}_fb"], color="tab:orange", lw=1.2, label="to the generator u_fb")
         top.plot(s["t"], s[v], color="tab:blue", lw=1.0, label="achieved")
         top.plot(s["t"], s[f"{v}_est"], color="tab:green", lw=0.8, alpha=0.7, label="estimate")
-        bottom.plot(s["t"], s[att], color="tab:red", lw=1.0)
+        bottom.plot(s["t"], s[f"{att}_cmd"], "k--", lw=1.2, label="command")
+        bottom.plot(s["t"], s[f"{att}_fb"], color="tab:orange", lw=1.2, label="to the actor (fed back)")
+        bottom.plot(s["t"], s[att], color="tab:red", lw=1.0, label="achieved")
         if a.height:
             h = ax[2][j]
             h.plot(s["t"], s["height_cmd"], "k--", lw=1.2, label="command")
@@ -95,6 +98,7 @@ def main():
         ax[-1][j].set_xlabel("t [s]")
     ax[0][0].set_ylabel(f"v_{v[1]} [m/s] (heading frame)")
     ax[1][0].set_ylabel(f"torso {att} [rad]")
+    ax[1][0].legend(fontsize=8, loc="lower left")
     if a.height:
         ax[2][0].set_ylabel("pelvis height [m]")
         ax[2][0].legend(fontsize=8, loc="upper left")

@@ -48,7 +48,8 @@
 //              velocity and posture feedback: what the generator got (the shaped command when off;
 //              --velocity-feedback / --posture-feedback on|off override the config;
 //              --crouched-envelope off drops commands.crouched_height, --bent-envelope off
-//              commands.bent_pitch, --walking-height-floor off commands.walking_min_height)
+//              commands.bent_pitch, --walking-height-floor off commands.walking_min_height,
+//              --posture-envelope off opens posture_feedback.envelope_min/max)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -236,7 +237,7 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
-  std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, upset_guard,
+  std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
       walking_height_floor;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
@@ -251,6 +252,9 @@ int main(int argc, char** argv) {
         "off: no crouched velocity envelope (commands.crouched_height 0); default: the controller config's");
   onOff("--bent-envelope", &bent_envelope,
         "off: no bent velocity envelope (commands.bent_pitch 0); default: the controller config's");
+  onOff("--posture-envelope", &posture_envelope,
+        "off: the posture feedback's pitch/roll bounds wide open (posture_feedback.envelope_min/max +-1.5 rad); default: "
+        "the controller config's");
   onOff("--upset-guard", &upset_guard,
         "on: the upset guard (velocity_feedback.upset_guard, with the config's thresholds or the defaults; needs the "
         "velocity feedback), off: none; default: the controller config's");
@@ -282,6 +286,12 @@ int main(int argc, char** argv) {
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
+    if (posture_envelope == "off") {
+      base.posture_feedback.envelope_min = {-1.5, -1.5};
+      base.posture_feedback.envelope_max = {1.5, 1.5};
+    }
+    if (posture_envelope == "on" && base.posture_feedback.envelope_max[0] >= 1.5 && base.posture_feedback.envelope_min[0] <= -1.5)
+      throw pmg::ConfigError(controller_path + ": --posture-envelope on: posture_feedback.envelope_min/max are wide open there");
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (const std::string e = base.velocity_feedback.validate(); !e.empty())
       throw pmg::ConfigError(controller_path + ": velocity_feedback." + e);
@@ -682,6 +692,8 @@ int main(int argc, char** argv) {
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
+       << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
+       << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {

@@ -433,6 +433,11 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(walking_min_command_rad >= 0.0 && walking_min_command_rad <= 0.5)) return "walking_min_command_rad: expected 0..0.5 rad";
   if (!(walking_deadband_rad >= 0.0 && walking_deadband_rad <= 0.3)) return "walking_deadband_rad: expected 0..0.3 rad";
   if (!(walking_crouch_m >= 0.0 && walking_crouch_m <= 0.2)) return "walking_crouch_m: expected 0..0.2 m";
+  for (std::size_t i = 0; i < 2; ++i)
+    if (!(std::isfinite(envelope_min[i]) && std::isfinite(envelope_max[i]) && envelope_min[i] <= 0.0 &&
+          envelope_max[i] >= 0.0 && envelope_min[i] >= -1.5 && envelope_max[i] <= 1.5))
+      return std::string("envelope_min/envelope_max[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") +
+             "): expected -1.5 <= min <= 0 <= max <= 1.5 rad";
   if (!(std::isfinite(height_ki) && height_ki >= 0.0 && height_ki <= 20.0)) return "height_ki: expected 0..20 [1/s]";
   if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
     return "max_height_correction_m: expected 0..0.1 m";
@@ -591,7 +596,10 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       cw = std::clamp(cw + config_.walking_ki[i] * (e - std::copysign(band, e)) * dt, -config_.walking_max_correction_rad,
                       config_.walking_max_correction_rad);
     const double c = std::clamp(cs + cw, -config_.max_correction_rad, config_.max_correction_rad);
-    const double limited = std::clamp(cmd[i] + c, (*range[i])[0], (*range[i])[1]);
+    // Within the command's range, and not pushed beyond envelope_min/max by the correction.
+    const double lo = std::max((*range[i])[0], std::min(cmd[i], config_.envelope_min[i]));
+    const double hi = std::min((*range[i])[1], std::max(cmd[i], config_.envelope_max[i]));
+    const double limited = std::clamp(cmd[i] + c, std::min(lo, hi), hi);
     c_[i] = limited - cmd[i];
     // Anti-windup: what the bounds cut comes off the integrator that is acting.
     const double cut = cs + cw - c_[i];

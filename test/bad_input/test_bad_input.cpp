@@ -630,6 +630,16 @@ std::vector<Case> allCases() {
          return sub(controllerText("g1_sil_policy.yaml"), "bent_pitch: 0.4 ", "bent_pitch: 0.9 ");
        }),
        error({"commands", "bent_pitch", "pitch_range max"})},
+      {"ctrl_posture_feedback_envelope_max_negative", Kind::kControllerConfig,
+       text([] {
+         return sub(controllerText("g1_sil_policy.yaml"), "envelope_max: [0.4, 0.2]", "envelope_max: [-0.1, 0.2]");
+       }),
+       error({"posture_feedback", "envelope_min/envelope_max[0] (pitch)", "-1.5 <= min <= 0 <= max <= 1.5"})},
+      {"ctrl_posture_feedback_envelope_min_not_a_pair", Kind::kControllerConfig,
+       text([] {
+         return sub(controllerText("g1_sil_policy.yaml"), "envelope_min: [-0.3, -0.2]", "envelope_min: [-0.3]");
+       }),
+       error({"posture_feedback", "envelope_min"})},
       {"ctrl_generator_cadence_ratio_out_of_range", Kind::kControllerConfig,
        text([] { return sub(controllerText("g1_sil.yaml"), "generator:\n", "generator:\n  max_cadence_ratio: 2.5\n"); }),
        error({"generator", "max_cadence_ratio", "[1, 2]"})},

@@ -749,6 +749,71 @@ TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
   EXPECT_EQ(n, 0u);
 }
 
+// envelope_min/max (bounds on the fed-back pitch/roll, the actor's trained range): a bent walk whose
+// torso reaches only 80 % of what it is given is fed back up to the envelope's 0.4 rad and no
+// further, where the walking bound alone lets the command reach 0.48; what the envelope cuts does
+// not wind up the integrator; the standing integrator is bounded alike; a bend inside the envelope
+// is corrected as before; a command already beyond it passes unchanged (not corrected further
+// out, not clipped); the default bounds nothing beyond the command's range; invalid bounds are
+// refused, naming the field.
+TEST(PostureFeedback, EnvelopeKeepsTheCorrectionInsideTheActorsTrainedRange) {
+  PostureFeedbackConfig c = walkingPitchConfig(1.0);
+  c.envelope_min = {-0.3, -0.2};
+  c.envelope_max = {0.4, 0.2};
+  ASSERT_EQ(c.validate(), "");
+  const PostureFeedbackConfig wide = walkingPitchConfig(1.0);
+  ASSERT_EQ(wide.envelope_max[0], 1.5) << "the default bounds nothing beyond the command's range";
+  const VelocityCommand walk{0.4, 0.0, 0.0};
+  // The actor achieves 80 % of the pitch it is given; returns the largest pitch sent to it.
+  auto run = [&](PostureFeedback& fb, double u_pitch, const VelocityCommand& v, int ticks) {
+    double torso = 0.0, most = -1.0;
+    for (int k = 0; k < ticks; ++k) {
+      const PostureCommand& out = fb.update({u_pitch, 0.0, 0.66}, v, uprightState(0.0, torso), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch - torso);
+      most = std::max(most, out.pitch);
+    }
+    return most;
+  };
+  PostureFeedback without(wide, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  PostureFeedback with(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  EXPECT_NEAR(run(without, 0.4, walk, 4000), 0.48, 1e-9) << "the walking bound alone: 0.4 + 0.08";
+  EXPECT_NEAR(run(with, 0.4, walk, 4000), 0.4, 1e-12) << "never beyond the envelope";
+  EXPECT_NEAR(with.correction()[0], 0.0, 1e-12) << "the cut came off the integrator";
+  // Told to stop with the bend kept: the standing integrator is bounded alike.
+  EXPECT_GT(run(without, 0.4, {}, 3000), 0.45) << "standing, the robot needs 0.5 and gets it";
+  EXPECT_NEAR(run(with, 0.4, {}, 3000), 0.4, 1e-12);
+  // A bend inside the envelope: corrected as usual, within the envelope.
+  with.reset();
+  EXPECT_LE(run(with, 0.3, walk, 4000), 0.4);
+  EXPECT_NEAR(with.command().pitch, 0.375, 0.005) << "80 % of 0.375 is the commanded 0.3";
+  EXPECT_NEAR(with.correction()[0], 0.075, 0.005);
+  // A command beyond the envelope (the shaper allows up to 0.6): passed on, not pushed further out.
+  with.reset();
+  EXPECT_NEAR(run(with, 0.5, walk, 4000), 0.5, 1e-12);
+  EXPECT_NEAR(with.command().pitch, 0.5, 1e-12);
+  // Roll alike: a lean at 0.19 whose torso stays upright is corrected up to 0.2 only.
+  PostureFeedbackConfig r = c;
+  r.walking_ki = {0.0, 0.5};
+  r.walking_min_command_rad = 0.0;
+  PostureFeedback roll(r, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  for (int k = 0; k < 3000; ++k) roll.update({0.0, 0.19, 0.78}, walk, uprightState(0.0, 0.0), 0.01);
+  EXPECT_NEAR(roll.command().roll, 0.2, 1e-12);
+  std::size_t n = 0;
+  const LowState bent = uprightState(0.0, 0.1);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 100; ++k) with.update({0.4, 0.1, 0.66}, walk, bent, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  PostureFeedbackConfig bad = c;
+  bad.envelope_min[0] = 0.05;
+  EXPECT_NE(bad.validate().find("envelope_min/envelope_max[0] (pitch)"), std::string::npos);
+  bad = c;
+  bad.envelope_max[1] = std::nan("");
+  EXPECT_NE(bad.validate().find("envelope_min/envelope_max[1] (roll)"), std::string::npos);
+}
+
 // walking_deadband_rad: an upright walk whose torso leans back 0.07 rad is corrected until the lean
 // is just beyond the band (0.03: inside it the correction decays), and one that leans 0.02 is left
 // alone; at the stop the correction decays.

@@ -3,7 +3,7 @@
 label sil): the default config (commands.bent_pitch 0.4 rad, bent_max_velocity v_x 0.8 m/s) runs
 test/data/policy/eval_bent_stop.yaml (bent forward 0.4 rad, 1.0 m/s forward, a stop with the bend
 kept, then upright) with the envelope off and on (pmg_policy_sil --bent-envelope off|on --seeds 2
---first-seed 2).
+--first-seed 2), both with the posture feedback's envelope open (--posture-envelope off).
 The hidden effect: without the envelope the bent robot does not stop when told (seeds 2 and 3: it
 walks on at 0.7-0.9 m/s through the stop segment, until it is told to straighten). On:
 - the stop segment's achieved v_x (mean over its last 60 % and the seeds) is below 0.25 m/s, and

@@ -427,6 +427,17 @@ struct PostureFeedbackConfig {
   /// bend is not held (held, a 0.4 rad bend walked at 0.66 m fell at the stop). Needs the standing
   /// height (the shaper's: the squat clip's neutral); the constructor throws ConfigError without it.
   double walking_crouch_m = 0.0;
+  /// Bounds on the fed-back pitch and roll [rad], (pitch, roll) minimum and maximum, each finite
+  /// with -1.5 ≤ envelope_min ≤ 0 ≤ envelope_max ≤ 1.5: a correction never pushes the command
+  /// beyond them, u_fb,p ∈ [min(u_p, envelope_min), max(u_p, envelope_max)] (a command already
+  /// beyond is passed on, not corrected further out), and what they cut comes off the integrator
+  /// that is acting (anti-windup). The default (±1.5) leaves only the command's range. For the
+  /// actor's trained range (wh6g: pitch up to 0.4, roll ±0.2). Why: walking bent 0.4 rad the walking
+  /// and standing integrators sent the actor 0.41-0.55 rad, beyond what it was trained on, and in
+  /// the stop after a crouched bent walk it ran away forward and fell (posture walks, held-out seeds
+  /// 86 and 94; docs/controller.md "Bent beyond the trained range").
+  std::array<double, 2> envelope_min{-1.5, -1.5};
+  std::array<double, 2> envelope_max{1.5, 1.5};
   /// Integral gain on the pelvis height [1/s], 0..20; 0 (the default) leaves the height alone.
   double height_ki = 0.0;
   /// Largest correction of the height command [m], [0, 0.1].
@@ -443,7 +454,7 @@ struct PostureFeedbackConfig {
 /// torso's pitch and roll (ZYX Euler angles of torso_link in W, as Table I measures them) from the
 /// IMU orientation and the waist encoders (KDL forward kinematics pelvis -> torso_link),
 ///   p̂ low-passed,  c_p ← clamp(c_p + k_p (u_p − p̂) dt, ±max_correction_rad),
-///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range);
+///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range ∩ [min(u_p, envelope_min), max(u_p, envelope_max)]);
 /// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays;
 /// with walking_ki > 0 a second integrator c_w acts while walking, once the posture command has been
 /// steady for walking_settle_s: c_w ← clamp(c_w + k_w (u_p − p̄) dt, ±walking_max_correction_rad) on

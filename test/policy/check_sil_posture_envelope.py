@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""Checks the posture feedback's envelope through the product path (ctest
+pmg_policy_sil_posture_envelope, label sil): the default config (posture_feedback.envelope_max pitch
+0.4 rad, the pitch the actor was trained to) runs test/data/policy/eval_bent_crouched_stop.yaml (bent
+0.4 rad and crouched to 0.66 m, 0.4 m/s forward, a stop with the bend and the crouch kept, then
+upright) with the envelope off and on (pmg_policy_sil --posture-envelope off|on --seeds 1
+--first-seed 31).
+The hidden effect: without the envelope the posture feedback sends the actor more than the 0.4 rad
+it was trained on, and in seed 31 the bent robot runs on after the stop (0.6 m/s 1-3 s in). On:
+- the pitch sent to the actor (the CSV's pitch_fb) never exceeds 0.4 rad; off it exceeds 0.45 (the
+  effect's cause is there);
+- off, the robot is faster than 0.3 m/s 1-3 s into the stop (the effect is there); on, below 0.1;
+- on, it is still (|v_x| < 0.15 m/s, 0.5 s mean) within 2.5 s of the stop command;
+- on, the bent walk still bends (achieved pitch above 0.28 rad of 0.4) and walks forward (above
+  0.25 m/s of 0.4);
+- on, no fall.
+Usage: check_sil_posture_envelope.py OFF_DIR ON_DIR
+"""
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sil_run import rows, window  # noqa: E402
+
+SEED = 31
+
+
+def seg(s, name):
+    return next(x for x in s["segments"] if x["name"] == name)
+
+
+def stop_speed(rs):
+    w = window(rs, "bent_stop", 1.0, 3.0)
+    return sum(r["vx"] for r in w) / len(w)
+
+
+def still_after(rs, t_stop, limit=0.15, span=0.5):
+    """Seconds from t_stop until the 0.5 s mean of |v_x| first falls below limit (None: never)."""
+    after = [r for r in rs if r["t"] >= t_stop]
+    n = int(round(span / 0.01))
+    for i in range(len(after) - n):
+        if abs(sum(r["vx"] for r in after[i:i + n]) / n) < limit:
+            return after[i]["t"] - t_stop
+    return None
+
+
+def main(off_dir, on_dir):
+    s_off, r_off = rows(off_dir, SEED)
+    s_on, r_on = rows(on_dir, SEED)
+    with open(f"{on_dir}/summary.json") as f:
+        summary_on = json.load(f)
+    bent = [r for r in r_on if r["segment"] in ("bend", "bent_fwd", "bent_stop")]
+    bent_off = [r for r in r_off if r["segment"] in ("bend", "bent_fwd", "bent_stop")]
+    top_on = max(r["pitch_fb"] for r in bent)
+    top_off = max(r["pitch_fb"] for r in bent_off if r["pitch_fb"] == r["pitch_fb"])
+    walk_on = seg(s_on, "bent_fwd")
+    t_stop = seg(s_on, "bent_stop")["t_begin"]
+    still = still_after(r_on, t_stop)
+    v_off, v_on = stop_speed(r_off), stop_speed(r_on)
+    print(f"pitch to the actor, largest: off {top_off:.3f}, on {top_on:.3f} rad; 1-3 s into the stop: off {v_off:+.3f}, "
+          f"on {v_on:+.3f} m/s; on: bent walk pitch {walk_on['achieved']['pitch']:.3f} v_x {walk_on['achieved']['vx']:+.3f}, "
+          f"still {still} s after the stop, envelope {summary_on['posture_envelope']}")
+    checks = {
+        "off run has the envelope open": s_off["posture_envelope"][2] >= 1.5,
+        "on run has pitch max 0.4": abs(s_on["posture_envelope"][2] - 0.4) < 1e-9,
+        "without the envelope the actor gets more than 0.45 rad (the cause is there)": top_off > 0.45,
+        "with it, never more than 0.4 rad": top_on <= 0.4 + 1e-9,
+        "without it the bent robot runs on after the stop (the effect is there)": v_off > 0.3,
+        "with it, the stop is slow": v_on < 0.1,
+        "with it, still within 2.5 s of the stop": still is not None and still < 2.5,
+        "the bent walk still bends and walks": walk_on["achieved"]["pitch"] > 0.28 and walk_on["achieved"]["vx"] > 0.25,
+        "with it, no fall": all(len(r["falls_s"]) == 0 for r in s_on["runs"]),
+    }
+    for name, ok in checks.items():
+        print(("ok   " if ok else "FAIL ") + name)
+    return 0 if all(checks.values()) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1], sys.argv[2]))
