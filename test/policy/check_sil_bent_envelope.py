@@ -18,21 +18,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows  # noqa: E402
-
-
-def seg(s, name):
-    return next(x for x in s["segments"] if x["name"] == name)
-
-
-def still_after(rs, t_stop, limit=0.15, span=0.5):
-    """Seconds from t_stop until the 0.5 s mean of |v_x| first falls below limit (None: never)."""
-    after = [r for r in rs if r["t"] >= t_stop]
-    n = int(round(span / 0.01))
-    for i in range(len(after) - n):
-        if abs(sum(r["vx"] for r in after[i:i + n]) / n) < limit:
-            return after[i]["t"] - t_stop
-    return None
+from sil_run import rows, seg, still_after, report  # noqa: E402
 
 
 def main(off_dir, on_dir):
@@ -57,9 +43,7 @@ def main(off_dir, on_dir):
         "the bent walk still goes forward, slower than commanded": 0.6 < walk_on["achieved"]["vx"] < 0.9,
         "with it, no fall": all(len(r["falls_s"]) == 0 for r in s_on["runs"]),
     }
-    for name, ok in checks.items():
-        print(("ok   " if ok else "FAIL ") + name)
-    return 0 if all(checks.values()) else 1
+    return report(checks)
 
 
 if __name__ == "__main__":

@@ -21,28 +21,14 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, window  # noqa: E402
+from sil_run import rows, seg, still_after, window, report  # noqa: E402
 
 SEED = 31
-
-
-def seg(s, name):
-    return next(x for x in s["segments"] if x["name"] == name)
 
 
 def stop_speed(rs):
     w = window(rs, "bent_stop", 1.0, 3.0)
     return sum(r["vx"] for r in w) / len(w)
-
-
-def still_after(rs, t_stop, limit=0.15, span=0.5):
-    """Seconds from t_stop until the 0.5 s mean of |v_x| first falls below limit (None: never)."""
-    after = [r for r in rs if r["t"] >= t_stop]
-    n = int(round(span / 0.01))
-    for i in range(len(after) - n):
-        if abs(sum(r["vx"] for r in after[i:i + n]) / n) < limit:
-            return after[i]["t"] - t_stop
-    return None
 
 
 def main(off_dir, on_dir):
@@ -72,9 +58,7 @@ def main(off_dir, on_dir):
         "the bent walk still bends and walks": walk_on["achieved"]["pitch"] > 0.28 and walk_on["achieved"]["vx"] > 0.25,
         "with it, no fall": all(len(r["falls_s"]) == 0 for r in s_on["runs"]),
     }
-    for name, ok in checks.items():
-        print(("ok   " if ok else "FAIL ") + name)
-    return 0 if all(checks.values()) else 1
+    return report(checks)
 
 
 if __name__ == "__main__":

@@ -16,13 +16,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows  # noqa: E402
+from sil_run import rows, seg, report  # noqa: E402
 
 SEED = 5
-
-
-def seg(s, name):
-    return next(x for x in s["segments"] if x["name"] == name)
 
 
 def main(off_dir, on_dir):
@@ -43,9 +39,7 @@ def main(off_dir, on_dir):
         "on, no upset-guard latch": len(run_on["upsets_s"]) == 0,
         "on, the squat goes down and the robot stays put": squat["height"] < 0.66 and abs(squat["vx"]) < 0.1,
     }
-    for name, ok in checks.items():
-        print(("ok   " if ok else "FAIL ") + name)
-    return 0 if all(checks.values()) else 1
+    return report(checks)
 
 
 if __name__ == "__main__":

@@ -16,3 +16,25 @@ def window(rs, name, t0, t1):
     seg = [r for r in rs if r["segment"] == name]
     start = seg[0]["t"]
     return [r for r in seg if t0 <= r["t"] - start < t1]
+
+
+def seg(summary, name):
+    """The summary's pooled segment NAME (summary.json "segments")."""
+    return next(x for x in summary["segments"] if x["name"] == name)
+
+
+def still_after(rs, t_stop, limit=0.15, span=0.5):
+    """Seconds from t_stop until the 0.5 s mean of |v_x| first falls below limit (None: never)."""
+    after = [r for r in rs if r["t"] >= t_stop]
+    n = int(round(span / 0.01))
+    for i in range(len(after) - n):
+        if abs(sum(r["vx"] for r in after[i:i + n]) / n) < limit:
+            return after[i]["t"] - t_stop
+    return None
+
+
+def report(checks):
+    """Prints each named check as ok/FAIL; 0 when all hold, else 1 (the check scripts' exit status)."""
+    for name, ok in checks.items():
+        print(("ok   " if ok else "FAIL ") + name)
+    return 0 if all(checks.values()) else 1

@@ -11,6 +11,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/controller/commands.hpp"
+#include "pmg/controller/controller_config.hpp"
 #include "pmg/teleop/gamepad.hpp"
 #include "pmg/teleop/gamepad_script.hpp"
 
@@ -505,6 +506,16 @@ TEST(GamepadConfig, ShippedConfigLoadsAndLiesInsideTheCommandLimits) {
   EXPECT_EQ(c.buttons.walk, (std::vector<GamepadControl>{GamepadControl::kRightShoulder, GamepadControl::kX}));
   EXPECT_EQ(c.link.stale_timeout, 0.5);
   EXPECT_NO_THROW(GamepadMapper{c});
+  // ... and inside the default policy config's posture limits, which keep the actor within what it was
+  // trained on (height from 0.59 m: docs/controller.md "Squats below the trained range"), so that the
+  // whole d-pad travel is something the robot does.
+  const ControllerConfig policy = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  EXPECT_GE(c.posture.height_range[0], policy.commands.height_range[0]);
+  EXPECT_LE(c.posture.height_range[1], policy.commands.height_range[1]);
+  EXPECT_GE(c.posture.pitch_range[0], policy.commands.pitch_range[0]);
+  EXPECT_LE(c.posture.pitch_range[1], policy.commands.pitch_range[1]);
+  EXPECT_GE(c.posture.roll_range[0], policy.commands.roll_range[0]);
+  EXPECT_LE(c.posture.roll_range[1], policy.commands.roll_range[1]);
 }
 
 struct BadConfig {
