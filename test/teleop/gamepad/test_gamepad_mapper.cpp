@@ -507,7 +507,7 @@ TEST(GamepadConfig, ShippedConfigLoadsAndLiesInsideTheCommandLimits) {
   EXPECT_EQ(c.link.stale_timeout, 0.5);
   EXPECT_NO_THROW(GamepadMapper{c});
   // ... and inside the default policy config's posture limits, which keep the actor within what it was
-  // trained on (height from 0.59 m: docs/controller.md "Squats below the trained range"), so that the
+  // trained on (height from 0.59 m: docs/controller.md "Squats and bends beyond the trained range"), so that the
   // whole d-pad travel is something the robot does.
   const ControllerConfig policy = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
   EXPECT_GE(c.posture.height_range[0], policy.commands.height_range[0]);
