@@ -286,11 +286,14 @@ int main(int argc, char** argv) {
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
+    const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
+    const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
+                              base.posture_feedback.envelope_max == open_posture.envelope_max;
     if (posture_envelope == "off") {
-      base.posture_feedback.envelope_min = {-1.5, -1.5};
-      base.posture_feedback.envelope_max = {1.5, 1.5};
+      base.posture_feedback.envelope_min = open_posture.envelope_min;
+      base.posture_feedback.envelope_max = open_posture.envelope_max;
     }
-    if (posture_envelope == "on" && base.posture_feedback.envelope_max[0] >= 1.5 && base.posture_feedback.envelope_min[0] <= -1.5)
+    if (posture_envelope == "on" && posture_open)
       throw pmg::ConfigError(controller_path + ": --posture-envelope on: posture_feedback.envelope_min/max are wide open there");
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (const std::string e = base.velocity_feedback.validate(); !e.empty())
