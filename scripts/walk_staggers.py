@@ -98,7 +98,7 @@ def score(out_dirs, sway):
                         w["upset"].append(tag)
                 c = w["command"]
                 axis = max(("vx", "vy", "wz"), key=lambda k: abs(c[k]))
-                stop = next((x["name"] for x in summary["segments"][w["order"] + 1:w["order"] + 2]), None)
+                stop = summary["segments"][i + 1]["name"] if i + 1 < len(summary["segments"]) else None
                 if stop is not None and abs(mean_speed(rows, stop, 1.0, 3.0, axis)) > RAN_ON:
                     w["ran_on"].append(tag)
                 if w["command"]["vy"] == 0 and any(t0 <= float(r["t"]) < t1 and abs(float(r["vy"])) > sway for r in rows):
