@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """A stop, seen side by side in several pmg_policy_sil runs (docs/controller.md "Braking steps").
 
-One column per run, for one seed: top, the velocity along --axis (the shaped command u, the command
-the generator got u_fb, the achieved velocity and the estimate); bottom, the torso pitch (--axis vx)
+One column per run, for one seed: top, the velocity along --axis (the script's command, the shaper's
+command where the CSV has it (vx_shaped: after its limits and envelopes), the command the generator
+got u_fb, the achieved velocity and the estimate); bottom, the torso pitch (--axis vx)
 or roll (--axis vy): commanded, sent to the actor after the posture feedback, achieved; with --height a third row, the pelvis height (the script's command, the
 generator's base height, achieved). A fall ends the trace and is marked; with --restart-after-fall
 runs only the first episode is drawn.
@@ -27,13 +28,13 @@ def series(path, t0, t1, axis):
     att = "pitch" if axis == "vx" else "roll"
     keys = ("t", f"{axis}_cmd", f"{axis}_fb", axis, f"{axis}_est", att, f"{att}_cmd", f"{att}_fb",
             "height_cmd", "height_ref", "height")
-    cols = {k: [] for k in keys}
+    cols = {k: [] for k in keys + (f"{axis}_shaped",)}
     for row in csv.DictReader(open(path)):
         t = float(row["t"])
         if t < t0 or t > t1 or row.get("episode", "0") != "0":
             continue
         for k in cols:
-            v = row[k]
+            v = row.get(k, "nan")  # vx_shaped: CSVs before 2026-11-28 lack it
             cols[k].append(float(v) if v not in ("", "nan") else float("nan"))
     return cols
 
@@ -78,6 +79,8 @@ def main():
     for j, (label, s, fall) in enumerate(runs):
         top, bottom = ax[0][j], ax[1][j]
         top.plot(s["t"], s[f"{v}_cmd"], "k--", lw=1.2, label="command u")
+        if any(x == x for x in s[f"{v}_shaped"]):
+            top.plot(s["t"], s[f"{v}_shaped"], color="tab:gray", lw=1.2, label="shaped (envelopes)")
         top.plot(s["t"], s[f"{v}_fb"], color="tab:orange", lw=1.2, label="to the generator u_fb")
         top.plot(s["t"], s[v], color="tab:blue", lw=1.0, label="achieved")
         top.plot(s["t"], s[f"{v}_est"], color="tab:green", lw=0.8, alpha=0.7, label="estimate")

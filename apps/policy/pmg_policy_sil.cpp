@@ -67,7 +67,9 @@
 // 2 s overlap the fallen episode's times; fb_held_ticks / fb_decayed_ticks: the velocity feedback's
 // cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
-// runs[k].upsets_s lists the script times it latched), <out>/frames<k>.csv and <out>/summary.json.
+// runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
+// command before the feedback, --feedback-within-envelopes on|off), <out>/frames<k>.csv and
+// <out>/summary.json.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -238,7 +240,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      walking_height_floor;
+      feedback_within_envelopes, walking_height_floor;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -258,6 +260,9 @@ int main(int argc, char** argv) {
   onOff("--upset-guard", &upset_guard,
         "on: the upset guard (velocity_feedback.upset_guard, with the config's thresholds or the defaults; needs the "
         "velocity feedback), off: none; default: the controller config's");
+  onOff("--feedback-within-envelopes", &feedback_within_envelopes,
+        "on: the velocity feedback's command kept inside the crouched and bent velocity envelopes "
+        "(velocity_feedback.within_posture_envelopes), off: not; default: the controller config's");
   onOff("--walking-height-floor", &walking_height_floor,
         "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
   app.add_flag("--restart-after-fall", restart_after_fall,
@@ -296,6 +301,7 @@ int main(int argc, char** argv) {
     if (posture_envelope == "on" && posture_open)
       throw pmg::ConfigError(controller_path + ": --posture-envelope on: posture_feedback.envelope_min/max are wide open there");
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
+    if (!feedback_within_envelopes.empty()) base.velocity_feedback.within_posture_envelopes = feedback_within_envelopes == "on";
     if (const std::string e = base.velocity_feedback.validate(); !e.empty())
       throw pmg::ConfigError(controller_path + ": velocity_feedback." + e);
     // A commands: key whose 0 means off, switched by --OPTION off|on ("on" keeps the config's value).
@@ -425,7 +431,10 @@ int main(int argc, char** argv) {
           // upset_hold: 1 while the upset guard holds the velocity command at zero
           // vx_leg, vy_leg, leg_feet: the leg-odometry sample of the tick (before the estimator's gate;
           // nan/0 without a stance foot), leg_rejected: 1 when the gate rejected it
-          csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks,upset_hold,vx_leg,vy_leg,leg_feet,leg_rejected\n";
+          // vx_shaped, vy_shaped, wz_shaped: the shaper's command (after its limits, envelopes and slew;
+          // before the feedback; nan when not active)
+          csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks,upset_hold,vx_leg,vy_leg,leg_feet,leg_rejected"
+                 ",vx_shaped,vy_shaped,wz_shaped\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
@@ -577,7 +586,9 @@ int main(int argc, char** argv) {
             const pmg::BaseVelocityEstimate* leg = vfb ? &vfb->estimator().lastLegOdometry() : nullptr;
             const bool leg_ok = leg && leg->valid;
             csv << ',' << (leg_ok ? leg->v_x : nan) << ',' << (leg_ok ? leg->v_y : nan) << ',' << (leg ? leg->stance_feet : 0)
-                << ',' << (vfb && vfb->estimator().rejecting() ? 1 : 0) << '\n';
+                << ',' << (vfb && vfb->estimator().rejecting() ? 1 : 0);
+            const pmg::VelocityCommand& us = controller.commands().velocity();
+            csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan) << '\n';
           }
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
@@ -695,6 +706,7 @@ int main(int argc, char** argv) {
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
+       << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)

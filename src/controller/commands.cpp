@@ -126,29 +126,8 @@ void CommandShaper::update(const CommandSample& s, double now, double dt, bool h
   // Crouched (CommandLimits::crouched_height) and bent (CommandLimits::bent_pitch) velocity envelopes,
   // on the shaped height and pitch: the larger scale wins, applied along the command's direction.
   VelocityCommand goal = target_;
-  const double t[3] = {target_.vx, target_.vy, target_.wz};
-  // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
-  const auto blended = [this](std::size_t i, double f, const std::array<double, 3>& at_full) {
-    return limits_.max_velocity[i] + f * (at_full[i] - limits_.max_velocity[i]);
-  };
   double crouch_scale = 0.0, bent_scale = 0.0;
-  if (limits_.crouched_height > 0.0) {
-    const double f = std::clamp((limits_.standing_height - posture_.height) /
-                                    (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
-    if (f > 0.0) {
-      double box = 0.0, l1 = 0.0;
-      for (std::size_t i = 0; i < 3; ++i) {
-        box = std::max(box, std::fabs(t[i]) / limits_.max_velocity[i]);
-        l1 += std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
-      }
-      crouch_scale = (1.0 - f) * box + f * l1;
-    }
-  }
-  if (limits_.bent_pitch > 0.0) {
-    const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
-    if (f > 0.0)
-      for (std::size_t i = 0; i < 3; ++i) bent_scale = std::max(bent_scale, std::fabs(t[i]) / blended(i, f, limits_.bent_max_velocity));
-  }
+  envelopeScales(target_, &crouch_scale, &bent_scale);
   const double scale = std::max(crouch_scale, bent_scale);
   if (scale > 1.0) {
     goal = {target_.vx / scale, target_.vy / scale, target_.wz / scale};
@@ -167,6 +146,39 @@ void CommandShaper::update(const CommandSample& s, double now, double dt, bool h
   posture_.pitch = slew(posture_.pitch, posture_target_.pitch, limits_.posture_rate * dt);
   posture_.roll = slew(posture_.roll, posture_target_.roll, limits_.posture_rate * dt);
   posture_.height = slew(posture_.height, height_goal, limits_.height_rate * dt);
+}
+
+double CommandShaper::envelopeScale(const VelocityCommand& v) const noexcept {
+  double crouch_scale = 0.0, bent_scale = 0.0;
+  envelopeScales(v, &crouch_scale, &bent_scale);
+  return std::max(crouch_scale, bent_scale);
+}
+
+void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept {
+  const double t[3] = {v.vx, v.vy, v.wz};
+  // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
+  const auto blended = [this](std::size_t i, double f, const std::array<double, 3>& at_full) {
+    return limits_.max_velocity[i] + f * (at_full[i] - limits_.max_velocity[i]);
+  };
+  *crouch_scale = 0.0;
+  *bent_scale = 0.0;
+  if (limits_.crouched_height > 0.0) {
+    const double f = std::clamp((limits_.standing_height - posture_.height) /
+                                    (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
+    if (f > 0.0) {
+      double box = 0.0, l1 = 0.0;
+      for (std::size_t i = 0; i < 3; ++i) {
+        box = std::max(box, std::fabs(t[i]) / limits_.max_velocity[i]);
+        l1 += std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
+      }
+      *crouch_scale = (1.0 - f) * box + f * l1;
+    }
+  }
+  if (limits_.bent_pitch > 0.0) {
+    const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
+    if (f > 0.0)
+      for (std::size_t i = 0; i < 3; ++i) *bent_scale = std::max(*bent_scale, std::fabs(t[i]) / blended(i, f, limits_.bent_max_velocity));
+  }
 }
 
 void ReferenceRateLimiter::reset(const double* q, int n) noexcept {

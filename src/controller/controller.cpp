@@ -158,7 +158,10 @@ TickStatus Controller::tick(double now) noexcept {
 
   // ---- generate / optimise
   if (active) {
-    const VelocityCommand& u_d = feedback_ ? feedback_->update(shaper_.velocity(), state_, dt_) : shaper_.velocity();
+    const VelocityCommand* u_fb = feedback_ ? &feedback_->update(shaper_.velocity(), state_, dt_) : &shaper_.velocity();
+    if (feedback_ && config_.velocity_feedback.within_posture_envelopes)  // kept inside the crouched and bent envelopes
+      u_fb = &feedback_->scaleDown(shaper_.envelopeScale(*u_fb));
+    const VelocityCommand& u_d = *u_fb;
     const PostureCommand& u_s =
         posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_,
                                                       feedback_ ? &feedback_->lastEstimate() : nullptr)

@@ -198,6 +198,8 @@ struct VelocityFeedbackYaml {
     a->Visit("yaw_rate_gated", &f.yaw_rate_gated, "the yaw rate moves only with accepted leg samples (true, tuned on) or is the gyro's every tick");
     a->Visit("gate_mps", &f.gate_mps, "leg-odometry samples further than this from the IMU prediction are rejected, (0, 5] m/s");
     a->Visit("max_rejected_s", &f.max_rejected_s, "after this long of rejections a sample is believed, 0..5 s");
+    a->Visit("within_posture_envelopes", &f.within_posture_envelopes,
+             "keep the corrected command inside the shaper's crouched and bent velocity envelopes (docs/controller.md)");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");

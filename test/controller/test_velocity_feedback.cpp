@@ -153,6 +153,89 @@ TEST(VelocityFeedback, BringsAnUnderachievingPlantToTheCommandWithinTheBound) {
   EXPECT_LT(max_step, 1.5 * 0.5 * 0.01 + 1e-9) << "u_fb moves at most k_i |e| per second";
 }
 
+// The controller's path (Controller::tick) with velocity_feedback.within_posture_envelopes: the
+// shaper's command, the feedback on a plant that achieves 80 % of what it is sent, then scaleDown by
+// the shaper's envelope scale of u_fb. Returns the largest envelope scale of u_fb over the ticks.
+double walkCrouchedAndBent(bool within, CommandShaper* shaper, VelocityFeedback* fb, int ticks, double* max_step) {
+  Plant plant{{0.8, 0.8, 0.8}};
+  BaseVelocityEstimate est;
+  CommandSample s;
+  s.command = Command{0.6, 0.0, 0.0, 0.3, 0.0, 0.66};  // told 0.6 m/s, bent 0.3 rad, crouched to 0.66 m
+  const double dt = 0.01;
+  double worst = 0.0;
+  VelocityCommand prev{};
+  for (int k = 0; k < ticks; ++k) {
+    const double t = k * dt;
+    if (t >= 8.0) s.command = Command{0.6, 0.0, 0.0, 0.0, 0.0, std::nullopt};  // straightened: the envelopes lift
+    s.velocity_time = s.posture_time = t;
+    shaper->update(s, t, dt);
+    const VelocityCommand* u_fb = &fb->correct(shaper->velocity(), est, dt);
+    if (within) u_fb = &fb->scaleDown(shaper->envelopeScale(*u_fb));
+    if (t < 8.0) worst = std::max(worst, shaper->envelopeScale(*u_fb));
+    for (std::size_t i = 0; i < 3; ++i) {
+      *max_step = std::max(*max_step, std::fabs((*u_fb)[i] - prev[i]));
+      // No windup: what the command carries is the feed-forward plus the correction, exactly.
+      EXPECT_NEAR((*u_fb)[i], fb->feedforward()[i] + fb->correction()[i], 1e-12) << "axis " << i << " at " << t;
+    }
+    prev = *u_fb;
+    est = plant.step(*u_fb, dt);
+  }
+  return worst;
+}
+
+TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelopeWithoutWindup) {
+  Legs legs;
+  CommandLimits limits;
+  limits.max_velocity = {1.0, 0.5, 1.0};
+  limits.max_acceleration = {1.0, 1.0, 2.0};
+  limits.standing_height = 0.78;
+  limits.crouched_height = 0.62;
+  limits.crouched_max_velocity = {0.3, 0.3, 0.6};
+  limits.bent_pitch = 0.4;
+  limits.bent_max_velocity = {0.8, 0.4, 0.8};
+  // Open (the default): the integrator lifts the slowed command back beyond the envelope.
+  CommandShaper open_shaper(limits);
+  VelocityFeedback open_fb(enabledConfig(), legs.model, legs.idx, limits.max_velocity);
+  double open_step = 0.0;
+  const double open_worst = walkCrouchedAndBent(false, &open_shaper, &open_fb, 800, &open_step);
+  EXPECT_GT(open_worst, 1.15) << "the correction carries the crouched bent walk beyond its envelope";
+  // Within: never beyond the envelope's edge, the shaped command itself on it, and continuous.
+  CommandShaper shaper(limits);
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, limits.max_velocity);
+  double max_step = 0.0, worst = 0.0;
+  std::size_t allocations = 0;
+  {
+    test::AllocationGuard alloc;
+    worst = walkCrouchedAndBent(true, &shaper, &fb, 1500, &max_step);
+    allocations = alloc.count();
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_LE(worst, 1.0 + 1e-9);
+  EXPECT_GT(fb.envelopeTicks(), 300u) << "it acted while crouched and bent";
+  EXPECT_LT(max_step, 0.02) << "u_fb stays continuous (the shaper's slew and k_i |e| dt per tick)";
+  // Upright again (from 8 s), the envelopes lift and the correction, not wound up, brings the plant
+  // to the command as without the bound.
+  EXPECT_EQ(shaper.envelopeScale(fb.command()), 0.0) << "upright at the standing height no envelope acts";
+  EXPECT_NEAR(fb.command().vx, 0.6 / 0.8, 0.01);
+  // The scale of the shaped command alone: it is what the shaper applied to its target.
+  CommandShaper probe(limits);
+  CommandSample s;
+  s.command = Command{0.6, 0.0, 0.0, 0.3, 0.0, 0.66};
+  for (int k = 0; k < 500; ++k) {
+    s.velocity_time = s.posture_time = k * 0.01;
+    probe.update(s, k * 0.01, 0.01);
+  }
+  const double scale = probe.envelopeScale({0.6, 0.0, 0.0});
+  EXPECT_GT(scale, 1.0);
+  EXPECT_NEAR(probe.velocity().vx, 0.6 / scale, 1e-9);
+  EXPECT_NEAR(probe.envelopeScale(probe.velocity()), 1.0, 1e-9);
+  EXPECT_EQ(probe.envelopeScale({}), 0.0);
+  // scaleDown by a scale of at most 1 changes nothing.
+  const VelocityCommand before = fb.command();
+  EXPECT_EQ(fb.scaleDown(1.0).vx, before.vx);
+  EXPECT_EQ(fb.scaleDown(0.5).vx, before.vx);
+}
+
 TEST(VelocityFeedback, IntegratesOnceTheCommandIsSteadyAndAStickJitterIsSteady) {
   Legs legs;
   VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});

@@ -139,10 +139,18 @@ class CommandShaper {
     return {velocity_.vx, velocity_.vy, velocity_.wz, posture_.pitch, posture_.roll, posture_.height};
   }
   bool stale() const noexcept { return stale_; }
+  /// How far @p v (heading frame) lies beyond the crouched and bent velocity envelopes at the shaped
+  /// posture of the last update: the larger of the two envelopes' scales s (CommandLimits::
+  /// crouched_height, bent_pitch); v / s is on the envelope's edge when s > 1, and v is inside when
+  /// s <= 1 (0 with both envelopes off or upright at the standing height). noexcept.
+  double envelopeScale(const VelocityCommand& v) const noexcept;
   const CommandCounters& counters() const noexcept { return counters_; }
   const CommandLimits& limits() const noexcept { return limits_; }
 
  private:
+  /// The crouched and the bent envelope's scales of @p v at the shaped posture (envelopeScale()).
+  void envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept;
+
   CommandLimits limits_;
   VelocityCommand target_{}, velocity_{};
   PostureCommand posture_target_{}, posture_{};

@@ -172,6 +172,14 @@ struct VelocityFeedbackConfig {
   /// correction is added to u_ff = feedforward.invert(u) instead of to u; the integral still drives
   /// the estimate to u.
   CommandResponseModel feedforward{};
+  /// true: u_fb stays inside the shaper's crouched and bent velocity envelopes at the shaped posture
+  /// (CommandShaper::envelopeScale; scaled along its direction onto their edge, the correction
+  /// reduced to match so that nothing winds up), as the shaped command does. false (the default):
+  /// only inside envelope_min/max and max_velocity, so a correction can carry a crouched or bent walk
+  /// faster than its envelope lets the command go. Why: crouched to 0.66 m and bent 0.3 rad, told
+  /// 0.6 m/s (shaped to 0.55), the correction sent 0.66 m/s on a low estimate and the robot ran on
+  /// after the stop (docs/controller.md "Running on after a crouched bent walk").
+  bool within_posture_envelopes = false;
   /// Upset guard (UpsetGuard; needs enabled: it runs on this loop's estimate). Off by default.
   UpsetGuardConfig upset_guard{};
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
@@ -329,6 +337,13 @@ class VelocityFeedback {
   /// tilts beyond max_tilt_rad, the correction decays to zero. noexcept, no allocation.
   const VelocityCommand& correct(const VelocityCommand& u, const BaseVelocityEstimate& est, double dt,
                                  bool hold = false, bool decay = false) noexcept;
+  /// Scales the last update's u_fb down by @p scale (> 1; otherwise nothing), along its direction,
+  /// and the correction with it (c = u_fb − u_ff, so that it does not wind up against the bound);
+  /// counted in envelopeTicks(). Returns u_fb. For VelocityFeedbackConfig::within_posture_envelopes.
+  /// noexcept, no allocation.
+  const VelocityCommand& scaleDown(double scale) noexcept;
+  /// Ticks on which scaleDown() acted so far.
+  std::uint64_t envelopeTicks() const noexcept { return envelope_ticks_; }
   /// Ticks on which the correction was held (estimator rejecting) / decayed (tilt) so far.
   std::uint64_t heldTicks() const noexcept { return held_ticks_; }
   std::uint64_t decayedTicks() const noexcept { return decayed_ticks_; }
@@ -363,7 +378,7 @@ class VelocityFeedback {
   std::array<double, 2> brake_{};
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{}, u_fb_prev_{};
-  std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0;
+  std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0, envelope_ticks_ = 0;
 };
 
 /// `posture_feedback:` of the controller config (PostureFeedback).
