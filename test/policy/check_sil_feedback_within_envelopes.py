@@ -22,14 +22,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, seg, still_after, window, report  # noqa: E402
+from sil_run import rows, seg, still_after, stop_speed, window, report  # noqa: E402
 
 SEED = 226
-
-
-def stop_speed(rs):
-    w = window(rs, "stop", 1.0, 3.0)
-    return sum(r["vx"] for r in w) / len(w)
 
 
 def excess(rs):
@@ -41,7 +36,7 @@ def main(off_dir, on_dir):
     s_off, r_off = rows(off_dir, SEED)
     s_on, r_on = rows(on_dir, SEED)
     ex_off, ex_on = excess(r_off), excess(r_on)
-    v_off, v_on = stop_speed(r_off), stop_speed(r_on)
+    v_off, v_on = stop_speed(r_off, "stop"), stop_speed(r_on, "stop")
     t_stop = seg(s_on, "stop")["t_begin"]
     still = still_after(r_on, t_stop)
     active = [r for r in r_on if r["vx_fb"] == r["vx_fb"]]

@@ -22,14 +22,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, seg, still_after, window, report  # noqa: E402
+from sil_run import rows, seg, still_after, stop_speed, report  # noqa: E402
 
 SEED = 31
-
-
-def stop_speed(rs):
-    w = window(rs, "bent_stop", 1.0, 3.0)
-    return sum(r["vx"] for r in w) / len(w)
 
 
 def main(off_dir, on_dir):
@@ -44,7 +39,7 @@ def main(off_dir, on_dir):
     walk_on = seg(s_on, "bent_fwd")
     t_stop = seg(s_on, "bent_stop")["t_begin"]
     still = still_after(r_on, t_stop)
-    v_off, v_on = stop_speed(r_off), stop_speed(r_on)
+    v_off, v_on = stop_speed(r_off, "bent_stop"), stop_speed(r_on, "bent_stop")
     print(f"pitch to the actor, largest: off {top_off:.3f}, on {top_on:.3f} rad; 1-3 s into the stop: off {v_off:+.3f}, "
           f"on {v_on:+.3f} m/s; on: bent walk pitch {walk_on['achieved']['pitch']:.3f} v_x {walk_on['achieved']['vx']:+.3f}, "
           f"still {still} s after the stop, envelope {summary_on['posture_envelope']}")

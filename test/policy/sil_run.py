@@ -18,6 +18,12 @@ def window(rs, name, t0, t1):
     return [r for r in seg if t0 <= r["t"] - start < t1]
 
 
+def stop_speed(rs, name, t0=1.0, t1=3.0):
+    """Mean v_x [m/s] over [t0, t1) s into segment NAME (1-3 s into a stop: did the robot stop when told?)."""
+    w = window(rs, name, t0, t1)
+    return sum(r["vx"] for r in w) / len(w)
+
+
 def seg(summary, name):
     """The summary's pooled segment NAME (summary.json "segments")."""
     return next(x for x in summary["segments"] if x["name"] == name)
