@@ -177,8 +177,8 @@ struct VelocityFeedbackConfig {
   /// reduced to match so that nothing winds up), as the shaped command does. false (the default):
   /// only inside envelope_min/max and max_velocity, so a correction can carry a crouched or bent walk
   /// faster than its envelope lets the command go. Why: crouched to 0.66 m and bent 0.3 rad, told
-  /// 0.6 m/s (shaped to 0.55), the correction sent 0.66 m/s on a low estimate and the robot ran on
-  /// after the stop (docs/controller.md "Running on after a crouched bent walk").
+  /// 0.6 m/s (shaped to 0.574), the correction sent up to 0.67 m/s on a low estimate and the robot
+  /// ran on after the stop (docs/controller.md "Running on after a crouched bent walk").
   bool within_posture_envelopes = false;
   /// Upset guard (UpsetGuard; needs enabled: it runs on this loop's estimate). Off by default.
   UpsetGuardConfig upset_guard{};
