@@ -415,8 +415,7 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
 const VelocityCommand& VelocityFeedback::scaleDown(double scale) noexcept {
   if (!(scale > 1.0)) return u_fb_;
   u_fb_ = {u_fb_.vx / scale, u_fb_.vy / scale, u_fb_.wz / scale};
-  const double out[3] = {u_fb_.vx, u_fb_.vy, u_fb_.wz};
-  for (std::size_t i = 0; i < 3; ++i) c_[i] = out[i] - u_ff_[i];
+  for (std::size_t i = 0; i < 3; ++i) c_[i] = u_fb_[i] - u_ff_[i];
   u_fb_prev_ = u_fb_;
   ++envelope_ticks_;
   return u_fb_;

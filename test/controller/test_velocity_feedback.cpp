@@ -203,13 +203,7 @@ TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelo
   CommandShaper shaper(limits);
   VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, limits.max_velocity);
   double max_step = 0.0, worst = 0.0;
-  std::size_t allocations = 0;
-  {
-    test::AllocationGuard alloc;
-    worst = walkCrouchedAndBent(true, &shaper, &fb, 1500, &max_step);
-    allocations = alloc.count();
-  }
-  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(test::allocationsDuring([&] { worst = walkCrouchedAndBent(true, &shaper, &fb, 1500, &max_step); }), 0u);
   EXPECT_LE(worst, 1.0 + 1e-9);
   EXPECT_GT(fb.envelopeTicks(), 300u) << "it acted while crouched and bent";
   EXPECT_LT(max_step, 0.02) << "u_fb stays continuous (the shaper's slew and k_i |e| dt per tick)";
@@ -822,14 +816,11 @@ TEST(PostureFeedback, WalkingIntegratorClosesABentWalkAndLetsGoAtTheStop) {
   for (int k = 0; k < 3000; ++k) fb.update({0.25, 0.1, 0.78}, walk, uprightState(0.0, 0.0), 0.01);
   EXPECT_EQ(fb.correction()[1], 0.0);
   EXPECT_NEAR(fb.correction()[0], 0.08, 1e-12);
-  std::size_t n = 0;
   const LowState bent = uprightState(0.0, 0.2);
-  {
-    test::AllocationGuard guard;
-    for (int k = 0; k < 100; ++k) fb.update({0.25, 0.1, 0.78}, walk, bent, 0.01);
-    n = guard.count();
-  }
-  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(test::allocationsDuring([&] {
+              for (int k = 0; k < 100; ++k) fb.update({0.25, 0.1, 0.78}, walk, bent, 0.01);
+            }),
+            0u);
 }
 
 // envelope_min/max (bounds on the fed-back pitch/roll, the actor's trained range): a bent walk whose
@@ -881,14 +872,11 @@ TEST(PostureFeedback, EnvelopeKeepsTheCorrectionInsideTheActorsTrainedRange) {
   PostureFeedback roll(r, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
   for (int k = 0; k < 3000; ++k) roll.update({0.0, 0.19, 0.78}, walk, uprightState(0.0, 0.0), 0.01);
   EXPECT_NEAR(roll.command().roll, 0.2, 1e-12);
-  std::size_t n = 0;
   const LowState bent = uprightState(0.0, 0.1);
-  {
-    test::AllocationGuard guard;
-    for (int k = 0; k < 100; ++k) with.update({0.4, 0.1, 0.66}, walk, bent, 0.01);
-    n = guard.count();
-  }
-  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(test::allocationsDuring([&] {
+              for (int k = 0; k < 100; ++k) with.update({0.4, 0.1, 0.66}, walk, bent, 0.01);
+            }),
+            0u);
   PostureFeedbackConfig bad = c;
   bad.envelope_min[0] = 0.05;
   EXPECT_NE(bad.validate().find("envelope_min/envelope_max[0] (pitch)"), std::string::npos);

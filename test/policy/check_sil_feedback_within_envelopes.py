@@ -22,7 +22,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, seg, still_after, stop_speed, window, report  # noqa: E402
+from sil_run import run_off_on, seg, still_after, stop_speed, window  # noqa: E402
 
 SEED = 226
 
@@ -32,9 +32,7 @@ def excess(rs):
     return max(r["vx_fb"] - r["vx_shaped"] for r in window(rs, "walk", 1.0, 4.0))
 
 
-def main(off_dir, on_dir):
-    s_off, r_off = rows(off_dir, SEED)
-    s_on, r_on = rows(on_dir, SEED)
+def checks(s_off, r_off, s_on, r_on):
     ex_off, ex_on = excess(r_off), excess(r_on)
     v_off, v_on = stop_speed(r_off, "stop"), stop_speed(r_on, "stop")
     t_stop = seg(s_on, "stop")["t_begin"]
@@ -45,7 +43,7 @@ def main(off_dir, on_dir):
     print(f"v_x fed back beyond the shaped command, largest: off {ex_off:+.3f}, on {ex_on:+.3f} m/s; 1-3 s into the "
           f"stop: off {v_off:+.3f}, on {v_on:+.3f} m/s; on: still {still} s after the stop, walk v_x "
           f"{walk_on['achieved']['vx']:+.3f} pitch {walk_on['achieved']['pitch']:.3f}, largest step of vx_fb {jump:.4f}")
-    checks = {
+    return {
         "off run has the switch off, on run on": s_off["feedback_within_envelopes"] is False
         and s_on["feedback_within_envelopes"] is True,
         "without it the correction carries v_x beyond the envelope (the cause is there)": ex_off > 0.03,
@@ -57,8 +55,7 @@ def main(off_dir, on_dir):
         "the crouched bent walk still walks and bends": walk_on["achieved"]["vx"] > 0.35 and walk_on["achieved"]["pitch"] > 0.2,
         "with it, no fall": all(len(r["falls_s"]) == 0 for r in s_on["runs"]),
     }
-    return report(checks)
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(run_off_on(checks, SEED, sys.argv))

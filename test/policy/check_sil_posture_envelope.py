@@ -17,21 +17,16 @@ it was trained on, and in seed 31 the bent robot runs on after the stop (0.6 m/s
 - on, no fall.
 Usage: check_sil_posture_envelope.py OFF_DIR ON_DIR
 """
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, seg, still_after, stop_speed, report  # noqa: E402
+from sil_run import run_off_on, seg, still_after, stop_speed  # noqa: E402
 
 SEED = 31
 
 
-def main(off_dir, on_dir):
-    s_off, r_off = rows(off_dir, SEED)
-    s_on, r_on = rows(on_dir, SEED)
-    with open(f"{on_dir}/summary.json") as f:
-        summary_on = json.load(f)
+def checks(s_off, r_off, s_on, r_on):
     bent = [r for r in r_on if r["segment"] in ("bend", "bent_fwd", "bent_stop")]
     bent_off = [r for r in r_off if r["segment"] in ("bend", "bent_fwd", "bent_stop")]
     top_on = max(r["pitch_fb"] for r in bent)
@@ -42,8 +37,8 @@ def main(off_dir, on_dir):
     v_off, v_on = stop_speed(r_off, "bent_stop"), stop_speed(r_on, "bent_stop")
     print(f"pitch to the actor, largest: off {top_off:.3f}, on {top_on:.3f} rad; 1-3 s into the stop: off {v_off:+.3f}, "
           f"on {v_on:+.3f} m/s; on: bent walk pitch {walk_on['achieved']['pitch']:.3f} v_x {walk_on['achieved']['vx']:+.3f}, "
-          f"still {still} s after the stop, envelope {summary_on['posture_envelope']}")
-    checks = {
+          f"still {still} s after the stop, envelope {s_on['posture_envelope']}")
+    return {
         "off run has the envelope open": s_off["posture_envelope"][2] >= 1.5,
         "on run has pitch max 0.4": abs(s_on["posture_envelope"][2] - 0.4) < 1e-9,
         "without the envelope the actor gets more than 0.45 rad (the cause is there)": top_off > 0.45,
@@ -54,8 +49,7 @@ def main(off_dir, on_dir):
         "the bent walk still bends and walks": walk_on["achieved"]["pitch"] > 0.28 and walk_on["achieved"]["vx"] > 0.25,
         "with it, no fall": all(len(r["falls_s"]) == 0 for r in s_on["runs"]),
     }
-    return report(checks)
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(run_off_on(checks, SEED, sys.argv))

@@ -16,14 +16,12 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import rows, seg, report  # noqa: E402
+from sil_run import run_off_on, seg  # noqa: E402
 
 SEED = 5
 
 
-def main(off_dir, on_dir):
-    s_off, r_off = rows(off_dir, SEED)
-    s_on, r_on = rows(on_dir, SEED)
+def checks(s_off, r_off, s_on, r_on):
     low_off = min(r["height_ref"] for r in r_off if r["episode"] == 0 and r["mode"] == "active")
     low_on = min(r["height_ref"] for r in r_on if r["episode"] == 0 and r["mode"] == "active")
     squat = seg(s_on, "squat")["achieved"]
@@ -31,7 +29,7 @@ def main(off_dir, on_dir):
     run_on = s_on["runs"][0]
     print(f"lowest reference base height: off {low_off:.3f}, on {low_on:.3f} m; falls off {falls_off}, on {len(run_on['falls_s'])}; "
           f"on: latches {run_on['upsets_s']}, squat pelvis {squat['height']:.3f} m, v_x {squat['vx']:+.3f} m/s")
-    checks = {
+    return {
         "off, the reference goes below 0.5 m (the cause is there)": low_off < 0.5,
         "on, never below 0.585 m": low_on >= 0.585,
         "off, the robot falls (the effect is there)": falls_off > 0,
@@ -39,8 +37,7 @@ def main(off_dir, on_dir):
         "on, no upset-guard latch": len(run_on["upsets_s"]) == 0,
         "on, the squat goes down and the robot stays put": squat["height"] < 0.66 and abs(squat["vx"]) < 0.1,
     }
-    return report(checks)
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(run_off_on(checks, SEED, sys.argv))

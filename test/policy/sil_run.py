@@ -44,3 +44,12 @@ def report(checks):
     for name, ok in checks.items():
         print(("ok   " if ok else "FAIL ") + name)
     return 0 if all(checks.values()) else 1
+
+
+def run_off_on(checks, seed, argv):
+    """An off/on SIL check's main: argv = [script, OFF_DIR, ON_DIR]; checks(s_off, r_off, s_on, r_on)
+    (rows() of SEED in each) prints its measures and returns {name: ok}. Returns report()'s status."""
+    if len(argv) != 3:
+        print(f"usage: {argv[0]} OFF_DIR ON_DIR")
+        return 2
+    return report(checks(*rows(argv[1], seed), *rows(argv[2], seed)))

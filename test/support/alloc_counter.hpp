@@ -51,4 +51,12 @@ class AllocationGuard {
   AllocationScope scope_;
 };
 
+/// Allocations on this thread while @p f runs (a test's "no allocation" check around a loop).
+template <class F>
+std::size_t allocationsDuring(F&& f) {
+  AllocationGuard guard;
+  f();
+  return guard.count();
+}
+
 }  // namespace pmg::test
