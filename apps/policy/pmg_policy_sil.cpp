@@ -49,7 +49,8 @@
 //              --velocity-feedback / --posture-feedback on|off override the config;
 //              --crouched-envelope off drops commands.crouched_height, --bent-envelope off
 //              commands.bent_pitch, --walking-height-floor off commands.walking_min_height,
-//              --posture-envelope off opens posture_feedback.envelope_min/max)
+//              --posture-envelope off opens posture_feedback.envelope_min/max, --joint-stops off the
+//              MJCF's soft joint stops instead of mujoco.joint_stops)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -61,7 +62,7 @@
 // A fall ends a seed's run; with --restart-after-fall a fresh robot stands 2 s and goes on from the
 // segment after the one it fell in (per-segment results for the rest of a grid such as
 // config/policies/eval_envelope.yaml; runs[k].falls_s lists every fall, the Table I metrics stop at
-// the first).
+// the first; runs[k].faults lists every latched supervisor fault: script time, cause, joint, value).
 // Writes <out>/seed<k>.csv (per tick; *_ref: the reference's implied motion as above, vx/vy/wz nan
 // without a stance foot; *_uopt: u'; episode: 0, then 1, 2, ... after each restart, whose first
 // 2 s overlap the fallen episode's times; fb_held_ticks / fb_decayed_ticks: the velocity feedback's
@@ -206,6 +207,12 @@ struct Totals {
   int restarts = 0;
   std::vector<double> upsets;         // [s] script time of every upset the guard latched on
   std::vector<SegmentSeed> segments;  // (script segments)
+  struct FaultRecord {
+    double t = 0;                     // [s] script time the supervisor latched it
+    std::string cause, joint;         // the fault in words; the joint's name for per-joint faults ("" otherwise)
+    double value = 0;                 // the offending value (q [rad], tilt [rad], height [m], ...)
+  };
+  std::vector<FaultRecord> faults;    // every episode's latched supervisor fault, in order
 };
 
 }  // namespace
@@ -240,7 +247,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      feedback_within_envelopes, walking_height_floor;
+      feedback_within_envelopes, walking_height_floor, joint_stops;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -265,6 +272,8 @@ int main(int argc, char** argv) {
         "(velocity_feedback.within_posture_envelopes), off: not; default: the controller config's");
   onOff("--walking-height-floor", &walking_height_floor,
         "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
+  onOff("--joint-stops", &joint_stops,
+        "off: the MJCF's soft joint stops (mujoco.joint_stops.timeconst 0); default: the controller config's");
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -313,6 +322,9 @@ int main(int argc, char** argv) {
     commandsSwitch(crouched_envelope, &base.commands.crouched_height, "--crouched-envelope", "crouched_height");
     commandsSwitch(bent_envelope, &base.commands.bent_pitch, "--bent-envelope", "bent_pitch");
     commandsSwitch(walking_height_floor, &base.commands.walking_min_height, "--walking-height-floor", "walking_min_height");
+    if (joint_stops == "off") base.mujoco.joint_stops.timeconst = 0.0;
+    if (joint_stops == "on" && !base.mujoco.joint_stops.enabled())
+      throw pmg::ConfigError(controller_path + ": --joint-stops on: mujoco.joint_stops.timeconst is 0 (the MJCF's) there");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
@@ -608,6 +620,12 @@ int main(int argc, char** argv) {
           }
         };
         rs = loop.run(T - offset, &run_script, &stop, observe);
+        if (rs.fault != pmg::FaultCode::kNone) {
+          const bool per_joint = rs.fault_joint >= 0 && rs.fault_joint < nj;
+          tot.faults.push_back({offset + rs.fault_time, pmg::toString(rs.fault),
+                                per_joint ? robot.joints[static_cast<std::size_t>(rs.fault_joint)].name : std::string(),
+                                rs.fault_value});
+        }
         held += static_cast<unsigned long long>(controller.policy()->runner().counters().held);
         if (fall_time < 0 || !restart_after_fall) break;
         // Go on after the segment it fell in (or after the first one of this episode when it
@@ -624,6 +642,11 @@ int main(int argc, char** argv) {
                   seed, tot.fell ? "FELL" : "ok", tot.survived, tot.lin / n, tot.yaw / n, tot.roll / n, tot.pitch / n,
                   tot.height / n, tot.slip / std::max<long>(1, tot.slip_n), held, pmg::toString(rs.final_mode),
                   pmg::toString(rs.fault));
+      for (const Totals::FaultRecord& f : tot.faults) {
+        std::printf(" | %s", f.cause.c_str());
+        if (!f.joint.empty()) std::printf(" (%s %.3f)", f.joint.c_str(), f.value);
+        std::printf(" at %.2f s", f.t);
+      }
       if (!tot.upsets.empty()) {
         std::printf(" | %zu upsets at", tot.upsets.size());
         for (double f : tot.upsets) std::printf(" %.2f", f);
@@ -706,6 +729,7 @@ int main(int argc, char** argv) {
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
+       << ", \"joint_stops_timeconst_s\": " << base.mujoco.joint_stops.timeconst
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
@@ -721,7 +745,11 @@ int main(int argc, char** argv) {
          << ", \"lin_vel\": " << vals[0] << ", \"yaw_vel\": " << vals[1] << ", \"roll\": " << vals[2] << ", \"pitch\": " << vals[3]
          << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5]
          << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts
-         << ", \"falls_s\": " << jtimes(t.falls) << ", \"upsets_s\": " << jtimes(t.upsets)
+         << ", \"falls_s\": " << jtimes(t.falls) << ", \"upsets_s\": " << jtimes(t.upsets) << ", \"faults\": [";
+      for (std::size_t f = 0; f < t.faults.size(); ++f)
+        js << (f ? ", " : "") << "{\"t\": " << jnum(t.faults[f].t) << ", \"cause\": " << jstr(t.faults[f].cause)
+           << ", \"joint\": " << jstr(t.faults[f].joint) << ", \"value\": " << jnum(t.faults[f].value) << "}";
+      js << "]"
          << ", \"segments\": [";
       for (std::size_t k = 0; k < windows.size(); ++k) {
         const SegmentSeed& ss = t.segments[k];

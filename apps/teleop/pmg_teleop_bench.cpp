@@ -439,6 +439,18 @@ struct TrialRig {
     v->detail += fmt::format("; the robot's trunk touched a table at {:.2f} s (largest force {:.0f} N, its weight {:.0f} N)",
                              trunk_on_table_s, trunk_on_table_n, weight);
   }
+  /// A fault the supervisor latched (damping: the robot goes limp) goes into the verdict's detail,
+  /// naming the joint for per-joint faults: a fall after it was the supervisor's doing, not the policy's.
+  void judgeFault(const pmg::RunSummary& rs, pmg::TaskVerdict* v) const {
+    if (rs.fault == pmg::FaultCode::kNone) return;
+    const auto& joints = app->config().robot.joints;
+    const bool per_joint = rs.fault_joint >= 0 && static_cast<std::size_t>(rs.fault_joint) < joints.size();
+    v->detail += fmt::format("; the supervisor latched '{}'{} at {:.2f} s", pmg::toString(rs.fault),
+                             per_joint ? fmt::format(" ({} {:.3f})", joints[static_cast<std::size_t>(rs.fault_joint)].name,
+                                                     rs.fault_value)
+                                       : std::string(),
+                             rs.fault_time);
+  }
 
  private:
   std::vector<bool> is_table;  ///< per body of the model: one of the scene's tables
@@ -856,7 +868,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
       break;
     }
   }
-  app.finish();  // closes the event log
+  const pmg::RunSummary summary = app.finish();  // closes the event log
   TrialResult r;
   r.trial = trial;
   r.fell = fell;
@@ -865,6 +877,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
   r.unpins = unpins;
   r.verdict = pmg::judgeWipe(scene, towel.name, traj, fell);
   rig.judgeTrunk(&r.verdict);
+  rig.judgeFault(summary, &r.verdict);
   r.trunk_on_table_s = rig.trunk_on_table_s;
   r.trunk_on_table_n = rig.trunk_on_table_n;
   return r;
@@ -1484,13 +1497,14 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     // A box seen below the pick table's top has fallen: nothing left to do.
     if (phase > kSqueeze && box_room.z() < pick.height - 0.05) phase = kDone;
   }
-  app.finish();
+  const pmg::RunSummary summary = app.finish();
   TrialResult r;
   r.trial = trial;
   r.fell = fell;
   r.seconds = traj.empty() ? 0.0 : traj.back().t;
   r.verdict = pmg::judgeBox(scene, box.name, pick.name, place.name, traj, fell);
   rig.judgeTrunk(&r.verdict);
+  rig.judgeFault(summary, &r.verdict);
   r.trunk_on_table_s = rig.trunk_on_table_s;
   r.trunk_on_table_n = rig.trunk_on_table_n;
   r.regrabs = regrabs;

@@ -83,15 +83,26 @@ struct GantryYaml {
   }
 };
 
+struct JointStopsYaml {
+  JointStopOptions s;
+  template <class A>
+  void Serialize(A* a) {
+    a->Visit("timeconst", &s.timeconst, "joint-limit solref time constant [s]: 0 = the MJCF's, else [2 timestep, 1]");
+    a->Visit("dampratio", &s.dampratio, "joint-limit solref damping ratio, (0, 10]");
+  }
+};
+
 struct MujocoYaml {
   double timestep = 0.001;
   std::vector<double> encoder_offsets;
   GantryYaml gantry;
+  JointStopsYaml joint_stops;
   template <class A>
   void Serialize(A* a) {
     a->Visit("timestep", &timestep, "physics step [s], <= 0.001");
     a->Visit("encoder_offsets", &encoder_offsets, "hidden zero offsets per joint [rad] (tests)");
     a->Visit("gantry", &gantry, "bring-up gantry");
+    a->Visit("joint_stops", &joint_stops, "stiffness of the joints' mechanical stops (MJCF solreflimit)");
   }
 };
 
@@ -391,6 +402,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.mujoco.cycle_period = 1.0 / c.hal_rate_hz;
   c.mujoco.encoder_offsets = y.mujoco.encoder_offsets;
   c.mujoco.gantry = y.mujoco.gantry.g;
+  c.mujoco.joint_stops = y.mujoco.joint_stops.s;
   if (const std::string e = c.mujoco.validate(); !e.empty()) fail("mujoco", e);
   c.generator = y.generator.p;
   if (!y.gco.empty()) {

@@ -26,6 +26,17 @@ std::string SoleContactOptions::validate(double timestep) const {
   return {};
 }
 
+std::string JointStopOptions::validate(double timestep) const {
+  if (!enabled()) {
+    if (timeconst == 0.0) return {};
+    return "joint_stops.timeconst: expected 0 (the MJCF's) or in [2 timestep, 1] s";
+  }
+  if (!(timeconst >= 2 * timestep - 1e-12 && timeconst <= 1.0))
+    return "joint_stops.timeconst: expected 0 (the MJCF's) or in [2 timestep, 1] s";
+  if (!(dampratio > 0 && dampratio <= 10)) return "joint_stops.dampratio: expected in (0, 10]";
+  return {};
+}
+
 std::string MujocoBackendOptions::validate() const {
   if (!(timestep > 0 && timestep <= 0.001)) return "mujoco.timestep: expected in (0, 0.001] s (>= 1 kHz physics)";
   const double ratio = cycle_period / timestep;
@@ -34,6 +45,7 @@ std::string MujocoBackendOptions::validate() const {
   for (double o : encoder_offsets)
     if (!std::isfinite(o) || std::fabs(o) > 0.5) return "mujoco.encoder_offsets: expected finite, |offset| <= 0.5 rad";
   if (std::string e = sole_contacts.validate(timestep); !e.empty()) return "mujoco." + e;
+  if (std::string e = joint_stops.validate(timestep); !e.empty()) return "mujoco." + e;
   for (const auto& [body, scale] : body_mass_scale)
     if (!(std::isfinite(scale) && scale >= 0.5 && scale <= 2.0))
       return "links." + body + ".mass_scale: expected 0.5..2";
@@ -57,6 +69,10 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
     if (id < 0) throw ConfigError(robot_.mjcf_path + ": joint '" + j.name + "' of " + robot_.source_file + " not in the MJCF");
     if (model_->jnt_type[id] != mjJNT_HINGE)
       throw ConfigError(robot_.mjcf_path + ": joint '" + j.name + "' is not a hinge");
+    if (options_.joint_stops.enabled()) {
+      model_->jnt_solref[mjNREF * id] = options_.joint_stops.timeconst;
+      model_->jnt_solref[mjNREF * id + 1] = options_.joint_stops.dampratio;
+    }
     const int act = static_cast<int>(qpos_adr_.size());
     if (act >= model_->nu || model_->actuator_trnid[2 * act] != id)
       throw ConfigError(robot_.mjcf_path + ": actuator " + std::to_string(act) + " does not drive joint '" + j.name +

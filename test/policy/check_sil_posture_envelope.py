@@ -3,11 +3,12 @@
 pmg_policy_sil_posture_envelope, label sil): the default config (posture_feedback.envelope_max pitch
 0.4 rad, the pitch the actor was trained to) runs test/data/policy/eval_bent_crouched_stop.yaml (bent
 0.4 rad and crouched to 0.66 m, 0.4 m/s forward, a stop with the bend and the crouch kept, then
-upright) on seed 31, off: with the envelope open (--posture-envelope off) and commands.pitch_range
+upright) on seed 41, off: with the envelope open (--posture-envelope off) and commands.pitch_range
 up to 0.6 rad as before 2026-11-28 (a copy of the config; since narrowed to 0.5, which caps the
 fed-back pitch as well), on: the default config.
 The hidden effect: without the envelope the posture feedback sends the actor more than the 0.4 rad
-it was trained on, and in seed 31 the bent robot runs on after the stop (0.6 m/s 1-3 s in). On:
+it was trained on, and in seed 41 the bent robot runs on after the stop (0.94 m/s 1-3 s in; seed 31
+until the SIL's joint stops were made stiff, docs/controller.md "Joint stops"). On:
 - the pitch sent to the actor (the CSV's pitch_fb) never exceeds 0.4 rad; off it exceeds 0.45 (the
   effect's cause is there);
 - off, the robot is faster than 0.3 m/s 1-3 s into the stop (the effect is there); on, below 0.1;
@@ -23,7 +24,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from sil_run import run_off_on, seg, still_after, stop_speed  # noqa: E402
 
-SEED = 31
+SEED = 41
 
 
 def checks(s_off, r_off, s_on, r_on):

@@ -64,6 +64,20 @@ struct SoleContactOptions {
   std::string validate(double timestep) const;  ///< empty if valid, else "sole_contacts.field: expected ..."
 };
 
+/// Mechanical stops of the robot's joints: the stiffness of MuJoCo's joint-limit constraint
+/// (the MJCF's solreflimit) on every joint of the robot config. The public G1 MJCF sets none, so
+/// MuJoCo's default applies: solref (0.02 s, 1), a stop soft enough that a foot landing in a stumble
+/// drives an ankle 0.1 rad beyond its range (measured: the right ankle pitch at -0.978 rad against
+/// -0.873, at 7 rad/s; docs/controller.md "Joint stops"), where a metal stop gives milliradians. Off
+/// (timeconst 0) keeps the MJCF's. MuJoCo 2.2 semantics: solref = (time constant [s], damping ratio);
+/// MuJoCo's stability rule asks for a time constant of at least 2 physics timesteps.
+struct JointStopOptions {
+  double timeconst = 0.0;  ///< solreflimit[0] [s]; 0 = the MJCF's (MuJoCo's default 0.02 s); else in [2 timestep, 1]
+  double dampratio = 1.0;  ///< solreflimit[1], in (0, 10]
+  bool enabled() const noexcept { return timeconst > 0; }
+  std::string validate(double timestep) const;  ///< empty if valid, else "joint_stops.field: expected ..."
+};
+
 /// Options of the MuJoCo backend.
 struct MujocoBackendOptions {
   double timestep = 0.001;          ///< physics step [s], ≤ 0.001 (≥ 1 kHz)
@@ -71,6 +85,7 @@ struct MujocoBackendOptions {
   GantryOptions gantry;
   std::vector<double> encoder_offsets;  ///< (n or empty) hidden zero offsets [rad]: reported = true + offset
   SoleContactOptions sole_contacts;     ///< calibration-bench floor (default off)
+  JointStopOptions joint_stops;         ///< stiffer joint stops than the MJCF's (default off)
   /// Model errors (pmg_sil --reality, hal/reality.hpp): MJCF body name -> factor on its mass and
   /// rotational inertia, in [0.5, 2]. An unknown body is a ConfigError.
   std::map<std::string, double> body_mass_scale;
