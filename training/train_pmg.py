@@ -225,6 +225,11 @@ def parse_args(argv=None):
     ap.add_argument("--p-combined", type=float, default=None, metavar="P",
                     help="probability that a drawn command combines velocity axes (EnvConfig.p_combined, default 0.4; "
                          "with p_single_axis 0.4 the rest stands still, so at most 0.6)")
+    ap.add_argument("--joint-stop-timeconst", type=float, default=None, metavar="S",
+                    help="time constant [s] of every joint's stop (its limit constraint's solref, EnvConfig."
+                         "joint_stop_timeconst; default 0 = the MJCF's, MuJoCo's 0.02 s, soft enough that a crouched "
+                         "walk presses the ankles 0.06 rad past their range); at least 2 physics steps (0.01 at 5 ms). "
+                         "The SIL's are 0.004 (mujoco.joint_stops, docs/controller.md \"Joint stops\")")
     ap.add_argument("--command-slew", action="store_true",
                     help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
                          "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
@@ -254,6 +259,8 @@ def parse_args(argv=None):
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
     if args.stop_keeps_posture is not None and not 0.0 <= args.stop_keeps_posture <= 1.0:
         ap.error(f"--stop-keeps-posture = {args.stop_keeps_posture}: expected in [0, 1]")
+    if args.joint_stop_timeconst is not None and not 0.01 - 1e-12 <= args.joint_stop_timeconst <= 1.0:
+        ap.error(f"--joint-stop-timeconst = {args.joint_stop_timeconst}: expected in [0.01, 1] s (2 physics steps of 5 ms)")
     if args.push_vel is not None:
         try:
             lo, hi = (float(x) for x in args.push_vel.split(","))
@@ -408,7 +415,8 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
     # Command-mix and push overrides (flag -> EnvConfig field), logged as set.
     for flag, field in (("p_stop", "p_stop"), ("stop_keeps_posture", "p_stop_keep_posture"), ("push_vel", "push_vel"),
-                        ("p_posture_walk", "p_posture_walk"), ("p_combined", "p_combined")):
+                        ("p_posture_walk", "p_posture_walk"), ("p_combined", "p_combined"),
+                        ("joint_stop_timeconst", "joint_stop_timeconst")):
         if getattr(args, flag) is not None:
             cfg = dataclasses.replace(cfg, **{field: getattr(args, flag)})
             log(f"{field}:", getattr(cfg, field))

@@ -302,6 +302,10 @@ class EnvConfig:
     # Leg position targets clamped to the joint limits, as the deployed HAL supervisor clamps every
     # setpoint (src/hal/safety/envelope.cpp, clampSetpoint); matters where kp x scale reaches past a limit.
     clamp_targets: bool = True
+    # Joint stops (the limit constraints' solref time constant [s] on every hinge joint): 0 keeps the
+    # MJCF's (MuJoCo's default 0.02 s), soft enough that crouched walks press the ankles 0.06 rad past
+    # their range. The SIL models metal stops (0.004 s, mujoco.joint_stops); here at least 2 physics steps.
+    joint_stop_timeconst: float = 0.0
     # Pushes (robustness; issue 12: falls): every push_interval [s] (uniform) the base gets a
     # horizontal velocity change of uniform direction and magnitude in push_vel [m/s] (world frame),
     # as a shove of a few hundred N for a few control periods would; none with deterministic_reset.
@@ -516,6 +520,13 @@ class G1PmgEnv(Env):
             mj.dof_armature[v] = np.where(self.act_has_armature, c["armature_kgm2"], mj.dof_armature[v])
             mj.dof_frictionloss[v] = np.maximum(np.maximum(c["fc_Nm"], c["fs_Nm"]), FRICTIONLOSS_FLOOR)
             mj.dof_damping[v] = 0.05 + c["kt_scale"] * c["kd_scale"] * self.kd[self.act_idx] + c["fv_Nms_per_rad"]
+        if cfg.joint_stop_timeconst > 0:
+            if cfg.joint_stop_timeconst < 2 * cfg.sim_dt - 1e-12:
+                raise ValueError(f"EnvConfig.joint_stop_timeconst = {cfg.joint_stop_timeconst}: expected >= 2 sim_dt "
+                                 f"({2 * cfg.sim_dt} s)")
+            hinges = mj.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+            mj.jnt_solref[hinges, 0] = cfg.joint_stop_timeconst
+            mj.jnt_solref[hinges, 1] = 1.0
         mj.opt.iterations = 4
         mj.opt.ls_iterations = 8
         self.mj_model = mj

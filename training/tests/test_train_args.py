@@ -3,7 +3,8 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --p-stop, --stop-keeps-posture and --p-posture-walk parse and a value outside
+--command-slew is off unless given; --joint-stop-timeconst parses and one below 2 physics steps (0.01 s) or
+non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse and a value outside
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
 and --p-combined parses and a value outside [0, 0.6] is refused;
 --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
@@ -35,6 +36,8 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--p-posture-walk", "0.7"]).p_postur
     failures.append("--p-posture-walk 0.7 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-combined", "0.5"]).p_combined != 0.5:
     failures.append("--p-combined 0.5 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--joint-stop-timeconst", "0.01"]).joint_stop_timeconst != 0.01:
+    failures.append("--joint-stop-timeconst 0.01 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
@@ -49,6 +52,8 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-posture-walk", "-0.1"], "--p-posture-walk"),
                   (["--p-posture-walk", "nan"], "--p-posture-walk"),
                   (["--p-combined", "0.7"], "--p-combined"),
+                  (["--joint-stop-timeconst", "0.005"], "--joint-stop-timeconst"),
+                  (["--joint-stop-timeconst", "nan"], "--joint-stop-timeconst"),
                   (["--p-combined", "nan"], "--p-combined"),
                   (["--command-range", "vx=1.0,-0.5"], "--command-range"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
