@@ -620,12 +620,8 @@ int main(int argc, char** argv) {
           }
         };
         rs = loop.run(T - offset, &run_script, &stop, observe);
-        if (rs.fault != pmg::FaultCode::kNone) {
-          const bool per_joint = rs.fault_joint >= 0 && rs.fault_joint < nj;
-          tot.faults.push_back({offset + rs.fault_time, pmg::toString(rs.fault),
-                                per_joint ? robot.joints[static_cast<std::size_t>(rs.fault_joint)].name : std::string(),
-                                rs.fault_value});
-        }
+        if (rs.fault != pmg::FaultCode::kNone)
+          tot.faults.push_back({offset + rs.fault_time, pmg::toString(rs.fault), rs.fault_joint_name, rs.fault_value});
         held += static_cast<unsigned long long>(controller.policy()->runner().counters().held);
         if (fall_time < 0 || !restart_after_fall) break;
         // Go on after the segment it fell in (or after the first one of this episode when it

@@ -443,12 +443,9 @@ struct TrialRig {
   /// naming the joint for per-joint faults: a fall after it was the supervisor's doing, not the policy's.
   void judgeFault(const pmg::RunSummary& rs, pmg::TaskVerdict* v) const {
     if (rs.fault == pmg::FaultCode::kNone) return;
-    const auto& joints = app->config().robot.joints;
-    const bool per_joint = rs.fault_joint >= 0 && static_cast<std::size_t>(rs.fault_joint) < joints.size();
     v->detail += fmt::format("; the supervisor latched '{}'{} at {:.2f} s", pmg::toString(rs.fault),
-                             per_joint ? fmt::format(" ({} {:.3f})", joints[static_cast<std::size_t>(rs.fault_joint)].name,
-                                                     rs.fault_value)
-                                       : std::string(),
+                             rs.fault_joint_name.empty() ? std::string()
+                                                         : fmt::format(" ({} {:.3f})", rs.fault_joint_name, rs.fault_value),
                              rs.fault_time);
   }
 

@@ -203,6 +203,8 @@ RunSummary ControllerApp::finish() {
     s.final_mode = hs.mode;
     s.fault = hs.fault.code;
     s.fault_joint = hs.fault.index;
+    if (s.fault_joint >= 0 && static_cast<std::size_t>(s.fault_joint) < config_.robot.joints.size())
+      s.fault_joint_name = config_.robot.joints[static_cast<std::size_t>(s.fault_joint)].name;
     s.fault_time = hs.fault.time_s;
     s.fault_value = hs.fault.value;
     s.mode_requests_refused = hs.refused_requests;

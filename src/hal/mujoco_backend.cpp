@@ -27,10 +27,7 @@ std::string SoleContactOptions::validate(double timestep) const {
 }
 
 std::string JointStopOptions::validate(double timestep) const {
-  if (!enabled()) {
-    if (timeconst == 0.0) return {};
-    return "joint_stops.timeconst: expected 0 (the MJCF's) or in [2 timestep, 1] s";
-  }
+  if (timeconst == 0.0) return {};  // the MJCF's stops
   if (!(timeconst >= 2 * timestep - 1e-12 && timeconst <= 1.0))
     return "joint_stops.timeconst: expected 0 (the MJCF's) or in [2 timestep, 1] s";
   if (!(dampratio > 0 && dampratio <= 10)) return "joint_stops.dampratio: expected in (0, 10]";

@@ -222,6 +222,7 @@ TEST(ControllerApp, NanStateLatchesDampingWithKdOnly) {
   EXPECT_EQ(app.controller().mode(), Mode::kDamping) << "latched";
   const RunSummary s = app.finish();
   EXPECT_NE(s.text().find("fault: motor reply timeout (joint 3"), std::string::npos) << s.text();
+  EXPECT_EQ(s.fault_joint_name, "left_knee_joint");
 }
 
 // Two cycles of NaN from one motor (corrupted frames) are held over by the HAL within the motor

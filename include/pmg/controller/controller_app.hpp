@@ -49,6 +49,7 @@ struct RunSummary {
   Mode final_mode = Mode::kPassive;
   FaultCode fault = FaultCode::kNone;  ///< the supervisor's latched fault at the end
   int fault_joint = -1;                ///< joint index for per-joint faults
+  std::string fault_joint_name;        ///< that joint's name in the robot config ("" otherwise)
   double fault_time = 0.0;             ///< [s] HAL time of the fault
   double fault_value = 0.0;            ///< offending value (height [m], angle [rad], ...)
   /// safety.startup: active, yet the motors or the IMU never all answered, so the robot never stood up.
