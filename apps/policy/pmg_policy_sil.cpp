@@ -50,7 +50,7 @@
 //              --crouched-envelope off drops commands.crouched_height, --bent-envelope off
 //              commands.bent_pitch, --walking-height-floor off commands.walking_min_height,
 //              --posture-envelope off opens posture_feedback.envelope_min/max, --joint-stops off the
-//              MJCF's soft joint stops instead of mujoco.joint_stops)
+//              MJCF's soft joint stops instead of mujoco.joint_stops, --braking off no braking steps)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -247,7 +247,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      feedback_within_envelopes, walking_height_floor, joint_stops;
+      feedback_within_envelopes, walking_height_floor, joint_stops, braking;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -274,6 +274,9 @@ int main(int argc, char** argv) {
         "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
   onOff("--joint-stops", &joint_stops,
         "off: the MJCF's soft joint stops (mujoco.joint_stops.timeconst 0); default: the controller config's");
+  onOff("--braking", &braking,
+        "off: no braking steps (velocity_feedback.brake_ratio 0), on: the config's (brake_ratio > 0 there); "
+        "default: the controller config's");
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -323,6 +326,9 @@ int main(int argc, char** argv) {
     commandsSwitch(bent_envelope, &base.commands.bent_pitch, "--bent-envelope", "bent_pitch");
     commandsSwitch(walking_height_floor, &base.commands.walking_min_height, "--walking-height-floor", "walking_min_height");
     if (joint_stops == "off") base.mujoco.joint_stops.timeconst = 0.0;
+    if (braking == "off") base.velocity_feedback.brake_ratio = 0.0;
+    if (braking == "on" && !(base.velocity_feedback.enabled && base.velocity_feedback.brake_ratio > 0.0))
+      throw pmg::ConfigError(controller_path + ": --braking on: velocity_feedback.brake_ratio is 0 (or the feedback is off) there");
     if (joint_stops == "on" && !base.mujoco.joint_stops.enabled())
       throw pmg::ConfigError(controller_path + ": --joint-stops on: mujoco.joint_stops.timeconst is 0 (the MJCF's) there");
     const pmg::RobotConfig& robot = base.robot;
@@ -726,6 +732,8 @@ int main(int argc, char** argv) {
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"joint_stops_timeconst_s\": " << base.mujoco.joint_stops.timeconst
+       << ", \"brake_ratio\": " << (base.velocity_feedback.enabled ? base.velocity_feedback.brake_ratio : 0.0)
+       << ", \"brake_posture_scaled\": " << (base.velocity_feedback.brake_posture_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"

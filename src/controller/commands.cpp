@@ -154,6 +154,17 @@ double CommandShaper::envelopeScale(const VelocityCommand& v) const noexcept {
   return std::max(crouch_scale, bent_scale);
 }
 
+double CommandShaper::crouchFraction() const noexcept {
+  if (!(limits_.crouched_height > 0.0)) return 0.0;
+  return std::clamp((limits_.standing_height - posture_.height) / (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
+}
+
+double CommandShaper::bendFraction() const noexcept {
+  return limits_.bent_pitch > 0.0 ? std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0) : 0.0;
+}
+
+double CommandShaper::postureFraction() const noexcept { return std::max(crouchFraction(), bendFraction()); }
+
 void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept {
   const double t[3] = {v.vx, v.vy, v.wz};
   // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
@@ -163,8 +174,7 @@ void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scal
   *crouch_scale = 0.0;
   *bent_scale = 0.0;
   if (limits_.crouched_height > 0.0) {
-    const double f = std::clamp((limits_.standing_height - posture_.height) /
-                                    (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
+    const double f = crouchFraction();
     if (f > 0.0) {
       double box = 0.0, l1 = 0.0;
       for (std::size_t i = 0; i < 3; ++i) {
@@ -175,7 +185,7 @@ void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scal
     }
   }
   if (limits_.bent_pitch > 0.0) {
-    const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
+    const double f = bendFraction();
     if (f > 0.0)
       for (std::size_t i = 0; i < 3; ++i) *bent_scale = std::max(*bent_scale, std::fabs(t[i]) / blended(i, f, limits_.bent_max_velocity));
   }

@@ -391,12 +391,13 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     bool raised = false;
     double* out[2] = {&u_fb_.vx, &u_fb_.vy};
     const double prev_out[2] = {previous.vx, previous.vy};
+    const double ratio = config_.brake_ratio * (config_.brake_posture_scaled ? brake_weight_ : 1.0);
     for (std::size_t i = 0; i < 2; ++i) {
       const double v = estimate(i);
       const double s = brake_[i] != 0.0 ? (brake_[i] > 0.0 ? 1.0 : -1.0) : (v >= 0.0 ? 1.0 : -1.0);
       const double f = std::fabs(brake_[i]);
       const bool active = est_.valid && !decay && s * *out[i] >= 0.0;
-      const double want = active ? std::max(0.0, config_.brake_ratio * s * v) : 0.0;
+      const double want = active ? std::max(0.0, ratio * s * v) : 0.0;
       const double cap = std::max(0.0, s * prev_out[i] - config_.brake_decel * dt);
       const double step = config_.brake_rate * dt;
       const double f_new = std::clamp(std::min(want, cap), std::max(0.0, f - step), f + step);

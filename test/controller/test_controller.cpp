@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <utility>
+
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
@@ -86,8 +88,8 @@ struct Sweep {
   std::array<double, kMaxMotors> prev_ref{};
   bool have_prev = false;
 
-  explicit Sweep(bool velocity_feedback = false, double brake_ratio = 0.0)
-      : config(silConfig(velocity_feedback, brake_ratio)) {
+  explicit Sweep(bool velocity_feedback = false, double brake_ratio = 0.0) : Sweep(silConfig(velocity_feedback, brake_ratio)) {}
+  explicit Sweep(ControllerConfig c) : config(std::move(c)) {
     ControllerAppOptions o;
     auto rec = std::make_unique<RecordingBackend>(config.robot, config.mujoco);
     recorder = rec.get();
@@ -243,6 +245,56 @@ TEST(ReferenceContinuity, BrakingStepsInTheGantryKeepEveryJointReferenceUnderThe
   EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
   EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
   EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
+// Braking steps scaled by the posture (velocity_feedback.brake_posture_scaled), through the
+// controller: upright the floor never acts, however the odometry reads the swinging legs; crouched
+// and bent it does, and the references stay under the bound through the stops and posture changes.
+TEST(ReferenceContinuity, PostureScaledBrakingActsOnlyCrouchedOrBentAndKeepsReferencesUnderTheBound) {
+  // The same abrupt walks and stops as the test above, upright and then crouched to crouched_height
+  // and bent to bent_pitch (weight 1).
+  const auto sweep = [](bool scaled, std::uint64_t* upright_ticks, std::uint64_t* crouched_ticks) {
+    ControllerConfig c = silConfig(true, 0.8);
+    c.velocity_feedback.brake_posture_scaled = scaled;
+    c.commands.crouched_height = 0.62;
+    c.commands.bent_pitch = 0.4;
+    Sweep s(std::move(c));
+    const CommandLimits& L = s.config.commands;
+    s.hold(cmd(0, 0, 0), 1.5, "engage");
+    EXPECT_EQ(s.app->controller().mode(), Mode::kActive);
+    const VelocityFeedback& fb = *s.app->controller().velocityFeedback();
+    const double vx = L.max_velocity[0], vy = L.max_velocity[1], linger = 0.8 * vx / s.config.velocity_feedback.brake_decel + 0.5;
+    const auto walks = [&](double pitch, std::optional<double> h, const std::string& at) {
+      for (const auto& [label, u] : std::vector<std::pair<std::string, Command>>{
+               {"+vx", cmd(0.8 * vx, 0, 0, pitch, 0, h)}, {"stop", cmd(0, 0, 0, pitch, 0, h)},
+               {"-vx-vy", cmd(-0.5 * vx, -0.8 * vy, 0, pitch, 0, h)}, {"stop again", cmd(0, 0, 0, pitch, 0, h)}})
+        s.hold(u, 2.0, at + " " + label);
+      s.hold(cmd(0, 0, 0, pitch, 0, h), linger, at + " standing");
+      EXPECT_EQ(fb.command().vx, 0.0) << at << ": the floor is gone " << linger << " s after the stop";
+      EXPECT_EQ(fb.command().vy, 0.0) << at;
+    };
+    walks(0.0, std::nullopt, "upright");
+    EXPECT_EQ(s.app->controller().commands().postureFraction(), 0.0);
+    *upright_ticks = fb.brakingTicks();
+    s.hold(cmd(0, 0, 0, 0.4, 0.0, 0.62), 2.0, "crouch and bend");
+    EXPECT_EQ(s.app->controller().commands().postureFraction(), 1.0);
+    walks(0.4, 0.62, "crouched and bent");
+    *crouched_ticks = fb.brakingTicks() - *upright_ticks;
+    s.hold(cmd(0, 0, 0), 2.0, "upright again");
+    std::printf("[ SIL ] braking %s in the gantry: floor acted on %llu ticks upright, %llu crouched and bent; fastest PMG "
+                "reference %.2f rad/s at %s\n", scaled ? "scaled by the posture" : "unscaled",
+                static_cast<unsigned long long>(*upright_ticks), static_cast<unsigned long long>(*crouched_ticks), s.max_ref_speed,
+                s.worst_at.c_str());
+    EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
+    EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
+    EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+  };
+  std::uint64_t unscaled_upright = 0, unscaled_crouched = 0, scaled_upright = 0, scaled_crouched = 0;
+  sweep(false, &unscaled_upright, &unscaled_crouched);
+  sweep(true, &scaled_upright, &scaled_crouched);
+  ASSERT_GT(unscaled_upright, 0u) << "the gantry's odometry outruns the stopping command upright";
+  EXPECT_EQ(scaled_upright, 0u) << "scaled by the posture: no braking upright";
+  EXPECT_GT(scaled_crouched, 0u) << "crouched and bent it brakes";
 }
 
 TEST(Controller, TickAndHalCycleDoNotAllocate) {

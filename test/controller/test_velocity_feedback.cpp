@@ -397,6 +397,72 @@ TEST(VelocityFeedback, BrakingFloorKeepsAGaitUnderARobotThatRunsOnAndStaysContin
   EXPECT_EQ(fb.brakeFloor()[1], 0.0);
 }
 
+// brake_posture_scaled: the floor's share is brake_ratio x the weight the controller gives (how
+// crouched or bent the shaped posture is). Weight 0 (upright) is no braking at all, weight 1 is the
+// unscaled floor, in between the share scales; a weight that drops mid-stop lets the floor go at
+// brake_rate, not at once.
+TEST(VelocityFeedback, PostureScaledBrakingFloorScalesWithTheWeightAndIsOffUpright) {
+  Legs legs;
+  std::vector<double> commands;
+  // 2 s at 1.0, the command ramps to zero over 1 s while the robot slows at 0.3 m/s^2; the weight
+  // switches to weight_after at tick switch_at.
+  const auto run = [&](bool scaled, double weight, std::vector<double>* out, double weight_after = -1.0, int switch_at = -1) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.ki = {0.0, 0.0, 0.0};  // the floor alone
+    c.brake_ratio = 0.8;
+    c.brake_posture_scaled = scaled;
+    VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+    BaseVelocityEstimate est;
+    est.valid = true;
+    est.stance_feet = 1;
+    for (int k = 0; k < 600; ++k) {
+      const double t = 0.01 * k;
+      fb.setBrakeWeight(k >= switch_at && switch_at >= 0 ? weight_after : weight);
+      est.v_x = t < 2.0 ? 1.0 : std::max(0.0, 1.0 - 0.3 * (t - 2.0));
+      const double u = t < 2.0 ? 1.0 : std::max(0.0, 1.0 - (t - 2.0));
+      if (commands.size() < 600) commands.push_back(u);
+      out->push_back(fb.correct({u, 0.0, 0.0}, est, 0.01).vx);
+    }
+    return fb.brakingTicks();
+  };
+  std::vector<double> unscaled, w0, w05, w1, not_scaled, nan_w, dropped;
+  run(false, 1.0, &unscaled);
+  EXPECT_EQ(run(true, 0.0, &w0), 0u) << "upright: no braking";
+  run(true, 0.5, &w05);
+  run(true, 1.0, &w1);
+  run(false, 0.0, &not_scaled);  // the weight is ignored unless brake_posture_scaled
+  EXPECT_EQ(run(true, std::nan(""), &nan_w), 0u) << "a NaN weight is 0";
+  run(true, 1.0, &dropped, 0.0, 300);
+  ASSERT_EQ(w0.size(), 600u);
+  for (std::size_t k = 0; k < w0.size(); ++k) {
+    EXPECT_EQ(w1[k], unscaled[k]) << "tick " << k;
+    EXPECT_EQ(not_scaled[k], unscaled[k]) << "tick " << k;
+    EXPECT_EQ(w0[k], commands[k]) << "tick " << k << ": the command";
+    EXPECT_LE(w05[k], w1[k] + 1e-12);
+    EXPECT_GE(w05[k], w0[k] - 1e-12);
+  }
+  // Where the half-weight floor raises the command it is at most 0.5 x 0.8 x the robot's velocity.
+  int raised = 0;
+  for (std::size_t k = 0; k < w05.size(); ++k) {
+    const double t = 0.01 * static_cast<double>(k), v = t < 2.0 ? 1.0 : std::max(0.0, 1.0 - 0.3 * (t - 2.0));
+    if (w05[k] > commands[k]) {
+      ++raised;
+      EXPECT_LE(w05[k], 0.5 * 0.8 * v + 1e-12) << "tick " << k;
+    }
+  }
+  EXPECT_GT(raised, 50);
+  // At 3 s the robot still moves at 0.7 m/s: a gait is kept, slower than the full floor's.
+  EXPECT_GT(w05[300], 0.2);
+  EXPECT_GT(w1[300], w05[300] + 0.1);
+  // The weight drops to 0 at tick 300: the floor goes at brake_rate (1 m/s^2 = 0.01 per tick).
+  EXPECT_EQ(dropped[299], w1[299]);
+  for (std::size_t k = 300; k < dropped.size(); ++k) {
+    EXPECT_LE(std::fabs(dropped[k] - dropped[k - 1]), 0.01 + 1e-12) << "tick " << k;
+  }
+  EXPECT_GT(dropped[305], w0[305]) << "not at once";
+  EXPECT_EQ(dropped.back(), 0.0);
+}
+
 // A response model of the kind scripts/fit_command_response.py fits: backward and sideways slower
 // than commanded, a turn that slows a side-step and a forward walk (more so when they point
 // opposite ways), a turn that drifts sideways.

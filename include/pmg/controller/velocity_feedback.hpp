@@ -168,6 +168,14 @@ struct VelocityFeedbackConfig {
   double brake_ratio = 0.0;
   double brake_decel = 0.2;  ///< chosen on the stop script (docs/controller.md "Braking steps")
   double brake_rate = 1.0;
+  /// true: the floor's share is brake_ratio × w, where w ∈ [0, 1] is how crouched or bent the shaped
+  /// posture is (VelocityFeedback::setBrakeWeight(); the controller passes
+  /// CommandShaper::postureFraction(): 0 upright at the standing height, so an upright stop is not
+  /// lengthened; 1 at the crouched or bent envelope's edge). false (the default): w = 1. Why: crouched
+  /// to 0.66 m and bent 0.3 rad, the default actor sometimes runs on after the stop and falls, while
+  /// upright braking steps doubled the stop from 1.0 m/s (docs/controller.md "Braking steps where the
+  /// robot runs on").
+  bool brake_posture_scaled = false;
   /// Feed-forward (off unless feedforward.enabled, and only while the feedback is enabled): the
   /// correction is added to u_ff = feedforward.invert(u) instead of to u; the integral still drives
   /// the estimate to u.
@@ -359,6 +367,9 @@ class VelocityFeedback {
   const std::array<double, 3>& feedforward() const noexcept { return u_ff_; }
   /// The braking floor (v_x, v_y [m/s] in H; 0: none) of the last update (config brake_ratio).
   const std::array<double, 2>& brakeFloor() const noexcept { return brake_; }
+  /// The weight w ∈ [0, 1] of the braking floor for the next update() when
+  /// config().brake_posture_scaled (clamped; NaN → 0). noexcept.
+  void setBrakeWeight(double w) noexcept { brake_weight_ = w >= 0.0 ? (w <= 1.0 ? w : 1.0) : 0.0; }
   /// Ticks on which the braking floor raised the command so far.
   std::uint64_t brakingTicks() const noexcept { return braking_ticks_; }
   /// The estimate (v_x, v_y [m/s], ω [rad/s] in H) the last update integrated on.
@@ -376,6 +387,7 @@ class VelocityFeedback {
   std::array<double, 3> u_ff_{};
   std::array<double, 3> u_anchor_{}, steady_{};
   std::array<double, 2> brake_{};
+  double brake_weight_ = 1.0;
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{}, u_fb_prev_{};
   std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0, envelope_ticks_ = 0;
