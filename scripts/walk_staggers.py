@@ -90,7 +90,7 @@ def score(out_dirs, sway):
                 if any(t0 <= t < t1 for t in run.get("upsets_s", [])):
                     w["latched"].append(tag)
                 seg = segs.get(name)
-                if seg is not None:
+                if seg is not None and all(seg["achieved"].get(k) is not None for k in ("vx", "pitch", *AXES)):  # None: fell before its window
                     a, c = seg["achieved"], w["command"]
                     w["vx"].append(a["vx"])
                     w["pitch"].append(a["pitch"])

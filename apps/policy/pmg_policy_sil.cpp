@@ -733,7 +733,7 @@ int main(int argc, char** argv) {
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"joint_stops_timeconst_s\": " << base.mujoco.joint_stops.timeconst
        << ", \"brake_ratio\": " << (base.velocity_feedback.enabled ? base.velocity_feedback.brake_ratio : 0.0)
-       << ", \"brake_posture_scaled\": " << (base.velocity_feedback.brake_posture_scaled ? "true" : "false")
+       << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"

@@ -159,12 +159,6 @@ double CommandShaper::crouchFraction() const noexcept {
   return std::clamp((limits_.standing_height - posture_.height) / (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
 }
 
-double CommandShaper::bendFraction() const noexcept {
-  return limits_.bent_pitch > 0.0 ? std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0) : 0.0;
-}
-
-double CommandShaper::postureFraction() const noexcept { return std::max(crouchFraction(), bendFraction()); }
-
 void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept {
   const double t[3] = {v.vx, v.vy, v.wz};
   // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
@@ -185,7 +179,7 @@ void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scal
     }
   }
   if (limits_.bent_pitch > 0.0) {
-    const double f = bendFraction();
+    const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);
     if (f > 0.0)
       for (std::size_t i = 0; i < 3; ++i) *bent_scale = std::max(*bent_scale, std::fabs(t[i]) / blended(i, f, limits_.bent_max_velocity));
   }

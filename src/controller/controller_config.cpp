@@ -218,7 +218,7 @@ struct VelocityFeedbackYaml {
     a->Visit("brake_ratio", &f.brake_ratio, "braking steps: gait floor at this share of the estimated v_x, v_y, [0, 1); 0 = off");
     a->Visit("brake_decel", &f.brake_decel, "the floor lets the reference decelerate at least this fast, (0, min(5, brake_rate)] m/s^2");
     a->Visit("brake_rate", &f.brake_rate, "largest change of the floor per second, (0, 10] m/s^2");
-    a->Visit("brake_posture_scaled", &f.brake_posture_scaled, "the floor's share scaled by how crouched or bent the shaped posture is, true|false");
+    a->Visit("brake_crouch_scaled", &f.brake_crouch_scaled, "the floor's share scaled by how crouched the shaped posture is (needs commands.crouched_height), true|false");
     a->Visit("feedforward", &feedforward, "identified command response, inverted in front of the correction (docs/controller.md)");
     a->Visit("upset_guard", &upset_guard, "hold the velocity command at zero after an upset (docs/controller.md)");
   }
@@ -419,10 +419,9 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.velocity_feedback.feedforward = y.velocity_feedback.feedforward.model();
   c.velocity_feedback.upset_guard = y.velocity_feedback.upset_guard.g;
   if (const std::string e = c.velocity_feedback.validate(); !e.empty()) fail("velocity_feedback", e);
-  if (c.velocity_feedback.brake_posture_scaled && c.velocity_feedback.brake_ratio > 0.0 &&
-      !(c.commands.crouched_height > 0.0) && !(c.commands.bent_pitch > 0.0))
-    fail("velocity_feedback", "brake_posture_scaled: true needs commands.crouched_height or commands.bent_pitch > 0 "
-                              "(the posture's weight comes from those envelopes; with both off the floor never acts)");
+  if (c.velocity_feedback.brake_crouch_scaled && c.velocity_feedback.brake_ratio > 0.0 && !(c.commands.crouched_height > 0.0))
+    fail("velocity_feedback", "brake_crouch_scaled: true needs commands.crouched_height > 0 "
+                              "(the weight is how far the posture is crouched towards it; without it the floor never acts)");
   c.posture_feedback = y.posture_feedback.f;
   if (const std::string e = c.posture_feedback.validate(); !e.empty()) fail("posture_feedback", e);
   c.soft_stand_duration = y.safety.soft_stand_duration_s;

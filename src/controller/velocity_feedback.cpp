@@ -391,7 +391,7 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     bool raised = false;
     double* out[2] = {&u_fb_.vx, &u_fb_.vy};
     const double prev_out[2] = {previous.vx, previous.vy};
-    const double ratio = config_.brake_ratio * (config_.brake_posture_scaled ? brake_weight_ : 1.0);
+    const double ratio = config_.brake_ratio * (config_.brake_crouch_scaled ? brake_weight_ : 1.0);
     for (std::size_t i = 0; i < 2; ++i) {
       const double v = estimate(i);
       const double s = brake_[i] != 0.0 ? (brake_[i] > 0.0 ? 1.0 : -1.0) : (v >= 0.0 ? 1.0 : -1.0);

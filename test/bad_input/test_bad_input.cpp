@@ -600,12 +600,12 @@ std::vector<Case> allCases() {
       {"ctrl_velocity_feedback_brake_decel_above_rate", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_decel: 2.0\n  brake_rate: 1.0\n"; }),
        error({"velocity_feedback", "brake_decel", "brake_rate"})},
-      {"ctrl_velocity_feedback_brake_posture_scaled_not_a_bool", Kind::kControllerConfig,
-       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_posture_scaled: 1.5\n"; }),
-       error({"brake_posture_scaled"})},
-      {"ctrl_velocity_feedback_brake_posture_scaled_without_envelopes", Kind::kControllerConfig,
-       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_ratio: 0.8\n  brake_posture_scaled: true\n"; }),
-       error({"velocity_feedback", "brake_posture_scaled", "crouched_height", "bent_pitch"})},
+      {"ctrl_velocity_feedback_brake_crouch_scaled_not_a_bool", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_crouch_scaled: 1.5\n"; }),
+       error({"brake_crouch_scaled"})},
+      {"ctrl_velocity_feedback_brake_crouch_scaled_without_crouched_envelope", Kind::kControllerConfig,
+       text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  brake_ratio: 0.8\n  brake_crouch_scaled: true\n"; }),
+       error({"velocity_feedback", "brake_crouch_scaled", "crouched_height"})},
       {"ctrl_velocity_feedback_feedforward_gain_out_of_range", Kind::kControllerConfig,
        text([] {
          return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    vy: {gain_positive: 5.0}\n";

@@ -231,45 +231,48 @@ TEST(CommandShaper, BentEnvelopeSlowsAFastWalkWhileTheTorsoIsBent) {
   EXPECT_EQ(plain.counters().bent_limited_ticks, 0u);
 }
 
-// postureFraction(): how crouched or bent the shaped posture is, the braking floor's weight
-// (velocity_feedback.brake_posture_scaled). 0 upright at the standing height and leaning back,
-// the larger of crouch and bend in between, 1 at or beyond an envelope's edge; it follows the
-// slewed posture, so it moves by at most the slew's share per tick.
-TEST(CommandShaper, PostureFractionIsTheLargerOfCrouchAndBendAndFollowsTheSlew) {
+// crouchFraction(): how crouched the shaped posture is, the braking floor's weight
+// (velocity_feedback.brake_crouch_scaled). 0 at the standing height however bent or leaning back,
+// 1 at or below crouched_height, in between along the slewed height, so it moves by at most the
+// height slew's share per tick.
+TEST(CommandShaper, CrouchFractionFollowsTheShapedHeightAndNotTheBend) {
   CommandLimits limits = envelopeLimits();
   limits.crouched_height = 0.62;
   limits.bent_pitch = 0.4;
   CommandShaper shaper(limits);
   HeldCommandRun run(shaper, 0.0, 0.0, 0.0);
   run(0.0, std::nullopt, 1.0);
-  EXPECT_EQ(shaper.postureFraction(), 0.0) << "upright at the standing height";
+  EXPECT_EQ(shaper.crouchFraction(), 0.0) << "upright at the standing height";
+  run(0.4, std::nullopt, 2.0);
+  ASSERT_NEAR(shaper.posture().pitch, 0.4, 1e-12);
+  EXPECT_EQ(shaper.crouchFraction(), 0.0) << "bent at the standing height";
   run(-0.1, std::nullopt, 2.0);
-  EXPECT_EQ(shaper.postureFraction(), 0.0) << "leaning back";
-  run(0.1, 0.70, 3.0);
-  ASSERT_NEAR(shaper.posture().height, 0.70, 1e-12);
-  EXPECT_NEAR(shaper.postureFraction(), 0.5, 1e-9) << "crouched halfway (0.08 of 0.16 m), bent a quarter";
+  EXPECT_EQ(shaper.crouchFraction(), 0.0) << "leaning back";
   run(0.3, 0.70, 3.0);
-  EXPECT_NEAR(shaper.postureFraction(), 0.75, 1e-9) << "now the bend is the larger";
-  // From there to a deep crouch and back upright: per tick at most the height slew's share.
-  double prev = shaper.postureFraction(), largest = 0.0;
-  for (const auto& [pitch, height] : std::vector<std::pair<double, double>>{{0.5, 0.55}, {0.0, 0.78}}) {
+  ASSERT_NEAR(shaper.posture().height, 0.70, 1e-12);
+  EXPECT_NEAR(shaper.crouchFraction(), 0.5, 1e-9) << "crouched halfway: 0.08 of 0.16 m";
+  // From there to a deep crouch and back up: per tick at most the height slew's share.
+  double prev = shaper.crouchFraction(), largest = 0.0;
+  for (const double height : {0.55, 0.78}) {
     for (int k = 0; k < 200; ++k) {
-      run(pitch, height, 0.01);
-      largest = std::max(largest, std::fabs(shaper.postureFraction() - prev));
-      prev = shaper.postureFraction();
+      run(0.0, height, 0.01);
+      largest = std::max(largest, std::fabs(shaper.crouchFraction() - prev));
+      prev = shaper.crouchFraction();
       EXPECT_GE(prev, 0.0);
       EXPECT_LE(prev, 1.0);
     }
-    if (height < 0.6) EXPECT_EQ(shaper.postureFraction(), 1.0) << "beyond both edges";
+    if (height < 0.6) {
+      EXPECT_EQ(shaper.crouchFraction(), 1.0) << "below crouched_height";
+    }
   }
-  EXPECT_EQ(shaper.postureFraction(), 0.0) << "upright again";
-  EXPECT_LE(largest, std::max(limits.height_rate * 0.01 / 0.16, limits.posture_rate * 0.01 / 0.4) + 1e-12);
+  EXPECT_EQ(shaper.crouchFraction(), 0.0) << "standing height again";
+  EXPECT_LE(largest, limits.height_rate * 0.01 / 0.16 + 1e-12);
   EXPECT_GT(largest, 0.0);
 
-  // Both envelopes off (the default): 0 however deep.
+  // The crouched envelope off (the default): 0 however deep.
   CommandShaper plain(envelopeLimits());
   HeldCommandRun(plain, 0.0, 0.0, 0.0)(0.4, 0.55, 4.0);
-  EXPECT_EQ(plain.postureFraction(), 0.0);
+  EXPECT_EQ(plain.crouchFraction(), 0.0);
 }
 
 TEST(CommandLimits, ValidateNamesTheField) {

@@ -247,15 +247,19 @@ TEST(ReferenceContinuity, BrakingStepsInTheGantryKeepEveryJointReferenceUnderThe
   EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
 }
 
-// Braking steps scaled by the posture (velocity_feedback.brake_posture_scaled), through the
-// controller: upright the floor never acts, however the odometry reads the swinging legs; crouched
-// and bent it does, and the references stay under the bound through the stops and posture changes.
-TEST(ReferenceContinuity, PostureScaledBrakingActsOnlyCrouchedOrBentAndKeepsReferencesUnderTheBound) {
-  // The same abrupt walks and stops as the test above, upright and then crouched to crouched_height
-  // and bent to bent_pitch (weight 1).
-  const auto sweep = [](bool scaled, std::uint64_t* upright_ticks, std::uint64_t* crouched_ticks) {
+// Braking steps scaled by the crouch (velocity_feedback.brake_crouch_scaled), through the
+// controller in the gantry, where the odometry reads the swinging legs as motion: at the standing
+// height, upright or bent, the floor never acts; crouched it does, and the references stay under the
+// bound through the stops and posture changes.
+TEST(ReferenceContinuity, CrouchScaledBrakingActsOnlyCrouchedAndKeepsReferencesUnderTheBound) {
+  // The same abrupt walks and stops as the test above, upright, bent to bent_pitch at the standing
+  // height, and crouched to crouched_height (weight 1).
+  struct Ticks {
+    std::uint64_t upright = 0, bent = 0, crouched = 0;
+  };
+  const auto sweep = [](bool scaled) {
     ControllerConfig c = silConfig(true, 0.8);
-    c.velocity_feedback.brake_posture_scaled = scaled;
+    c.velocity_feedback.brake_crouch_scaled = scaled;
     c.commands.crouched_height = 0.62;
     c.commands.bent_pitch = 0.4;
     Sweep s(std::move(c));
@@ -265,6 +269,8 @@ TEST(ReferenceContinuity, PostureScaledBrakingActsOnlyCrouchedOrBentAndKeepsRefe
     const VelocityFeedback& fb = *s.app->controller().velocityFeedback();
     const double vx = L.max_velocity[0], vy = L.max_velocity[1], linger = 0.8 * vx / s.config.velocity_feedback.brake_decel + 0.5;
     const auto walks = [&](double pitch, std::optional<double> h, const std::string& at) {
+      const std::uint64_t before = fb.brakingTicks();
+      s.hold(cmd(0, 0, 0, pitch, 0, h), 2.0, at + " pose");
       for (const auto& [label, u] : std::vector<std::pair<std::string, Command>>{
                {"+vx", cmd(0.8 * vx, 0, 0, pitch, 0, h)}, {"stop", cmd(0, 0, 0, pitch, 0, h)},
                {"-vx-vy", cmd(-0.5 * vx, -0.8 * vy, 0, pitch, 0, h)}, {"stop again", cmd(0, 0, 0, pitch, 0, h)}})
@@ -272,29 +278,30 @@ TEST(ReferenceContinuity, PostureScaledBrakingActsOnlyCrouchedOrBentAndKeepsRefe
       s.hold(cmd(0, 0, 0, pitch, 0, h), linger, at + " standing");
       EXPECT_EQ(fb.command().vx, 0.0) << at << ": the floor is gone " << linger << " s after the stop";
       EXPECT_EQ(fb.command().vy, 0.0) << at;
+      return fb.brakingTicks() - before;
     };
-    walks(0.0, std::nullopt, "upright");
-    EXPECT_EQ(s.app->controller().commands().postureFraction(), 0.0);
-    *upright_ticks = fb.brakingTicks();
-    s.hold(cmd(0, 0, 0, 0.4, 0.0, 0.62), 2.0, "crouch and bend");
-    EXPECT_EQ(s.app->controller().commands().postureFraction(), 1.0);
-    walks(0.4, 0.62, "crouched and bent");
-    *crouched_ticks = fb.brakingTicks() - *upright_ticks;
+    Ticks t;
+    t.upright = walks(0.0, std::nullopt, "upright");
+    t.bent = walks(0.4, std::nullopt, "bent");
+    EXPECT_EQ(s.app->controller().commands().crouchFraction(), 0.0);
+    t.crouched = walks(0.0, 0.62, "crouched");
+    EXPECT_EQ(s.app->controller().commands().crouchFraction(), 1.0);
     s.hold(cmd(0, 0, 0), 2.0, "upright again");
-    std::printf("[ SIL ] braking %s in the gantry: floor acted on %llu ticks upright, %llu crouched and bent; fastest PMG "
-                "reference %.2f rad/s at %s\n", scaled ? "scaled by the posture" : "unscaled",
-                static_cast<unsigned long long>(*upright_ticks), static_cast<unsigned long long>(*crouched_ticks), s.max_ref_speed,
-                s.worst_at.c_str());
+    std::printf("[ SIL ] braking %s in the gantry: floor acted on %llu ticks upright, %llu bent, %llu crouched; fastest PMG "
+                "reference %.2f rad/s at %s\n", scaled ? "scaled by the crouch" : "unscaled",
+                static_cast<unsigned long long>(t.upright), static_cast<unsigned long long>(t.bent),
+                static_cast<unsigned long long>(t.crouched), s.max_ref_speed, s.worst_at.c_str());
     EXPECT_LE(s.max_ref_speed, L.max_reference_speed + 1e-9) << s.worst_at;
     EXPECT_LE(s.recorder->max_sent_speed, L.max_reference_speed + 1e-9);
     EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+    return t;
   };
-  std::uint64_t unscaled_upright = 0, unscaled_crouched = 0, scaled_upright = 0, scaled_crouched = 0;
-  sweep(false, &unscaled_upright, &unscaled_crouched);
-  sweep(true, &scaled_upright, &scaled_crouched);
-  ASSERT_GT(unscaled_upright, 0u) << "the gantry's odometry outruns the stopping command upright";
-  EXPECT_EQ(scaled_upright, 0u) << "scaled by the posture: no braking upright";
-  EXPECT_GT(scaled_crouched, 0u) << "crouched and bent it brakes";
+  const Ticks unscaled = sweep(false), scaled = sweep(true);
+  ASSERT_GT(unscaled.upright, 0u) << "the gantry's odometry outruns the stopping command upright";
+  ASSERT_GT(unscaled.bent, 0u) << "and bent";
+  EXPECT_EQ(scaled.upright, 0u) << "scaled by the crouch: no braking at the standing height";
+  EXPECT_EQ(scaled.bent, 0u) << "bent at the standing height neither";
+  EXPECT_GT(scaled.crouched, 0u) << "crouched it brakes";
 }
 
 TEST(Controller, TickAndHalCycleDoNotAllocate) {

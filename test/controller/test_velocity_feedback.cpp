@@ -397,11 +397,11 @@ TEST(VelocityFeedback, BrakingFloorKeepsAGaitUnderARobotThatRunsOnAndStaysContin
   EXPECT_EQ(fb.brakeFloor()[1], 0.0);
 }
 
-// brake_posture_scaled: the floor's share is brake_ratio x the weight the controller gives (how
-// crouched or bent the shaped posture is). Weight 0 (upright) is no braking at all, weight 1 is the
+// brake_crouch_scaled: the floor's share is brake_ratio x the weight the controller gives (how
+// crouched the shaped posture is). Weight 0 (standing height) is no braking at all, weight 1 is the
 // unscaled floor, in between the share scales; a weight that drops mid-stop lets the floor go at
 // brake_rate, not at once.
-TEST(VelocityFeedback, PostureScaledBrakingFloorScalesWithTheWeightAndIsOffUpright) {
+TEST(VelocityFeedback, CrouchScaledBrakingFloorScalesWithTheWeightAndIsOffAtStandingHeight) {
   Legs legs;
   std::vector<double> commands;
   // 2 s at 1.0, the command ramps to zero over 1 s while the robot slows at 0.3 m/s^2; the weight
@@ -410,7 +410,7 @@ TEST(VelocityFeedback, PostureScaledBrakingFloorScalesWithTheWeightAndIsOffUprig
     VelocityFeedbackConfig c = enabledConfig();
     c.ki = {0.0, 0.0, 0.0};  // the floor alone
     c.brake_ratio = 0.8;
-    c.brake_posture_scaled = scaled;
+    c.brake_crouch_scaled = scaled;
     VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
     BaseVelocityEstimate est;
     est.valid = true;
@@ -427,10 +427,10 @@ TEST(VelocityFeedback, PostureScaledBrakingFloorScalesWithTheWeightAndIsOffUprig
   };
   std::vector<double> unscaled, w0, w05, w1, not_scaled, nan_w, dropped;
   run(false, 1.0, &unscaled);
-  EXPECT_EQ(run(true, 0.0, &w0), 0u) << "upright: no braking";
+  EXPECT_EQ(run(true, 0.0, &w0), 0u) << "at the standing height: no braking";
   run(true, 0.5, &w05);
   run(true, 1.0, &w1);
-  run(false, 0.0, &not_scaled);  // the weight is ignored unless brake_posture_scaled
+  run(false, 0.0, &not_scaled);  // the weight is ignored unless brake_crouch_scaled
   EXPECT_EQ(run(true, std::nan(""), &nan_w), 0u) << "a NaN weight is 0";
   run(true, 1.0, &dropped, 0.0, 300);
   ASSERT_EQ(w0.size(), 600u);

@@ -4,7 +4,8 @@ leaning back, stop, stand) with the effects hidden in seed 1 (a sideways sway be
 walk, an upset-guard latch and a fall in the stop, the walk's mean 0.5 m/s off its command, still
 0.6 m/s forward 1-3 s into the stop) and none in seed 0, each count comes out 0 for seed 0 and 1 for
 seed 1, and the JSON lists them; standing segments are not walks; a directory without summary.json
-is refused, naming it."""
+is refused, naming it; a seed without achieved values in the walk (fell before its window) is run,
+not averaged."""
 import csv
 import json
 import os
@@ -61,6 +62,21 @@ def main():
             assert w[key] == ["run:1"], (key, w[key], r.stdout)
         assert abs(sum(w["vx"]) / 2 - 0.75) < 1e-9, w["vx"]
         assert "walk" in r.stdout and "ran_on: run:1" in r.stdout, r.stdout
+    # A seed that fell before the walk's averaging window has no achieved values there (null): it is
+    # counted as run, its staggers still, but it adds nothing to the walk's mean.
+    with tempfile.TemporaryDirectory() as d:
+        out_dir = os.path.join(d, "run")
+        os.mkdir(out_dir)
+        write_run(out_dir)
+        path = os.path.join(out_dir, "summary.json")
+        summary = json.load(open(path))
+        summary["runs"][1]["segments"][1]["achieved"] = {k: None for k in command(0.0)}
+        json.dump(summary, open(path, "w"))
+        table = os.path.join(d, "t.json")
+        r = subprocess.run([sys.executable, SCRIPT, out_dir, "--json", table], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        w = json.load(open(table))["walks"][0]
+        assert w["seeds"] == 2 and w["vx"] == [1.0] and w["fell"] == ["run:1"] and w["upset"] == [], w
     with tempfile.TemporaryDirectory() as d:
         r = subprocess.run([sys.executable, SCRIPT, d], capture_output=True, text=True)
         assert r.returncode != 0 and "summary.json: missing" in (r.stderr + r.stdout), r

@@ -144,21 +144,17 @@ class CommandShaper {
   /// crouched_height, bent_pitch); v / s is on the envelope's edge when s > 1, and v is inside when
   /// s <= 1 (0 with both envelopes off or upright at the standing height). noexcept.
   double envelopeScale(const VelocityCommand& v) const noexcept;
-  /// How crouched or bent the shaped posture of the last update is, in [0, 1]: the larger of the
-  /// crouched envelope's crouch f = (standing − h) / (standing − crouched_height) and the bent
-  /// envelope's bend f = pitch / bent_pitch, each clamped to [0, 1] (the blend factors of
-  /// envelopeScale()); 0 for an envelope that is off, 0 upright at the standing height, 1 at or
-  /// beyond crouched_height or bent_pitch. Continuous: it follows the slewed posture. noexcept.
-  double postureFraction() const noexcept;
+  /// How crouched the shaped posture of the last update is, in [0, 1]: the crouched envelope's
+  /// crouch f = (standing − h) / (standing − crouched_height), clamped (the blend factor of
+  /// envelopeScale()); 0 with the crouched envelope off (crouched_height 0) or at the standing height,
+  /// 1 at or below crouched_height. Continuous: it follows the slewed height. noexcept.
+  double crouchFraction() const noexcept;
   const CommandCounters& counters() const noexcept { return counters_; }
   const CommandLimits& limits() const noexcept { return limits_; }
 
  private:
   /// The crouched and the bent envelope's scales of @p v at the shaped posture (envelopeScale()).
   void envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept;
-  /// The crouch and bend blend factors of the shaped posture (postureFraction()).
-  double crouchFraction() const noexcept;
-  double bendFraction() const noexcept;
 
   CommandLimits limits_;
   VelocityCommand target_{}, velocity_{};

@@ -168,14 +168,15 @@ struct VelocityFeedbackConfig {
   double brake_ratio = 0.0;
   double brake_decel = 0.2;  ///< chosen on the stop script (docs/controller.md "Braking steps")
   double brake_rate = 1.0;
-  /// true: the floor's share is brake_ratio × w, where w ∈ [0, 1] is how crouched or bent the shaped
-  /// posture is (VelocityFeedback::setBrakeWeight(); the controller passes
-  /// CommandShaper::postureFraction(): 0 upright at the standing height, so an upright stop is not
-  /// lengthened; 1 at the crouched or bent envelope's edge). false (the default): w = 1. Why: crouched
+  /// true: the floor's share is brake_ratio × w, where w ∈ [0, 1] is how crouched the shaped posture
+  /// is (VelocityFeedback::setBrakeWeight(); the controller passes CommandShaper::crouchFraction():
+  /// 0 at the standing height, so an upright or bent stop at the standing height is not lengthened;
+  /// 1 at commands.crouched_height; needs that envelope on). false (the default): w = 1. Why: crouched
   /// to 0.66 m and bent 0.3 rad, the default actor sometimes runs on after the stop and falls, while
-  /// upright braking steps doubled the stop from 1.0 m/s (docs/controller.md "Braking steps where the
-  /// robot runs on").
-  bool brake_posture_scaled = false;
+  /// unscaled braking steps doubled the upright stop from 1.0 m/s, and weighted by the bend too they
+  /// lengthened the bent stop from 1.0 m/s at the standing height (docs/controller.md "Braking steps
+  /// where the robot runs on").
+  bool brake_crouch_scaled = false;
   /// Feed-forward (off unless feedforward.enabled, and only while the feedback is enabled): the
   /// correction is added to u_ff = feedforward.invert(u) instead of to u; the integral still drives
   /// the estimate to u.
@@ -368,7 +369,7 @@ class VelocityFeedback {
   /// The braking floor (v_x, v_y [m/s] in H; 0: none) of the last update (config brake_ratio).
   const std::array<double, 2>& brakeFloor() const noexcept { return brake_; }
   /// The weight w ∈ [0, 1] of the braking floor for the next update() when
-  /// config().brake_posture_scaled (clamped; NaN → 0). noexcept.
+  /// config().brake_crouch_scaled (clamped; NaN → 0). noexcept.
   void setBrakeWeight(double w) noexcept { brake_weight_ = w >= 0.0 ? (w <= 1.0 ? w : 1.0) : 0.0; }
   /// Ticks on which the braking floor raised the command so far.
   std::uint64_t brakingTicks() const noexcept { return braking_ticks_; }

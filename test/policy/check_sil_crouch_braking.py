@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Checks the braking steps scaled by the posture (velocity_feedback.brake_ratio with
-brake_posture_scaled, on in the default config) through the product path (label sil), off: with
+"""Checks the braking steps scaled by the crouch (velocity_feedback.brake_ratio with
+brake_crouch_scaled, on in the default config) through the product path (label sil), off: with
 --braking off, on: as shipped.
 
-Crouched (ctest pmg_policy_sil_posture_braking): the default config runs
+Crouched (ctest pmg_policy_sil_crouch_braking): the default config runs
 training/results/fidelity/run_on/bent_crouched_stops.yaml (crouched to 0.66 m and bent 0.3 rad, told
 0.6 m/s, then a stop with the pose kept) on seed 331 to 16 s, with the velocity feedback's correction
 not bounded by the posture envelopes (--feedback-within-envelopes off), the harder case in which the
@@ -18,12 +18,12 @@ a standing reference, and it falls. On:
   decelerate more slowly), and is zero again by the end of the stop;
 - on, the robot is still (|v_x| < 0.15 m/s, 0.5 s mean) within 3 s of the stop command.
 
-Upright (ctest pmg_policy_sil_posture_braking_upright, with --upright): the default config runs the
-upright stop from 1.0 m/s (training/results/fidelity/fast20s_ft2/stop/fast_fwd.yaml) on seed 0. Upright
-at the standing height the posture's weight is 0: the floor never acts and the run is the same tick for
-tick (v_x achieved and sent to the generator), so an upright stop is not lengthened.
+At the standing height (ctest pmg_policy_sil_crouch_braking_standing, with --standing): the default
+config runs test/data/policy/eval_standing_height_stops.yaml (stops from 1.0 m/s upright and bent
+0.4 rad) on seed 0. At the standing height the crouch's weight is 0: the floor never acts and the run
+is the same tick for tick (v_x achieved and sent to the generator), so those stops are not lengthened.
 
-Usage: check_sil_posture_braking.py [--upright] OFF_DIR ON_DIR
+Usage: check_sil_crouch_braking.py [--standing] OFF_DIR ON_DIR
 """
 import math
 import os
@@ -33,7 +33,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from sil_run import run_off_on, still_after  # noqa: E402
 
 SEED = 331
-UPRIGHT_SEED = 0
+STANDING_SEED = 0
 
 
 def stop1(rs):
@@ -42,7 +42,7 @@ def stop1(rs):
 
 
 def braking_keys(s_off, s_on):
-    return s_off["brake_ratio"] == 0 and s_on["brake_ratio"] > 0 and s_on["brake_posture_scaled"]
+    return s_off["brake_ratio"] == 0 and s_on["brake_ratio"] > 0 and s_on["brake_crouch_scaled"]
 
 
 def checks(s_off, r_off, s_on, r_on):
@@ -58,7 +58,7 @@ def checks(s_off, r_off, s_on, r_on):
           f"generator command up to {lift:.3f} m/s above the shaped one, largest rise per tick {rise:.4f}, "
           f"at the end of the stop {st_on[-1]['vx_fb'] if st_on else float('nan'):.3f}, still {still} s after the stop")
     return {
-        "off run without braking, on run with the posture-scaled floor": braking_keys(s_off, s_on),
+        "off run without braking, on run with the crouch-scaled floor": braking_keys(s_off, s_on),
         "off, faster than 1.0 m/s in the stop on a standing reference (the cause is there)": len(standing_ref_fast) > 0,
         "off, the robot fell (the effect is there)": len(run_off["falls_s"]) > 0,
         "on, no fall": run_on["falls_s"] == [],
@@ -74,19 +74,22 @@ def equal(a, b):
     return a == b or (math.isnan(a) and math.isnan(b))
 
 
-def upright_checks(s_off, r_off, s_on, r_on):
+def standing_checks(s_off, r_off, s_on, r_on):
     same = len(r_off) == len(r_on) and all(equal(a["vx"], b["vx"]) and equal(a["vx_fb"], b["vx_fb"]) for a, b in zip(r_off, r_on))
     largest = max((abs(a["vx_fb"] - b["vx_fb"]) for a, b in zip(r_off, r_on) if not math.isnan(a["vx_fb"] - b["vx_fb"])),
                   default=float("nan"))
-    print(f"upright stop from 1.0 m/s: {len(r_on)} ticks, largest difference of the generator's v_x {largest}")
+    bent = [r for r in r_on if r["segment"] == "bent_fwd"]
+    print(f"stops from 1.0 m/s upright and bent at the standing height: {len(r_on)} ticks, largest difference of the "
+          f"generator's v_x {largest}; the bent walk's pitch {max((r['pitch'] for r in bent), default=0):.2f} rad at most")
     return {
-        "off run without braking, on run with the posture-scaled floor": braking_keys(s_off, s_on),
-        "upright, the stop is the same tick for tick with and without": same,
-        "upright, no fall": s_on["runs"][0]["falls_s"] == [],
+        "off run without braking, on run with the crouch-scaled floor": braking_keys(s_off, s_on),
+        "at the standing height, the stops are the same tick for tick with and without": same,
+        "the bent walk bends (the bent case is there)": len(bent) > 0 and max(r["pitch"] for r in bent) > 0.3,
+        "no fall": s_on["runs"][0]["falls_s"] == [],
     }
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--upright":
-        sys.exit(run_off_on(upright_checks, UPRIGHT_SEED, sys.argv[1:]))
+    if len(sys.argv) > 1 and sys.argv[1] == "--standing":
+        sys.exit(run_off_on(standing_checks, STANDING_SEED, sys.argv[1:]))
     sys.exit(run_off_on(checks, SEED, sys.argv))
