@@ -326,11 +326,11 @@ int main(int argc, char** argv) {
     commandsSwitch(bent_envelope, &base.commands.bent_pitch, "--bent-envelope", "bent_pitch");
     commandsSwitch(walking_height_floor, &base.commands.walking_min_height, "--walking-height-floor", "walking_min_height");
     if (joint_stops == "off") base.mujoco.joint_stops.timeconst = 0.0;
+    if (joint_stops == "on" && !base.mujoco.joint_stops.enabled())
+      throw pmg::ConfigError(controller_path + ": --joint-stops on: mujoco.joint_stops.timeconst is 0 (the MJCF's) there");
     if (braking == "off") base.velocity_feedback.brake_ratio = 0.0;
     if (braking == "on" && !(base.velocity_feedback.enabled && base.velocity_feedback.brake_ratio > 0.0))
       throw pmg::ConfigError(controller_path + ": --braking on: velocity_feedback.brake_ratio is 0 (or the feedback is off) there");
-    if (joint_stops == "on" && !base.mujoco.joint_stops.enabled())
-      throw pmg::ConfigError(controller_path + ": --joint-stops on: mujoco.joint_stops.timeconst is 0 (the MJCF's) there");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
