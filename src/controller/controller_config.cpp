@@ -208,7 +208,8 @@ struct VelocityFeedbackYaml {
     a->Visit("odometry_time_s", &f.odometry_time_s, "time constant of the leg-odometry correction, 0..2 s");
     a->Visit("yaw_rate_gated", &f.yaw_rate_gated, "the yaw rate moves only with accepted leg samples (true, tuned on) or is the gyro's every tick");
     a->Visit("gate_mps", &f.gate_mps, "leg-odometry samples further than this from the IMU prediction are rejected, (0, 5] m/s");
-    a->Visit("max_rejected_s", &f.max_rejected_s, "after this long of rejections a sample is believed, 0..5 s");
+    a->Visit("max_rejected_s", &f.max_rejected_s, "after this long of rejections the estimate restarts from the legs, 0..5 s");
+    a->Visit("restart_median", &f.restart_median, "restart from the median innovation of the rejected window (true) or the next sample (false, tuned on)");
     a->Visit("within_posture_envelopes", &f.within_posture_envelopes,
              "keep the corrected command inside the shaper's crouched and bent velocity envelopes (docs/controller.md)");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");

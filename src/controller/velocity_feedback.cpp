@@ -264,8 +264,20 @@ void BaseVelocityEstimator::reset() noexcept {
   v_ = {0.0, 0.0, 0.0};
   initialized_ = false;
   rejected_run_ = 0;
+  restarts_ = 0;
   tilt_ = 0.0;
   last_leg_ = BaseVelocityEstimate{};
+}
+
+double BaseVelocityEstimator::medianInnovation(std::size_t i, int n) noexcept {
+  const auto count = static_cast<std::ptrdiff_t>(n);
+  std::copy(innovations_[i].begin(), innovations_[i].begin() + count, scratch_.begin());
+  auto mid = scratch_.begin() + count / 2;
+  std::nth_element(scratch_.begin(), mid, scratch_.begin() + count);
+  if (count % 2 == 1) return *mid;
+  const double upper = *mid;
+  const double lower = *std::max_element(scratch_.begin(), mid);  // the largest of the lower half
+  return 0.5 * (lower + upper);
 }
 
 BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double dt) noexcept {
@@ -298,16 +310,37 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
     const double innovation = std::hypot(leg.v_x - v_[0], leg.v_y - v_[1]);
     // Rejected for max_rejected_s: the IMU-only prediction has drifted; restart from the legs.
     const bool restart = !initialized_ || static_cast<double>(rejected_run_) * dt >= config_.max_rejected_s;
-    if (restart || innovation <= config_.gate_mps) {
+    if (restart && initialized_ && config_.restart_median) {
+      // From the prediction shifted by the median innovation of the rejected window and this sample:
+      // a glitch among them (a lifting foot counted in stance) does not become the estimate.
+      const int slot = rejected_run_ % kRestartWindow;
+      innovations_[0][slot] = leg.v_x - v_[0];
+      innovations_[1][slot] = leg.v_y - v_[1];
+      const int n = std::min(rejected_run_ + 1, kRestartWindow);
+      v_[0] += medianInnovation(0, n);
+      v_[1] += medianInnovation(1, n);
+      // The gated yaw rate restarts from this sample, as without the median: the integral loop's yaw
+      // gain was chosen on that (with the median here too, the grid lost 4 more segments).
+      if (config_.yaw_rate_gated) v_[2] = leg.yaw_rate;
+      rejected_run_ = 0;
+      ++restarts_;
+      ++accepted_;
+    } else if (restart || innovation <= config_.gate_mps) {
       v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
       v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
       // Gated (yaw_rate_gated, the default): the yaw rate (the gyro's) moves with the accepted
       // samples only, held while the gate rejects and taken from one sample on a restart.
       if (config_.yaw_rate_gated || !initialized_) v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
+      if (restart && initialized_) ++restarts_;
       initialized_ = true;
       rejected_run_ = 0;
       ++accepted_;
     } else {
+      if (config_.restart_median) {
+        const int slot = rejected_run_ % kRestartWindow;
+        innovations_[0][slot] = leg.v_x - v_[0];
+        innovations_[1][slot] = leg.v_y - v_[1];
+      }
       ++rejected_run_;
       ++rejected_;
     }

@@ -663,6 +663,64 @@ TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) 
   EXPECT_NEAR(e.v_x, odo.estimate(spike).v_x, 1e-9);
 }
 
+TEST(BaseVelocityEstimator, MedianRestartIsNotTakenByOneGlitchAndEqualsTheSampleWhenTheLegsAgree) {
+  // After max_rejected_s (0.3 s) of rejections the estimate restarts. The rejected window holds a
+  // real motion the IMU prediction missed (2 of 3 samples, +0.5 m/s forward) and glitches (1 of 3,
+  // -1.8 m/s: a lifting foot counted in stance), and the restart tick itself brings a glitch.
+  Legs legs;
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;  // the left foot is the lower: stance
+  qd[0].setZero();
+  qd[1].setZero();
+  LowState still = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  still.imu.acc = {0.0, 0.0, 9.81};
+  // Leg odometry is linear in the stance leg's joint speeds (no rotation): scale one pattern.
+  LegOdometry odo(legs.model, legs.idx, enabledConfig().stance_band_m);
+  qd[0] << 3.0, 0.0, 0.0, -4.0, 1.0, 0.0;
+  const double unit = odo.estimate(makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero())).v_x;
+  ASSERT_GT(std::fabs(unit), 0.1);
+  auto sample = [&](double v_x) {
+    gco::LegVector qs[2] = {qd[0] * (v_x / unit), gco::LegVector::Zero()};
+    LowState s = makeState(legs, q, qs, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+    s.imu.acc = still.imu.acc;
+    return s;
+  };
+  const LowState good = sample(0.5), glitch = sample(-1.8);
+  ASSERT_NEAR(odo.estimate(good).v_x, 0.5, 1e-9);
+  const double good_v_y = odo.estimate(good).v_y;
+
+  auto run = [&](bool median, bool agree, std::size_t* allocations) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.restart_median = median;
+    c.max_rejected_s = 0.295;  // the 31st sample after 30 rejections (away from 30 x 0.01's rounding)
+    BaseVelocityEstimator est(legs.model, legs.idx, c);
+    for (int k = 0; k < 20; ++k) est.update(still, 0.01);
+    BaseVelocityEstimate e;
+    test::AllocationGuard alloc;
+    for (int k = 0; k < 30; ++k) e = est.update(agree || k % 3 != 2 ? good : glitch, 0.01);
+    EXPECT_TRUE(est.rejecting());
+    EXPECT_NEAR(e.v_x, 0.0, 1e-9) << "the prediction, without the legs";
+    EXPECT_EQ(est.restarts(), 0u);
+    // The restart tick: a glitch, unless the legs agree.
+    e = est.update(agree ? good : glitch, 0.01);
+    *allocations = alloc.count();
+    EXPECT_EQ(est.restarts(), 1u);
+    EXPECT_FALSE(est.rejecting());
+    return e;
+  };
+  std::size_t n = 0;
+  const BaseVelocityEstimate sample_restart = run(false, false, &n);
+  EXPECT_NEAR(sample_restart.v_x, -1.8, 1e-6) << "the restart from the next sample takes the glitch";
+  const BaseVelocityEstimate median_restart = run(true, false, &n);
+  EXPECT_EQ(n, 0u);
+  EXPECT_NEAR(median_restart.v_x, 0.5, 1e-6) << "the median of the window is a good sample";
+  EXPECT_NEAR(median_restart.v_y, good_v_y, 1e-6);
+  // Where the legs agree, both restarts give the legs' measurement.
+  EXPECT_NEAR(run(true, true, &n).v_x, 0.5, 1e-6);
+  EXPECT_NEAR(run(false, true, &n).v_x, 0.5, 1e-6);
+}
+
 TEST(BaseVelocityEstimator, UngatedYawRateFollowsTheGyroWhileTheLegsAreRejected) {
   Legs legs;
   gco::LegVector q[2], qd[2];

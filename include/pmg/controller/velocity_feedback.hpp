@@ -140,8 +140,16 @@ struct VelocityFeedbackConfig {
   bool yaw_rate_gated = true;
   /// Leg-odometry samples further than this from the prediction are rejected [m/s], (0, 5].
   double gate_mps = 0.15;
-  /// After this long of consecutive rejections the estimate restarts from the next sample [s], [0, 5].
+  /// After this long of consecutive rejections the estimate restarts from the legs [s], [0, 5].
   double max_rejected_s = 0.3;
+  /// How it restarts. false (what the integral loop and the feed-forward were tuned on): from the
+  /// next leg-odometry sample alone, so one glitch (a lifting foot counted in stance) can become the
+  /// estimate, and the gate then rejects the good samples around the wrong value. true: v_x, v_y
+  /// restart from the prediction shifted by the median innovation (sample − prediction, per axis)
+  /// of the samples rejected in the last max_rejected_s, this tick's included (at most
+  /// kRestartWindow samples); the gated yaw rate still restarts from this sample.
+  /// docs/controller.md "A restart from the median".
+  bool restart_median = false;
   /// Above this pelvis tilt (IMU roll or pitch) [rad], (0, 1.5], the correction is not integrated
   /// and decays to zero with decay_time_s: a robot that is being shoved or catching itself gets
   /// exactly the user's command.
@@ -237,9 +245,10 @@ class LegOdometry {
 /// W, plus gravity; the rotation of H by the gyro's yaw rate) and pulled towards the leg-odometry
 /// measurement with time constant odometry_time_s; a measurement more than gate_mps from the
 /// prediction is rejected (touchdown and lift-off transients, slips, flight phases); once the
-/// rejections have lasted max_rejected_s the estimate restarts from the legs' measurement. The yaw
+/// rejections have lasted max_rejected_s the estimate restarts from the legs' measurement (the next
+/// sample, or with restart_median the median of the rejected window). The yaw
 /// rate is the gyro's (rotated into W), low-passed alike and moved only with the accepted samples:
-/// held while the gate rejects, taken from one sample on a restart. Measured against the
+/// held while the gate rejects, restarted with the velocity. Measured against the
 /// simulator (docs/controller.md "Velocity estimate"): RMS error on the envelope grid about 0.10 m/s
 /// (v_x), 0.08 m/s (v_y), 0.23 rad/s (yaw rate); an ungated yaw rate and a 5 mm stance band are
 /// more accurate, but the integral loop tuned on this estimate then upset more often at the
@@ -261,14 +270,24 @@ class BaseVelocityEstimator {
   bool rejecting() const noexcept { return rejected_run_ > 0; }
   /// Pelvis tilt from vertical of the last update [rad] (IMU orientation).
   double tilt() const noexcept { return tilt_; }
+  /// Restarts after max_rejected_s of rejections so far (the first sample is not one).
+  std::uint64_t restarts() const noexcept { return restarts_; }
+  /// Most rejected samples a median restart looks back over (500 at 100 Hz and max_rejected_s 5 s).
+  static constexpr int kRestartWindow = 512;
 
  private:
   static constexpr double kGravity = 9.81;
+  /// Median of the last n (≤ kRestartWindow) innovations of axis i; reorders scratch_ only.
+  double medianInnovation(std::size_t i, int n) noexcept;
   LegOdometry odometry_;
   VelocityFeedbackConfig config_;
   std::array<double, 3> v_{};
   bool initialized_ = false;
   int rejected_run_ = 0;
+  std::uint64_t restarts_ = 0;
+  /// Innovations (v_x, v_y) of the rejected samples, a ring indexed by rejected_run_.
+  std::array<std::array<double, kRestartWindow>, 2> innovations_{};
+  std::array<double, kRestartWindow> scratch_{};
   double tilt_ = 0.0;
   std::uint64_t accepted_ = 0, rejected_ = 0;
   BaseVelocityEstimate last_leg_;
