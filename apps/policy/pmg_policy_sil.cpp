@@ -50,7 +50,8 @@
 //              --crouched-envelope off drops commands.crouched_height, --bent-envelope off
 //              commands.bent_pitch, --walking-height-floor off commands.walking_min_height,
 //              --posture-envelope off opens posture_feedback.envelope_min/max, --joint-stops off the
-//              MJCF's soft joint stops instead of mujoco.joint_stops, --braking off no braking steps)
+//              MJCF's soft joint stops instead of mujoco.joint_stops, --braking off no braking steps,
+//              --upset-upright off a latched upset guard keeps the operator's posture)
 //   estimate   the feedback's leg-odometry estimate of vx, vy, wz and, with the height fed back, the
 //              kinematic pelvis height (null when off)
 //   feedback_held_fraction, feedback_decayed_fraction   the share of the window's ticks in which the
@@ -247,7 +248,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      feedback_within_envelopes, walking_height_floor, joint_stops, braking;
+      feedback_within_envelopes, walking_height_floor, joint_stops, braking, upset_upright;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -277,6 +278,9 @@ int main(int argc, char** argv) {
   onOff("--braking", &braking,
         "off: no braking steps (velocity_feedback.brake_ratio 0), on: the config's (brake_ratio > 0 there); "
         "default: the controller config's");
+  onOff("--upset-upright", &upset_upright,
+        "off: a latched upset guard keeps the operator's posture (velocity_feedback.upset_guard.upright false), on: "
+        "the torso goes upright while latched (needs the guard); default: the controller config's");
   app.add_flag("--restart-after-fall", restart_after_fall,
                "after a fall, start a fresh robot standing 2 s before the next segment and go on (per-segment "
                "results for the rest of the script; the Table I metrics stop at the first fall)");
@@ -331,6 +335,9 @@ int main(int argc, char** argv) {
     if (braking == "off") base.velocity_feedback.brake_ratio = 0.0;
     if (braking == "on" && !(base.velocity_feedback.enabled && base.velocity_feedback.brake_ratio > 0.0))
       throw pmg::ConfigError(controller_path + ": --braking on: velocity_feedback.brake_ratio is 0 (or the feedback is off) there");
+    if (!upset_upright.empty()) base.velocity_feedback.upset_guard.upright = upset_upright == "on";
+    if (upset_upright == "on" && !(base.velocity_feedback.enabled && base.velocity_feedback.upset_guard.enabled))
+      throw pmg::ConfigError(controller_path + ": --upset-upright on: velocity_feedback.upset_guard is off (or the feedback is) there");
     const pmg::RobotConfig& robot = base.robot;
     const pmg::CommandScript script = pmg::loadCommandScript(commands);
     const double T = duration > 0 ? duration : script.duration();
@@ -731,6 +738,7 @@ int main(int argc, char** argv) {
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
+       << ", \"upset_upright\": " << (base.velocity_feedback.upset_guard.enabled && base.velocity_feedback.upset_guard.upright ? "true" : "false")
        << ", \"joint_stops_timeconst_s\": " << base.mujoco.joint_stops.timeconst
        << ", \"brake_ratio\": " << (base.velocity_feedback.enabled ? base.velocity_feedback.brake_ratio : 0.0)
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")

@@ -77,7 +77,7 @@ void CommandShaper::reset() noexcept {
   held_ = false;
 }
 
-void CommandShaper::update(const CommandSample& s, double now, double dt, bool hold_velocity) noexcept {
+void CommandShaper::update(const CommandSample& s, double now, double dt, bool hold_velocity, bool upright) noexcept {
   const Command& u = s.command;
   if (s.velocity_time >= 0 && s.velocity_time != last_velocity_time_) {
     last_velocity_time_ = s.velocity_time;
@@ -143,8 +143,10 @@ void CommandShaper::update(const CommandSample& s, double now, double dt, bool h
   velocity_.vx = slew(velocity_.vx, goal.vx, limits_.max_acceleration[0] * dt);
   velocity_.vy = slew(velocity_.vy, goal.vy, limits_.max_acceleration[1] * dt);
   velocity_.wz = slew(velocity_.wz, goal.wz, limits_.max_acceleration[2] * dt);
-  posture_.pitch = slew(posture_.pitch, posture_target_.pitch, limits_.posture_rate * dt);
-  posture_.roll = slew(posture_.roll, posture_target_.roll, limits_.posture_rate * dt);
+  // UpsetGuard with upright: the torso straightens at the posture slew (continuous) while latched.
+  const bool straighten = hold_velocity && upright;
+  posture_.pitch = slew(posture_.pitch, straighten ? 0.0 : posture_target_.pitch, limits_.posture_rate * dt);
+  posture_.roll = slew(posture_.roll, straighten ? 0.0 : posture_target_.roll, limits_.posture_rate * dt);
   posture_.height = slew(posture_.height, height_goal, limits_.height_rate * dt);
 }
 

@@ -134,7 +134,8 @@ TickStatus Controller::tick(double now) noexcept {
   // Upset guard (velocity_feedback.upset_guard): the last tick's shaped command against its own
   // estimate of this tick's state.
   const bool hold_velocity = active && upset_guard_ && upset_guard_->update(shaper_.velocity(), shaper_.target(), state_, dt_);
-  shaper_.update(*input, now, dt_, hold_velocity);
+  const bool upright = hold_velocity && config_.velocity_feedback.upset_guard.upright;
+  shaper_.update(*input, now, dt_, hold_velocity, upright);
   ever_active_ = ever_active_ || active;
   if (active && prev_mode_ != Mode::kActive) {
     // Entering active from the standing pose: the generator, the actor and the command start
@@ -165,7 +166,7 @@ TickStatus Controller::tick(double now) noexcept {
     const VelocityCommand& u_d = *u_fb;
     const PostureCommand& u_s =
         posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_,
-                                                      feedback_ ? &feedback_->lastEstimate() : nullptr)
+                                                      feedback_ ? &feedback_->lastEstimate() : nullptr, upright)
                           : shaper_.posture();
     const gco::GcoResult& g =
         fixed_generator_ ? pmg_->step(fixed_u_d_, PostureCommand{0.0, 0.0, config_.commands.standing_height}, dt_)

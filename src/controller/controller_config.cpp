@@ -190,6 +190,7 @@ struct UpsetGuardYaml {
     a->Visit("settle_s", &g.settle_s, "settled this long, [0, 10] s");
     a->Visit("rearm_band", &g.rearm_band, "released once settled and the operator's command within this of zero, [0, 0.3]");
     a->Visit("stance_band_m", &g.stance_band_m, "the guard's own estimate: soles within this height of the lowest are in stance, (0, 0.1] m");
+    a->Visit("upright", &g.upright, "while latched, the torso pitch and roll go to 0 as well (true|false)");
   }
 };
 

@@ -571,7 +571,8 @@ bool PostureFeedback::torsoAttitude(const LowState& state, double* pitch, double
 }
 
 const PostureCommand& PostureFeedback::update(const PostureCommand& u, const VelocityCommand& v,
-                                              const LowState& state, double dt, const BaseVelocityEstimate* v_est) noexcept {
+                                              const LowState& state, double dt, const BaseVelocityEstimate* v_est,
+                                              bool upset) noexcept {
   u_fb_ = u;
   if (!config_.enabled) return u_fb_;
   double pitch = 0.0, roll = 0.0, tilt = 0.0;
@@ -591,7 +592,8 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   const bool moving = config_.still_measured_velocity > 0.0 && v_est && v_est->valid &&
                       (std::fabs(v_est->v_x) >= config_.still_measured_velocity ||
                        std::fabs(v_est->v_y) >= config_.still_measured_velocity);
-  const bool tilted = ok && tilt > config_.max_tilt_rad;
+  // Upset and going upright: every correction decays, as when tilted.
+  const bool tilted = (ok && tilt > config_.max_tilt_rad) || upset;
   const bool hold_stand = still && moving && !tilted;  // the standing correction neither integrates nor decays
   const bool decay = !still || tilted;
   const double decay_keep = std::max(0.0, 1.0 - dt / config_.decay_time_s);

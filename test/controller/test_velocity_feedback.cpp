@@ -1220,6 +1220,38 @@ TEST(PostureFeedback, StandingCorrectionIsHeldWhileTheRobotStillMoves) {
   EXPECT_NE(c.validate().find("still_measured_velocity"), std::string::npos);
 }
 
+TEST(PostureFeedback, UpsetUprightDecaysTheCorrectionInsteadOfIntegrating) {
+  // The upset guard holds with upright: the shaper sends pitch 0, the torso leans back 0.12 rad as the
+  // robot runs on. Integrating, the standing correction would push the torso forward again.
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.max_correction_rad = 0.15;
+  c.decay_time_s = 0.5;
+  ASSERT_EQ(c.validate(), "");
+  const LowState leaning_back = uprightState(0.0, -0.12);
+  auto run = [&](bool upset, std::vector<double>* trace) {
+    PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+    // A correction built while still (the torso 0.1 short of a 0.3 rad bend).
+    for (int k = 0; k < 100; ++k) fb.update({0.3, 0.0, 0.78}, {}, uprightState(0.0, 0.2), 0.01);
+    for (int k = 0; k < 300; ++k) {
+      fb.update({0.0, 0.0, 0.78}, {}, leaning_back, 0.01, nullptr, upset);
+      trace->push_back(fb.correction()[0]);
+    }
+  };
+  std::vector<double> plain, upset;
+  plain.reserve(300);
+  upset.reserve(300);
+  run(false, &plain);
+  run(true, &upset);
+  EXPECT_NEAR(plain.back(), 0.15, 1e-9) << "integrating: pushed forward to the bound";
+  EXPECT_LT(std::fabs(upset.back()), 0.01) << "upset: decayed towards 0";
+  for (std::size_t k = 1; k < upset.size(); ++k) {
+    EXPECT_LE(std::fabs(upset[k]), std::fabs(upset[k - 1]) + 1e-12) << "never grows: " << k;
+    EXPECT_LE(std::fabs(upset[k] - upset[k - 1]), 0.01 / 0.5 * 0.15 + 1e-12) << "continuous: " << k;
+  }
+}
+
 TEST(PostureFeedback, WalkingDecayAfterAStop) {
   PostureFeedbackConfig c;
   c.enabled = true;
@@ -1458,6 +1490,61 @@ TEST(UpsetGuard, TheShaperTakesTheVelocityToZeroContinuouslyAndCountsTheUpset) {
   EXPECT_EQ(shaper.target().vx, 1.0) << "the operator's command is kept (the re-arm looks at it)";
   EXPECT_EQ(shaper.counters().upsets, 1u);
   EXPECT_GT(shaper.counters().upset_hold_ticks, 200u);
+}
+
+TEST(UpsetGuard, UprightStraightensTheTorsoWhileLatchedAndGivesThePostureBackContinuously) {
+  // Told to walk bent 0.3 rad with a 0.1 rad lean, crouched to 0.66 m: the robot runs on at
+  // 1.2 m/s while told to stop, the guard latches; later it settles and the operator lets go.
+  CommandLimits limits;
+  limits.max_acceleration = {1.0, 1.0, 2.0};
+  limits.posture_rate = 0.5;
+  const double dt = 0.01;
+  auto run = [&](bool upright, std::vector<PostureCommand>* trace, std::vector<bool>* held) {
+    CommandShaper shaper(limits);
+    UpsetGuard guard(guardConfig());
+    CommandSample s;
+    s.command.pitch = 0.3;
+    s.command.roll = 0.1;
+    s.command.height = 0.66;
+    for (int k = 0; k < 900; ++k) {
+      const double t = k * dt;
+      s.velocity_time = s.posture_time = t;
+      s.command.vx = t < 2.0 ? 0.6 : 0.0;
+      const BaseVelocityEstimate est = t < 2.0 ? estimateOf(shaper.velocity().vx, 0.0, 0.0)
+                                      : t < 5.0 ? estimateOf(1.2, 0.0, 0.0) : estimateOf(0.0, 0.0, 0.0);
+      const bool hold = guard.update(shaper.velocity(), shaper.target(), est, dt);
+      shaper.update(s, t, dt, hold, hold && upright);
+      trace->push_back(shaper.posture());
+      held->push_back(hold);
+    }
+  };
+  std::vector<PostureCommand> on, off;
+  std::vector<bool> held_on, held_off;
+  on.reserve(900);
+  off.reserve(900);
+  run(true, &on, &held_on);
+  run(false, &off, &held_off);
+  ASSERT_EQ(held_on, held_off) << "upright does not change when the guard latches or releases";
+  int first = -1, last = -1;
+  for (int k = 0; k < 900; ++k)
+    if (held_on[static_cast<std::size_t>(k)]) last = k, first = first < 0 ? k : first;
+  ASSERT_GT(first, 200) << "latched in the run-on";
+  ASSERT_LT(last, 850) << "released after settling";
+  double min_pitch_held = 1.0;
+  for (int k = 1; k < 900; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    // Continuous: the posture slew bounds every step, latched or not.
+    ASSERT_LE(std::fabs(on[i].pitch - on[i - 1].pitch), limits.posture_rate * dt + 1e-12) << k;
+    ASSERT_LE(std::fabs(on[i].roll - on[i - 1].roll), limits.posture_rate * dt + 1e-12) << k;
+    EXPECT_EQ(on[i].height, off[i].height) << "the height goes on: " << k;
+    if (!held_on[i] && k < first) EXPECT_EQ(on[i].pitch, off[i].pitch) << k;
+    if (held_on[i]) min_pitch_held = std::min(min_pitch_held, on[i].pitch);
+  }
+  EXPECT_EQ(min_pitch_held, 0.0) << "upright within the hold (0.6 s at 0.5 rad/s)";
+  EXPECT_EQ(on[static_cast<std::size_t>(last)].roll, 0.0);
+  for (int k = first; k <= last; ++k) EXPECT_NEAR(off[static_cast<std::size_t>(k)].pitch, 0.3, 1e-12) << "without: bent on";
+  EXPECT_NEAR(on.back().pitch, 0.3, 1e-12) << "released: back to the operator's bend";
+  EXPECT_NEAR(on.back().roll, 0.1, 1e-12);
 }
 
 TEST(UpsetGuard, ConfigRefusesValuesOutOfRangeNamingTheField) {

@@ -122,8 +122,10 @@ class CommandShaper {
   explicit CommandShaper(CommandLimits limits);
   /// @param sample newest input; @param now controller time [s]; @param dt tick [s];
   /// @param hold_velocity the velocity command goes to zero at the slew limits whatever the operator
-  /// commands (UpsetGuard latched); the posture goes on.
-  void update(const CommandSample& sample, double now, double dt, bool hold_velocity = false) noexcept;
+  /// commands (UpsetGuard latched); the posture goes on, unless @p upright: then the pitch and roll
+  /// go to 0 at posture_rate too (UpsetGuardConfig::upright), the height goes on.
+  void update(const CommandSample& sample, double now, double dt, bool hold_velocity = false,
+              bool upright = false) noexcept;
   /// Zero velocity, neutral posture, standing height at once (only when the motors do not follow
   /// the references: before the loop enters kActive).
   void reset() noexcept;

@@ -113,6 +113,11 @@ struct UpsetGuardConfig {
   /// the feedback's (which its integral loop was tuned on): docs/controller.md "What the velocity
   /// estimate gets wrong"; on the feedback's own estimate the guard latched on its glitches.
   double stance_band_m = 0.005;
+  /// While latched, the shaped torso pitch and roll also go to 0 (upright) at the shaper's
+  /// posture_rate, whatever the operator commands; the height is kept. Released, they slew back to the
+  /// operator's posture. Why: a robot that runs on after a stop bent forward falls forward; in the
+  /// stress runs every fall came after a latch (docs/controller.md "Upright while upset").
+  bool upright = false;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
 };
@@ -535,8 +540,11 @@ class PostureFeedback {
   /// command after feedback. When disabled returns @p u.
   /// @p v_est: the estimated base velocity (v_x, v_y [m/s] in H; the velocity feedback's), or
   /// nullptr when none is available (then still_measured_velocity is not applied).
+  /// @p upset: the upset guard holds with UpsetGuardConfig::upright; the standing and walking
+  /// corrections decay (decay_time_s) instead of integrating, so that the torso goes upright (the
+  /// standing integrator would otherwise push a torso leaning back as the robot runs on forward again).
   const PostureCommand& update(const PostureCommand& u, const VelocityCommand& v, const LowState& state,
-                               double dt, const BaseVelocityEstimate* v_est = nullptr) noexcept;
+                               double dt, const BaseVelocityEstimate* v_est = nullptr, bool upset = false) noexcept;
   void reset() noexcept;
   const PostureCommand& command() const noexcept { return u_fb_; }
   /// Correction (pitch, roll) [rad] and the low-passed measurement (pitch, roll) [rad] of the last update.
