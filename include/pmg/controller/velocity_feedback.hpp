@@ -253,7 +253,7 @@ class LegOdometry {
 /// rejections have lasted max_rejected_s the estimate restarts from the legs' measurement (the next
 /// sample, or with restart_median the median of the rejected window). The yaw
 /// rate is the gyro's (rotated into W), low-passed alike and moved only with the accepted samples:
-/// held while the gate rejects, restarted with the velocity. Measured against the
+/// held while the gate rejects, taken from one sample on a restart. Measured against the
 /// simulator (docs/controller.md "Velocity estimate"): RMS error on the envelope grid about 0.10 m/s
 /// (v_x), 0.08 m/s (v_y), 0.23 rad/s (yaw rate); an ungated yaw rate and a 5 mm stance band are
 /// more accurate, but the integral loop tuned on this estimate then upset more often at the
