@@ -310,37 +310,34 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
     const double innovation = std::hypot(leg.v_x - v_[0], leg.v_y - v_[1]);
     // Rejected for max_rejected_s: the IMU-only prediction has drifted; restart from the legs.
     const bool restart = !initialized_ || static_cast<double>(rejected_run_) * dt >= config_.max_rejected_s;
-    if (restart && initialized_ && config_.restart_median) {
-      // From the prediction shifted by the median innovation of the rejected window and this sample:
-      // a glitch among them (a lifting foot counted in stance) does not become the estimate.
+    // With restart_median, the window's samples (the rejected ones and a restart's own) are kept for
+    // the median a restart takes.
+    if (config_.restart_median && initialized_ && (restart || innovation > config_.gate_mps)) {
       const int slot = rejected_run_ % kRestartWindow;
       innovations_[0][slot] = leg.v_x - v_[0];
       innovations_[1][slot] = leg.v_y - v_[1];
-      const int n = std::min(rejected_run_ + 1, kRestartWindow);
-      v_[0] += medianInnovation(0, n);
-      v_[1] += medianInnovation(1, n);
-      // The gated yaw rate restarts from this sample, as without the median: the integral loop's yaw
-      // gain was chosen on that (with the median here too, the grid lost 4 more segments).
-      if (config_.yaw_rate_gated) v_[2] = leg.yaw_rate;
-      rejected_run_ = 0;
-      ++restarts_;
-      ++accepted_;
-    } else if (restart || innovation <= config_.gate_mps) {
-      v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
-      v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
+    }
+    if (restart || innovation <= config_.gate_mps) {
+      if (restart && initialized_ && config_.restart_median) {
+        // From the prediction shifted by the median innovation of the window: a glitch among them (a
+        // lifting foot counted in stance) does not become the estimate.
+        const int n = std::min(rejected_run_ + 1, kRestartWindow);
+        v_[0] += medianInnovation(0, n);
+        v_[1] += medianInnovation(1, n);
+      } else {
+        v_[0] = restart ? leg.v_x : v_[0] + a * (leg.v_x - v_[0]);
+        v_[1] = restart ? leg.v_y : v_[1] + a * (leg.v_y - v_[1]);
+      }
       // Gated (yaw_rate_gated, the default): the yaw rate (the gyro's) moves with the accepted
-      // samples only, held while the gate rejects and taken from one sample on a restart.
+      // samples only, held while the gate rejects and taken from one sample on a restart (with the
+      // median too: the integral loop's yaw gain was chosen on that; with the median there as well
+      // the grid lost 4 more segments).
       if (config_.yaw_rate_gated || !initialized_) v_[2] = restart ? leg.yaw_rate : v_[2] + a * (leg.yaw_rate - v_[2]);
       if (restart && initialized_) ++restarts_;
       initialized_ = true;
       rejected_run_ = 0;
       ++accepted_;
     } else {
-      if (config_.restart_median) {
-        const int slot = rejected_run_ % kRestartWindow;
-        innovations_[0][slot] = leg.v_x - v_[0];
-        innovations_[1][slot] = leg.v_y - v_[1];
-      }
       ++rejected_run_;
       ++rejected_;
     }
