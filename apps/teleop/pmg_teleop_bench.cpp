@@ -462,6 +462,8 @@ struct TrialResult {
   int unpins = 0;   ///< wipe: times the operator stood up and stepped back, the robot pinned against the table
   double trunk_on_table_s = -1.0;  ///< first time the pelvis or torso touched a table [s] (-1: never)
   double trunk_on_table_n = 0.0;   ///< the largest normal force between them [N]
+  double level_from_rad = -1.0;    ///< box, level_on_place: the seen tilt when levelling began [rad] (-1: not levelled)
+  double level_to_rad = -1.0;      ///< ... and when it ended [rad]
 };
 
 // One wiping trial. The operator: settle, engage (A), walk to face the towel, squeeze the right
@@ -946,6 +948,22 @@ struct BoxOperatorConfig : OperatorCommon {
   /// stayed closed until that lead was unwound, and moving on they dragged the box along.
   bool unwind_on_release = false;    // tried, not kept (docs/teleop.md), as are place_in_m 0.10 and face_box_*
   double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
+  /// Set a box that hangs turned in the grip down on its low edge, then level it: lowering over the
+  /// place top, once the box is seen turned far side down (its top leaning away from the robot) by
+  /// more than level_tilt_rad with its lowest corner within level_touch_m of the place top (touching
+  /// it), the
+  /// operator stops lowering and draws its hands back towards the robot at level_speed, so that the
+  /// box turns about its far bottom edge until it is seen lying within level_done_rad of flat (at
+  /// most level_back_m back or 4 s); then it lowers and lets go as before. A box that turned beyond
+  /// about 0.83 rad (atan of its depth over its height) and is let down on its far edge topples onto
+  /// its far face ("tipped"); below about 0.6 rad, lowering alone lays it flat (tuning seeds 0-39).
+  bool level_on_place = false;
+  double level_tilt_rad = 0.70;    ///< [rad]
+  double level_done_rad = 0.10;    ///< [rad]
+  double level_max_rad = 1.2;      ///< a box seen turned further lies on its face already: left alone [rad]
+  double level_touch_m = 0.02;     ///< [m]
+  double level_speed = 0.05;       ///< [m/s]
+  double level_back_m = 0.15;      ///< [m]
   /// Face the box square: while walking up (approach, raise, close-in) the operator turns its head
   /// so that the robot turns towards the box's seen yaw (yaw rate = gain x the box's yaw relative to
   /// the robot's heading, at most 0.3 rad/s, 0.03 rad dead band); a box seen turned puts one side
@@ -977,6 +995,13 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
     a->Visit("unwind_on_release", &unwind_on_release, "true | false");
     a->Visit("place_in_m", &place_in_m, "[m]");
+    a->Visit("level_on_place", &level_on_place, "true | false");
+    a->Visit("level_tilt_rad", &level_tilt_rad, "[rad]");
+    a->Visit("level_done_rad", &level_done_rad, "[rad]");
+    a->Visit("level_max_rad", &level_max_rad, "[rad]");
+    a->Visit("level_touch_m", &level_touch_m, "[m]");
+    a->Visit("level_speed", &level_speed, "[m/s]");
+    a->Visit("level_back_m", &level_back_m, "[m]");
     a->Visit("face_box_gain", &face_box_gain, "[1/s] (0: off)");
     a->Visit("face_box_hold", &face_box_hold, "true | false");
     a->Visit("carry_heading_gain", &carry_heading_gain, "[1/s] (0: off)");
@@ -1035,6 +1060,12 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(face_box_gain >= 0 && face_box_gain <= 5.0)) return "face_box_gain: expected [0, 5] 1/s (0: off)";
     if (!(carry_heading_gain >= 0 && carry_heading_gain <= 5.0)) return "carry_heading_gain: expected [0, 5] 1/s (0: off)";
     if (!(place_in_m >= 0 && place_in_m <= 0.3)) return "place_in_m: expected [0, 0.3] m";
+    if (!(level_tilt_rad > 0 && level_tilt_rad <= 1.2)) return "level_tilt_rad: expected (0, 1.2] rad";
+    if (!(level_done_rad > 0 && level_done_rad < level_tilt_rad)) return "level_done_rad: expected (0, level_tilt_rad) rad";
+    if (!(level_max_rad > level_tilt_rad && level_max_rad <= 1.6)) return "level_max_rad: expected (level_tilt_rad, 1.6] rad";
+    if (!(level_touch_m >= 0 && level_touch_m <= 0.1)) return "level_touch_m: expected [0, 0.1] m";
+    if (!(level_speed > 0 && level_speed <= 0.3)) return "level_speed: expected (0, 0.3] m/s";
+    if (!(level_back_m > 0 && level_back_m <= 0.3)) return "level_back_m: expected (0, 0.3] m";
     if (!(stand_off_far_m >= 0 && stand_off_far_m <= 1.0)) return "stand_off_far_m: expected [0, 1] m";
     if (!(stand_off_m >= 0 && stand_off_m <= stand_off_far_m)) return "stand_off_m: expected [0, stand_off_far_m] m";
     if (!(place_stand_off_m >= 0 && place_stand_off_m <= 1.0)) return "place_stand_off_m: expected [0, 1] m";
@@ -1086,6 +1117,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       see_pelvis(op.view_latency_s, op.view_noise_m, rng), see_yaw(op.view_latency_s, 0.0, rng),
       see_box_yaw(op.view_latency_s, 0.0, rng),  // the box's yaw relative to the robot's heading (x) [rad]
       see_box_up(op.view_latency_s, 0.0, rng),   // the box's z axis in W (upright: (0, 0, 1))
+      see_box_xy_z(op.view_latency_s, 0.0, rng),  // the W z components of the box's x and y axes (x, y)
       see_torso_pitch(op.view_latency_s, 0.0, rng);  // the torso's pitch (x) [rad]: the head camera's horizon
   std::array<View, 2> see_hand{View(op.view_latency_s, op.view_noise_m, rng), View(op.view_latency_s, op.view_noise_m, rng)};
   Eigen::Vector2d walk_integral = Eigen::Vector2d::Zero();
@@ -1121,6 +1153,9 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   double held_yaw = 0.0;   // the box's seen yaw (relative to the robot) when it was gripped [rad]
   double stand_t0 = -1.0;  // lifting: when standing up began (< 0: not yet) [s]
   int regrabs = 0;         // times the box was gripped again after it stayed on (or fell back onto) the pick table
+  enum Level { kLevelNo, kLevelOn, kLevelDone } level = kLevelNo;  // level_on_place: not (yet), levelling, done
+  double level_t0 = 0.0, level_x0 = 0.0;  // when levelling began, and carry_x then
+  double level_from = -1.0, level_to = -1.0;  // the seen tilt when it began and ended [rad]
 
   std::vector<pmg::TaskObjectSample> traj;
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
@@ -1164,6 +1199,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     see_yaw.push(t, Vector3d(yaw, 0.0, 0.0));
     see_box_yaw.push(t, Vector3d(std::remainder(yawOf(obj.q_W) - yaw, 2.0 * M_PI), 0.0, 0.0));
     see_box_up.push(t, obj.q_W * Vector3d::UnitZ());
+    see_box_xy_z.push(t, Vector3d((obj.q_W * Vector3d::UnitX()).z(), (obj.q_W * Vector3d::UnitY()).z(), 0.0));
     see_torso_pitch.push(t, Vector3d(std::asin(std::clamp(-d->xmat[9 * torso + 6], -1.0, 1.0)), 0.0, 0.0));
     for (std::size_t h = 0; h < 2; ++h) see_hand[h].push(t, unyaw * (hand_p[h] - torso_p));
     const Vector3d box_R = see_box.seen(t), box_room = see_box_room.seen(t), pelvis_W = see_pelvis.seen(t);
@@ -1361,12 +1397,27 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       case kLower: {
         // Forward until the box is over the place top, then down onto it.
         grip = true;
+        if (entered) level = kLevelNo;
         const double x_goal = place_near_x + op.place_in_m - torso_p.x() + grasp_in;
-        carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
-        if (std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
+        if (level == kLevelNo) carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
+        const bool over = std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0;
+        if (op.level_on_place && over && level != kLevelDone) {
+          // level_on_place: the box as seen, its tilt, which way its top leans, and its lowest corner.
+          const Vector3d up = see_box_up.seen(t), xy_z = see_box_xy_z.seen(t);
+          const double tilt = std::acos(std::clamp(up.z(), -1.0, 1.0));
+          const double lowest = box_room.z() - 0.5 * (box.size[0] * std::abs(xy_z.x()) + box.size[1] * std::abs(xy_z.y()) +
+                                                       box_h * std::abs(up.z()));
+          if (level == kLevelNo && tilt > op.level_tilt_rad && tilt < op.level_max_rad && (unyaw * up).x() > 0.0 && std::abs(lowest - place.height) < op.level_touch_m)
+            level = kLevelOn, level_t0 = t, level_x0 = carry_x, level_from = tilt;
+          if (level == kLevelOn) {
+            carry_x -= op.level_speed * dt;  // back towards the robot, at the height held: the box turns about its far edge
+            if (tilt < op.level_done_rad || level_x0 - carry_x > op.level_back_m || t - level_t0 > 4.0) level = kLevelDone, level_to = tilt;
+          }
+        }
+        if (over && level != kLevelOn) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
         walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.max_speed);
-        if ((lift_z <= place_z_R && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
+        if ((level != kLevelOn && lift_z <= place_z_R && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
         break;
       }
       case kOpen:
@@ -1505,6 +1556,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   r.trunk_on_table_s = rig.trunk_on_table_s;
   r.trunk_on_table_n = rig.trunk_on_table_n;
   r.regrabs = regrabs;
+  r.level_from_rad = level_from;
+  r.level_to_rad = level_to;
   return r;
 }
 
@@ -1560,6 +1613,10 @@ int main(int argc, char** argv) {
       if (task == "wipe") summary["trial_results"].back()["unpins"] = r.unpins;
       summary["trial_results"].back()["trunk_on_table_s"] = r.trunk_on_table_s;
       summary["trial_results"].back()["trunk_on_table_n"] = r.trunk_on_table_n;
+      if (task == "box") {
+        summary["trial_results"].back()["level_from_rad"] = r.level_from_rad;
+        summary["trial_results"].back()["level_to_rad"] = r.level_to_rad;
+      }
       if (!r.verdict.success)
         summary["failures"].push_back({{"trial", k}, {"reason", r.verdict.failure}, {"detail", r.verdict.detail}});
       // Keep the event log and object track of the first success and the first failure; drop the rest
