@@ -950,13 +950,14 @@ struct BoxOperatorConfig : OperatorCommon {
   double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
   /// Set a box that hangs turned in the grip down on its low edge, then level it: lowering over the
   /// place top, once the box is seen turned far side down (its top leaning away from the robot) by
-  /// more than level_tilt_rad with its lowest corner within level_touch_m of the place top (touching
-  /// it), the
-  /// operator stops lowering and draws its hands back towards the robot at level_speed, so that the
-  /// box turns about its far bottom edge until it is seen lying within level_done_rad of flat (at
-  /// most level_back_m back or 4 s); then it lowers and lets go as before. A box that turned beyond
-  /// about 0.83 rad (atan of its depth over its height) and is let down on its far edge topples onto
-  /// its far face ("tipped"); below about 0.6 rad, lowering alone lays it flat (tuning seeds 0-39).
+  /// more than level_tilt_rad, and less than level_max_rad, with its lowest corner within
+  /// level_touch_m of the place top (touching it), the operator stops lowering and draws its hands
+  /// back towards the robot at level_speed, so that the box turns about its far bottom edge, until
+  /// it is seen within level_done_rad of flat (at most level_back_m back, or 4 s); then it lowers
+  /// and lets go as before. Why: a box turned beyond about 0.83 rad (the atan of its depth over its
+  /// height) and let down on its far edge should topple onto its far face ("tipped"). Tried, not
+  /// kept: lowering alone laid such boxes flat more often (held out: 23/100 with it, 27/100
+  /// without; docs/teleop.md).
   bool level_on_place = false;
   double level_tilt_rad = 0.70;    ///< [rad]
   double level_done_rad = 0.10;    ///< [rad]
