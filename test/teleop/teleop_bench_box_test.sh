@@ -63,9 +63,12 @@ for out in sys.argv[1:]:
     scene_xml = open(os.path.join(out, "trial_0_scene.xml")).read()
     if scene_xml.count('_hand_collision"') != 2 or 'type="box" pos=' not in scene_xml:
         fail.append(f"{out}: the trial's scene lacks the two hand pads")
-    # level_on_place is off in the shipped operator: no trial levels its box.
+    # level_on_place is off in the shipped operator: no trial levels its box ...
     if r.get("level_from_rad") != -1.0 or r.get("level_to_rad") != -1.0:
         fail.append(f"{out}: level_from_rad {r.get('level_from_rad')}, level_to_rad {r.get('level_to_rad')}: expected -1 (off)")
+    # Nor does it set the box back while lifting (setback_tilt_rad off).
+    if r.get("setbacks") != 0:
+        fail.append(f"{out}: setbacks {r.get('setbacks')}: expected 0 (off)")
     held = [float(q["grip_left_n"]) + float(q["grip_right_n"]) for q in rows if q["phase"] == "carry"]
     if not held or max(held) < 10.0:
         fail.append(f"{out}: no grip force logged while carrying")
@@ -88,3 +91,4 @@ expect_refused "$bin" box "$d" range3 'view_noise_m: 0.005\ngrasp_below_top_m: 0
 expect_refused "$bin" box "$d" range4 'view_noise_m: 0.005\nvertical_lead_m: 0.9\n' range4.yaml vertical_lead_m '\[0, 0.5\]'
 expect_refused "$bin" box "$d" range5 'view_noise_m: 0.005\nlevel_done_rad: 0.8\n' range5.yaml level_done_rad level_tilt_rad
 expect_refused "$bin" box "$d" range6 'view_noise_m: 0.005\nlevel_on_place: 1.5\n' range6.yaml level_on_place
+expect_refused "$bin" box "$d" range7 'view_noise_m: 0.005\nsetback_tilt_rad: 2.0\n' range7.yaml setback_tilt_rad '\[0, 1.5\]'
