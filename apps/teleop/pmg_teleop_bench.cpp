@@ -1256,6 +1256,13 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       target[0] = Vector3d(x, carry_y, z) + turn * Vector3d(0, w, 0);
       target[1] = Vector3d(x, carry_y, z) - turn * Vector3d(0, w, 0);
     };
+    // The box as seen resting upright on the pick top (slipped out of the hands, or set back), and
+    // the operator's second grip of it: open the hands and lower them beside it again (kDescend
+    // keeps a hand above the box's top until it is beside the box).
+    auto restingOnPick = [&]() {
+      return std::abs(box_room.z() - 0.5 * box_h - pick.height) < 0.02 && see_box_up.seen(t).z() > std::cos(0.2);
+    };
+    auto gripAgain = [&]() { phase = kDescend, phase_t0 = t, ++regrabs, regrip_x = std::numeric_limits<double>::quiet_NaN(); };
     // Lifting and carrying, the operator watches the box, not its own hands: the hands go up (or
     // down) at most lift_speed until the box's bottom is seen carry_clearance_m above the place
     // table's top, however far the box has sagged in the grip; at most max_raise_m above the
@@ -1411,10 +1418,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         grip = working = true;
         lift_z = std::max(grip_z - 0.01, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
-        const Eigen::Vector3d up = see_box_up.seen(t);
-        const bool resting = std::abs(box_room.z() - 0.5 * box_h - pick.height) < 0.02 && up.z() > std::cos(0.2);
-        if ((resting && t - phase_t0 > 1.0) || t - phase_t0 > 4.0)
-          phase = kDescend, phase_t0 = t, ++regrabs, regrip_x = std::numeric_limits<double>::quiet_NaN();
+        if ((restingOnPick() && t - phase_t0 > 1.0) || t - phase_t0 > 4.0) gripAgain();
         break;
       }
       case kCarry: {
@@ -1569,14 +1573,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
       break;
     }
     // A box seen back on the pick table, upright, while lifting or carrying: it slipped out of the
-    // hands. Open them and lower them beside it again (kDescend keeps a hand above the box's top
-    // until it is beside the box).
-    if ((phase == kLift || phase == kCarry) && t - phase_t0 > 2.0 && regrabs < op.max_regrabs) {
-      const double bottom = box_room.z() - 0.5 * box_h;
-      const Eigen::Vector3d up = see_box_up.seen(t);
-      if (std::abs(bottom - pick.height) < 0.02 && up.z() > std::cos(0.2))
-        phase = kDescend, phase_t0 = t, ++regrabs, regrip_x = std::numeric_limits<double>::quiet_NaN();
-    }
+    // hands; grip it again.
+    if ((phase == kLift || phase == kCarry) && t - phase_t0 > 2.0 && regrabs < op.max_regrabs && restingOnPick()) gripAgain();
     // A box seen below the pick table's top has fallen: nothing left to do.
     if (phase > kSqueeze && box_room.z() < pick.height - 0.05) phase = kDone;
   }
