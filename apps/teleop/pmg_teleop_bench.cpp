@@ -319,13 +319,17 @@ double walkCommand(const Op& op, const Eigen::Vector2d& target_W, const Vector3d
 // A body's position in the world frame W [m] (mjData::xpos).
 Vector3d bodyPos(const mjData* d, int body) { return Vector3d(d->xpos[3 * body], d->xpos[3 * body + 1], d->xpos[3 * body + 2]); }
 
-// Each hand's contact normal force on @p body now [N], the grip's squeeze for the trace: [0, 1]
-// through every geom of the left / right hand's subtree (rooted at subtree_root, e.g. the wrist roll
-// link), [2, 3] through its geom pad[h] alone (-1: none). MuJoCo's mj_contactForce gives the force
-// in the contact frame, whose first axis is the normal.
-std::array<double, 4> contactNormalForce(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root,
-                                         const std::array<int, 2>& pad = {-1, -1}) {
-  std::array<double, 4> n{0.0, 0.0, 0.0, 0.0};
+// Each hand's contact forces on @p body now, for the trace [N]: [0, 1] the normal force through every
+// geom of the left / right hand's subtree (rooted at subtree_root, e.g. the wrist roll link), [2, 3]
+// the normal force through its geom pad[h] alone (-1: none); [4, 5] the vertical (W z, up +) part of
+// the whole force that subtree applies to @p body (normal and friction: what holds it up), [6, 7] the
+// vertical part of the normal forces alone (negative: the squeeze pushes the body down, as where a
+// housing presses on a top edge). MuJoCo's mj_contactForce gives the force in the contact frame (rows
+// of mjContact::frame: the normal, from geom1 to geom2, then the two tangents); it is the force geom1
+// applies to geom2.
+std::array<double, 8> contactForces(const mjModel* m, const mjData* d, int body, const std::array<int, 2>& subtree_root,
+                                    const std::array<int, 2>& pad = {-1, -1}) {
+  std::array<double, 8> n{};
   auto inSubtree = [&](int b, int root) {
     for (; b > 0; b = m->body_parentid[b])
       if (b == root) return true;
@@ -338,8 +342,15 @@ std::array<double, 4> contactNormalForce(const mjModel* m, const mjData* d, int 
     if (other < 0) continue;
     mjtNum f[6];
     mj_contactForce(m, d, i, f);
+    const double sign = b2 == body ? 1.0 : -1.0;  // the force on @p body
+    const double normal_z = sign * f[0] * c.frame[2];
+    const double total_z = sign * (f[0] * c.frame[2] + f[1] * c.frame[5] + f[2] * c.frame[8]);
     for (std::size_t h = 0; h < 2; ++h) {
-      if (inSubtree(other, subtree_root[h])) n[h] += std::abs(f[0]);
+      if (inSubtree(other, subtree_root[h])) {
+        n[h] += std::abs(f[0]);
+        n[4 + h] += total_z;
+        n[6 + h] += normal_z;
+      }
       if (pad[h] >= 0 && (c.geom1 == pad[h] || c.geom2 == pad[h])) n[2 + h] += std::abs(f[0]);
     }
   }
@@ -563,7 +574,7 @@ TrialResult runWipe(int trial, std::uint64_t seed, const pmg::TaskScene& base_sc
                        app.controller().teleop()->status().command.vy, app.controller().teleop()->status().command.wz,
                        app.controller().teleop()->status().command.pitch);
     {
-      const std::array<double, 4> press = contactNormalForce(m, d, towel_body, press_root, press_pad);
+      const std::array<double, 8> press = contactForces(m, d, towel_body, press_root, press_pad);
       // palm_normal_z: the hand's y axis (across the palm: the pad's thin axis) in W, z component;
       // +-1 with the palm flat on the table, 0 with the palm facing sideways.
       csv << fmt::format(",{:.2f},{:.2f},{:.3f}\n", press[0], press[2], d->xmat[9 * hand + 7]);
@@ -1127,6 +1138,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   // The rubber hands' collision geoms (scene hand_collision; -1 without): the grip through the palms.
   const std::array<int, 2> hand_geom{mj_name2id(m, mjOBJ_GEOM, "task_left_hand_collision"), mj_name2id(m, mjOBJ_GEOM, "task_right_hand_collision")};
   if (box_body < 0 || hand_subtree[0] < 0 || hand_subtree[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks the box body or *_wrist_roll_link");
+  const std::array<int, 2> arm_root{mj_name2id(m, mjOBJ_BODY, "left_shoulder_pitch_link"), mj_name2id(m, mjOBJ_BODY, "right_shoulder_pitch_link")};
+  if (arm_root[0] < 0 || arm_root[1] < 0) throw std::runtime_error("pmg_teleop_bench: the model lacks *_shoulder_pitch_link");
 
   std::mt19937_64 rng(seed * 7919 + 17);
   View see_box(op.view_latency_s, op.view_noise_m, rng), see_box_room(op.view_latency_s, op.view_noise_m, rng),
@@ -1179,7 +1192,8 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
   std::ofstream csv(out_dir / fmt::format("trial_{}.csv", trial));
   csv << "t,phase,pelvis_x,pelvis_y,pelvis_z,hand_x,hand_y,hand_z,obj_x,obj_y,obj_z,head_x,head_y,engaged,cmd_vx,cmd_vy,cmd_wz,cmd_pitch,"
          "left_hand_x,left_hand_y,left_hand_z,grip_left_n,grip_right_n,box_tilt,left_hand_pitch,right_hand_pitch,"
-         "grip_left_hand_n,grip_right_hand_n\n";
+         "grip_left_hand_n,grip_right_hand_n,grip_left_up_n,grip_right_up_n,grip_left_normal_up_n,grip_right_normal_up_n,"
+         "arm_left_n,arm_right_n,arm_left_up_n,arm_right_up_n,arm_left_normal_up_n,arm_right_normal_up_n,body_n\n";
   bool fell = false;
   const double dt = 0.01;
   const long ticks = std::lround(op.max_trial_s / dt);
@@ -1198,13 +1212,20 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
                        obj.p_W.x(), obj.p_W.y(), obj.p_W.z(), vr.head_position[0], vr.head_position[1], ts.engaged ? 1 : 0,
                        ts.command.vx, ts.command.vy, ts.command.wz, ts.command.pitch, hand_p[0].x(), hand_p[0].y(), hand_p[0].z());
     {
-      const std::array<double, 4> grip_n = contactNormalForce(m, d, box_body, hand_subtree, hand_geom);
+      const std::array<double, 8> grip_n = contactForces(m, d, box_body, hand_subtree, hand_geom);
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[0], grip_n[1]);
       // The box's tilt (angle of its z axis from W's) and each hand's pitch (elevation of its x
       // axis, along the fingers, above the horizontal; negative: pointing down) [rad].
       csv << fmt::format(",{:.4f}", pmg::tiltAngle(obj.q_W));
       for (std::size_t h = 0; h < 2; ++h) csv << fmt::format(",{:.4f}", std::asin(std::clamp(d->xmat[9 * hand_body[h] + 6], -1.0, 1.0)));
       csv << fmt::format(",{:.2f},{:.2f}", grip_n[2], grip_n[3]);  // through the rubber hands' own geoms
+      csv << fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f}", grip_n[4], grip_n[5], grip_n[6], grip_n[7]);  // up: the whole force, its normal part
+      // The same through each whole arm (shoulder on: the forearms and elbows too), and the normal
+      // force through the rest of the robot (trunk, legs: the box against the body).
+      const std::array<double, 8> arm_n = contactForces(m, d, box_body, arm_root);
+      const std::array<double, 8> robot_n = contactForces(m, d, box_body, {sim->pelvisBody(), -1});
+      csv << fmt::format(",{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f},{:.2f}", arm_n[0], arm_n[1], arm_n[4], arm_n[5], arm_n[6], arm_n[7],
+                         robot_n[0] - arm_n[0] - arm_n[1]);
     }
     csv << "\n";
     if (k % 2 == 0) writeObjectPose(rig.objects_csv, t, box.name, obj);  // 50 Hz

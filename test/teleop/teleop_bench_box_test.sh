@@ -72,6 +72,14 @@ for out in sys.argv[1:]:
     held = [float(q["grip_left_n"]) + float(q["grip_right_n"]) for q in rows if q["phase"] == "carry"]
     if not held or max(held) < 10.0:
         fail.append(f"{out}: no grip force logged while carrying")
+    # Carried in the air, the box is held up by the arms alone: the vertical part of their contact
+    # forces on it (frame W, up +) balances its weight (1.0 kg in box_scene.yaml), which checks the
+    # contact frames' convention; each whole arm carries at least what its wrist subtree does.
+    up = sorted(float(q["arm_left_up_n"]) + float(q["arm_right_up_n"]) for q in rows if q["phase"] == "carry" and float(q["body_n"]) < 1.0)
+    if not up or abs(up[len(up) // 2] - 9.81) > 2.0:
+        fail.append(f"{out}: median vertical arm force on the carried box {up[len(up) // 2] if up else None} N: expected its weight, 9.81 N")
+    if any(float(q[f"arm_{h}_n"]) + 1e-6 < float(q[f"grip_{h}_n"]) for q in rows for h in ("left", "right")):
+        fail.append(f"{out}: an arm's normal force below its wrist subtree's")
     fig = s.get("figures", {})
     if "success" not in fig:
         fail.append(f"{out}: no figures of the success")
