@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Pack a build's binary with every shared library it loads, glibc and its loader included, into a
 # tarball that runs on another x86-64 Linux machine without installing anything: used to run
-# scripts/operator_search.py on the device machines' many cores (docs/teleop.md, "Operator search").
+# scripts/operator_search.py on the device machines' many cores (docs/teleop.md, "Operator search on many cores").
 #   scripts/bundle_bench.sh [BINARY] [OUT.txz]   (defaults: build/bin/pmg_teleop_bench, .bundle/bench.txz)
 # There:  tar xJf bench.txz && PMG_DATA_DIR=<a checkout> bundle/run.sh --task box ...
 set -euo pipefail

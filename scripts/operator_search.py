@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Search a scripted teleop operator's parameters with many trials on many cores.
+r"""Search a scripted teleop operator's parameters with many trials on many cores.
 
 pmg_teleop_bench is deterministic per seed, so variants of an operator can be compared trial by trial
 on the same seeds. Twenty trials per variant (the earlier tuning) cannot tell 0.25 from 0.35; this
@@ -18,7 +18,14 @@ estimates every parameter's effect from all trials at once.
            with one intercept per seed, so the seeds' difficulty cancels). Writes DIR/report.json.
 
 The bench command is --bench (default build/bin/pmg_teleop_bench); on a machine without the build's
-libraries use a bundle from scripts/bundle_bench.sh: --bench "bundle/run.sh".
+libraries use a bundle from scripts/bundle_bench.sh: --bench "bundle/run.sh". On the device machines
+(docs/teleop.md, "Operator search on many cores"), with the bundle and the variants carried in .bundle/:
+  here:   scripts/bundle_bench.sh && python3 scripts/operator_search.py sample --n 47 --out .bundle/s1
+  there:  tar xJf .bundle/bench.txz -C /tmp && python3 scripts/operator_search.py run \
+            --variants .bundle/s1/variants/*.yaml --seeds 2000:2100 --bench /tmp/bundle/run.sh \
+            --deadline-s 470 --out /tmp/s1; tar czf $OUT/s1.tgz -C /tmp s1/results
+          (one archive: the device returns only a limited number of files)
+  here:   tar xzf s1.tgz && cp .bundle/s1/variants.json s1/ && python3 scripts/operator_search.py report --out s1
 Pure standard library in `run` (the device machines need nothing installed); `sample`/`make` need PyYAML.
 """
 import argparse
