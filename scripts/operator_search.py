@@ -15,7 +15,8 @@ estimates every parameter's effect from all trials at once.
            by seed block, so a run stopped by --deadline-s leaves every variant on the same seeds.
   report   successes per variant, paired against v000 on the seeds both ran, and each parameter's
            effect on the success rate by least squares on all trials (a linear probability model
-           with one intercept per seed, so the seeds' difficulty cancels). Writes DIR/report.json.
+           with one intercept per seed, so the seeds' difficulty cancels), once there are more
+           variants than parameters moved (else it says so). Writes DIR/report.json.
 
 The bench command is --bench (default build/bin/pmg_teleop_bench); on a machine without the build's
 libraries use a bundle from scripts/bundle_bench.sh: --bench "bundle/run.sh". On the device machines
@@ -63,6 +64,7 @@ BOX_SPACE = {
     "hand_toe_in_rad": (-0.1, 0.2),
     "max_raise_m": (0.08, 0.20),
     "unwind_on_release": [False, True],
+    "unwind_on_place": [False, True],
     "freeze_regrip_aim": [False, True],
     "release_clear_m": [0.0, 0.04, 0.06],
     "keep_hand_pitch": [False, True],
@@ -74,7 +76,8 @@ BOX_SPACE = {
 
 # Values of the space's keys that a base config may leave out (the bench's defaults).
 BOX_DEFAULTS = {"vertical_lead_m": 0.0, "unwind_on_release": False, "freeze_regrip_aim": False, "release_clear_m": 0.0,
-                "keep_hand_pitch": False, "hug_m": 0.0, "place_in_m": 0.04, "hand_pitch_rad": 0.0, "hand_toe_in_rad": 0.0}
+                "keep_hand_pitch": False, "hug_m": 0.0, "place_in_m": 0.04, "hand_pitch_rad": 0.0, "hand_toe_in_rad": 0.0,
+                "unwind_on_place": False}
 
 
 def load_base(path):
@@ -287,6 +290,17 @@ def cmd_report(a):
             for j, key in enumerate(keys):
                 X[i, len(seeds) + j] = feature(v, key)
             y[i] = ok
+        # Identifiable only with more distinct variants than parameters: with fewer, least squares
+        # returns the minimum-norm answer, which shrinks every effect towards zero.
+        variant_features = np.array([[feature(v, key) for key in keys] for v in sorted(by_var)])
+        rank = np.linalg.matrix_rank(variant_features - variant_features.mean(axis=0)) if len(by_var) > 1 else 0
+        moved_keys = int(np.count_nonzero(np.abs(variant_features).sum(axis=0)))
+        if rank < moved_keys:
+            print(f"\nparameter effects not estimated: {len(by_var)} variants span only {rank} of the {moved_keys} parameters "
+                  f"moved (sample more variants than parameters)")
+            report["effects_not_identifiable"] = {"variants": len(by_var), "rank": int(rank), "parameters_moved": moved_keys}
+            (out / "report.json").write_text(json.dumps(report, indent=1))
+            return
         beta, *_ = np.linalg.lstsq(X, y, rcond=None)
         resid = y - X @ beta
         dof = max(1, len(rows) - np.linalg.matrix_rank(X))

@@ -959,6 +959,10 @@ struct BoxOperatorConfig : OperatorCommon {
   /// inside the box (the arm's PD then presses the box), and opening from there the robot's hands
   /// stayed closed until that lead was unwound, and moving on they dragged the box along.
   bool unwind_on_release = false;    // tried, not kept (docs/teleop.md), as are place_in_m 0.10 and face_box_*
+  /// The same at the place table only: the box set down, the controllers are brought back to where
+  /// the robot's hands are seen before the hands open, so that they do let go (without it, boxes
+  /// were left squeezed 1-2 cm above the place top, judged not placed: docs/teleop.md).
+  bool unwind_on_place = false;
   double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
   /// Set a box that hangs turned in the grip down on its low edge, then level it: lowering over the
   /// place top, once the box is seen turned far side down (its top leaning away from the robot) by
@@ -1017,6 +1021,7 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("release_clear_m", &release_clear_m, "[m]");
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
     a->Visit("unwind_on_release", &unwind_on_release, "true | false");
+    a->Visit("unwind_on_place", &unwind_on_place, "true | false");
     a->Visit("place_in_m", &place_in_m, "[m]");
     a->Visit("level_on_place", &level_on_place, "true | false");
     a->Visit("setback_tilt_rad", &setback_tilt_rad, "[rad] (0: off)");
@@ -1258,7 +1263,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     const double carry_z_R = place.height + op.carry_clearance_m + box_h - op.grasp_below_top_m - torso_z;
     const double place_z_R = place.height - op.place_press_m + box_h - op.grasp_below_top_m - torso_z;
     const bool entered = phase != last_phase;
-    const bool unwind = op.unwind_on_release && entered && (phase == kRelease || phase == kOpen);
+    const bool unwind = entered && ((op.unwind_on_release && (phase == kRelease || phase == kOpen)) || (op.unwind_on_place && phase == kOpen));
     last_phase = phase;
     bool grip = false, working = false;
     double work_f = -1.0;  // crouch and look-down fraction when not all or nothing (standing up slowly)

@@ -100,3 +100,4 @@ expect_refused "$bin" box "$d" range4 'view_noise_m: 0.005\nvertical_lead_m: 0.9
 expect_refused "$bin" box "$d" range5 'view_noise_m: 0.005\nlevel_done_rad: 0.8\n' range5.yaml level_done_rad level_tilt_rad
 expect_refused "$bin" box "$d" range6 'view_noise_m: 0.005\nlevel_on_place: 1.5\n' range6.yaml level_on_place
 expect_refused "$bin" box "$d" range7 'view_noise_m: 0.005\nsetback_tilt_rad: 2.0\n' range7.yaml setback_tilt_rad '\[0, 1.5\]'
+expect_refused "$bin" box "$d" range8 'view_noise_m: 0.005\nunwind_on_place: 0.5\n' range8.yaml unwind_on_place
