@@ -77,7 +77,7 @@ BOX_SPACE = {
 # Values of the space's keys that a base config may leave out (the bench's defaults).
 BOX_DEFAULTS = {"vertical_lead_m": 0.0, "unwind_on_release": False, "freeze_regrip_aim": False, "release_clear_m": 0.0,
                 "keep_hand_pitch": False, "hug_m": 0.0, "place_in_m": 0.04, "hand_pitch_rad": 0.0, "hand_toe_in_rad": 0.0,
-                "unwind_on_place": False}
+                "unwind_on_place": False, "place_flat_rad": 0.0}
 
 
 def load_base(path):

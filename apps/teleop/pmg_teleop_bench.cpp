@@ -963,6 +963,12 @@ struct BoxOperatorConfig : OperatorCommon {
   /// the robot's hands are seen before the hands open, so that they do let go (without it, boxes
   /// were left squeezed 1-2 cm above the place top, judged not placed: docs/teleop.md).
   bool unwind_on_place = false;
+  /// Placing, lower the hands past the nominal place height (at most place_deeper_m further) until
+  /// the box is seen resting on the place top, its lowest corner within 1 cm of it, and turned less
+  /// than this [rad] (0: off; the nominal height only). A box hanging turned in the grip touches down
+  /// on an edge first, and lowering on turns it flat.
+  double place_flat_rad = 0.0;
+  double place_deeper_m = 0.06;    ///< [m]
   double place_in_m = 0.04;        ///< placing: the box's near side (as gripped) this far beyond the place top's near edge [m]
   /// Set a box that hangs turned in the grip down on its low edge, then level it: lowering over the
   /// place top, once the box is seen turned far side down (its top leaning away from the robot) by
@@ -1022,6 +1028,8 @@ struct BoxOperatorConfig : OperatorCommon {
     a->Visit("freeze_regrip_aim", &freeze_regrip_aim, "true | false");
     a->Visit("unwind_on_release", &unwind_on_release, "true | false");
     a->Visit("unwind_on_place", &unwind_on_place, "true | false");
+    a->Visit("place_flat_rad", &place_flat_rad, "[rad] (0: off)");
+    a->Visit("place_deeper_m", &place_deeper_m, "[m]");
     a->Visit("place_in_m", &place_in_m, "[m]");
     a->Visit("level_on_place", &level_on_place, "true | false");
     a->Visit("setback_tilt_rad", &setback_tilt_rad, "[rad] (0: off)");
@@ -1090,6 +1098,8 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(face_box_gain >= 0 && face_box_gain <= 5.0)) return "face_box_gain: expected [0, 5] 1/s (0: off)";
     if (!(carry_heading_gain >= 0 && carry_heading_gain <= 5.0)) return "carry_heading_gain: expected [0, 5] 1/s (0: off)";
     if (!(place_in_m >= 0 && place_in_m <= 0.3)) return "place_in_m: expected [0, 0.3] m";
+    if (!(place_flat_rad >= 0 && place_flat_rad <= 0.5)) return "place_flat_rad: expected [0, 0.5] rad (0: off)";
+    if (!(place_deeper_m >= 0 && place_deeper_m <= 0.15)) return "place_deeper_m: expected [0, 0.15] m";
     if (!(level_tilt_rad > 0 && level_tilt_rad <= 1.2)) return "level_tilt_rad: expected (0, 1.2] rad";
     if (!(setback_tilt_rad >= 0 && setback_tilt_rad <= 1.5)) return "setback_tilt_rad: expected [0, 1.5] rad (0: off)";
     if (!(setback_height_m > 0 && setback_height_m <= 0.5)) return "setback_height_m: expected (0, 0.5] m";
@@ -1479,10 +1489,19 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
             if (tilt < op.level_done_rad || level_x0 - carry_x > op.level_back_m || t - level_t0 > 4.0) level = kLevelDone, level_to = tilt;
           }
         }
-        if (over && level != kLevelOn) lift_z = std::max(place_z_R, lift_z - op.lift_speed * dt);
+        // place_flat_rad: on down until the box is seen resting flat on the top (or place_deeper_m deeper).
+        bool resting_flat = true;
+        if (op.place_flat_rad > 0) {
+          const Vector3d up = see_box_up.seen(t), xy_z = see_box_xy_z.seen(t);
+          const double lowest = box_room.z() - 0.5 * (box.size[0] * std::abs(xy_z.x()) + box.size[1] * std::abs(xy_z.y()) + box_h * std::abs(up.z()));
+          resting_flat = std::acos(std::clamp(up.z(), -1.0, 1.0)) < op.place_flat_rad && lowest - place.height < 0.01;
+        }
+        const double place_floor = op.place_flat_rad > 0 ? place_z_R - op.place_deeper_m : place_z_R;
+        if (over && level != kLevelOn && !(resting_flat && lift_z <= place_z_R)) lift_z = std::max(place_floor, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
         walkTo(Eigen::Vector2d(place_near_x - op.place_stand_off_m, place.pos[1]), op.max_speed);
-        if ((level != kLevelOn && lift_z <= place_z_R && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
+        const bool placed = lift_z <= place_z_R && (resting_flat || lift_z <= place_floor);
+        if ((level != kLevelOn && placed && t - phase_t0 > 2.0) || t - phase_t0 > 12.0) phase = kOpen, phase_t0 = t;
         break;
       }
       case kOpen:

@@ -101,3 +101,4 @@ expect_refused "$bin" box "$d" range5 'view_noise_m: 0.005\nlevel_done_rad: 0.8\
 expect_refused "$bin" box "$d" range6 'view_noise_m: 0.005\nlevel_on_place: 1.5\n' range6.yaml level_on_place
 expect_refused "$bin" box "$d" range7 'view_noise_m: 0.005\nsetback_tilt_rad: 2.0\n' range7.yaml setback_tilt_rad '\[0, 1.5\]'
 expect_refused "$bin" box "$d" range8 'view_noise_m: 0.005\nunwind_on_place: 0.5\n' range8.yaml unwind_on_place
+expect_refused "$bin" box "$d" range9 'view_noise_m: 0.005\nplace_flat_rad: 0.8\n' range9.yaml place_flat_rad '\[0, 0.5\]'
