@@ -178,33 +178,25 @@ def cmd_run(a):
     t_start = time.time()
     done = failed = 0
     print(f"{len(jobs)} jobs ({len(variants)} variants x seeds {first}..{last - 1}, {a.per_job} per job) on {a.procs} processes", flush=True)
+
+    def job(j):  # a job not started by the deadline is skipped (jobs go seed block by seed block)
+        if a.deadline_s and time.time() - t_start > a.deadline_s:
+            return None
+        return run_job(a.bench, a.task, j[0], j[1], j[2], results, scratch, a.scene)
+
     with ThreadPoolExecutor(max_workers=a.procs) as pool:
-        pending = iter(jobs)
-        futures = {}
-
-        def submit_next():
-            if a.deadline_s and time.time() - t_start > a.deadline_s:
-                return False
-            j = next(pending, None)
-            if j is None:
-                return False
-            futures[pool.submit(run_job, a.bench, a.task, j[0], j[1], j[2], results, scratch, a.scene)] = j
-            return True
-
-        for _ in range(a.procs):
-            if not submit_next():
-                break
-        while futures:
-            fut = next(as_completed(list(futures)))
-            j = futures.pop(fut)
-            dest, secs, status = fut.result()
+        futures = {pool.submit(job, j): j for j in jobs}
+        for fut in as_completed(futures):
+            j, r = futures[fut], fut.result()
+            if r is None:
+                continue
+            dest, secs, status = r
             done += 1
             if status not in ("ok", "cached"):
                 failed += 1
                 print(f"FAILED {j[0].stem} seed {j[1]}: {status}", flush=True)
             if done % max(1, len(jobs) // 40) == 0 or status not in ("ok", "cached"):
                 print(f"[{time.time() - t_start:6.0f} s] {done}/{len(jobs)} jobs, last {secs:.0f} s", flush=True)
-            submit_next()
     print(f"done: {done} of {len(jobs)} jobs ({failed} failed) in {time.time() - t_start:.0f} s", flush=True)
 
 

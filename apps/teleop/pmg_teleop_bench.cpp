@@ -1476,12 +1476,11 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
         const double x_goal = place_near_x + op.place_in_m - torso_p.x() + grasp_in;
         if (level == kLevelNo) carry_x += std::clamp(x_goal - carry_x, -0.05 * dt, 0.05 * dt);
         const bool over = std::abs(x_goal - carry_x) < 0.01 || t - phase_t0 > 3.0;
+        // The box as seen: its z axis (which way its top leans), its tilt and its lowest corner (W z).
+        const Vector3d up = see_box_up.seen(t), xy_z = see_box_xy_z.seen(t);
+        const double tilt = std::acos(std::clamp(up.z(), -1.0, 1.0));
+        const double lowest = box_room.z() - 0.5 * (box.size[0] * std::abs(xy_z.x()) + box.size[1] * std::abs(xy_z.y()) + box_h * std::abs(up.z()));
         if (op.level_on_place && over && level != kLevelDone) {
-          // level_on_place: the box as seen, its tilt, which way its top leans, and its lowest corner.
-          const Vector3d up = see_box_up.seen(t), xy_z = see_box_xy_z.seen(t);
-          const double tilt = std::acos(std::clamp(up.z(), -1.0, 1.0));
-          const double lowest = box_room.z() - 0.5 * (box.size[0] * std::abs(xy_z.x()) + box.size[1] * std::abs(xy_z.y()) +
-                                                       box_h * std::abs(up.z()));
           if (level == kLevelNo && tilt > op.level_tilt_rad && tilt < op.level_max_rad && (unyaw * up).x() > 0.0 && std::abs(lowest - place.height) < op.level_touch_m)
             level = kLevelOn, level_t0 = t, level_x0 = carry_x, level_from = tilt;
           if (level == kLevelOn) {
@@ -1490,12 +1489,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
           }
         }
         // place_flat_rad: on down until the box is seen resting flat on the top (or place_deeper_m deeper).
-        bool resting_flat = true;
-        if (op.place_flat_rad > 0) {
-          const Vector3d up = see_box_up.seen(t), xy_z = see_box_xy_z.seen(t);
-          const double lowest = box_room.z() - 0.5 * (box.size[0] * std::abs(xy_z.x()) + box.size[1] * std::abs(xy_z.y()) + box_h * std::abs(up.z()));
-          resting_flat = std::acos(std::clamp(up.z(), -1.0, 1.0)) < op.place_flat_rad && lowest - place.height < 0.01;
-        }
+        const bool resting_flat = op.place_flat_rad <= 0 || (tilt < op.place_flat_rad && lowest - place.height < 0.01);
         const double place_floor = op.place_flat_rad > 0 ? place_z_R - op.place_deeper_m : place_z_R;
         if (over && level != kLevelOn && !(resting_flat && lift_z <= place_z_R)) lift_z = std::max(place_floor, lift_z - op.lift_speed * dt);
         holding(carry_x, lift_z, half_w - op.squeeze_m);
