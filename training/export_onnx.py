@@ -70,6 +70,12 @@ def export(npz, out_path, brax_check=None, robot_yaml=None, training=None, clips
     if not os.path.isabs(robot_yaml):
         robot_yaml = os.path.join(repo_root(), robot_yaml)
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
+    offset = str(np.load(npz)["action_offset"]) if "action_offset" in np.load(npz).files else "default"
+    if offset != "default":
+        # The contract's action offset is a constant (the standing pose); the controller has no
+        # residual-on-reference targets, so such an actor would be deployed with the wrong targets.
+        raise SystemExit(f"{npz}: action_offset {offset!r}: the controller deploys actors whose targets are the "
+                         f"standing pose plus scale x action only (EnvConfig.action_offset 'default'); not exported")
     reference = load_reference_settings(npz, clips_dir)
     with open(robot_yaml) as f:
         robot = yaml.safe_load(f)

@@ -86,7 +86,7 @@ def save_params(params, out, env, clip_names):
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
               "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
               "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling),
-              "clips_digest": np.array(clips_digest(env.clip_files))}
+              "clips_digest": np.array(clips_digest(env.clip_files)), "action_offset": np.array(env.cfg.action_offset)}
     for i in range(len(p)):
         arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
         arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]
@@ -132,6 +132,17 @@ def _positive_ints(text):
     if not sizes or min(sizes) < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated positive integers, e.g. 512,256,128")
     return sizes
+
+
+def _scale_factor(text):
+    """argparse type of --action-scale-factor: a finite number in (0, 2]."""
+    try:
+        f = float(text)
+    except ValueError:
+        f = float("nan")
+    if not (0.0 < f <= 2.0):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a number in (0, 2]")
+    return f
 
 
 def action_scale_from(path):
@@ -195,6 +206,11 @@ def parse_args(argv=None):
     ap.add_argument("--action-scale", default="motion", choices=["motion", "torque_matched"],
                     help="leg action scale: motion = from the clips' joint ranges; torque_matched = that x kp_nominal/kp, "
                          "the same PD torque per unit action whatever --gains (EnvConfig.action_scale_rule)")
+    ap.add_argument("--action-offset", default="default", choices=["default", "reference"],
+                    help="leg targets: default = standing pose + scale x action; reference = the PMG reference + scale x "
+                         "action, a residual on the generated motion (EnvConfig.action_offset; the contract carries it)")
+    ap.add_argument("--action-scale-factor", type=_scale_factor, default=1.0, metavar="F",
+                    help="multiplies the leg action scale (the rule's or --action-scale-from's), e.g. 0.5 for residual actions")
     ap.add_argument("--tracking-sigma", type=float, default=None, metavar="S",
                     help="width of both velocity-tracking rewards exp(-err^2/S) (EnvConfig.lin_vel_sigma, yaw_rate_sigma; "
                          "default 0.25)")
@@ -391,7 +407,8 @@ def main(argv=None):
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
     cfg = dataclasses.replace(cfg, upright_walking=args.upright_walking, sole_levelling=args.sole_levelling)
-    cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale)
+    cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale,
+                              action_offset=args.action_offset)
     if args.tracking_sigma is not None:
         cfg = dataclasses.replace(cfg, lin_vel_sigma=args.tracking_sigma, yaw_rate_sigma=args.tracking_sigma)
     if args.orientation_sigma is not None:
@@ -425,6 +442,10 @@ def main(argv=None):
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
     cfg = dataclasses.replace(cfg, clips=args.clips)
     action_scale = action_scale_from(args.action_scale_from) if args.action_scale_from else None
+    if args.action_scale_factor != 1.0:
+        if action_scale is None:  # the rule's scale, from the clips
+            action_scale = G1PmgEnv(cfg, clip_files).action_scale
+        action_scale = np.asarray(action_scale, np.float64) * args.action_scale_factor
     env = G1PmgEnv(cfg, clip_files, action_scale=action_scale)
     clip_files = env.clip_files
     if args.smoke:
@@ -492,6 +513,10 @@ def main(argv=None):
     log("training done in", time.time() - t_start, "s")
     save_params(params, args.out, env, clip_names)
     diff = check_against_brax(params, make_inference_fn, env, args.out)
+    if cfg.action_offset != "default":
+        log(f"not exported to ONNX: action_offset {cfg.action_offset!r} (the controller deploys standing-pose offsets "
+            "only); actor.npz and params.pkl are kept")
+        return
     from export_onnx import export
     export(os.path.join(args.out, "actor.npz"), os.path.join(args.out, "g1_pmg_policy.onnx"), brax_check=diff,
            robot_yaml=export_robot_yaml(cfg),

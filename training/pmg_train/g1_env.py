@@ -299,6 +299,12 @@ class EnvConfig:
     # gains, 1.5-3.7x softer, the motion scale leaves the hip pitch 19 of the nominal 70 N m; issue 15).
     # With nominal gains both rules are the same. The ONNX contract carries the scale.
     action_scale_rule: str = "motion"
+    # What an action is added to (leg joints): "default" = the standing pose (q_des = q_stand + scale a,
+    # the paper's and every shipped actor's); "reference" = the PMG reference of this control step
+    # (q_des = q_ref + scale a: a residual on the generated motion, so that the untrained actor, a = 0,
+    # already steps with the reference; beyond the paper, for the training-time target of issue 12).
+    # The ONNX contract carries it (action.offset_from).
+    action_offset: str = "default"
     # Leg position targets clamped to the joint limits, as the deployed HAL supervisor clamps every
     # setpoint (src/hal/safety/envelope.cpp, clampSetpoint); matters where kp x scale reaches past a limit.
     clamp_targets: bool = True
@@ -450,6 +456,8 @@ class G1PmgEnv(Env):
         if not (0.0 <= cfg.actuator_dr_min <= cfg.actuator_dr_max < 1.0) or not cfg.actuator_dr_z >= 0.0:
             raise ValueError(f"EnvConfig.actuator_dr_min/max/z = {cfg.actuator_dr_min}/{cfg.actuator_dr_max}/"
                              f"{cfg.actuator_dr_z}: expected 0 <= min <= max < 1 and z >= 0")
+        if cfg.action_offset not in ("default", "reference"):
+            raise ValueError(f"EnvConfig.action_offset = {cfg.action_offset!r}: expected 'default' or 'reference'")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
         if clip_files is None:
@@ -850,7 +858,8 @@ class G1PmgEnv(Env):
         a = jnp.clip(action, -1.0, 1.0)
         applied = jnp.where(info["delay"] > 0, info["last_action"], a)  # one period of latency
         q_des = jnp.asarray(self.q_default)
-        q_des = q_des.at[:LEG].set(jnp.asarray(self.q_default[:LEG]) + jnp.asarray(self.action_scale) * applied)
+        base = info["ref_q"][:LEG] if c.action_offset == "reference" else jnp.asarray(self.q_default[:LEG])
+        q_des = q_des.at[:LEG].set(base + jnp.asarray(self.action_scale) * applied)
         if c.clamp_targets:
             q_des = q_des.at[:LEG].set(jnp.clip(q_des[:LEG], self.q_lower[:LEG], self.q_upper[:LEG]))
         t = info["step"].astype(jnp.float32) * c.control_dt

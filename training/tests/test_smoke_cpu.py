@@ -11,7 +11,7 @@ PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
 it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as two tests
-(training_smoke_env: 1 to 1e, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
+(training_smoke_env: 1 to 1f, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
 env's reset and step takes most of the time, so parts 1 to 1e share one env with every training
 option on (make_smoke_env), compiled once; the default configuration is the PPO run's (2).
 
@@ -48,12 +48,16 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    (max_accel [m/s^2, rad/s^2] and posture/height rates x dt), and the goals are redrawn per segment.
 1e. Stops (EnvConfig.p_stop = 1, p_stop_keep_posture = 1, in 1c's env): every goal drawn after a
    walking goal has zero velocity and keeps the walking goal's posture (pitch, roll, height).
+1f. Residual actions (EnvConfig.action_offset = "reference", its own env, one physics substep from a
+   deterministic reset, an action on one knee): the leg torques equal kp (q_ref + scale a - q), the PMG
+   reference of the step, not the standing pose; an unknown action_offset is refused.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
    model passes onnx.checker and carries the pmg.contract, whose pmg.clips_digest names the clips
    trained on; progress.jsonl reached the step count
-   with finite metrics; both devices were used.
+   with finite metrics; both devices were used; the same actor marked as trained with residual
+   actions (action_offset "reference") is refused by the export.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -625,6 +629,54 @@ def ppo_checks(check, workdir, obs):
     act = actor_forward(mean, std, layers, 12, obs.astype(np.float32))
     check(np.isfinite(act).all() and np.abs(act).max() <= 1.0,
           f"exported actor on {where}: finite, within [-1, 1] (max |a| {np.abs(act).max():.3f})")
+    # An actor trained with residual actions (action_offset "reference") is not exported: the
+    # contract's offset is the standing pose, and the controller would apply its actions to that.
+    z = dict(np.load(os.path.join(out, "actor.npz")))
+    z["action_offset"] = np.array("reference")
+    np.savez(os.path.join(out, "actor_residual.npz"), **z)
+    try:
+        export_onnx.export(os.path.join(out, "actor_residual.npz"), os.path.join(out, "residual.onnx"))
+        msg = ""
+    except SystemExit as e:
+        msg = str(e)
+    check("action_offset" in msg and not os.path.exists(os.path.join(out, "residual.onnx")),
+          f"a residual actor is refused by the export, naming action_offset ({msg[:60]}...)")
+
+
+def action_offset_checks(check):
+    """Residual actions (EnvConfig.action_offset = "reference"): the leg PD targets are the PMG reference
+    of the step plus scale x action, not the standing pose plus it. One physics substep from a
+    deterministic reset, with an action on one knee: the leg torques equal kp (q_ref + scale a - q)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    from pmg_train import g1_env
+    t0 = time.time()
+    env = g1_env.G1PmgEnv(g1_env.EnvConfig(deterministic_reset=True, push_vel=(0.0, 0.0), action_offset="reference"),
+                          sorted(glob.glob("config/clips/g1/*.yaml")))
+    env.n_substeps = 1
+    st = jax.jit(env.reset)(jax.random.PRNGKey(3))
+    st = st.replace(info=dict(st.info, delay=jnp.float32(0.0)))  # the action of this step applies (no latency)
+    knee = 3
+    a = np.zeros(12, np.float32)
+    a[knee] = 0.5
+    q = np.asarray(st.pipeline_state.qpos[7:19], np.float64)
+    ref = np.asarray(st.info["ref_q"], np.float64)[:12]
+    ctrl = np.asarray(jax.jit(env.step)(st, jnp.asarray(a)).pipeline_state.ctrl, np.float64)[:12]
+    kp = env.kp[:12].astype(np.float64) * np.asarray(st.info["kp_scale"], np.float64)
+    tau = lambda base: np.clip(kp * (np.clip(base + env.action_scale * a, env.q_lower[:12], env.q_upper[:12]) - q),
+                               -env.tau_max[:12], env.tau_max[:12])
+    err, err_default = np.abs(ctrl - tau(ref)).max(), np.abs(ctrl - tau(env.q_default[:12])).max()
+    print(f"residual-action probe {time.time() - t0:.1f} s (compile included)", flush=True)
+    check(err < 1e-3 and err_default > 1.0 and np.abs(ref - env.q_default[:12]).max() > 0.1,
+          f"action_offset reference: leg torques = kp (q_ref + scale a - q) (max diff {err:.1e} N m); against the "
+          f"standing pose they would differ by {err_default:.1f} N m")
+    try:
+        g1_env.G1PmgEnv(g1_env.EnvConfig(action_offset="reference_q"), sorted(glob.glob("config/clips/g1/*.yaml")))
+        refused = False
+    except ValueError as e:
+        refused = "action_offset" in str(e)
+    check(refused, "an unknown action_offset is refused, naming the field")
 
 
 def main():
@@ -633,8 +685,8 @@ def main():
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
-                    help="env: the environment checks (1, 1b, 1c, 1d, 1e: rollout, actuator models, gains, "
-                         "hand forces, command slew, stops); ppo: the tiny PPO run (2); all: both")
+                    help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f: rollout, actuator models, gains, "
+                         "hand forces, command slew, stops, residual actions); ppo: the tiny PPO run (2); all: both")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -655,6 +707,7 @@ def main():
         obs, starts, reset, step = env_checks(check, env, args.envs, args.steps)
         actuator_env_checks(check, env, cal_path, starts)
         hand_force_checks(check, env, reset, step)
+        action_offset_checks(check)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")

@@ -6,7 +6,8 @@ into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m
 --command-slew is off unless given; --joint-stop-timeconst parses and one below 2 physics steps (0.01 s) or
 non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse and a value outside
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
-and --p-combined parses and a value outside [0, 0.6] is refused;
+and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
+--action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
 --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
@@ -36,6 +37,13 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--p-posture-walk", "0.7"]).p_postur
     failures.append("--p-posture-walk 0.7 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-combined", "0.5"]).p_combined != 0.5:
     failures.append("--p-combined 0.5 not parsed")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--action-offset", "reference", "--action-scale-factor", "0.5"])
+if (args.action_offset, args.action_scale_factor) != ("reference", 0.5):
+    failures.append(f"--action-offset reference --action-scale-factor 0.5 parsed as {args.action_offset}, "
+                    f"{args.action_scale_factor}")
+args = train_pmg.parse_args(["--out", "/tmp/x"])
+if (args.action_offset, args.action_scale_factor) != ("default", 1.0):
+    failures.append(f"--action-offset / --action-scale-factor defaults: {args.action_offset}, {args.action_scale_factor}")
 if train_pmg.parse_args(["--out", "/tmp/x", "--joint-stop-timeconst", "0.01"]).joint_stop_timeconst != 0.01:
     failures.append("--joint-stop-timeconst 0.01 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
@@ -67,7 +75,11 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--orientation-sigma", "nan"], "--orientation-sigma"),
                   (["--height-sigma", "0"], "--height-sigma"),
                   (["--height-sigma", "-0.001"], "--height-sigma"),
-                  (["--yaw-rate-weight", "-1"], "--yaw-rate-weight")):
+                  (["--yaw-rate-weight", "-1"], "--yaw-rate-weight"),
+                  (["--action-offset", "ref"], "--action-offset"),
+                  (["--action-scale-factor", "0"], "--action-scale-factor"),
+                  (["--action-scale-factor", "nan"], "--action-scale-factor"),
+                  (["--action-scale-factor", "3"], "--action-scale-factor")):
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err):
