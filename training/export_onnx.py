@@ -70,7 +70,8 @@ def export(npz, out_path, brax_check=None, robot_yaml=None, training=None, clips
     if not os.path.isabs(robot_yaml):
         robot_yaml = os.path.join(repo_root(), robot_yaml)
     mean, std, layers, action_scale, clips, mode = load_actor(npz)
-    offset = str(np.load(npz)["action_offset"]) if "action_offset" in np.load(npz).files else "default"
+    with np.load(npz) as z:
+        offset = str(z["action_offset"]) if "action_offset" in z.files else "default"  # older actors: the standing pose
     if offset != "default":
         # The contract's action offset is a constant (the standing pose); the controller has no
         # residual-on-reference targets, so such an actor would be deployed with the wrong targets.

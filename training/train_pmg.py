@@ -208,7 +208,8 @@ def parse_args(argv=None):
                          "the same PD torque per unit action whatever --gains (EnvConfig.action_scale_rule)")
     ap.add_argument("--action-offset", default="default", choices=["default", "reference"],
                     help="leg targets: default = standing pose + scale x action; reference = the PMG reference + scale x "
-                         "action, a residual on the generated motion (EnvConfig.action_offset; the contract carries it)")
+                         "action, a residual on the generated motion (EnvConfig.action_offset; not exported to ONNX: the "
+                         "controller deploys standing-pose offsets only)")
     ap.add_argument("--action-scale-factor", type=_scale_factor, default=1.0, metavar="F",
                     help="multiplies the leg action scale (the rule's or --action-scale-from's), e.g. 0.5 for residual actions")
     ap.add_argument("--tracking-sigma", type=float, default=None, metavar="S",

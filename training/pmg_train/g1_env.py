@@ -302,8 +302,9 @@ class EnvConfig:
     # What an action is added to (leg joints): "default" = the standing pose (q_des = q_stand + scale a,
     # the paper's and every shipped actor's); "reference" = the PMG reference of this control step
     # (q_des = q_ref + scale a: a residual on the generated motion, so that the untrained actor, a = 0,
-    # already steps with the reference; beyond the paper, for the training-time target of issue 12).
-    # The ONNX contract carries it (action.offset_from).
+    # already steps with the reference; beyond the paper, tried for the training-time target of issue
+    # 12 and not adopted: training/README.md). Such an actor is not exported to ONNX: the controller
+    # deploys standing-pose offsets only.
     action_offset: str = "default"
     # Leg position targets clamped to the joint limits, as the deployed HAL supervisor clamps every
     # setpoint (src/hal/safety/envelope.cpp, clampSetpoint); matters where kp x scale reaches past a limit.
