@@ -443,11 +443,9 @@ def main(argv=None):
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
     cfg = dataclasses.replace(cfg, clips=args.clips)
     action_scale = action_scale_from(args.action_scale_from) if args.action_scale_from else None
-    if args.action_scale_factor != 1.0:
-        if action_scale is None:  # the rule's scale, from the clips
-            action_scale = G1PmgEnv(cfg, clip_files).action_scale
-        action_scale = np.asarray(action_scale, np.float64) * args.action_scale_factor
     env = G1PmgEnv(cfg, clip_files, action_scale=action_scale)
+    if args.action_scale_factor != 1.0:  # the rule's or the earlier run's scale, scaled (before any step is traced)
+        env.action_scale = (env.action_scale * args.action_scale_factor).astype(np.float32)
     clip_files = env.clip_files
     if args.smoke:
         smoke(env, args.out)
