@@ -7,6 +7,7 @@
 #include "pmg/controller/lcm_command_source.hpp"
 #include "pmg/controller/telemetry.hpp"
 #include "pmg/hal/realtime.hpp"
+#include "pmg/policy/contract.hpp"
 #include "pmg/policy/policy_stage.hpp"
 #include "pmg/teleop/teleop_mode.hpp"
 
@@ -68,6 +69,12 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
     posture_feedback_ =
         std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range, L.height_range,
                                           L.standing_height, pmg_->gco().legModel(), pmg_->legJointIndex());
+  if (config_.upper_body.enabled) {
+    // The actor's joints (the legs, and the waist if it commands it) are refused.
+    std::vector<std::string> actor = policy::makePolicyRobotSpec(robot, dt_).leg_joints;
+    if (policy_) actor.insert(actor.end(), policy_->contract().actuated_joints.begin(), policy_->contract().actuated_joints.end());
+    upper_body_ = std::make_unique<UpperBodyCompensation>(robot, config_.upper_body, actor);
+  }
   command_.num_motors = n;
   holdStandingPose();
 }
@@ -201,6 +208,7 @@ TickStatus Controller::tick(double now) noexcept {
         command_.motors[k] = MotorCommand{q_ref_[k], ref_out_.qd_ref[i], j.kp, j.kd, 0.0};
       }
     }
+    if (upper_body_) upper_body_->apply(state_, command_);
   } else {
     holdStandingPose();  // ignored by the supervisor outside kActive; keeps the stream fresh
   }

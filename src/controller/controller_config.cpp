@@ -322,6 +322,7 @@ struct ControllerYaml {
   CommandsYaml commands;
   VelocityFeedbackYaml velocity_feedback;
   PostureFeedbackYaml posture_feedback;
+  UpperBodyConfig upper_body;
   SafetyYaml safety;
   std::optional<PolicyYaml> policy;
   TelemetryYaml telemetry;
@@ -342,6 +343,7 @@ struct ControllerYaml {
     a->Visit("commands", &commands, "command limits");
     a->Visit("velocity_feedback", &velocity_feedback, "closed-loop velocity tracking (docs/controller.md)");
     a->Visit("posture_feedback", &posture_feedback, "closed-loop torso pitch/roll tracking (docs/controller.md)");
+    a->Visit("upper_body", &upper_body, "upper-body gravity compensation and damping (docs/controller.md)");
     a->Visit("safety", &safety, "supervisor settings");
     a->Visit("policy", &policy, "trained actor (absent: PMG references drive the motors)");
     a->Visit("telemetry", &telemetry, "LCM telemetry and event log");
@@ -426,6 +428,8 @@ ControllerConfig loadControllerConfig(const std::string& path) {
                               "(the weight is how far the posture is crouched towards it; without it the floor never acts)");
   c.posture_feedback = y.posture_feedback.f;
   if (const std::string e = c.posture_feedback.validate(); !e.empty()) fail("posture_feedback", e);
+  c.upper_body = y.upper_body;
+  if (const std::string e = c.upper_body.validate(); !e.empty()) fail("upper_body", e);
   c.soft_stand_duration = y.safety.soft_stand_duration_s;
   c.damping_kd_scale = y.safety.damping_kd_scale;
   c.startup = y.safety.startup;

@@ -98,6 +98,8 @@ class Controller {
   const UpsetGuard* upsetGuard() const noexcept { return upset_guard_.get(); }
   /// The posture feedback stage (config posture_feedback.enabled), or nullptr.
   const PostureFeedback* postureFeedback() const noexcept { return posture_feedback_.get(); }
+  /// The upper-body feed-forward stage (`upper_body:`), nullptr when off.
+  const UpperBodyCompensation* upperBody() const noexcept { return upper_body_.get(); }
   const ReferenceRateLimiter& referenceLimiter() const noexcept { return limiter_; }
   /// Mode requests the loop forwarded to the supervisor (operator and start-up sequence).
   std::uint64_t modeRequestsPosted() const noexcept { return requests_posted_; }
@@ -126,6 +128,7 @@ class Controller {
   std::unique_ptr<VelocityFeedback> feedback_;
   std::unique_ptr<UpsetGuard> upset_guard_;  ///< velocity_feedback.upset_guard (nullptr when off)
   std::unique_ptr<PostureFeedback> posture_feedback_;
+  std::unique_ptr<UpperBodyCompensation> upper_body_;  ///< upper_body (nullptr when off)
   ReferenceRateLimiter limiter_;
   GeneratorOutput ref_out_;  // generator output with the rate-limited reference (preallocated)
   LatestValue<CommandSample> input_;

@@ -18,6 +18,7 @@
 #include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
 #include "pmg/hal/runner.hpp"
+#include "pmg/controller/upper_body.hpp"
 #include "pmg/teleop/teleop_mode.hpp"
 
 namespace pmg {
@@ -62,6 +63,9 @@ struct ControllerConfig {
   VelocityFeedbackConfig velocity_feedback;
   /// Closed-loop torso pitch/roll tracking (`posture_feedback:`, velocity_feedback.hpp); off unless enabled.
   PostureFeedbackConfig posture_feedback;
+  /// Upper-body gravity compensation and damping through tau_ff (`upper_body:`, upper_body.hpp);
+  /// off unless enabled.
+  UpperBodyConfig upper_body;
   double soft_stand_duration = 1.0;  ///< supervisor soft stand: measured → standing pose [s]
   double damping_kd_scale = 1.0;     ///< damping mode: kd = scale · robot config kd
   StartupMode startup = StartupMode::kActive;

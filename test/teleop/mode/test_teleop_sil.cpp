@@ -145,5 +145,61 @@ TEST(TeleopSil, DroppedStreamStopsTheRobotAndItsArmsSettle) {
   EXPECT_GT(s.minHeight(), 0.6) << "the robot fell";
 }
 
+// Crouched 0.18 m and bent (looking down 0.70 rad: torso pitch 0.36 rad) with both hands forward
+// and low, as the box operator grips: the upper body's weight bends the waist pitch beyond its
+// reference. The teleop config's upper_body feed-forward (include/pmg/controller/upper_body.hpp)
+// takes that error out. Returns the waist pitch error q - q_ref [rad] over the last 2 s of 4 s:
+// mean, and the largest measured waist pitch.
+struct WaistPitch {
+  double mean_error = 0.0, max_q = -10.0, min_height = 10.0;
+};
+WaistPitch crouchedWithArmsForward(bool upper_body) {
+  ControllerConfig c = teleopConfig();
+  EXPECT_TRUE(c.upper_body.enabled) << "the teleop config enables upper_body";
+  c.upper_body.enabled = upper_body;
+  ControllerApp app(c);
+  EXPECT_EQ(app.controller().upperBody() != nullptr, upper_body);
+  Session s(app);
+  s.run(operatorAt(0, 0), 1.0);
+  s.pressA(operatorAt(0, 0));
+  // As the box operator does: the hands forward first, then crouch and bend in place.
+  teleop::VrSample vr = operatorAt(0, 0);
+  vr.grip = {1.0, 1.0};
+  vr.hand_position = {{{0.40, 0.18, 1.6 - 0.45}, {0.40, -0.18, 1.6 - 0.45}}};
+  s.run(vr, 1.5);
+  const double head_z = 1.6 - 0.18, look_down = 0.70;
+  vr = operatorAt(0, 0, head_z);
+  vr.head_quat = {std::cos(look_down / 2), 0, std::sin(look_down / 2), 0};
+  vr.grip = {1.0, 1.0};
+  vr.hand_position = {{{0.40, 0.18, head_z - 0.45}, {0.40, -0.18, head_z - 0.45}}};
+  s.run(vr, 3.0);
+  const int pitch = c.robot.jointIndex("waist_pitch_joint");
+  WaistPitch w;
+  int n = 0;
+  for (int k = 0; k < 200; ++k) {
+    s.tick(vr);
+    const double q = app.controller().lastState().motors[static_cast<std::size_t>(pitch)].q;
+    w.mean_error += q - app.controller().reference()[static_cast<std::size_t>(pitch)];
+    w.max_q = std::max(w.max_q, q);
+    ++n;
+  }
+  w.mean_error /= n;
+  w.min_height = s.minHeight();
+  EXPECT_EQ(app.controller().mode(), Mode::kActive);
+  return w;
+}
+
+TEST(TeleopSil, UpperBodyFeedForwardHoldsTheWaistUnderTheArms) {
+  const WaistPitch off = crouchedWithArmsForward(false);
+  const WaistPitch on = crouchedWithArmsForward(true);
+  std::printf("waist pitch error (q - q_ref), crouched and bent, arms forward: off %.3f rad (largest q %.3f), on %.3f rad (largest q %.3f)\n",
+              off.mean_error, off.max_q, on.mean_error, on.max_q);
+  EXPECT_GT(off.mean_error, 0.08) << "without the feed-forward the waist should sag (the case this stage is for)";
+  EXPECT_LT(std::fabs(on.mean_error), 0.03);
+  EXPECT_LT(on.max_q, off.max_q - 0.05);
+  EXPECT_GT(on.min_height, 0.5) << "the robot fell";
+  EXPECT_GT(off.min_height, 0.5) << "the robot fell";
+}
+
 }  // namespace
 }  // namespace pmg

@@ -1,0 +1,122 @@
+#include "pmg/controller/upper_body.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "pmg/common/config_error.hpp"
+
+namespace pmg {
+
+std::string UpperBodyConfig::validate() const {
+  const auto bad = [](const char* field, double v, const char* range) {
+    return fmt::format("upper_body.{} = {}: expected {}", field, v, range);
+  };
+  if (!(gravity_scale >= 0.0 && gravity_scale <= 1.5)) return bad("gravity_scale", gravity_scale, "0..1.5");
+  if (!(damping >= 0.0 && damping <= 50.0)) return bad("damping", damping, "0..50 N*m*s/rad");
+  if (!(max_torque > 0.0 && max_torque <= 300.0)) return bad("max_torque", max_torque, "(0, 300] N*m");
+  if (enabled && joints.empty()) return "upper_body.joints: empty: expected at least one joint when enabled";
+  return "";
+}
+
+UpperBodyCompensation::UpperBodyCompensation(const RobotConfig& robot, const UpperBodyConfig& config,
+                                             const std::vector<std::string>& leg_joints)
+    : config_(config) {
+  const std::set<std::string> legs(leg_joints.begin(), leg_joints.end());
+  std::set<int> seen;
+  for (std::size_t i = 0; i < config_.joints.size(); ++i) {
+    const std::string& name = config_.joints[i];
+    const std::string key = fmt::format("upper_body.joints[{}] = '{}'", i, name);
+    const int j = robot.jointIndex(name);
+    if (j < 0) throw ConfigError(key + ": not a joint of " + robot.source_file);
+    if (legs.count(name)) throw ConfigError(key + ": a joint the actor commands (its torque is the actor's contract)");
+    if (!seen.insert(j).second) throw ConfigError(key + ": listed twice");
+    joint_index_.push_back(j);
+  }
+  try {
+    Mujoco22Options mo;
+    mo.imu_site = robot.imu_site;
+    model_ = loadMujocoModel(robot.mjcf_path, mo);
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(std::string("upper_body: ") + e.what());
+  }
+  const mjModel* m = model_.get();
+  data_.reset(mj_makeData(m));
+  if (!data_) throw ConfigError("upper_body: " + robot.mjcf_path + ": mj_makeData failed");
+  // The floating base: the model's first free joint.
+  int free_joint = -1;
+  for (int k = 0; k < m->njnt && free_joint < 0; ++k)
+    if (m->jnt_type[k] == mjJNT_FREE) free_joint = k;
+  if (free_joint < 0) throw ConfigError("upper_body: " + robot.mjcf_path + ": no free joint (floating base)");
+  base_qpos_ = m->jnt_qposadr[free_joint];
+  const int base_body = m->jnt_bodyid[free_joint];
+  const int site = mj_name2id(m, mjOBJ_SITE, robot.imu_site.c_str());
+  if (site < 0 || m->site_bodyid[site] != base_body)
+    throw ConfigError("upper_body: " + robot.mjcf_path + ": IMU site '" + robot.imu_site +
+                      "' is not on the floating base body (the IMU gives the base orientation)");
+  const mjtNum* qs = m->site_quat + 4 * site;  // base <- site
+  q_site_inv_ = {qs[0], -qs[1], -qs[2], -qs[3]};
+  for (const JointConfig& jc : robot.joints) {
+    const int id = mj_name2id(m, mjOBJ_JOINT, jc.name.c_str());
+    if (id < 0) throw ConfigError("upper_body: " + robot.mjcf_path + ": no joint '" + jc.name + "'");
+    qpos_adr_.push_back(m->jnt_qposadr[id]);
+  }
+  for (const int j : joint_index_) {
+    const auto k = static_cast<std::size_t>(j);
+    dof_adr_.push_back(m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, robot.joints[k].name.c_str())]);
+    limit_.push_back(std::min(config_.max_torque, robot.joints[k].torque_limit));
+  }
+  gravity_.assign(joint_index_.size(), 0.0);
+  tau_ff_.assign(joint_index_.size(), 0.0);
+  rne_.assign(static_cast<std::size_t>(m->nv), 0.0);
+}
+
+UpperBodyCompensation::~UpperBodyCompensation() = default;
+
+const std::vector<double>& UpperBodyCompensation::gravity(const LowState& state) noexcept {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  // Base pose: world <- base = (world <- IMU) * (IMU <- base); the position does not matter.
+  double* qb = d->qpos + base_qpos_;
+  qb[0] = qb[1] = 0.0;
+  qb[2] = 1.0;
+  mjtNum q_wb[4] = {1, 0, 0, 0};
+  if (state.imu.valid) {
+    const mjtNum q_wi[4] = {state.imu.quat_wxyz[0], state.imu.quat_wxyz[1], state.imu.quat_wxyz[2], state.imu.quat_wxyz[3]};
+    const mjtNum q_ib[4] = {q_site_inv_[0], q_site_inv_[1], q_site_inv_[2], q_site_inv_[3]};
+    mju_mulQuat(q_wb, q_wi, q_ib);
+    mju_normalize4(q_wb);
+    if (!std::isfinite(q_wb[0] + q_wb[1] + q_wb[2] + q_wb[3])) q_wb[0] = 1, q_wb[1] = q_wb[2] = q_wb[3] = 0;
+  }
+  for (int a = 0; a < 4; ++a) qb[3 + a] = q_wb[a];
+  const int n = std::min(state.num_motors, static_cast<int>(qpos_adr_.size()));
+  for (int i = 0; i < n; ++i) {
+    const double q = state.motors[static_cast<std::size_t>(i)].q;
+    if (std::isfinite(q)) d->qpos[qpos_adr_[static_cast<std::size_t>(i)]] = q;
+  }
+  mju_zero(d->qvel, m->nv);
+  mj_kinematics(m, d);
+  mj_comPos(m, d);
+  mj_comVel(m, d);
+  mj_rne(m, d, 0, rne_.data());  // zero velocity, no acceleration term: the gravity forces
+  for (std::size_t k = 0; k < gravity_.size(); ++k) gravity_[k] = rne_[static_cast<std::size_t>(dof_adr_[k])];
+  return gravity_;
+}
+
+void UpperBodyCompensation::apply(const LowState& state, LowCommand& command) noexcept {
+  gravity(state);
+  for (std::size_t k = 0; k < joint_index_.size(); ++k) {
+    const auto j = static_cast<std::size_t>(joint_index_[k]);
+    double qd = state.motors[j].qd;
+    if (!std::isfinite(qd)) qd = 0.0;
+    double tau = config_.gravity_scale * gravity_[k] - config_.damping * qd;
+    if (!std::isfinite(tau)) tau = 0.0;
+    tau = std::clamp(tau, -limit_[k], limit_[k]);
+    tau_ff_[k] = tau;
+    if (static_cast<int>(j) < command.num_motors) command.motors[j].tau_ff = tau;
+  }
+}
+
+}  // namespace pmg
