@@ -195,7 +195,7 @@ TEST(UpperBody, ControllerConfigRefusesUnknownKeys) {
   for (std::size_t at = text.find("../"); at != std::string::npos; at = text.find("../", at))
     text.replace(at, 3, test::sourcePath("config") + "/");
   const auto at = text.find("upper_body:");
-  ASSERT_NE(at, std::string::npos) << "the teleop config enables upper_body";
+  ASSERT_NE(at, std::string::npos) << "the teleop config has an upper_body: section";
   std::string bad = text;
   bad.insert(text.find('\n', at) + 1, "  dampin: 3.0\n");
   test::TempDir dir;

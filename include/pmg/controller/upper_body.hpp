@@ -20,8 +20,10 @@
 // Loads the model does not know (a carried box) are not compensated.
 //
 // The policies were trained without it; it is off unless a controller config enables it
-// (`upper_body:`), and the teleoperation config does. The legs are refused: their torque belongs
-// to the actor's contract.
+// (`upper_body:`). No shipped config does: in the teleoperation config it holds the waist, but the
+// actor and the task operators were trained and tuned on the sagging waist (box 68/200 against
+// 66/200, wiping 35/40 against 39/40; docs/controller.md). The legs are refused: their torque
+// belongs to the actor's contract.
 //
 // Real-time: apply() is noexcept and allocation-free (MuJoCo's kinematics and RNE work in the
 // preallocated mjData). Setup allocates and throws.

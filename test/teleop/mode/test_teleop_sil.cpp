@@ -147,15 +147,15 @@ TEST(TeleopSil, DroppedStreamStopsTheRobotAndItsArmsSettle) {
 
 // Crouched 0.18 m and bent (looking down 0.70 rad: torso pitch 0.36 rad) with both hands forward
 // and low, as the box operator grips: the upper body's weight bends the waist pitch beyond its
-// reference. The teleop config's upper_body feed-forward (include/pmg/controller/upper_body.hpp)
-// takes that error out. Returns the waist pitch error q - q_ref [rad] over the last 2 s of 4 s:
+// reference. The teleop config's upper_body feed-forward (include/pmg/controller/upper_body.hpp),
+// switched on here (the config ships it off), takes that error out. Returns the waist pitch error q - q_ref [rad] over the last 2 s of 4 s:
 // mean, and the largest measured waist pitch.
 struct WaistPitch {
   double mean_error = 0.0, max_q = -10.0, min_height = 10.0;
 };
 WaistPitch crouchedWithArmsForward(bool upper_body) {
   ControllerConfig c = teleopConfig();
-  EXPECT_TRUE(c.upper_body.enabled) << "the teleop config enables upper_body";
+  EXPECT_EQ(c.upper_body.joints.size(), 3u) << "the teleop config's upper_body: the three waist joints";
   c.upper_body.enabled = upper_body;
   ControllerApp app(c);
   EXPECT_EQ(app.controller().upperBody() != nullptr, upper_body);
