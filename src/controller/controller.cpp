@@ -154,6 +154,7 @@ TickStatus Controller::tick(double now) noexcept {
     if (posture_feedback_) posture_feedback_->reset();
     pmg_->reset(0.0);
     if (policy_) policy_->reset();
+    if (upper_body_) upper_body_->reset();  // the feed-forward fades in from zero
     limiter_.reset(q_ref_.data(), n);
   }
   if (!active) {  // the command takes effect only while the loop drives the motors
@@ -208,7 +209,7 @@ TickStatus Controller::tick(double now) noexcept {
         command_.motors[k] = MotorCommand{q_ref_[k], ref_out_.qd_ref[i], j.kp, j.kd, 0.0};
       }
     }
-    if (upper_body_) upper_body_->apply(state_, command_);
+    if (upper_body_) upper_body_->apply(state_, command_, dt_);
   } else {
     holdStandingPose();  // ignored by the supervisor outside kActive; keeps the stream fresh
   }

@@ -17,6 +17,7 @@ std::string UpperBodyConfig::validate() const {
   if (!(gravity_scale >= 0.0 && gravity_scale <= 1.5)) return bad("gravity_scale", gravity_scale, "0..1.5");
   if (!(damping >= 0.0 && damping <= 50.0)) return bad("damping", damping, "0..50 N*m*s/rad");
   if (!(max_torque > 0.0 && max_torque <= 300.0)) return bad("max_torque", max_torque, "(0, 300] N*m");
+  if (!(ramp_s >= 0.0 && ramp_s <= 10.0)) return bad("ramp_s", ramp_s, "0..10 s");
   if (enabled && joints.empty()) return "upper_body.joints: empty: expected at least one joint when enabled";
   return "";
 }
@@ -105,13 +106,15 @@ const std::vector<double>& UpperBodyCompensation::gravity(const LowState& state)
   return gravity_;
 }
 
-void UpperBodyCompensation::apply(const LowState& state, LowCommand& command) noexcept {
+void UpperBodyCompensation::apply(const LowState& state, LowCommand& command, double dt) noexcept {
   gravity(state);
+  if (std::isfinite(dt) && dt > 0.0) elapsed_s_ += dt;
+  const double fade = config_.ramp_s > 0.0 ? std::min(1.0, elapsed_s_ / config_.ramp_s) : 1.0;
   for (std::size_t k = 0; k < joint_index_.size(); ++k) {
     const auto j = static_cast<std::size_t>(joint_index_[k]);
     double qd = state.motors[j].qd;
     if (!std::isfinite(qd)) qd = 0.0;
-    double tau = config_.gravity_scale * gravity_[k] - config_.damping * qd;
+    double tau = fade * (config_.gravity_scale * gravity_[k] - config_.damping * qd);
     if (!std::isfinite(tau)) tau = 0.0;
     tau = std::clamp(tau, -limit_[k], limit_[k]);
     tau_ff_[k] = tau;

@@ -25,6 +25,7 @@ UpperBodyConfig waistAndLeftArm() {
   c.enabled = true;
   c.joints = {"waist_yaw_joint", "waist_roll_joint", "waist_pitch_joint", "left_shoulder_pitch_joint", "left_elbow_joint"};
   c.max_torque = 300.0;
+  c.ramp_s = 0.0;
   return c;
 }
 
@@ -106,6 +107,7 @@ TEST(UpperBody, ApplyWritesOnlyItsJointsDampsAndClamps) {
   c.damping = 5.0;
   c.gravity_scale = 0.5;
   c.max_torque = 300.0;
+  c.ramp_s = 0.0;
   UpperBodyCompensation ub(robot, c, legs());
   LowState s = pose(robot, {1, 0, 0, 0});
   const int pitch = robot.jointIndex("waist_pitch_joint");
@@ -115,7 +117,7 @@ TEST(UpperBody, ApplyWritesOnlyItsJointsDampsAndClamps) {
   cmd.num_motors = s.num_motors;
   for (auto& mc : cmd.motors) mc.tau_ff = 7.0;
   const std::vector<double> g = ub.gravity(s);
-  ub.apply(s, cmd);
+  ub.apply(s, cmd, 0.01);
   EXPECT_NEAR(cmd.motors[static_cast<std::size_t>(pitch)].tau_ff, 0.5 * g[2] - 5.0 * 0.4, 1e-12);
   EXPECT_NEAR(cmd.motors[static_cast<std::size_t>(robot.jointIndex("waist_roll_joint"))].tau_ff, 0.5 * g[1], 1e-12)
       << "a non-finite velocity is not damped";
@@ -130,13 +132,41 @@ TEST(UpperBody, ApplyWritesOnlyItsJointsDampsAndClamps) {
   c.max_torque = 1.0;
   UpperBodyCompensation small(robot, c, legs());
   s.motors[static_cast<std::size_t>(pitch)].qd = 100.0;
-  small.apply(s, cmd);
+  small.apply(s, cmd, 0.01);
   EXPECT_DOUBLE_EQ(cmd.motors[static_cast<std::size_t>(pitch)].tau_ff, -1.0);
   c.max_torque = 300.0;
   c.damping = 50.0;
   UpperBodyCompensation big(robot, c, legs());
-  big.apply(s, cmd);
+  big.apply(s, cmd, 0.01);
   EXPECT_DOUBLE_EQ(cmd.motors[static_cast<std::size_t>(pitch)].tau_ff, -robot.joints[static_cast<std::size_t>(pitch)].torque_limit);
+}
+
+TEST(UpperBody, FadesInAfterResetSoThatEngagingNeverStepsATorque) {
+  const RobotConfig& robot = test::g1Robot();
+  UpperBodyConfig c = waistAndLeftArm();
+  c.ramp_s = 0.5;
+  UpperBodyCompensation ub(robot, c, legs());
+  const LowState s = pose(robot, {1, 0, 0, 0});
+  const int pitch = robot.jointIndex("waist_pitch_joint");
+  const double full = UpperBodyCompensation(robot, waistAndLeftArm(), legs()).gravity(s)[2];
+  ASSERT_GT(std::fabs(full), 5.0);
+  LowCommand cmd;
+  cmd.num_motors = s.num_motors;
+  ub.reset();
+  double prev = 0.0, largest_step = 0.0;
+  for (int k = 1; k <= 60; ++k) {
+    ub.apply(s, cmd, 0.01);
+    const double tau = cmd.motors[static_cast<std::size_t>(pitch)].tau_ff;
+    if (k == 1) EXPECT_NEAR(tau, full * 0.01 / 0.5, 1e-9) << "the first tick after reset";
+    if (k == 25) EXPECT_NEAR(tau, full * 0.5, 1e-9) << "half way";
+    largest_step = std::max(largest_step, std::fabs(tau - prev));
+    prev = tau;
+  }
+  EXPECT_NEAR(prev, full, 1e-9) << "faded in after ramp_s";
+  EXPECT_LE(largest_step, std::fabs(full) * 0.01 / 0.5 + 1e-9);
+  ub.reset();  // entering active again starts from zero
+  ub.apply(s, cmd, 0.01);
+  EXPECT_NEAR(cmd.motors[static_cast<std::size_t>(pitch)].tau_ff, full * 0.01 / 0.5, 1e-9);
 }
 
 TEST(UpperBody, ApplyAllocatesNothing) {
@@ -145,11 +175,11 @@ TEST(UpperBody, ApplyAllocatesNothing) {
   LowState s = pose(robot, {1, 0, 0, 0});
   LowCommand cmd;
   cmd.num_motors = s.num_motors;
-  ub.apply(s, cmd);
+  ub.apply(s, cmd, 0.01);
   test::AllocationGuard guard;
   for (int k = 0; k < 100; ++k) {
     s.motors[14].q = 0.3 + 0.001 * k;
-    ub.apply(s, cmd);
+    ub.apply(s, cmd, 0.01);
   }
   EXPECT_EQ(guard.count(), 0u);
 }
@@ -183,6 +213,9 @@ TEST(UpperBody, ConfigNamesTheFieldAndRange) {
   c = UpperBodyConfig{};
   c.max_torque = 0.0;
   EXPECT_NE(c.validate().find("upper_body.max_torque"), std::string::npos);
+  c = UpperBodyConfig{};
+  c.ramp_s = 11.0;
+  EXPECT_NE(c.validate().find("upper_body.ramp_s = 11: expected 0..10 s"), std::string::npos) << c.validate();
   c = UpperBodyConfig{};
   c.enabled = true;
   c.joints.clear();

@@ -49,6 +49,9 @@ struct UpperBodyConfig {
   double damping = 0.0;
   /// Bound on |tau_ff| [N m], (0, 300]; each joint's torque_limit bounds it too.
   double max_torque = 40.0;
+  /// After reset() (the loop entering active) the feed-forward fades in linearly over this long
+  /// [s], [0, 10], so that engaging never steps a joint's torque; 0: at once.
+  double ramp_s = 1.0;
   /// "" if valid, else "upper_body.<field> = <value>: expected <range>".
   std::string validate() const;
   template <class A>
@@ -58,6 +61,7 @@ struct UpperBodyConfig {
     a->Visit("gravity_scale", &gravity_scale, "share of the model's gravity torque, 0..1.5");
     a->Visit("damping", &damping, "extra viscous damping through the feed-forward, 0..50 N*m*s/rad");
     a->Visit("max_torque", &max_torque, "bound on |tau_ff|, (0, 300] N*m");
+    a->Visit("ramp_s", &ramp_s, "fade-in after the loop enters active, 0..10 s");
   }
 };
 
@@ -79,9 +83,13 @@ class UpperBodyCompensation {
   /// (world <- IMU). Without a valid IMU the base is taken upright. noexcept, allocation-free.
   const std::vector<double>& gravity(const LowState& state) noexcept;
 
-  /// Adds tau_ff (file comment) to @p command's motors of the configured joints (overwriting their
-  /// tau_ff). noexcept, allocation-free.
-  void apply(const LowState& state, LowCommand& command) noexcept;
+  /// Starts the fade-in (config.ramp_s): call when the loop enters active.
+  void reset() noexcept { elapsed_s_ = 0.0; }
+
+  /// Writes tau_ff (file comment), times the fade-in min(1, time since reset() / ramp_s), into
+  /// @p command's motors of the configured joints (overwriting their tau_ff); @p dt [s] is the
+  /// tick period. noexcept, allocation-free.
+  void apply(const LowState& state, LowCommand& command, double dt) noexcept;
 
   const UpperBodyConfig& config() const noexcept { return config_; }
   /// Robot joint index of each configured joint.
@@ -101,6 +109,7 @@ class UpperBodyCompensation {
   std::vector<double> tau_ff_;   // per configured joint
   std::vector<mjtNum> rne_;      // nv
   int base_qpos_ = 0;
+  double elapsed_s_ = 0.0;  // since reset()
   std::array<double, 4> q_site_inv_{1, 0, 0, 0};  // IMU site orientation in the base frame, inverted
 };
 
