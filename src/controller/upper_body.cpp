@@ -59,16 +59,23 @@ UpperBodyCompensation::UpperBodyCompensation(const RobotConfig& robot, const Upp
                       "' is not on the floating base body (the IMU gives the base orientation)");
   const mjtNum* qs = m->site_quat + 4 * site;  // base <- site
   q_site_inv_ = {qs[0], -qs[1], -qs[2], -qs[3]};
+  std::vector<int> dof_adr_of_joint;  // per robot joint
   for (const JointConfig& jc : robot.joints) {
     const int id = mj_name2id(m, mjOBJ_JOINT, jc.name.c_str());
     if (id < 0) throw ConfigError("upper_body: " + robot.mjcf_path + ": no joint '" + jc.name + "'");
     qpos_adr_.push_back(m->jnt_qposadr[id]);
+    dof_adr_of_joint.push_back(m->jnt_dofadr[id]);
   }
   for (const int j : joint_index_) {
     const auto k = static_cast<std::size_t>(j);
-    dof_adr_.push_back(m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, robot.joints[k].name.c_str())]);
+    dof_adr_.push_back(dof_adr_of_joint[k]);
     limit_.push_back(std::min(config_.max_torque, robot.joints[k].torque_limit));
   }
+  // Zero velocity, set once: nothing later writes qvel or the velocity terms mj_rne reads (cvel,
+  // cdof_dot; mj_comVel is never called), so its bias forces are the gravity forces alone.
+  mju_zero(data_->qvel, m->nv);
+  mju_zero(data_->cvel, 6 * m->nbody);
+  mju_zero(data_->cdof_dot, 6 * m->nv);
   gravity_.assign(joint_index_.size(), 0.0);
   tau_ff_.assign(joint_index_.size(), 0.0);
   rne_.assign(static_cast<std::size_t>(m->nv), 0.0);
@@ -97,18 +104,16 @@ const std::vector<double>& UpperBodyCompensation::gravity(const LowState& state)
     const double q = state.motors[static_cast<std::size_t>(i)].q;
     if (std::isfinite(q)) d->qpos[qpos_adr_[static_cast<std::size_t>(i)]] = q;
   }
-  mju_zero(d->qvel, m->nv);
   mj_kinematics(m, d);
   mj_comPos(m, d);
-  mj_comVel(m, d);
-  mj_rne(m, d, 0, rne_.data());  // zero velocity, no acceleration term: the gravity forces
+  mj_rne(m, d, 0, rne_.data());  // zero velocity (see the constructor), no acceleration term: the gravity forces
   for (std::size_t k = 0; k < gravity_.size(); ++k) gravity_[k] = rne_[static_cast<std::size_t>(dof_adr_[k])];
   return gravity_;
 }
 
 void UpperBodyCompensation::apply(const LowState& state, LowCommand& command, double dt) noexcept {
   gravity(state);
-  if (std::isfinite(dt) && dt > 0.0) elapsed_s_ += dt;
+  if (std::isfinite(dt) && dt > 0.0) elapsed_s_ = std::min(elapsed_s_ + dt, config_.ramp_s);
   const double fade = config_.ramp_s > 0.0 ? std::min(1.0, elapsed_s_ / config_.ramp_s) : 1.0;
   for (std::size_t k = 0; k < joint_index_.size(); ++k) {
     const auto j = static_cast<std::size_t>(joint_index_[k]);
