@@ -86,7 +86,8 @@ def save_params(params, out, env, clip_names):
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
               "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
               "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling),
-              "clips_digest": np.array(clips_digest(env.clip_files)), "action_offset": np.array(env.cfg.action_offset)}
+              "clips_digest": np.array(clips_digest(env.clip_files)), "action_offset": np.array(env.cfg.action_offset),
+              "upper_body_ff": np.array(env.cfg.upper_body_ff)}
     for i in range(len(p)):
         arrays[f"w{i}"] = p[f"hidden_{i}"]["kernel"]
         arrays[f"b{i}"] = p[f"hidden_{i}"]["bias"]
@@ -263,6 +264,10 @@ def parse_args(argv=None):
     ap.add_argument("--hand-forces", type=float, default=None, metavar="P",
                     help="external hand forces in the domain randomisation (issue 14): probability per teleoperated hand "
                          "and segment (EnvConfig.p_hand_force; default 0 = off); needs --arms teleop")
+    ap.add_argument("--upper-body-ff", action="store_true",
+                    help="the controller's upper-body gravity compensation at the waist joints in the environment "
+                         "(EnvConfig.upper_body_ff: nominal-model gravity torque - 5 N m s/rad x qd, once per tick; "
+                         "deploy with `upper_body: {enabled: true}`, docs/controller.md)")
     args = ap.parse_args(argv)
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
@@ -431,6 +436,10 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, actuator_dr_z=args.actuator_dr_z)
     if args.hand_forces is not None:
         cfg = dataclasses.replace(cfg, p_hand_force=args.hand_forces)
+    if args.upper_body_ff:
+        cfg = dataclasses.replace(cfg, upper_body_ff=True)
+        log("upper-body feed-forward at the waist: damping", cfg.upper_body_damping, "N m s/rad, bound",
+            cfg.upper_body_max_torque, "N m")
     # Command-mix and push overrides (flag -> EnvConfig field), logged as set.
     for flag, field in (("p_stop", "p_stop"), ("stop_keeps_posture", "p_stop_keep_posture"), ("push_vel", "push_vel"),
                         ("p_posture_walk", "p_posture_walk"), ("p_combined", "p_combined"),

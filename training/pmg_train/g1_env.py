@@ -343,6 +343,17 @@ class EnvConfig:
     hand_force_z: tuple = (-20.0, 40.0)
     hand_force_xy: float = 25.0
     hand_force_rate: float = 100.0
+    # Upper-body gravity compensation (issue 14; the controller's `upper_body:` section,
+    # src/controller/upper_body.cpp, docs/controller.md "Upper-body gravity compensation"): once per
+    # control step each waist joint gets tau_ff = g(q) - upper_body_damping * qd, clamped to
+    # +-min(upper_body_max_torque, torque limit), added to its PD torque and held over the substeps, as
+    # the controller writes the motor command's tau_ff once per 10 ms tick. g is the gravity torque of
+    # everything beyond the joint, from the NOMINAL masses (what the controller's model knows: the torso
+    # and hand payloads of the DR are not in it) at the measured pose (the last physics step's
+    # kinematics, 5 ms old). Off (every shipped actor so far): the waist follows PMG on its PD alone.
+    upper_body_ff: bool = False
+    upper_body_damping: float = 5.0
+    upper_body_max_torque: float = 40.0
     noise: dict = dataclasses.field(default_factory=lambda: {"gyro": 0.1, "gravity": 0.03, "q": 0.01, "qd": 0.5})
     deterministic_reset: bool = False  # evaluation: default pose, phase 0, nominal motors, no latency
     # Width of the velocity-tracking rewards exp(-err^2 / sigma) [(m/s)^2, (rad/s)^2]. With 0.25 a
@@ -556,6 +567,45 @@ class G1PmgEnv(Env):
         upper = np.array([j["upper"] for j in joints])[self.arm_idx]
         self.arm_lower, self.arm_upper = lower.astype(np.float32), upper.astype(np.float32)
         self.arm_default = self.q_default[self.arm_idx]
+        self._setup_upper_body(mj, cfg)
+
+    def _setup_upper_body(self, mj, cfg):
+        """Constants of the waist gravity compensation (EnvConfig.upper_body_ff): the waist joints' ids,
+        dof indices and bodies, each joint's subtree as a 0/1 mask over bodies (3, nbody) and the nominal
+        body masses, the torque bound per joint."""
+        if not (0.0 <= cfg.upper_body_damping <= 50.0 and 0.0 < cfg.upper_body_max_torque <= 200.0):
+            raise ValueError(f"EnvConfig.upper_body_damping / upper_body_max_torque = {cfg.upper_body_damping} / "
+                             f"{cfg.upper_body_max_torque}: expected 0..50 N m s/rad and (0, 200] N m")
+        names = ("waist_yaw_joint", "waist_roll_joint", "waist_pitch_joint")
+        self.ub_jnt = np.array([mj.joint(n).id for n in names], np.int32)
+        self.ub_dof = np.array([mj.jnt_dofadr[j] for j in self.ub_jnt], np.int32)
+        self.ub_q = np.array([self.joint_names.index(n) for n in names], np.int32)  # robot order (ctrl, kp)
+        roots = [mj.jnt_bodyid[j] for j in self.ub_jnt]
+        mask = np.zeros((len(names), mj.nbody))
+        for r, root in enumerate(roots):
+            for b in range(mj.nbody):
+                a = b
+                while a != 0 and a != root:
+                    a = mj.body_parentid[a]
+                mask[r, b] = 1.0 if a == root else 0.0
+        self.ub_mask = mask
+        self.ub_mass = np.asarray(mj.body_mass, np.float64).copy()
+        self.ub_limit = np.minimum(cfg.upper_body_max_torque, self.tau_max[self.ub_q]).astype(np.float32)
+
+    def waist_gravity(self, xipos, xanchor, xaxis):
+        """Gravity torque [N m] that holds each waist joint (yaw, roll, pitch), (3,): for the hinge with
+        world anchor p and axis a, a . ((c - p) x (M g_up)), with M the nominal mass beyond the joint, c
+        its centre of mass (frame W) and g_up = (0, 0, 9.81) m/s^2; = MuJoCo's qfrc_bias at zero
+        velocity on those dofs (smoke check 1f). @p xipos (nbody, 3), xanchor / xaxis (njnt, 3): a data's
+        kinematics. Works on NumPy and JAX arrays."""
+        xp = jnp if isinstance(xipos, jax.Array) else np
+        m = xp.asarray(self.ub_mask * self.ub_mass[None, :], dtype=xipos.dtype)
+        M = m.sum(axis=1)
+        c = (m @ xipos) / M[:, None]
+        p = xanchor[self.ub_jnt]
+        a = xaxis[self.ub_jnt]
+        f = xp.stack([xp.zeros_like(M), xp.zeros_like(M), M * 9.81], axis=1)
+        return xp.sum(a * xp.cross(c - p, f), axis=1)
 
     def _setup_actuators(self, cfg):
         """Identified actuator models from cfg.actuators (module docstring "Actuator models"):
@@ -883,10 +933,17 @@ class G1PmgEnv(Env):
             v = 6 + idx
             sys = self.actuator_sys(sys, info["act"])
 
+        tau_ff = jnp.zeros(29)
+        if c.upper_body_ff:  # the controller's upper_body: feed-forward, once per tick (EnvConfig.upper_body_ff)
+            d0 = state.pipeline_state
+            ff = self.waist_gravity(d0.xipos, d0.xanchor, d0.xaxis) - c.upper_body_damping * d0.qvel[self.ub_dof]
+            lim = jnp.asarray(self.ub_limit)
+            tau_ff = tau_ff.at[self.ub_q].set(jnp.clip(ff, -lim, lim))
+
         def substep(carry, _):
             data, line = carry
             q = data.qpos[7:]
-            tau = kp * (q_des - q) + kd * qd_des  # -kd*qd is the implicit joint damping
+            tau = kp * (q_des - q) + kd * qd_des + tau_ff  # -kd*qd is the implicit joint damping
             tau = jnp.clip(tau, -self.tau_max, self.tau_max)
             sys_k = sys
             if ident:
