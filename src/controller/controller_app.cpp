@@ -81,6 +81,7 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
     po.gco = config_.gco.enabled;
     po.sole_levelling = config_.gco.sole_levelling.enabled;
     po.upright_walking = config_.generator.upright_walking;
+    po.upper_body_ff = config_.upper_body.enabled;
     po.clips_digest = clipsDigest(clips);
     policy = std::make_unique<policy::PolicyStage>(config_.policy_file, robot, po);
   }

@@ -219,6 +219,8 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   // Contracts written before the sole levelling have no pmg.sole_levelling: trained without it.
   c.pmg.emplace("sole_levelling", "false");
   c.pmg.emplace("upright_walking", "false");
+  // Contracts written before the upper-body feed-forward in training have no pmg.upper_body_ff.
+  c.pmg.emplace("upper_body_ff", "false");
 
   const YAML::Node pairs = r.require(root, "reference_pairs", "");
   if (!pairs.IsSequence() || pairs.size() == 0) r.fail("reference_pairs", "expected a non-empty list");

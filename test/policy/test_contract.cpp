@@ -125,6 +125,29 @@ TEST(Contract, ReferenceSettingsMustMatchTheController) {
   EXPECT_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s), ContractError);
 }
 
+// pmg.upper_body_ff: an actor trained with the controller's waist feed-forward in its environment
+// (pmg-train --upper-body-ff: the teleoperation actor since 2026-11-29) runs only where the controller
+// feeds the waist's gravity torque forward (`upper_body: enabled`), and an actor without the key
+// (trained without it) only where the controller does not.
+TEST(Contract, UpperBodyFeedForwardMustMatchTheController) {
+  PolicyRobotSpec s = g1Spec();
+  s.pmg = {{"enabled", "true"}, {"gco", "true"}, {"mode", "pmg"}, {"sole_levelling", "false"},
+           {"upright_walking", "false"}, {"upper_body_ff", "false"}};
+  const std::string trained_with = pmg::test::sourcePath("config/policies/g1_teleop_upper_body.onnx");
+  const std::string trained_without = pmg::test::sourcePath("config/policies/g1_table2_baseline.onnx");
+  EXPECT_NO_THROW(PolicyRunner(trained_without, s));  // no key: false
+  try {
+    PolicyRunner runner(trained_with, s);
+    FAIL() << "accepted an actor trained with the waist feed-forward on a controller without it";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.upper_body_ff");
+    EXPECT_NE(std::string(e.what()).find("'true'"), std::string::npos) << e.what();
+  }
+  s.pmg["upper_body_ff"] = "true";
+  EXPECT_NO_THROW(PolicyRunner(trained_with, s));
+  EXPECT_THROW(PolicyRunner(trained_without, s), ContractError);
+}
+
 // pmg.clips_digest (pmg::clipsDigest): a policy whose contract names the clips it was trained on
 // runs only on those clips (wh6hs, trained on the raised walking templates, is refused on the
 // captured ones); a contract without the key (bk_vy6, exported before it existed) is not checked.

@@ -50,7 +50,10 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    walking goal has zero velocity and keeps the walking goal's posture (pitch, roll, height).
 1f. Residual actions (EnvConfig.action_offset = "reference", its own env, one physics substep from a
    deterministic reset, an action on one knee): the leg torques equal kp (q_ref + scale a - q), the PMG
-   reference of the step, not the standing pose; an unknown action_offset is refused.
+   reference of the step, not the standing pose; an unknown action_offset is refused. The same env
+   has the upper-body feed-forward on (EnvConfig.upper_body_ff, issue 14), with the waist joints
+   moving: their torques equal the PD plus MuJoCo's own gravity torque (mj_rne at zero velocity on
+   the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -652,17 +655,22 @@ def action_offset_checks(check):
     import numpy as np
     from pmg_train import g1_env
     t0 = time.time()
-    env = g1_env.G1PmgEnv(g1_env.EnvConfig(deterministic_reset=True, push_vel=(0.0, 0.0), action_offset="reference"),
-                          sorted(glob.glob("config/clips/g1/*.yaml")))
+    import mujoco
+    env = g1_env.G1PmgEnv(g1_env.EnvConfig(deterministic_reset=True, push_vel=(0.0, 0.0), action_offset="reference",
+                                           upper_body_ff=True), sorted(glob.glob("config/clips/g1/*.yaml")))
     env.n_substeps = 1
     st = jax.jit(env.reset)(jax.random.PRNGKey(3))
     st = st.replace(info=dict(st.info, delay=jnp.float32(0.0)))  # the action of this step applies (no latency)
+    qd_waist = np.array([0.3, -0.4, 0.5])
+    st = st.replace(pipeline_state=st.pipeline_state.replace(
+        qvel=st.pipeline_state.qvel.at[env.ub_dof].set(jnp.asarray(qd_waist, jnp.float32))))
     knee = 3
     a = np.zeros(12, np.float32)
     a[knee] = 0.5
     q = np.asarray(st.pipeline_state.qpos[7:19], np.float64)
     ref = np.asarray(st.info["ref_q"], np.float64)[:12]
-    ctrl = np.asarray(jax.jit(env.step)(st, jnp.asarray(a)).pipeline_state.ctrl, np.float64)[:12]
+    ctrl_all = np.asarray(jax.jit(env.step)(st, jnp.asarray(a)).pipeline_state.ctrl, np.float64)
+    ctrl = ctrl_all[:12]
     kp = env.kp[:12].astype(np.float64) * np.asarray(st.info["kp_scale"], np.float64)
     tau = lambda base: np.clip(kp * (np.clip(base + env.action_scale * a, env.q_lower[:12], env.q_upper[:12]) - q),
                                -env.tau_max[:12], env.tau_max[:12])
@@ -677,6 +685,25 @@ def action_offset_checks(check):
     except ValueError as e:
         refused = "action_offset" in str(e)
     check(refused, "an unknown action_offset is refused, naming the field")
+
+    # Upper-body feed-forward: the waist torques of the same substep.
+    m = env.mj_model
+    d = mujoco.MjData(m)
+    d.qpos[:] = np.asarray(st.pipeline_state.qpos, np.float64)
+    mujoco.mj_forward(m, d)  # qvel 0: qfrc_bias is the gravity torque alone
+    grav = d.qfrc_bias[env.ub_dof]
+    ff = np.clip(grav - 5.0 * qd_waist, -env.ub_limit, env.ub_limit)
+    w = env.ub_q
+    q_w = np.asarray(st.pipeline_state.qpos, np.float64)[7 + w]
+    ref_all = np.asarray(st.info["ref_q"], np.float64)
+    refd_all = np.asarray(st.info["ref_qd"], np.float64)
+    kp_w = env.kp[w].astype(np.float64) * np.broadcast_to(np.asarray(st.info["kp_scale"], np.float64), (29,))[w]
+    pd = kp_w * (ref_all[w] - q_w) + env.kd[w] * refd_all[w]
+    want = np.clip(pd + ff, -env.tau_max[w], env.tau_max[w])
+    err = np.abs(ctrl_all[w] - want).max()
+    check(err < 1e-3 and np.abs(ff).min() > 1.0,
+          f"upper_body_ff: waist torques = PD + MuJoCo's gravity torque - 5 qd, clamped (max diff {err:.1e} N m; "
+          f"feed-forward {np.round(ff, 2).tolist()} N m, gravity {np.round(grav, 2).tolist()} N m)")
 
 
 def main():

@@ -37,6 +37,11 @@ struct PolicyStageOptions {
   bool gco = false;               ///< the controller runs GCO (must match the contract)
   bool sole_levelling = false;    ///< the reference's stance soles are levelled (GcoOptions::sole_levelling; must match)
   bool upright_walking = false;   ///< the walking clips' waist lean is removed (GeneratorParams::upright_walking; must match)
+  /// The controller feeds the waist joints' gravity torque forward (`upper_body: enabled`,
+  /// pmg::UpperBodyCompensation). Must match the contract's pmg.upper_body_ff: an actor trained with
+  /// the feed-forward in its environment (pmg-train --upper-body-ff) balances a waist that holds its
+  /// reference, one trained without it a waist that sags under the arms.
+  bool upper_body_ff = false;
   /// Reference the actor was trained on (must match the contract's pmg.mode): "pmg" = the PMG
   /// generator on all clips (the controller); "single_gait" = the generator on the forward-walk
   /// clip alone at its nominal speed (the Table I baseline; only pmg_policy_sil runs it).

@@ -147,16 +147,20 @@ TEST(TeleopSil, DroppedStreamStopsTheRobotAndItsArmsSettle) {
 
 // Crouched 0.18 m and bent (looking down 0.70 rad: torso pitch 0.36 rad) with both hands forward
 // and low, as the box operator grips: the upper body's weight bends the waist pitch beyond its
-// reference. The teleop config's upper_body feed-forward (include/pmg/controller/upper_body.hpp),
-// switched on here (the config ships it off), takes that error out. Returns the waist pitch error q - q_ref [rad] over the last 2 s of 4 s:
-// mean, and the largest measured waist pitch.
+// reference. The teleop config's upper_body feed-forward (include/pmg/controller/upper_body.hpp)
+// takes that error out. Without it, the actor before (g1_table2_baseline.onnx, trained without the
+// feed-forward: the shipped one is refused there, TeleopSil.TheShippedActorNeedsTheFeedForward).
+// Returns the waist pitch error q - q_ref [rad] over the last 2 s of 4 s: mean, and the largest
+// measured waist pitch.
 struct WaistPitch {
   double mean_error = 0.0, max_q = -10.0, min_height = 10.0;
 };
 WaistPitch crouchedWithArmsForward(bool upper_body) {
   ControllerConfig c = teleopConfig();
   EXPECT_EQ(c.upper_body.joints.size(), 3u) << "the teleop config's upper_body: the three waist joints";
+  EXPECT_TRUE(c.upper_body.enabled) << "the teleop config ships the feed-forward on";
   c.upper_body.enabled = upper_body;
+  if (!upper_body) c.policy_file = test::sourcePath("config/policies/g1_table2_baseline.onnx");
   ControllerApp app(c);
   EXPECT_EQ(app.controller().upperBody() != nullptr, upper_body);
   Session s(app);
@@ -199,6 +203,19 @@ TEST(TeleopSil, UpperBodyFeedForwardHoldsTheWaistUnderTheArms) {
   EXPECT_LT(on.max_q, off.max_q - 0.05);
   EXPECT_GT(on.min_height, 0.5) << "the robot fell";
   EXPECT_GT(off.min_height, 0.5) << "the robot fell";
+}
+
+// The shipped teleop actor was trained with the waist feed-forward (its contract's pmg.upper_body_ff):
+// the controller refuses to run it without, naming the key.
+TEST(TeleopSil, TheShippedActorNeedsTheFeedForward) {
+  ControllerConfig c = teleopConfig();
+  c.upper_body.enabled = false;
+  try {
+    ControllerApp app(c);
+    FAIL() << "ran the actor trained with the waist feed-forward without it";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("pmg.upper_body_ff"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
