@@ -107,6 +107,13 @@ and is zero again when the episode ends. The actor does not observe it (it must 
 state, as on the robot); the critic neither (its input stays as before, so runs restore earlier
 checkpoints).
 
+Upper-body feed-forward (EnvConfig.upper_body_ff, issue 14; `--upper-body-ff`): the controller's
+`upper_body:` stage in the environment. Once per control step the three waist joints get the gravity
+torque of everything beyond them (nominal masses, the last physics step's pose: waist_gravity, equal
+to MuJoCo's qfrc_bias at zero velocity) minus upper_body_damping x qd, clamped, on top of their PD
+torque. An actor trained with it is deployed with `upper_body: enabled: true` (its contract's
+pmg.upper_body_ff).
+
 Privileged critic observation: the actor's terms without noise, plus base linear velocity in the
 heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay,
 the 14 arm joint targets (relative to the default pose) and the two hand payloads [kg] (90 values).
