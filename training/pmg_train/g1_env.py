@@ -598,6 +598,11 @@ class G1PmgEnv(Env):
         self.ub_mask = mask
         self.ub_mass = np.asarray(mj.body_mass, np.float64).copy()
         self.ub_limit = np.minimum(cfg.upper_body_max_torque, self.tau_max[self.ub_q]).astype(np.float32)
+        if cfg.upper_body_ff and np.isin(self.ub_q, self.act_idx).any():
+            # The identified actuator model replaces those joints' torque with its own PD (no tau_ff term).
+            raise ValueError(f"EnvConfig.upper_body_ff with EnvConfig.actuators = {cfg.actuators!r}: that config "
+                             "identifies a waist joint, and the actuator model's torque has no feed-forward term; "
+                             "use one or the other")
 
     def waist_gravity(self, xipos, xanchor, xaxis):
         """Gravity torque [N m] that holds each waist joint (yaw, roll, pitch), (3,): for the hinge with

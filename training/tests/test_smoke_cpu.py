@@ -53,7 +53,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    reference of the step, not the standing pose; an unknown action_offset is refused. The same env
    has the upper-body feed-forward on (EnvConfig.upper_body_ff, issue 14), with the waist joints
    moving: their torques equal the PD plus MuJoCo's own gravity torque (mj_rne at zero velocity on
-   the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped.
+   the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped; with a calibrated robot config
+   that identifies a waist joint it is refused (the actuator model has no feed-forward term).
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
@@ -704,6 +705,23 @@ def action_offset_checks(check):
     check(err < 1e-3 and np.abs(ff).min() > 1.0,
           f"upper_body_ff: waist torques = PD + MuJoCo's gravity torque - 5 qd, clamped (max diff {err:.1e} N m; "
           f"feed-forward {np.round(ff, 2).tolist()} N m, gravity {np.round(grav, 2).tolist()} N m)")
+    # A calibrated robot config that identifies a waist joint: its actuator model has no feed-forward
+    # term, so the combination is refused rather than the feed-forward silently dropped.
+    with open("config/robots/g1/g1.yaml") as f:
+        lines = f.read().splitlines(keepends=True)
+    for i, line in enumerate(lines):
+        if line.lstrip().startswith("- {name: waist_pitch_joint,"):
+            lines[i] = line.rstrip().rstrip("}") + ", actuator: {kp_scale: 0.9}}\n"
+    cal = os.path.join(tempfile.mkdtemp(prefix="pmg_smoke_ub_"), "g1_waist_calibrated.yaml")
+    with open(cal, "w") as f:
+        f.write("".join(lines))
+    try:
+        g1_env.G1PmgEnv(g1_env.EnvConfig(upper_body_ff=True, actuators=cal), sorted(glob.glob("config/clips/g1/*.yaml")))
+        msg = ""
+    except ValueError as e:
+        msg = str(e)
+    check("upper_body_ff" in msg and "waist" in msg,
+          f"upper_body_ff with an identified waist joint is refused, naming both ({msg[:70]}...)")
 
 
 def main():
