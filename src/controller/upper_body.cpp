@@ -93,8 +93,7 @@ const std::vector<double>& UpperBodyCompensation::gravity(const LowState& state)
   mjtNum q_wb[4] = {1, 0, 0, 0};
   if (state.imu.valid) {
     const mjtNum q_wi[4] = {state.imu.quat_wxyz[0], state.imu.quat_wxyz[1], state.imu.quat_wxyz[2], state.imu.quat_wxyz[3]};
-    const mjtNum q_ib[4] = {q_site_inv_[0], q_site_inv_[1], q_site_inv_[2], q_site_inv_[3]};
-    mju_mulQuat(q_wb, q_wi, q_ib);
+    mju_mulQuat(q_wb, q_wi, q_site_inv_.data());  // (world <- IMU) (IMU <- base)
     mju_normalize4(q_wb);
     if (!std::isfinite(q_wb[0] + q_wb[1] + q_wb[2] + q_wb[3])) q_wb[0] = 1, q_wb[1] = q_wb[2] = q_wb[3] = 0;
   }

@@ -157,8 +157,12 @@ TEST(UpperBody, FadesInAfterResetSoThatEngagingNeverStepsATorque) {
   for (int k = 1; k <= 60; ++k) {
     ub.apply(s, cmd, 0.01);
     const double tau = cmd.motors[static_cast<std::size_t>(pitch)].tau_ff;
-    if (k == 1) EXPECT_NEAR(tau, full * 0.01 / 0.5, 1e-9) << "the first tick after reset";
-    if (k == 25) EXPECT_NEAR(tau, full * 0.5, 1e-9) << "half way";
+    if (k == 1) {
+      EXPECT_NEAR(tau, full * 0.01 / 0.5, 1e-9) << "the first tick after reset";
+    }
+    if (k == 25) {
+      EXPECT_NEAR(tau, full * 0.5, 1e-9) << "half way";
+    }
     largest_step = std::max(largest_step, std::fabs(tau - prev));
     prev = tau;
   }

@@ -19,11 +19,11 @@
 // (tau = kp (q_ref - q) + kd (qd_ref - qd) + tau_ff, include/pmg/hal/bus/motor_protocol.hpp).
 // Loads the model does not know (a carried box) are not compensated.
 //
-// The policies were trained without it; it is off unless a controller config enables it
-// (`upper_body:`). No shipped config does: in the teleoperation config it holds the waist, but the
-// actor and the task operators were trained and tuned on the sagging waist (box 68/200 against
-// 66/200, wiping 35/40 against 39/40; docs/controller.md). The legs are refused: their torque
-// belongs to the actor's contract.
+// Off unless a controller config enables it (`upper_body:`). The teleoperation config does, with an
+// actor trained with the same feed-forward in its environment (pmg-train --upper-body-ff; its
+// contract's pmg.upper_body_ff must match `enabled`, or the controller refuses the actor). Under an
+// actor trained without it, it held the waist but carried no more boxes (docs/controller.md). The
+// legs are refused: their torque belongs to the actor's contract.
 //
 // Real-time: apply() is noexcept and allocation-free (MuJoCo's kinematics and RNE work in the
 // preallocated mjData). Setup allocates and throws.
@@ -110,7 +110,7 @@ class UpperBodyCompensation {
   std::vector<mjtNum> rne_;      // nv
   int base_qpos_ = 0;
   double elapsed_s_ = 0.0;  // since reset()
-  std::array<double, 4> q_site_inv_{1, 0, 0, 0};  // IMU site orientation in the base frame, inverted
+  std::array<mjtNum, 4> q_site_inv_{1, 0, 0, 0};  // IMU site orientation in the base frame, inverted
 };
 
 }  // namespace pmg
