@@ -10,12 +10,20 @@ lift phase's ticks where the arms press on the box (whole-arm normal force above
 - normal up: the median vertical part (frame W, up +) of the arms' normal forces on the box [N];
   negative: the arms press the box down (as where they lie across its top edges) and friction must
   carry that as well as the weight.
+- pad share: the part of the wrist subtrees' normal force that goes through the rubber hands' pads
+  (the scene's `*_hand_collision` geoms) rather than the wrist housings, sum(grip_*_hand_n) /
+  sum(grip_*_n); logs without those columns give none;
+- wrists along the box: at the first such tick, the midpoint of the two wrists (`*_wrist_yaw_link`)
+  along the box's depth from its centre, frame W horizontal, the box's depth axis taken
+  perpendicular to the line between the wrists (they sit on its two sides) [m]; negative: towards
+  the robot (the box is 0.22 m deep, so -0.11 is its near side).
 Trials with fewer than 10 such ticks (no grip while lifting) are listed without numbers. Prints one
 line per trial and, per NAME, the medians by outcome; --json writes them.
 """
 import argparse
 import csv
 import json
+import math
 import statistics as st
 import sys
 from pathlib import Path
@@ -35,11 +43,22 @@ def analyse_trial(csv_path):
     f = lambda r, k: float(r[k])
     lift = [r for r in rows if r["phase"] == "lift" and f(r, "arm_left_n") + f(r, "arm_right_n") > 5.0]
     if len(lift) < 10:
-        return None, None
+        return {"forearm_share": None, "normal_up_n": None, "pad_share": None, "wrists_along_box_m": None}
     arm = sum(f(r, "arm_left_n") + f(r, "arm_right_n") for r in lift)
     wrist = sum(f(r, "grip_left_n") + f(r, "grip_right_n") for r in lift)
     normal_up = st.median(f(r, "arm_left_normal_up_n") + f(r, "arm_right_normal_up_n") for r in lift)
-    return 1.0 - wrist / arm, normal_up
+    out = {"forearm_share": 1.0 - wrist / arm, "normal_up_n": normal_up, "pad_share": None, "wrists_along_box_m": None}
+    if "grip_left_hand_n" in rows[0] and wrist > 0:
+        out["pad_share"] = sum(f(r, "grip_left_hand_n") + f(r, "grip_right_hand_n") for r in lift) / wrist
+    if all(k in rows[0] for k in ("obj_x", "obj_y", "left_hand_x", "left_hand_y", "hand_x", "hand_y")):
+        r = lift[0]
+        ly, lx = f(r, "left_hand_y") - f(r, "hand_y"), f(r, "left_hand_x") - f(r, "hand_x")
+        n = math.hypot(lx, ly)
+        if n > 1e-6:  # depth axis: the left-to-right line turned -90 degrees about z (frame W)
+            mx = 0.5 * (f(r, "left_hand_x") + f(r, "hand_x")) - f(r, "obj_x")
+            my = 0.5 * (f(r, "left_hand_y") + f(r, "hand_y")) - f(r, "obj_y")
+            out["wrists_along_box_m"] = (mx * ly - my * lx) / n
+    return out
 
 
 def main():
@@ -57,10 +76,13 @@ def main():
             if not (d / "summary.json").exists():
                 sys.exit(f"{d}: no summary.json (a pmg_teleop_bench --task box output folder)")
             for k, outcome in sorted(trial_outcomes(d).items()):
-                share, up = analyse_trial(d / f"trial_{k}.csv")
-                trials.append({"dir": str(d), "trial": k, "outcome": outcome, "forearm_share": share, "normal_up_n": up})
+                a_ = analyse_trial(d / f"trial_{k}.csv")
+                trials.append({"dir": str(d), "trial": k, "outcome": outcome, **a_})
+                opt = lambda v, fmt: "-" if v is None else format(v, fmt)
                 print(f"{name} {d}/trial_{k}: {outcome:16s} " +
-                      (f"forearm share {share:4.2f}, normal up {up:+6.1f} N" if share is not None else "no grip while lifting"))
+                      (f"forearm share {a_['forearm_share']:4.2f}, normal up {a_['normal_up_n']:+6.1f} N, "
+                       f"pad share {opt(a_['pad_share'], '4.2f')}, wrists along the box {opt(a_['wrists_along_box_m'], '+.3f')} m"
+                       if a_["forearm_share"] is not None else "no grip while lifting"))
         summary = {"trials": len(trials), "successes": sum(t["outcome"] == "success" for t in trials), "by_outcome": {}}
         gripped = [t for t in trials if t["forearm_share"] is not None]
         for outcome in sorted({t["outcome"] for t in gripped}) + ["all"]:
@@ -70,10 +92,15 @@ def main():
                 "forearm_share_median": st.median(t["forearm_share"] for t in g),
                 "normal_up_n_median": st.median(t["normal_up_n"] for t in g),
                 "forearm_share_above_0.3": sum(t["forearm_share"] > 0.3 for t in g)}
+            for key in ("pad_share", "wrists_along_box_m"):
+                v = [t[key] for t in g if t[key] is not None]
+                summary["by_outcome"][outcome][key + "_median"] = st.median(v) if v else None
         print(f"== {name}: {summary['successes']}/{summary['trials']} successes")
         for outcome, v in summary["by_outcome"].items():
             print(f"   {outcome:16s} {v['trials']:3d} gripped: forearm share median {v['forearm_share_median']:.2f} "
-                  f"({v['forearm_share_above_0.3']} above 0.3), normal up median {v['normal_up_n_median']:+.1f} N")
+                  f"({v['forearm_share_above_0.3']} above 0.3), normal up median {v['normal_up_n_median']:+.1f} N, "
+                  f"pad share median {'-' if v['pad_share_median'] is None else format(v['pad_share_median'], '.2f')}, "
+                  f"wrists along the box median {'-' if v['wrists_along_box_m_median'] is None else format(v['wrists_along_box_m_median'], '+.3f')} m")
         report[name] = {"summary": summary, "trials": trials}
     if a.json:
         Path(a.json).write_text(json.dumps(report, indent=1))

@@ -45,7 +45,7 @@ from pathlib import Path
 # Ranges are inside the bench's validated ranges (apps/teleop/pmg_teleop_bench.cpp, validate()).
 BOX_SPACE = {
     "grasp_below_top_m": (0.03, 0.12),
-    "grasp_in_m": (0.03, 0.10),
+    "grasp_in_m": (-0.06, 0.10),  # < 0: short of the near side (v6 -0.04, docs/teleop.md)
     "regrip_in_m": (0.10, 0.18),
     "slide_to_m": (-0.07, 0.0),
     "squeeze_m": (0.0, 0.06),

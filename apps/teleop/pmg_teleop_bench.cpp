@@ -912,7 +912,7 @@ struct BoxOperatorConfig : OperatorCommon {
   double look_down_rad = 0.70;     ///< headset pitch while grasping (beyond 0.25 rad: the torso bends)
   double hover_m = 0.06;           ///< the open hands this far above the box's top while walking in [m]
   double grasp_below_top_m = 0.06; ///< the hands' height: this far below the box's top [m]
-  double grasp_in_m = 0.06;        ///< the wrists this far behind the box's near side (the hands reach forward of the wrist) [m]
+  double grasp_in_m = 0.06;        ///< the wrists this far behind the box's near side, < 0: short of it (the hands reach forward of the wrist) [m]
   double spread_m = 0.08;          ///< the wrists this far outside the box's sides before closing [m]
   double squeeze_m = 0.03;         ///< ... and this far inside them when squeezing [m]
   double squeeze_s = 1.5;          ///< closing the hands [s]
@@ -932,7 +932,7 @@ struct BoxOperatorConfig : OperatorCommon {
   bool lift_in_place = true;       ///< lifting: no stepping back until the box is up
   double slide_to_m = -2.0;        ///< gripped, a box whose near side lies further beyond the pick top's edge than this is slid towards the robot to it and gripped again; < -1 = never [m]
   double slide_speed = 0.05;       ///< ... at this speed [m/s]
-  double regrip_in_m = 0.0;        ///< after a slide, grip again with the wrists this far behind the box's near side (nearer its centre of mass); 0 = grasp_in_m [m]
+  double regrip_in_m = 0.0;        ///< after a slide, grip again with the wrists this far behind the box's near side (nearer its centre of mass; < 0: short of it); 0 = grasp_in_m [m]
   double stand_after_lift_m = 0.0; ///< lifting: stay crouched and bent until the box's bottom is seen this far above the pick top, then stand up over stand_s; 0 = at once [m]
   /// Hug: once the box is seen clear of the pick top, draw the hands this much towards the torso
   /// (at hug_speed), so that the box's near side rests against the body, a third contact against
@@ -1089,7 +1089,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(max_regrabs >= 0 && max_regrabs <= 5)) return "max_regrabs: expected [0, 5]";
     if (!(slide_to_m >= -2.0 && slide_to_m <= 0.3)) return "slide_to_m: expected [-2, 0.3] m (< -1: never)";
     if (!(slide_speed > 0 && slide_speed <= 0.2)) return "slide_speed: expected (0, 0.2] m/s";
-    if (!(regrip_in_m >= 0 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [0, 0.3] m (0: grasp_in_m)";
+    if (!(regrip_in_m >= -0.15 && regrip_in_m <= 0.3)) return "regrip_in_m: expected [-0.15, 0.3] m (0: grasp_in_m)";
     if (!(std::abs(hand_toe_in_rad) <= 0.5)) return "hand_toe_in_rad: expected [-0.5, 0.5] rad";
     if (!(std::abs(hand_roll_rad) <= 1.8)) return "hand_roll_rad: expected [-1.8, 1.8] rad";
     if (!(side_tol_m >= 0 && side_tol_m <= 0.2)) return "side_tol_m: expected [0, 0.2] m (0: no check)";
@@ -1117,7 +1117,7 @@ struct BoxOperatorConfig : OperatorCommon {
     if (!(look_down_rad >= 0 && look_down_rad <= 1.2)) return "look_down_rad: expected [0, 1.2] rad";
     if (!(hover_m >= 0 && hover_m <= 0.3)) return "hover_m: expected [0, 0.3] m";
     if (!(grasp_below_top_m >= -0.1 && grasp_below_top_m <= 0.3)) return "grasp_below_top_m: expected [-0.1, 0.3] m";
-    if (!(grasp_in_m >= 0 && grasp_in_m <= 0.3)) return "grasp_in_m: expected [0, 0.3] m";
+    if (!(grasp_in_m >= -0.15 && grasp_in_m <= 0.3)) return "grasp_in_m: expected [-0.15, 0.3] m";
     if (!(squeeze_s > 0 && squeeze_s <= 10)) return "squeeze_s: expected (0, 10] s";
     if (!(carry_clearance_m >= 0 && carry_clearance_m <= 0.3)) return "carry_clearance_m: expected [0, 0.3] m";
     if (!(place_press_m >= 0 && place_press_m <= 0.1)) return "place_press_m: expected [0, 0.1] m";
@@ -1316,7 +1316,7 @@ TrialResult runBox(int trial, std::uint64_t seed, const pmg::TaskScene& base_sce
     // The grasp's centre on the box: `in` behind its near side (along the box), at the box's centre
     // height (frame R); grasp_in_m, or regrip_in_m after a slide.
     auto graspCentre = [&](double in) -> Vector3d { return box_R + box_turn * Vector3d(-0.5 * box.size[0] + in, 0, 0); };
-    const double regrip_in = op.regrip_in_m > 0 ? op.regrip_in_m : op.grasp_in_m;
+    const double regrip_in = op.regrip_in_m != 0 ? op.regrip_in_m : op.grasp_in_m;
     const double grasp_in = slid ? regrip_in : op.grasp_in_m;
     Vector3d grasp_c = graspCentre(grasp_in);
     if (op.freeze_regrip_aim && slid && std::isfinite(regrip_x)) grasp_c.x() = regrip_x;

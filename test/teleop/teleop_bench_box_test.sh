@@ -78,6 +78,14 @@ for out in sys.argv[1:]:
     up = sorted(float(q["arm_left_up_n"]) + float(q["arm_right_up_n"]) for q in rows if q["phase"] == "carry" and float(q["body_n"]) < 1.0)
     if not up or abs(up[len(up) // 2] - 9.81) > 2.0:
         fail.append(f"{out}: median vertical arm force on the carried box {up[len(up) // 2] if up else None} N: expected its weight, 9.81 N")
+    # The shipped operator grips short of the box's near side (grasp_in_m < 0), so that the hands'
+    # pads, not the wrist housings, press on its sides: lifting and carrying, the pads carry most of
+    # the wrist subtrees' normal force (v5's grip 6 cm past the near side: 0.22 in seed 1).
+    lc = [q for q in rows if q["phase"] in ("lift", "carry")]
+    pads = sum(float(q["grip_left_hand_n"]) + float(q["grip_right_hand_n"]) for q in lc)
+    wrists = sum(float(q["grip_left_n"]) + float(q["grip_right_n"]) for q in lc)
+    if wrists <= 0 or pads / wrists < 0.5:
+        fail.append(f"{out}: the pads carry {pads / max(wrists, 1e-9):.2f} of the wrists' normal force while lifting and carrying: expected >= 0.5")
     if any(float(q[f"arm_{h}_n"]) + 1e-6 < float(q[f"grip_{h}_n"]) for q in rows for h in ("left", "right")):
         fail.append(f"{out}: an arm's normal force below its wrist subtree's")
     fig = s.get("figures", {})
@@ -95,6 +103,7 @@ PY
 expect_refused "$bin" box "$d" bad 'view_noise_m: 0.005\nsqueeze_force: 1\n' bad.yaml squeeze_force
 expect_refused "$bin" box "$d" range 'view_noise_m: 0.005\nside_tol_m: 0.5\n' range.yaml side_tol_m 0.2
 expect_refused "$bin" box "$d" range2 'view_noise_m: 0.005\nregrip_in_m: 0.5\n' range2.yaml regrip_in_m 0.3
+expect_refused "$bin" box "$d" range2b 'view_noise_m: 0.005\ngrasp_in_m: -0.2\n' range2b.yaml grasp_in_m '\[-0.15, 0.3\]'
 expect_refused "$bin" box "$d" range3 'view_noise_m: 0.005\ngrasp_below_top_m: 0.5\n' range3.yaml grasp_below_top_m '\[-0.1, 0.3\]'
 expect_refused "$bin" box "$d" range4 'view_noise_m: 0.005\nvertical_lead_m: 0.9\n' range4.yaml vertical_lead_m '\[0, 0.5\]'
 expect_refused "$bin" box "$d" range5 'view_noise_m: 0.005\nlevel_done_rad: 0.8\n' range5.yaml level_done_rad level_tilt_rad
