@@ -54,7 +54,7 @@ def analyse_trial(csv_path):
         r = lift[0]
         ly, lx = f(r, "left_hand_y") - f(r, "hand_y"), f(r, "left_hand_x") - f(r, "hand_x")
         n = math.hypot(lx, ly)
-        if n > 1e-6:  # depth axis: the left-to-right line turned -90 degrees about z (frame W)
+        if n > 1e-6:  # depth axis: the right-to-left wrist line turned -90 degrees about z, forward (frame W)
             mx = 0.5 * (f(r, "left_hand_x") + f(r, "hand_x")) - f(r, "obj_x")
             my = 0.5 * (f(r, "left_hand_y") + f(r, "hand_y")) - f(r, "obj_y")
             out["wrists_along_box_m"] = (mx * ly - my * lx) / n
@@ -76,13 +76,13 @@ def main():
             if not (d / "summary.json").exists():
                 sys.exit(f"{d}: no summary.json (a pmg_teleop_bench --task box output folder)")
             for k, outcome in sorted(trial_outcomes(d).items()):
-                a_ = analyse_trial(d / f"trial_{k}.csv")
-                trials.append({"dir": str(d), "trial": k, "outcome": outcome, **a_})
+                res = analyse_trial(d / f"trial_{k}.csv")
+                trials.append({"dir": str(d), "trial": k, "outcome": outcome, **res})
                 opt = lambda v, fmt: "-" if v is None else format(v, fmt)
                 print(f"{name} {d}/trial_{k}: {outcome:16s} " +
-                      (f"forearm share {a_['forearm_share']:4.2f}, normal up {a_['normal_up_n']:+6.1f} N, "
-                       f"pad share {opt(a_['pad_share'], '4.2f')}, wrists along the box {opt(a_['wrists_along_box_m'], '+.3f')} m"
-                       if a_["forearm_share"] is not None else "no grip while lifting"))
+                      (f"forearm share {res['forearm_share']:4.2f}, normal up {res['normal_up_n']:+6.1f} N, "
+                       f"pad share {opt(res['pad_share'], '4.2f')}, wrists along the box {opt(res['wrists_along_box_m'], '+.3f')} m"
+                       if res["forearm_share"] is not None else "no grip while lifting"))
         summary = {"trials": len(trials), "successes": sum(t["outcome"] == "success" for t in trials), "by_outcome": {}}
         gripped = [t for t in trials if t["forearm_share"] is not None]
         for outcome in sorted({t["outcome"] for t in gripped}) + ["all"]:
