@@ -61,6 +61,11 @@ def analyse_trial(csv_path):
     return out
 
 
+def fmt_or_dash(v, spec):
+    """A number in `spec`, or '-' where the log could not give it."""
+    return "-" if v is None else format(v, spec)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("runs", nargs="+", help="NAME=DIR[,DIR...]")
@@ -78,10 +83,9 @@ def main():
             for k, outcome in sorted(trial_outcomes(d).items()):
                 res = analyse_trial(d / f"trial_{k}.csv")
                 trials.append({"dir": str(d), "trial": k, "outcome": outcome, **res})
-                opt = lambda v, fmt: "-" if v is None else format(v, fmt)
                 print(f"{name} {d}/trial_{k}: {outcome:16s} " +
                       (f"forearm share {res['forearm_share']:4.2f}, normal up {res['normal_up_n']:+6.1f} N, "
-                       f"pad share {opt(res['pad_share'], '4.2f')}, wrists along the box {opt(res['wrists_along_box_m'], '+.3f')} m"
+                       f"pad share {fmt_or_dash(res['pad_share'], '4.2f')}, wrists along the box {fmt_or_dash(res['wrists_along_box_m'], '+.3f')} m"
                        if res["forearm_share"] is not None else "no grip while lifting"))
         summary = {"trials": len(trials), "successes": sum(t["outcome"] == "success" for t in trials), "by_outcome": {}}
         gripped = [t for t in trials if t["forearm_share"] is not None]
@@ -99,8 +103,8 @@ def main():
         for outcome, v in summary["by_outcome"].items():
             print(f"   {outcome:16s} {v['trials']:3d} gripped: forearm share median {v['forearm_share_median']:.2f} "
                   f"({v['forearm_share_above_0.3']} above 0.3), normal up median {v['normal_up_n_median']:+.1f} N, "
-                  f"pad share median {'-' if v['pad_share_median'] is None else format(v['pad_share_median'], '.2f')}, "
-                  f"wrists along the box median {'-' if v['wrists_along_box_m_median'] is None else format(v['wrists_along_box_m_median'], '+.3f')} m")
+                  f"pad share median {fmt_or_dash(v['pad_share_median'], '.2f')}, "
+                  f"wrists along the box median {fmt_or_dash(v['wrists_along_box_m_median'], '+.3f')} m")
         report[name] = {"summary": summary, "trials": trials}
     if a.json:
         Path(a.json).write_text(json.dumps(report, indent=1))
