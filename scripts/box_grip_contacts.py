@@ -17,7 +17,10 @@ lift phase's ticks where the arms press on the box (whole-arm normal force above
   along the box's depth from its centre, frame W horizontal, the box's depth axis taken
   perpendicular to the line between the wrists (they sit on its two sides) [m]; negative: towards
   the robot (the box is 0.22 m deep, so -0.11 is its near side).
-Trials with fewer than 10 such ticks (no grip while lifting) are listed without numbers. Prints one
+- first 5 cm: lifting or carrying, the time the box's centre takes from 0.5 cm to 5 cm above where it
+  started (`obj_z`) [s], and the box's tilt (`box_tilt`) when it gets there [rad]: how fast the box
+  leaves the table, and how far it has turned in the grip by then; none where it never rose 5 cm.
+Trials with fewer than 10 such ticks (no grip while lifting) are listed without the force numbers. Prints one
 line per trial and, per NAME, the medians by outcome; --json writes them.
 """
 import argparse
@@ -41,13 +44,14 @@ def analyse_trial(csv_path):
     if rows and any(k not in rows[0] for k in need):
         sys.exit(f"{csv_path}: lacks the whole-arm contact columns ({', '.join(need)}): a log from an older pmg_teleop_bench")
     f = lambda r, k: float(r[k])
+    rise = first_5cm(rows)
     lift = [r for r in rows if r["phase"] == "lift" and f(r, "arm_left_n") + f(r, "arm_right_n") > 5.0]
     if len(lift) < 10:
-        return {"forearm_share": None, "normal_up_n": None, "pad_share": None, "wrists_along_box_m": None}
+        return {"forearm_share": None, "normal_up_n": None, "pad_share": None, "wrists_along_box_m": None, **rise}
     arm = sum(f(r, "arm_left_n") + f(r, "arm_right_n") for r in lift)
     wrist = sum(f(r, "grip_left_n") + f(r, "grip_right_n") for r in lift)
     normal_up = st.median(f(r, "arm_left_normal_up_n") + f(r, "arm_right_normal_up_n") for r in lift)
-    out = {"forearm_share": 1.0 - wrist / arm, "normal_up_n": normal_up, "pad_share": None, "wrists_along_box_m": None}
+    out = {"forearm_share": 1.0 - wrist / arm, "normal_up_n": normal_up, "pad_share": None, "wrists_along_box_m": None, **rise}
     if "grip_left_hand_n" in rows[0] and wrist > 0:
         out["pad_share"] = sum(f(r, "grip_left_hand_n") + f(r, "grip_right_hand_n") for r in lift) / wrist
     if all(k in rows[0] for k in ("obj_x", "obj_y", "left_hand_x", "left_hand_y", "hand_x", "hand_y")):
@@ -59,6 +63,21 @@ def analyse_trial(csv_path):
             my = 0.5 * (f(r, "left_hand_y") + f(r, "hand_y")) - f(r, "obj_y")
             out["wrists_along_box_m"] = (mx * ly - my * lx) / n
     return out
+
+
+def first_5cm(rows):
+    """Lifting or carrying: the seconds from the box's centre 0.5 cm to 5 cm above its first logged
+    height, and its tilt at 5 cm (None, None where the log lacks obj_z/box_tilt or it never got there)."""
+    none = {"first_5cm_s": None, "tilt_at_5cm_rad": None}
+    if not rows or "obj_z" not in rows[0] or "box_tilt" not in rows[0]:
+        return none
+    z0 = float(rows[0]["obj_z"])
+    up = [r for r in rows if r["phase"] in ("lift", "carry")]
+    a = next((r for r in up if float(r["obj_z"]) - z0 > 0.005), None)
+    b = next((r for r in up if float(r["obj_z"]) - z0 > 0.05), None)
+    if a is None or b is None:
+        return none
+    return {"first_5cm_s": float(b["t"]) - float(a["t"]), "tilt_at_5cm_rad": float(b["box_tilt"])}
 
 
 def fmt_or_dash(v, spec):
@@ -86,7 +105,8 @@ def main():
                 print(f"{name} {d}/trial_{k}: {outcome:16s} " +
                       (f"forearm share {res['forearm_share']:4.2f}, normal up {res['normal_up_n']:+6.1f} N, "
                        f"pad share {fmt_or_dash(res['pad_share'], '4.2f')}, wrists along the box {fmt_or_dash(res['wrists_along_box_m'], '+.3f')} m"
-                       if res["forearm_share"] is not None else "no grip while lifting"))
+                       if res["forearm_share"] is not None else "no grip while lifting") +
+                      f"; first 5 cm in {fmt_or_dash(res['first_5cm_s'], '.2f')} s, tilt then {fmt_or_dash(res['tilt_at_5cm_rad'], '.2f')} rad")
         summary = {"trials": len(trials), "successes": sum(t["outcome"] == "success" for t in trials), "by_outcome": {}}
         gripped = [t for t in trials if t["forearm_share"] is not None]
         for outcome in sorted({t["outcome"] for t in gripped}) + ["all"]:
@@ -96,7 +116,7 @@ def main():
                 "forearm_share_median": st.median(t["forearm_share"] for t in g),
                 "normal_up_n_median": st.median(t["normal_up_n"] for t in g),
                 "forearm_share_above_0.3": sum(t["forearm_share"] > 0.3 for t in g)}
-            for key in ("pad_share", "wrists_along_box_m"):
+            for key in ("pad_share", "wrists_along_box_m", "first_5cm_s", "tilt_at_5cm_rad"):
                 v = [t[key] for t in g if t[key] is not None]
                 summary["by_outcome"][outcome][key + "_median"] = st.median(v) if v else None
         print(f"== {name}: {summary['successes']}/{summary['trials']} successes")
@@ -104,7 +124,8 @@ def main():
             print(f"   {outcome:16s} {v['trials']:3d} gripped: forearm share median {v['forearm_share_median']:.2f} "
                   f"({v['forearm_share_above_0.3']} above 0.3), normal up median {v['normal_up_n_median']:+.1f} N, "
                   f"pad share median {fmt_or_dash(v['pad_share_median'], '.2f')}, "
-                  f"wrists along the box median {fmt_or_dash(v['wrists_along_box_m_median'], '+.3f')} m")
+                  f"wrists along the box median {fmt_or_dash(v['wrists_along_box_m_median'], '+.3f')} m, "
+                  f"first 5 cm median {fmt_or_dash(v['first_5cm_s_median'], '.2f')} s at tilt {fmt_or_dash(v['tilt_at_5cm_rad_median'], '.2f')} rad")
         report[name] = {"summary": summary, "trials": trials}
     if a.json:
         Path(a.json).write_text(json.dumps(report, indent=1))
