@@ -13,7 +13,9 @@ the share of its window in which the velocity feedback was held or decayed (when
 it), the torso roll in the side-steps
 and, in every segment, the torso pitch or roll that it does not command (cross-coupling, target
 <= 0.05 rad). Frames: commands and achieved velocities in the robot's
-heading frame, as pmg_policy_sil writes them. Exit status 2 on a file without `segments`.
+heading frame, as pmg_policy_sil writes them. A segment that no seed reached (every seed fell
+before its window: `achieved` all null) counts as a miss on every axis it commands. Exit status 2 on
+a file without `segments`.
 """
 import json
 import os
@@ -34,7 +36,11 @@ def score(path):
     if "segments" not in summary:
         print(f"{path}: no 'segments' (expected pmg_policy_sil's summary.json)", file=sys.stderr)
         sys.exit(2)
-    segs = [s for s in summary["segments"] if s.get("achieved")]
+    def measured(s):
+        return bool(s.get("achieved")) and all(v is not None for v in s["achieved"].values())
+    segs = [s for s in summary["segments"] if measured(s)]
+    # No seed in the window (all fell before it): a miss on each axis it commands, without a value.
+    unreached = [s for s in summary["segments"] if s.get("achieved") and not measured(s)]
     print(f"== {path}")
     total_in = total = 0
     missed = {}
@@ -49,6 +55,7 @@ def score(path):
             else:
                 miss.append(f"{s['name']} ({ach:+.3f} of {cmd:+.3f})")
                 missed[s["name"]] = s
+        miss += [f"{s['name']} (no seed in its window)" for s in unreached if abs(s["command"][axis]) >= 1e-9]
         total_in += len(hit)
         total += len(hit) + len(miss)
         print(f"{axis}: {len(hit)}/{len(hit) + len(miss)} in band; misses: {', '.join(miss) or 'none'}")
@@ -68,6 +75,11 @@ def score(path):
             commanded = abs(c[key] - standing) > 1e-9 if key == "height" else abs(c[key]) > 1e-9
             if commanded and abs(a[key] - c[key]) > tol:
                 posture_miss.append(f"{s['name']} {key} {a[key]:+.3f} of {c[key]:+.3f}")
+    for s in unreached:
+        c = s["command"]
+        for key in POSTURE_ABS:
+            if (abs(c[key] - standing) > 1e-9 if key == "height" else abs(c[key]) > 1e-9):
+                posture_miss.append(f"{s['name']} {key} (no seed in its window)")
     print(f"posture misses: {', '.join(posture_miss) or 'none'}")
     side = [s for s in segs if abs(s["command"]["vy"]) > 1e-9 and abs(s["command"]["vx"]) < 1e-9
             and abs(s["command"]["wz"]) < 1e-9 and abs(s["command"]["roll"]) < 1e-9]

@@ -4,7 +4,9 @@ synthetic pmg_policy_sil summary whose misses are known: backward at 80 % (outsi
 at 96 % (inside), a crouch 20 mm high (outside 0.015 m), a side-step rolling 0.07 rad and a bent
 walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on target, one seed
 fallen in the backward walk (named with the segment), and the velocity feedback held for 25 % and
-decayed for 40 % of the backward walk's window (named with the missed segment).
+decayed for 40 % of the backward walk's window (named with the missed segment), and a crouched walk
+that no seed reached (every seed fell before its window: `achieved` all null), a miss on both axes
+it commands.
 Usage: test_segment_band.py
 """
 import json
@@ -31,6 +33,8 @@ def main():
         seg("left", {"vy": 0.3}, {"vy": 0.29, "roll": -0.07}),
         seg("crouch", {"height": 0.62}, {"height": 0.64}),
         seg("bent_walk", {"vx": 0.3, "pitch": 0.25}, {"vx": 0.3, "pitch": 0.25, "roll": 0.06}),
+        {**seg("crouch_walk", {"vx": 0.4, "height": 0.68}, {}), "seeds": 0, "fallen": 2,
+         "achieved": {k: None for k in ("vx", "vy", "wz", "pitch", "roll", "height")}},
     ]}
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "summary.json")
@@ -40,14 +44,14 @@ def main():
                              capture_output=True, text=True, check=True).stdout
     print(out)
     expect = [
-        "vx: 2/3 in band; misses: back (-0.400 of -0.500)",
+        "vx: 2/4 in band; misses: back (-0.400 of -0.500), crouch_walk (no seed in its window)",
         "vy: 1/1 in band; misses: none",
-        "velocity segments in band: 3/4",
-        "posture misses: crouch height +0.640 of +0.620",
+        "velocity segments in band: 3/5",
+        "posture misses: crouch height +0.640 of +0.620, crouch_walk height (no seed in its window)",
         "torso roll in the side-steps: 0.070-0.070 rad",
         "cross-coupling beyond 0.05 rad (pitch/roll not commanded, every segment; largest 0.070): "
         "left roll -0.070, bent_walk roll +0.060",
-        "seeds fallen (summed over segments): 1; in back 1",
+        "seeds fallen (summed over segments): 3; in back 1, crouch_walk 2",
         "velocity feedback in the missed segments (share of the window not integrated): back held 25% decayed 40%",
     ]
     missing = [e for e in expect if e not in out]
