@@ -30,6 +30,11 @@ def in_band(cmd, ach, tol):
     return abs(ach - cmd) <= max(VEL_REL * abs(cmd), tol)
 
 
+def posture_commanded(command, key, standing):
+    """A posture axis the segment commands: height away from standing, pitch or roll away from 0."""
+    return abs(command[key] - standing) > 1e-9 if key == "height" else abs(command[key]) > 1e-9
+
+
 def score(path):
     with open(path) as f:
         summary = json.load(f)
@@ -72,14 +77,10 @@ def score(path):
     for s in segs:
         c, a = s["command"], s["achieved"]
         for key, tol in POSTURE_ABS.items():
-            commanded = abs(c[key] - standing) > 1e-9 if key == "height" else abs(c[key]) > 1e-9
-            if commanded and abs(a[key] - c[key]) > tol:
+            if posture_commanded(c, key, standing) and abs(a[key] - c[key]) > tol:
                 posture_miss.append(f"{s['name']} {key} {a[key]:+.3f} of {c[key]:+.3f}")
-    for s in unreached:
-        c = s["command"]
-        for key in POSTURE_ABS:
-            if (abs(c[key] - standing) > 1e-9 if key == "height" else abs(c[key]) > 1e-9):
-                posture_miss.append(f"{s['name']} {key} (no seed in its window)")
+    posture_miss += [f"{s['name']} {key} (no seed in its window)" for s in unreached for key in POSTURE_ABS
+                     if posture_commanded(s["command"], key, standing)]
     print(f"posture misses: {', '.join(posture_miss) or 'none'}")
     side = [s for s in segs if abs(s["command"]["vy"]) > 1e-9 and abs(s["command"]["vx"]) < 1e-9
             and abs(s["command"]["wz"]) < 1e-9 and abs(s["command"]["roll"]) < 1e-9]
