@@ -44,14 +44,14 @@ def analyse_trial(csv_path):
     if rows and any(k not in rows[0] for k in need):
         sys.exit(f"{csv_path}: lacks the whole-arm contact columns ({', '.join(need)}): a log from an older pmg_teleop_bench")
     f = lambda r, k: float(r[k])
-    rise = first_5cm(rows)
+    out = {"forearm_share": None, "normal_up_n": None, "pad_share": None, "wrists_along_box_m": None, **first_5cm(rows)}
     lift = [r for r in rows if r["phase"] == "lift" and f(r, "arm_left_n") + f(r, "arm_right_n") > 5.0]
     if len(lift) < 10:
-        return {"forearm_share": None, "normal_up_n": None, "pad_share": None, "wrists_along_box_m": None, **rise}
+        return out
     arm = sum(f(r, "arm_left_n") + f(r, "arm_right_n") for r in lift)
     wrist = sum(f(r, "grip_left_n") + f(r, "grip_right_n") for r in lift)
-    normal_up = st.median(f(r, "arm_left_normal_up_n") + f(r, "arm_right_normal_up_n") for r in lift)
-    out = {"forearm_share": 1.0 - wrist / arm, "normal_up_n": normal_up, "pad_share": None, "wrists_along_box_m": None, **rise}
+    out["forearm_share"] = 1.0 - wrist / arm
+    out["normal_up_n"] = st.median(f(r, "arm_left_normal_up_n") + f(r, "arm_right_normal_up_n") for r in lift)
     if "grip_left_hand_n" in rows[0] and wrist > 0:
         out["pad_share"] = sum(f(r, "grip_left_hand_n") + f(r, "grip_right_hand_n") for r in lift) / wrist
     if all(k in rows[0] for k in ("obj_x", "obj_y", "left_hand_x", "left_hand_y", "hand_x", "hand_y")):
