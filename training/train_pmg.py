@@ -175,6 +175,9 @@ def parse_args(argv=None):
     ap.add_argument("--discounting", type=float, default=0.97, metavar="GAMMA",
                     help="PPO discount per control step, in (0, 1) (default 0.97: a horizon 1/(1 - gamma) of 33 "
                          "steps, 0.33 s at 100 Hz)")
+    ap.add_argument("--mirror-loss", type=float, default=0.0, metavar="W",
+                    help="weight of the mirror-symmetry loss on the actor's mean action (pmg_train/symmetry.py; "
+                         "default 0 = off, PPO's loss unchanged), finite and >= 0")
     ap.add_argument("--reward-scaling", type=float, default=1.0, metavar="S",
                     help="PPO reward scaling, > 0 (Brax: rewards x S in the loss; 1 - gamma keeps the returns' "
                          "scale when gamma changes)")
@@ -279,6 +282,8 @@ def parse_args(argv=None):
         ap.error(f"--discounting = {args.discounting}: expected in (0, 1)")
     if not args.reward_scaling > 0:
         ap.error(f"--reward-scaling = {args.reward_scaling}: expected > 0")
+    if not (math.isfinite(args.mirror_loss) and args.mirror_loss >= 0):
+        ap.error(f"--mirror-loss = {args.mirror_loss}: expected a finite weight >= 0")
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
     if args.height_sigma is not None and not args.height_sigma > 0:
@@ -412,6 +417,7 @@ def main(argv=None):
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn
+    from pmg_train.symmetry import env_maps, with_mirror_loss
 
     clip_files = sorted(glob.glob(os.path.join(args.clips, "*.yaml")))
     if not clip_files:
@@ -482,7 +488,7 @@ def main(argv=None):
     with open(os.path.join(args.out, "train_config.json"), "w") as f:
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
                    "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
-                   "devices": [str(d) for d in devices], "jax": jax.__version__,
+                   "devices": [str(d) for d in devices], "jax": jax.__version__, "mirror_loss": args.mirror_loss,
                    "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
                    "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
@@ -521,6 +527,11 @@ def main(argv=None):
     evaluator_cls = ppo.acting.Evaluator
     if args.num_eval_envs == 0:
         ppo.acting.Evaluator = _NoEvaluator
+    ppo_loss = ppo.ppo_losses.compute_ppo_loss
+    if args.mirror_loss > 0:  # brax 0.14.2: train() binds ppo_losses.compute_ppo_loss when called
+        ppo.ppo_losses.compute_ppo_loss = with_mirror_loss(ppo_loss, args.mirror_loss, net_cfg["policy_obs_key"],
+                                                           *env_maps(env))
+        log("mirror-symmetry loss, weight", args.mirror_loss)
     try:
         make_inference_fn, params, _ = ppo.train(
             environment=env, network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
@@ -528,6 +539,7 @@ def main(argv=None):
             policy_params_fn=policy_params_fn, restore_params=restore, **ppo_cfg)
     finally:
         ppo.acting.Evaluator = evaluator_cls
+        ppo.ppo_losses.compute_ppo_loss = ppo_loss
     log("training done in", time.time() - t_start, "s")
     save_params(params, args.out, env, clip_names)
     diff = check_against_brax(params, make_inference_fn, env, args.out)

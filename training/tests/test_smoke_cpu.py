@@ -56,11 +56,12 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped; with a calibrated robot config
    that identifies a waist joint it is refused (the actuator model has no feed-forward term).
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
-   one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts): checkpoint, actor.npz and ONNX
+   one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts, the mirror-symmetry loss at
+   weight 0.5): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
    model passes onnx.checker and carries the pmg.contract, whose pmg.clips_digest names the clips
    trained on; progress.jsonl reached the step count
-   with finite metrics; both devices were used; the same actor marked as trained with residual
+   with finite metrics, the mirror loss among them (> 0: Brax ran the patched loss); both devices were used; the same actor marked as trained with residual
    actions (action_offset "reference") is refused by the export.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
@@ -589,7 +590,7 @@ def ppo_checks(check, workdir, obs):
     timesteps = 80  # one training step: batch 8 x 2 minibatches x unroll 5 = 80 env steps
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
-            "--hidden", "32,32", "--seed", "1"]
+            "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5"]
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
     t0 = time.time()
@@ -608,6 +609,9 @@ def ppo_checks(check, workdir, obs):
     check(last.get("step", 0) >= timesteps and all(math.isfinite(v) for v in last.values()),
           f"progress.jsonl reached step {last.get('step')} >= {timesteps} with finite metrics "
           f"(policy loss {last.get('training/policy_loss')}, value loss {last.get('training/v_loss')})")
+    check(last.get("training/mirror_loss", 0.0) > 0 and tc.get("mirror_loss") == 0.5,
+          f"the mirror-symmetry loss ran inside Brax's PPO (--mirror-loss 0.5): training/mirror_loss "
+          f"{last.get('training/mirror_loss')}")
     check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
     mean, std, layers, action_scale, clips, mode = export_onnx.load_actor(os.path.join(out, "actor.npz"))
     check([w.shape for w, _ in layers] == [(62, 32), (32, 32), (32, 24)] and mode == "pmg_gco" and len(clips) > 0,

@@ -8,8 +8,8 @@ non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
 and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
 --action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
---discounting (default 0.97) and --reward-scaling (default 1.0) parse, and a discount outside (0, 1) or a
-non-positive scale is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
+--discounting (default 0.97), --reward-scaling (default 1.0) and --mirror-loss (default 0) parse, and a
+discount outside (0, 1), a non-positive scale or a negative or non-finite mirror weight is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -47,8 +47,11 @@ if (args.action_offset, args.action_scale_factor) != ("default", 1.0):
     failures.append(f"--action-offset / --action-scale-factor defaults: {args.action_offset}, {args.action_scale_factor}")
 if train_pmg.parse_args(["--out", "/tmp/x", "--joint-stop-timeconst", "0.01"]).joint_stop_timeconst != 0.01:
     failures.append("--joint-stop-timeconst 0.01 not parsed")
-if (args.discounting, args.reward_scaling) != (0.97, 1.0):
-    failures.append(f"--discounting / --reward-scaling defaults: {args.discounting}, {args.reward_scaling}")
+if (args.discounting, args.reward_scaling, args.mirror_loss) != (0.97, 1.0, 0.0):
+    failures.append(f"--discounting / --reward-scaling / --mirror-loss defaults: {args.discounting}, "
+                    f"{args.reward_scaling}, {args.mirror_loss}")
+if train_pmg.parse_args(["--out", "/tmp/x", "--mirror-loss", "0.5"]).mirror_loss != 0.5:
+    failures.append("--mirror-loss 0.5 not parsed")
 args = train_pmg.parse_args(["--out", "/tmp/x", "--discounting", "0.99", "--reward-scaling", "0.33"])
 if (args.discounting, args.reward_scaling) != (0.99, 0.33):
     failures.append(f"--discounting 0.99 --reward-scaling 0.33 parsed as {args.discounting}, {args.reward_scaling}")
@@ -90,7 +93,10 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--discounting", "0"], "--discounting"),
                   (["--discounting", "nan"], "--discounting"),
                   (["--reward-scaling", "0"], "--reward-scaling"),
-                  (["--reward-scaling", "nan"], "--reward-scaling")):
+                  (["--reward-scaling", "nan"], "--reward-scaling"),
+                  (["--mirror-loss", "-1"], "--mirror-loss"),
+                  (["--mirror-loss", "nan"], "--mirror-loss"),
+                  (["--mirror-loss", "inf"], "--mirror-loss")):
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err):
@@ -121,5 +127,5 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 37 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 41 cases as expected")
 sys.exit(1 if failures else 0)

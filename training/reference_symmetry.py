@@ -1,0 +1,69 @@
+#!/usr/bin/env python3
+"""How mirror-symmetric the PMG reference is (issue 12; the assumption of the mirror-symmetry loss).
+
+The mirror-symmetry loss (pmg_train/symmetry.py) asks the actor for pi(M_o o) = M_a pi(o), with the
+gait phase moved by half a cycle. That is only consistent if the reference it tracks is symmetric the
+same way: q_ref(phase + 1/2, M u) = M q_ref(phase, u) for the legs. (The actor sees the reference's
+joints, mirrored by the same map, so an asymmetric reference does not contradict the loss; only what
+the actor infers from the phase about the reference still to come does.) This prints, per command, the RMS
+and the largest difference over 20 phases (pmg_generator.step, the NumPy port of the C++ generator,
+without GCO) for the clip library given, and the leg joints' RMS range of motion over the cycle for
+scale.
+
+  .venv-training/bin/python training/reference_symmetry.py [--clips config/clips/g1_walking_height] [--scan-shift]
+
+--scan-shift adds, per command, the phase shift in [0.30, 0.70] (steps of 0.02) that matches the two
+sides best, and its RMS difference.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(REPO, "training"))
+
+COMMANDS = [  # (v_x, v_y, omega), (pitch, roll, height <= 0: standing)
+    ((0.5, 0.0, 0.0), (0.0, 0.0, 0.0)), ((1.0, 0.0, 0.0), (0.0, 0.0, 0.0)), ((-0.3, 0.0, 0.0), (0.0, 0.0, 0.0)),
+    ((0.0, 0.3, 0.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.5), (0.0, 0.0, 0.0)), ((0.5, 0.2, 0.3), (0.0, 0.0, 0.0)),
+    ((0.8, -0.2, -0.4), (0.0, 0.0, 0.0)), ((0.4, 0.0, 0.0), (0.0, 0.0, 0.68)), ((0.0, 0.0, 0.0), (0.0, 0.15, 0.0)),
+]
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--clips", default="config/clips/g1_walking_height")
+    ap.add_argument("--robot", default="config/robots/g1/g1.yaml")
+    ap.add_argument("--scan-shift", action="store_true")
+    args = ap.parse_args()
+    from pmg_train import pmg_generator as pg
+    from pmg_train.g1_env import LEG
+    from pmg_train.symmetry import COMMAND_SIGN
+    js = pg.joint_space_from_robot_yaml(os.path.join(REPO, args.robot))
+    model = pg.load_library(os.path.join(REPO, args.clips), js)
+    idx, sgn = js.mirror_index, js.mirror_sign
+    s_d, s_s = np.array(COMMAND_SIGN[:3]), np.array([1.0, COMMAND_SIGN[4], 1.0])
+    print(f"clips {args.clips}: legs, 20 phases; q_ref(phase + 1/2, M u) - M q_ref(phase, u) [rad]")
+    print(f"{'u_d (vx, vy, wz)':>22} {'u_s (pitch, roll, h)':>22} {'RMS':>7} {'max':>7} {'RMS motion':>11}"
+          + (f" {'best shift':>10} {'its RMS':>7}" if args.scan_shift else ""))
+    phases = np.arange(20) / 20.0
+
+    def differences(u_d, u_s, shift):
+        a = [pg.step(model, p, np.array(u_d), np.array(u_s), 0.01)["q_ref"] for p in phases]
+        b = [pg.step(model, (p + shift) % 1.0, np.array(u_d) * s_d, np.array(u_s) * s_s, 0.01)["q_ref"] for p in phases]
+        return np.array([(y - x[idx] * sgn)[:LEG] for x, y in zip(a, b)]), np.array([x[:LEG] for x in a])
+
+    for u_d, u_s in COMMANDS:
+        d, m = differences(u_d, u_s, 0.5)
+        line = (f"{str(u_d):>22} {str(u_s):>22} {np.sqrt(np.mean(d ** 2)):7.4f} {np.abs(d).max():7.4f} "
+                f"{np.sqrt(np.mean((m - m.mean(0)) ** 2)):11.4f}")
+        if args.scan_shift:
+            rms, shift = min((float(np.sqrt(np.mean(differences(u_d, u_s, s)[0] ** 2))), s)
+                             for s in np.round(np.arange(0.30, 0.701, 0.02), 2))
+            line += f" {shift:10.2f} {rms:7.4f}"
+        print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
