@@ -7,7 +7,9 @@ interpreter; PMG_SKIP_TRAINING_TESTS=1 skips, exit 77). No environment step is c
 1. The leg joint map (the robot config's mirror / mirror_sign) is the G1 model's own symmetry: on random
    leg poses, MuJoCo's forward kinematics of the mirrored pose puts every left leg body where the
    mirror image (y -> -y) of its right partner is, and orients it as M R M (and the other way round).
-   The map with hip roll's sign flipped fails this (the check can fail).
+   The map with hip roll's sign flipped fails this (the check can fail). Every left / right body pair of
+   the model (legs and arms) has equal masses, mirrored centres of mass and principal inertias within
+   0.1 % (the knee links' differ by 0.06 % in Unitree's model).
 2. The actor observation map is the environment's: g1_env.G1PmgEnv.raw_obs of a mirrored state (base
    position and quaternion, linear and angular velocity, all 29 joints, the tracked command, the
    reference, the last action, phase + 1/2) equals the mirror map applied to the observation of the
@@ -72,6 +74,15 @@ def fk_check(check, js, leg_index, leg_sign, n_poses, rng):
                     err = max(err, np.abs(x_m[a] - M @ x[b]).max(), np.abs(R_m[a] - M @ R[b] @ M).max())
         return err
 
+    pairs_all = [(b, mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, m.body(b).name.replace("left_", "right_", 1)))
+                 for b in range(m.nbody) if m.body(b).name.startswith("left_")]
+    mass = max(abs(m.body_mass[a] - m.body_mass[b]) for a, b in pairs_all)
+    com = max(np.abs(m.body_ipos[a] * (1, -1, 1) - m.body_ipos[b]).max() for a, b in pairs_all)
+    inertia, worst_body = max((np.abs(m.body_inertia[a] - m.body_inertia[b]).max() / m.body_inertia[a].max(),
+                               m.body(a).name) for a, b in pairs_all)
+    check(all(b >= 0 for _, b in pairs_all) and mass == 0 and com < 1e-9 and inertia < 1e-3,
+          f"the model's {len(pairs_all)} left / right body pairs: equal masses, mirrored centres of mass, principal "
+          f"inertias within 0.1 % (largest differences {mass:.1e} kg, {com:.1e} m, {100 * inertia:.3f} % at {worst_body})")
     err = worst(leg_index, leg_sign)
     check(len(pairs) == 6 and err < 1e-6, f"forward kinematics of {n_poses} mirrored leg poses: {len(pairs)} body "
           f"pairs, largest position / rotation difference {err:.2e} (< 1e-6)")
