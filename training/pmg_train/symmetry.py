@@ -22,7 +22,9 @@ Maps (signed permutations: x_mirrored[i] = sign[i] * x[index[i]]):
   joint_pos_rel, joint_vel, last_action, pmg_ref_q_rel: the leg joint map;
   pmg_phase (sin 2 pi phase, cos 2 pi phase) -> (-, -): half a gait cycle later, because every clip is
   aligned on the left touchdown (pmg_generator.align_on_left_touchdown), so the mirrored gait's left
-  touchdown is the original's right one. For the static clips phase does not matter.
+  touchdown is the original's right one. That is exact for a gait whose right touchdown comes half a
+  cycle after its left; the shipped side-step's comes 0.42 of a cycle after it
+  (training/reference_symmetry.py --scan-shift). For the static clips phase does not matter.
 - action (leg joint position offsets): the leg joint map.
 
 ctest training_symmetry (training/tests/test_symmetry.py) checks the joint map against MuJoCo's forward
