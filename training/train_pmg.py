@@ -179,8 +179,8 @@ def parse_args(argv=None):
                     help="weight of the mirror-symmetry loss on the actor's mean action (pmg_train/symmetry.py; "
                          "default 0 = off, PPO's loss unchanged), finite and >= 0")
     ap.add_argument("--reward-scaling", type=float, default=1.0, metavar="S",
-                    help="PPO reward scaling, > 0 (Brax: rewards x S in the loss; 1 - gamma keeps the returns' "
-                         "scale when gamma changes)")
+                    help="PPO reward scaling, finite and > 0 (Brax: rewards x S in the loss; S = (1 - gamma) / 0.03 "
+                         "keeps the returns at gamma 0.97's scale)")
     ap.add_argument("--num-minibatches", type=int, default=32)
     ap.add_argument("--unroll-length", type=int, default=20)
     ap.add_argument("--episode-length", type=int, default=None,
@@ -280,8 +280,8 @@ def parse_args(argv=None):
     args = ap.parse_args(argv)
     if not 0.0 < args.discounting < 1.0:
         ap.error(f"--discounting = {args.discounting}: expected in (0, 1)")
-    if not args.reward_scaling > 0:
-        ap.error(f"--reward-scaling = {args.reward_scaling}: expected > 0")
+    if not (math.isfinite(args.reward_scaling) and args.reward_scaling > 0):
+        ap.error(f"--reward-scaling = {args.reward_scaling}: expected a finite value > 0")
     if not (math.isfinite(args.mirror_loss) and args.mirror_loss >= 0):
         ap.error(f"--mirror-loss = {args.mirror_loss}: expected a finite weight >= 0")
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:

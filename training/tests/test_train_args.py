@@ -9,7 +9,7 @@ non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse
 and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
 --action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
 --discounting (default 0.97), --reward-scaling (default 1.0) and --mirror-loss (default 0) parse, and a
-discount outside (0, 1), a non-positive scale or a negative or non-finite mirror weight is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
+discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -94,6 +94,7 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--discounting", "nan"], "--discounting"),
                   (["--reward-scaling", "0"], "--reward-scaling"),
                   (["--reward-scaling", "nan"], "--reward-scaling"),
+                  (["--reward-scaling", "inf"], "--reward-scaling"),
                   (["--mirror-loss", "-1"], "--mirror-loss"),
                   (["--mirror-loss", "nan"], "--mirror-loss"),
                   (["--mirror-loss", "inf"], "--mirror-loss")):
@@ -127,5 +128,5 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 41 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 42 cases as expected")
 sys.exit(1 if failures else 0)
