@@ -36,7 +36,8 @@ def mirror_script(src, dst):
                     raise SystemExit(f"{src}: segments[{i}].{k} = {seg[k]!r}: expected a number")
                 seg[k] = -seg[k] if seg[k] else 0
     with open(dst, "w") as f:
-        f.write(f"# The mirror image of {src} (v_y, wz and roll negated): scripts/mirror_grid.py mirror\n")
+        f.write(f"# The mirror image of {src} (v_y, wz and roll negated), written by\n"
+                f"#   python3 scripts/mirror_grid.py mirror {src} {dst}\n")
         yaml.safe_dump(doc, f, sort_keys=False, default_flow_style=None)
 
 
