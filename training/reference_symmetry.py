@@ -49,17 +49,23 @@ def main():
           + (f" {'best shift':>10} {'its RMS':>7}" if args.scan_shift else ""))
     phases = np.arange(20) / 20.0
 
-    def differences(u_d, u_s, shift):
-        a = [pg.step(model, p, np.array(u_d), np.array(u_s), 0.01)["q_ref"] for p in phases]
-        b = [pg.step(model, (p + shift) % 1.0, np.array(u_d) * s_d, np.array(u_s) * s_s, 0.01)["q_ref"] for p in phases]
-        return np.array([(y - x[idx] * sgn)[:LEG] for x, y in zip(a, b)]), np.array([x[:LEG] for x in a])
+    def q_ref(u_d, u_s, shift):
+        """References (all joints) at the 20 phases moved by @p shift, (20, n)."""
+        return np.array([pg.step(model, (p + shift) % 1.0, np.array(u_d), np.array(u_s), 0.01)["q_ref"] for p in phases])
 
     for u_d, u_s in COMMANDS:
-        d, m = differences(u_d, u_s, 0.5)
+        a = q_ref(u_d, u_s, 0.0)       # this side, once per command
+        mirrored_a = (a[:, idx] * sgn)[:, :LEG]
+        u_dm, u_sm = np.array(u_d) * s_d, np.array(u_s) * s_s
+
+        def differences(shift):
+            return q_ref(u_dm, u_sm, shift)[:, :LEG] - mirrored_a
+
+        d, m = differences(0.5), a[:, :LEG]
         line = (f"{str(u_d):>22} {str(u_s):>22} {np.sqrt(np.mean(d ** 2)):7.4f} {np.abs(d).max():7.4f} "
                 f"{np.sqrt(np.mean((m - m.mean(0)) ** 2)):11.4f}")
         if args.scan_shift:
-            rms, shift = min((float(np.sqrt(np.mean(differences(u_d, u_s, s)[0] ** 2))), s)
+            rms, shift = min((float(np.sqrt(np.mean(differences(s) ** 2))), s)
                              for s in np.round(np.arange(0.30, 0.701, 0.02), 2))
             line += f" {shift:10.2f} {rms:7.4f}"
         print(line, flush=True)

@@ -33,7 +33,7 @@ from export_onnx import LEG, OBS_TERMS  # noqa: E402
 from pmg_train import pmg_generator as pg  # noqa: E402
 from pmg_train.contract import CONTRACT_KEY, _floats, actor_forward, actor_graph, save_onnx  # noqa: E402
 from pmg_train.paths import repo_root  # noqa: E402
-from pmg_train.symmetry import actor_obs_mirror, leg_mirror, mirror  # noqa: E402
+from pmg_train.symmetry import actor_maps, mirror  # noqa: E402
 
 
 def load_onnx_actor(path):
@@ -76,12 +76,6 @@ def symmetrized_layers(mean, std, layers, obs_map, act_map, n_act):
     return [(w.astype(np.float32), b.astype(np.float32)) for w, b in out]
 
 
-def maps(robot_yaml):
-    js = pg.joint_space_from_robot_yaml(robot_yaml)
-    leg = leg_mirror(js.mirror_index, js.mirror_sign, LEG)
-    return actor_obs_mirror(OBS_TERMS, *leg), (leg[0], leg[1].astype(np.float32))
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("input")
@@ -91,7 +85,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     mean, std, layers, contract, meta = load_onnx_actor(args.input)
     robot_yaml = args.robot or os.path.join(repo_root(), "config/robots/g1/g1.yaml")
-    obs_map, act_map = maps(robot_yaml)
+    obs_map, act_map = actor_maps(pg.joint_space_from_robot_yaml(robot_yaml), OBS_TERMS, LEG)
     if mean.size != len(obs_map[0]):
         raise SystemExit(f"{args.input}: {mean.size} observations; the mirror map has {len(obs_map[0])} "
                          f"(export_onnx.OBS_TERMS)")

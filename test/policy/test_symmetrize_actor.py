@@ -19,35 +19,30 @@ import sys
 import tempfile
 
 import numpy as np
-import onnx
 import yaml
-from onnx import numpy_helper
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "training"))
 from export_onnx import LEG, OBS_TERMS  # noqa: E402
 from pmg_train import pmg_generator as pg  # noqa: E402
 from pmg_train.contract import actor_forward, mlp_graph, save_onnx  # noqa: E402
-from pmg_train.symmetry import actor_obs_mirror, leg_mirror, mirror  # noqa: E402
+from pmg_train.symmetry import actor_maps, mirror  # noqa: E402
+from symmetrize_actor import load_onnx_actor  # noqa: E402
 
 TOOL = os.path.join(ROOT, "training", "symmetrize_actor.py")
 IN = os.path.join(ROOT, "config", "policies", "g1_pmg_policy_wh6g.onnx")
 
 
 def load(path):
-    m = onnx.load(path)
-    init = {t.name: numpy_helper.to_array(t) for t in m.graph.initializer}
-    n = len([k for k in init if k.startswith("w") and k[1:].isdigit()])
-    meta = {p.key: p.value for p in m.metadata_props}
-    return (init["obs_mean"].reshape(-1), init["obs_std"].reshape(-1),
-            [(init[f"w{i}"], init[f"b{i}"].reshape(-1)) for i in range(n)], meta)
+    """(mean, std, layers, metadata) of an exported actor (the tool's own reader)."""
+    mean, std, layers, _, meta = load_onnx_actor(path)
+    return mean, std, layers, meta
 
 
 def main():
     failures = []
     js = pg.joint_space_from_robot_yaml(os.path.join(ROOT, "config/robots/g1/g1.yaml"))
-    leg = leg_mirror(js.mirror_index, js.mirror_sign, LEG)
-    obs_map, act_map = actor_obs_mirror(OBS_TERMS, *leg), leg
+    obs_map, act_map = actor_maps(js, OBS_TERMS, LEG)
     mean, std, layers, meta_in = load(IN)
     rng = np.random.default_rng(7)
     obs = (mean + std * rng.standard_normal((200, mean.size))).astype(np.float32)

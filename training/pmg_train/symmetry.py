@@ -74,13 +74,20 @@ def actor_obs_mirror(obs_terms, leg_index, leg_sign):
     return np.asarray(index, int), np.asarray(sign, np.float32)
 
 
+def actor_maps(js, obs_terms, n_leg):
+    """((obs index, obs sign), (action index, action sign)) of a leg actor: @p js a
+    pmg_generator.JointSpace (the robot config's mirror map), @p obs_terms its observation layout,
+    the actions the first @p n_leg joints."""
+    leg = leg_mirror(js.mirror_index, js.mirror_sign, n_leg)
+    return actor_obs_mirror(obs_terms, *leg), (leg[0], leg[1].astype(np.float32))
+
+
 def env_maps(env):
-    """((obs index, obs sign), (action index, action sign)) for a g1_env.G1PmgEnv's actor."""
+    """actor_maps of a g1_env.G1PmgEnv's actor."""
     from pmg_train.g1_env import LEG, OBS_TERMS
-    leg = leg_mirror(env.js.mirror_index, env.js.mirror_sign, LEG)
     if env.action_size != LEG:
         raise ValueError(f"action size {env.action_size}: expected the {LEG} leg joints")
-    return actor_obs_mirror(OBS_TERMS, *leg), (leg[0], leg[1].astype(np.float32))
+    return actor_maps(env.js, OBS_TERMS, LEG)
 
 
 def mirror(x, index, sign):
