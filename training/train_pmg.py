@@ -8,6 +8,8 @@ split evenly, gradients averaged); --devices N uses the first N. The device list
 Writes into --out: progress.jsonl (eval + training metrics vs env steps and wall time),
 params.pkl (normaliser, policy, value: resume with --restore; written at every eval), actor.npz
 (the actor's arrays), train_config.json, g1_pmg_policy.onnx (actor + pmg.contract, export_onnx.py).
+--warmup-steps N: the first N steps with wide tracking rewards, then the run's own widths (two ppo.train
+calls in one process; progress.jsonl names each record's "stage").
 --smoke: imports, env reset/step timing, JAX PMG port vs the committed C++ vectors; no training.
 """
 import argparse
@@ -181,6 +183,19 @@ def parse_args(argv=None):
     ap.add_argument("--reward-scaling", type=float, default=1.0, metavar="S",
                     help="PPO reward scaling, finite and > 0 (Brax: rewards x S in the loss; S = (1 - gamma) / 0.03 "
                          "keeps the returns at gamma 0.97's scale)")
+    ap.add_argument("--warmup-steps", type=int, default=0, metavar="N",
+                    help="reward-width warm-up: the first N of --timesteps train with wide tracking rewards "
+                         "(--warmup-tracking-sigma, --warmup-height-sigma), then PPO continues from those parameters "
+                         "with the run's own widths (a second ppo.train: a fresh optimiser, one more compile, "
+                         "evaluations in the second stage only). 0 = off. A narrow reward exp(-err^2/S) has almost no "
+                         "gradient far from its target: a policy that does not yet turn or crouch learns nothing "
+                         "from it (training/README.md \"wide tracking rewards\")")
+    ap.add_argument("--warmup-tracking-sigma", type=float, default=None, metavar="S",
+                    help="width of both velocity-tracking rewards during the warm-up [(m/s)^2, (rad/s)^2] "
+                         "(default 0.25, EnvConfig's own); needs --warmup-steps")
+    ap.add_argument("--warmup-height-sigma", type=float, default=None, metavar="S",
+                    help="width of the pelvis height reward during the warm-up [m^2] (default 0.02: a 0.16 m "
+                         "shortfall keeps 28 %% of the term); needs --warmup-steps")
     ap.add_argument("--num-minibatches", type=int, default=32)
     ap.add_argument("--unroll-length", type=int, default=20)
     ap.add_argument("--episode-length", type=int, default=None,
@@ -284,6 +299,17 @@ def parse_args(argv=None):
         ap.error(f"--reward-scaling = {args.reward_scaling}: expected a finite value > 0")
     if not (math.isfinite(args.mirror_loss) and args.mirror_loss >= 0):
         ap.error(f"--mirror-loss = {args.mirror_loss}: expected a finite weight >= 0")
+    if args.warmup_steps < 0 or (args.warmup_steps > 0 and args.warmup_steps >= args.timesteps):
+        ap.error(f"--warmup-steps = {args.warmup_steps}: expected 0 (off) or fewer than --timesteps = {args.timesteps}")
+    for flag, default in (("warmup_tracking_sigma", 0.25), ("warmup_height_sigma", 0.02)):
+        value = getattr(args, flag)
+        name = "--" + flag.replace("_", "-")
+        if value is not None and args.warmup_steps == 0:
+            ap.error(f"{name} = {value}: has no effect without --warmup-steps N > 0")
+        if value is not None and not (math.isfinite(value) and value > 0):
+            ap.error(f"{name} = {value}: expected a finite width > 0")
+        if value is None:
+            setattr(args, flag, default)
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
     if args.height_sigma is not None and not args.height_sigma > 0:
@@ -360,6 +386,16 @@ def parse_args(argv=None):
                  f"of --num-envs = {args.num_envs} (Brax PPO collects batch_size x num_minibatches unrolls per "
                  f"update from num_envs environments)")
     return args
+
+
+def warmup_config(cfg, args):
+    """The warm-up stage's EnvConfig (--warmup-steps): @p cfg with the velocity-tracking widths
+    (lin_vel_sigma, yaw_rate_sigma) set to --warmup-tracking-sigma and height_sigma to
+    --warmup-height-sigma, every other field as it is; None when --warmup-steps is 0."""
+    if args.warmup_steps <= 0:
+        return None
+    return dataclasses.replace(cfg, lin_vel_sigma=args.warmup_tracking_sigma, yaw_rate_sigma=args.warmup_tracking_sigma,
+                               height_sigma=args.warmup_height_sigma)
 
 
 def select_devices(args):
@@ -472,6 +508,8 @@ def main(argv=None):
     if args.action_scale_factor != 1.0:  # the rule's or the earlier run's scale, scaled (before any step is traced)
         env.action_scale = (env.action_scale * args.action_scale_factor).astype(np.float32)
     clip_files = env.clip_files
+    warmup_cfg = warmup_config(cfg, args)
+    warmup_env = None if warmup_cfg is None else G1PmgEnv(warmup_cfg, clip_files, action_scale=env.action_scale)
     if args.smoke:
         smoke(env, args.out)
         return
@@ -489,6 +527,9 @@ def main(argv=None):
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
                    "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
                    "devices": [str(d) for d in devices], "jax": jax.__version__, "mirror_loss": args.mirror_loss,
+                   "warmup": None if warmup_env is None else {
+                       "steps": args.warmup_steps, "lin_vel_sigma": args.warmup_tracking_sigma,
+                       "yaw_rate_sigma": args.warmup_tracking_sigma, "height_sigma": args.warmup_height_sigma},
                    "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
                    "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
@@ -506,37 +547,53 @@ def main(argv=None):
         log("restoring", args.restore)
     t_start = time.time()
     progress = open(os.path.join(args.out, "progress.jsonl"), "a")
+    stage = {"name": "main", "offset": 0, "last": 0}
 
     def progress_fn(step, metrics):
-        rec = {"step": int(step), "wall_s": time.time() - t_start}
+        stage["last"] = int(step)
+        rec = {"step": int(step) + stage["offset"], "wall_s": time.time() - t_start, "stage": stage["name"]}
         rec.update({k: float(np.asarray(v)) for k, v in metrics.items() if np.asarray(v).size == 1})
         progress.write(json.dumps(rec) + "\n")
         progress.flush()
-        log(f"step {step:>10d}  eval reward {rec.get('eval/episode_reward', float('nan')):8.2f}  "
-            f"len {rec.get('eval/avg_episode_length', float('nan')):6.1f}")
+        log(f"step {rec['step']:>10d}  eval reward {rec.get('eval/episode_reward', float('nan')):8.2f}  "
+            f"len {rec.get('eval/avg_episode_length', float('nan')):6.1f}" + (f"  ({stage['name']})" if warmup_env else ""))
 
     clip_names = [os.path.splitext(os.path.basename(c))[0] for c in clip_files]
 
     def policy_params_fn(step, make_policy, params):  # checkpoint at every eval
         save_params(params, args.out, env, clip_names)
-        log(f"checkpoint at step {step}")
+        log(f"checkpoint at step {step + stage['offset']}")
 
     # Brax builds its Evaluator even with run_evals=False, and the Evaluator compiles the evaluation env's
-    # reset when built (brax 0.14.2: acting.Evaluator.__init__; 32 s on a CPU). With --num-eval-envs 0
-    # nothing evaluates, so a stand-in that compiles nothing is built instead.
+    # reset when built (brax 0.14.2: acting.Evaluator.__init__; 32 s on a CPU). Where nothing evaluates
+    # (--num-eval-envs 0, the warm-up) a stand-in that compiles nothing is built instead.
     evaluator_cls = ppo.acting.Evaluator
-    if args.num_eval_envs == 0:
-        ppo.acting.Evaluator = _NoEvaluator
     ppo_loss = ppo.ppo_losses.compute_ppo_loss
     if args.mirror_loss > 0:  # brax 0.14.2: train() binds ppo_losses.compute_ppo_loss when called
         ppo.ppo_losses.compute_ppo_loss = with_mirror_loss(ppo_loss, args.mirror_loss, net_cfg["policy_obs_key"],
                                                            *env_maps(env))
         log("mirror-symmetry loss, weight", args.mirror_loss)
+
+    def train(environment, **overrides):
+        run_cfg = {**ppo_cfg, **overrides}
+        ppo.acting.Evaluator = evaluator_cls if run_cfg["run_evals"] else _NoEvaluator
+        return ppo.train(environment=environment,
+                         network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
+                         randomization_fn=make_randomization_fn(environment), progress_fn=progress_fn,
+                         policy_params_fn=policy_params_fn, **run_cfg)
+
     try:
-        make_inference_fn, params, _ = ppo.train(
-            environment=env, network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
-            randomization_fn=make_randomization_fn(env), progress_fn=progress_fn,
-            policy_params_fn=policy_params_fn, restore_params=restore, **ppo_cfg)
+        if warmup_env is not None:  # stage 1: wide rewards, no evaluations, one checkpoint at its end
+            stage["name"] = "warmup"
+            log(f"warm-up: {args.warmup_steps} steps with tracking sigma {args.warmup_tracking_sigma}, "
+                f"height sigma {args.warmup_height_sigma}")
+            _, restore, _ = train(warmup_env, num_timesteps=args.warmup_steps, num_evals=1, run_evals=False,
+                                  restore_params=restore)
+            stage.update(name="main", offset=stage["last"])
+            log(f"warm-up done after {stage['offset']} steps, {time.time() - t_start:.0f} s; the run's own widths from here")
+        make_inference_fn, params, _ = train(env, num_timesteps=args.timesteps - stage["offset"],
+                                             seed=args.seed + (1 if warmup_env is not None else 0),
+                                             restore_params=restore)
     finally:
         ppo.acting.Evaluator = evaluator_cls
         ppo.ppo_losses.compute_ppo_loss = ppo_loss

@@ -587,10 +587,13 @@ def ppo_checks(check, workdir, obs):
 
     out = os.path.join(workdir, "ppo")
     n_dev = len(jax.local_devices())
-    timesteps = 80  # one training step: batch 8 x 2 minibatches x unroll 5 = 80 env steps
+    # Two training steps (batch 8 x 2 minibatches x unroll 5 = 80 env steps each): the first in the
+    # reward-width warm-up (--warmup-steps), the second with the run's own widths, from the first's params.
+    timesteps, warmup = 160, 80
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
-            "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5"]
+            "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
+            "--warmup-steps", str(warmup), "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03"]
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
     t0 = time.time()
@@ -606,12 +609,18 @@ def ppo_checks(check, workdir, obs):
     with open(os.path.join(out, "progress.jsonl")) as f:
         recs = [json.loads(line) for line in f if line.strip()]
     last = recs[-1] if recs else {}
-    check(last.get("step", 0) >= timesteps and all(math.isfinite(v) for v in last.values()),
+    check(last.get("step", 0) >= timesteps and all(math.isfinite(v) for v in last.values() if not isinstance(v, str)),
           f"progress.jsonl reached step {last.get('step')} >= {timesteps} with finite metrics "
           f"(policy loss {last.get('training/policy_loss')}, value loss {last.get('training/v_loss')})")
     check(last.get("training/mirror_loss", 0.0) > 0 and tc.get("mirror_loss") == 0.5,
           f"the mirror-symmetry loss ran inside Brax's PPO (--mirror-loss 0.5): training/mirror_loss "
           f"{last.get('training/mirror_loss')}")
+    stages = [(r.get("stage"), r.get("step")) for r in recs]
+    check(stages[0] == ("warmup", warmup) and stages[-1][0] == "main" and stages[-1][1] >= timesteps and
+          tc.get("warmup") == {"steps": warmup, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03} and
+          tc["env"]["lin_vel_sigma"] == 0.05,
+          f"the warm-up ran first with its own widths, then the run's (stage, step): {stages}; "
+          f"train_config warmup {tc.get('warmup')}, env lin_vel_sigma {tc['env']['lin_vel_sigma']}")
     check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
     mean, std, layers, action_scale, clips, mode = export_onnx.load_actor(os.path.join(out, "actor.npz"))
     check([w.shape for w, _ in layers] == [(62, 32), (32, 32), (32, 24)] and mode == "pmg_gco" and len(clips) > 0,

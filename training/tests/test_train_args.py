@@ -9,7 +9,10 @@ non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse
 and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
 --action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
 --discounting (default 0.97), --reward-scaling (default 1.0) and --mirror-loss (default 0) parse, and a
-discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
+discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused;
+--warmup-steps (default 0: no warm-up config) parses, its config changes the three tracking widths and
+nothing else, and a negative count, one not below --timesteps, a warm-up width without --warmup-steps or a
+non-positive or non-finite width is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -97,7 +100,15 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--reward-scaling", "inf"], "--reward-scaling"),
                   (["--mirror-loss", "-1"], "--mirror-loss"),
                   (["--mirror-loss", "nan"], "--mirror-loss"),
-                  (["--mirror-loss", "inf"], "--mirror-loss")):
+                  (["--mirror-loss", "inf"], "--mirror-loss"),
+                  (["--warmup-steps", "-1"], "--warmup-steps"),
+                  (["--timesteps", "1000", "--warmup-steps", "1000"], "--warmup-steps"),
+                  (["--warmup-tracking-sigma", "0.3"], "--warmup-tracking-sigma"),
+                  (["--warmup-height-sigma", "0.03"], "--warmup-height-sigma"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-tracking-sigma", "0"],
+                   "--warmup-tracking-sigma"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-height-sigma", "nan"],
+                   "--warmup-height-sigma")):
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err):
@@ -106,6 +117,30 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
+# --warmup-steps: off by default (no warm-up config); on, its config changes the three widths and nothing else.
+import dataclasses  # noqa: E402
+
+
+@dataclasses.dataclass(frozen=True)
+class _Cfg:  # EnvConfig's width fields (the smoke run's PPO part uses the real one)
+    lin_vel_sigma: float = 0.05
+    yaw_rate_sigma: float = 0.05
+    height_sigma: float = 0.0005
+    orientation_sigma: float = 0.05
+    episode_length: int = 1000
+
+
+args = train_pmg.parse_args(["--out", "/tmp/x"])
+if args.warmup_steps != 0 or train_pmg.warmup_config(_Cfg(), args) is not None:
+    failures.append(f"--warmup-steps default: {args.warmup_steps}, warm-up config {train_pmg.warmup_config(_Cfg(), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400"])
+if train_pmg.warmup_config(_Cfg(), args) != _Cfg(0.25, 0.25, 0.02, 0.05, 1000):
+    failures.append(f"--warmup-steps 400, default widths: warm-up config {train_pmg.warmup_config(_Cfg(), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400",
+                             "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.01"])
+if (args.warmup_steps, train_pmg.warmup_config(_Cfg(), args)) != (400, _Cfg(0.3, 0.3, 0.01, 0.05, 1000)):
+    failures.append(f"--warmup-steps 400 with widths 0.3, 0.01: {args.warmup_steps}, "
+                    f"{train_pmg.warmup_config(_Cfg(), args)}")
 if train_pmg.parse_args(["--out", "/tmp/x", "--clips", "config/clips/other"]).clips != "config/clips/other":
     failures.append("--clips not parsed")
 # --action-scale-from: the scale of an earlier run's train_config.json; a bad file is refused naming the flag.
@@ -128,5 +163,5 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 42 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 51 cases as expected")
 sys.exit(1 if failures else 0)
