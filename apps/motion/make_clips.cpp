@@ -308,6 +308,11 @@ int main(int argc, char** argv) {
                  "--walking-height: smallest knee flexion the raise may leave [rad]")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  bool symmetric_gaits = false;
+  app.add_flag("--symmetric-gaits", symmetric_gaits,
+               "average each captured forward/backward walk with its own mirror image half a cycle on, so that its left "
+               "and right steps are mirror images (pmg::motion::symmetrizeGaitClip; not the shipped sets; docs/motion.md "
+               "\"Symmetric gaits\")");
   CLI11_PARSE(app, argc, argv);
 
   // The clip set (built with push_back of named specs: GCC 12 warns falsely on nested brace
@@ -454,6 +459,13 @@ int main(int argc, char** argv) {
                                   walking_height.min_knee, wh.min_raise);
         std::printf("%-20s walking height %.4f -> %.4f m (standing %.4f, smallest raise %.4f m)\n", clip.name.c_str(),
                     wh.mean_height_before, wh.mean_height_after, wh.standing_height, wh.min_raise);
+      }
+      if (symmetric_gaits && clip.axis == CommandAxis::kForward) {
+        symmetrizeGaitClip(clip, robot);
+        relabelContactsFromRobotFeet(clip, model, robot_contacts);
+        height_note += "; left/right symmetrized (x(phi) <- (x(phi) + M x(phi + 1/2)) / 2), contacts relabelled from the robot soles";
+        std::printf("%-20s symmetrized: contacts L (%.3f, %.3f) / R (%.3f, %.3f)\n", clip.name.c_str(), clip.contact[0].mu,
+                    clip.contact[0].sigma, clip.contact[1].mu, clip.contact[1].sigma);
       }
       if (!tracks_dir.empty()) writeSoleTracks(clip, model, tracks_dir + "/" + spec.name + "_soles.csv");
       const int offset = static_cast<int>(std::lround(spec.source.begin_s * human.fps));

@@ -548,6 +548,48 @@ void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot) {
   clip.q = 0.5 * (clip.q + mirrorJoints(clip.q, generatorJointSpace(robot)));
 }
 
+void symmetrizeGaitClip(DynamicClip& clip, const RobotConfig& robot) {
+  const auto n = static_cast<Eigen::Index>(robot.numJoints());
+  const Eigen::Index N = clip.q.rows();
+  if (clip.q.cols() != n || clip.qd.cols() != n || clip.qd.rows() != N)
+    throw std::invalid_argument(fmt::format("symmetrizeGaitClip({}): q {}x{}, qd {}x{}; the robot config has {} joints", clip.name,
+                                            N, clip.q.cols(), clip.qd.rows(), clip.qd.cols(), n));
+  if (N == 0 || N % 2 != 0)
+    throw std::invalid_argument(fmt::format("symmetrizeGaitClip({}): {} samples; expected an even number (half a cycle = N/2 samples)",
+                                            clip.name, N));
+  if (clip.axis != CommandAxis::kForward)
+    throw std::invalid_argument(fmt::format("symmetrizeGaitClip({}): axis {}; expected forward (a side-step or a turn is not its own "
+                                            "mirror image)", clip.name, toString(clip.axis)));
+  if (clip.v_base.rows() != N || clip.omega_base.rows() != N || clip.base_height.size() != N)
+    throw std::invalid_argument(fmt::format("symmetrizeGaitClip({}): v_base, omega_base or base_height has not {} rows", clip.name, N));
+  const Eigen::Index h = N / 2;
+  auto half_on = [&](const Eigen::MatrixXd& x) {  // row k takes row k + h (mod N)
+    Eigen::MatrixXd y(x.rows(), x.cols());
+    for (Eigen::Index k = 0; k < N; ++k) y.row(k) = x.row((k + h) % N);
+    return y;
+  };
+  const GeneratorJointSpace joints = generatorJointSpace(robot);
+  clip.q = 0.5 * (clip.q + mirrorJoints(half_on(clip.q), joints));
+  clip.qd = 0.5 * (clip.qd + mirrorJoints(half_on(clip.qd), joints));
+  const Eigen::Vector3d s_v(1.0, -1.0, 1.0), s_w(-1.0, 1.0, -1.0);
+  clip.v_base = 0.5 * (clip.v_base + half_on(clip.v_base) * s_v.asDiagonal());
+  clip.omega_base = 0.5 * (clip.omega_base + half_on(clip.omega_base) * s_w.asDiagonal());
+  const Eigen::MatrixXd height = clip.base_height;
+  clip.base_height = 0.5 * (height + half_on(height)).col(0);
+  FootContact& left = clip.contact[static_cast<std::size_t>(Foot::kLeft)];
+  const FootContact right = clip.contact[static_cast<std::size_t>(Foot::kRight)];
+  const double a = 2.0 * M_PI * left.mu, b = 2.0 * M_PI * (right.mu - 0.5);
+  double mu = std::atan2(std::sin(a) + std::sin(b), std::cos(a) + std::cos(b)) / (2.0 * M_PI);
+  mu -= std::floor(mu);
+  left.mu = mu >= 1.0 ? 0.0 : mu;
+  left.sigma = 0.5 * (left.sigma + right.sigma);
+  FootContact& r = clip.contact[static_cast<std::size_t>(Foot::kRight)];
+  r.sigma = left.sigma;
+  r.mu = left.mu + 0.5;
+  r.mu -= std::floor(r.mu);
+  clip.implied = ImpliedMotionTable{};
+}
+
 }  // namespace pmg::motion
 
 namespace pmg::motion {

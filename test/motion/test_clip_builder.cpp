@@ -13,6 +13,8 @@
 #include "pmg/common/robot_config.hpp"
 #include "pmg/motion/clip_builder.hpp"
 #include "pmg/clips/clip_io.hpp"
+#include "pmg/clips/clip_transforms.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 
 namespace {
 
@@ -193,6 +195,68 @@ TEST(ClipBuilder, SymmetrizedStaticClipIsMirrorInvariant) {
   EXPECT_THROW(symmetrizeStaticClip(wrong, robot), std::invalid_argument);
 }
 
+// symmetrizeGaitClip on the shipped forward walk (a single capture whose left and right steps differ):
+// afterwards every quantity half a cycle on is the mirror image of the one now, the change is half the
+// capture's asymmetry, the mean forward speed is kept, and a second pass changes nothing.
+TEST(ClipBuilder, SymmetrizedGaitStepsAlikeOnBothFeet) {
+  const RobotConfig& robot = pmg::test::g1Robot();
+  const GeneratorJointSpace joints = generatorJointSpace(robot);
+  const DynamicClip before = readDynamicClip(pmg::test::g1ClipDir() + "/walk_forward.yaml", robot);
+  const Eigen::Index N = before.q.rows(), h = N / 2;
+  ASSERT_EQ(N % 2, 0);
+  auto half_on = [&](const Eigen::MatrixXd& x) {
+    Eigen::MatrixXd y(x.rows(), x.cols());
+    for (Eigen::Index k = 0; k < N; ++k) y.row(k) = x.row((k + h) % N);
+    return y;
+  };
+  const Eigen::Vector3d s_v(1.0, -1.0, 1.0), s_w(-1.0, 1.0, -1.0);
+  // How far the capture is from symmetric: q(k + h) against M q(k), over all joints and samples.
+  const double asym_before = (mirrorJoints(half_on(before.q), joints) - before.q).norm();
+  EXPECT_GT(asym_before / std::sqrt(static_cast<double>(before.q.size())), 0.01);  // > 0.01 rad RMS: a real asymmetry
+  DynamicClip clip = before;
+  symmetrizeGaitClip(clip, robot);
+  EXPECT_LT((half_on(clip.q) - mirrorJoints(clip.q, joints)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((half_on(clip.qd) - mirrorJoints(clip.qd, joints)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((half_on(clip.v_base) - clip.v_base * s_v.asDiagonal()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((half_on(clip.omega_base) - clip.omega_base * s_w.asDiagonal()).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::MatrixXd hgt = clip.base_height;
+  EXPECT_LT((half_on(hgt) - hgt).cwiseAbs().maxCoeff(), 1e-12);
+  // The change is half the asymmetry (the clip moves halfway to its mirror image), not more.
+  EXPECT_NEAR((clip.q - before.q).norm(), 0.5 * asym_before, 1e-9);
+  EXPECT_NEAR(clip.v_base.col(0).mean(), before.v_base.col(0).mean(), 1e-12);  // nominal speed kept
+  EXPECT_NEAR(clip.v_base.col(1).mean(), 0.0, 1e-12);                         // no net side drift
+  EXPECT_NEAR(clip.omega_base.col(2).mean(), 0.0, 1e-12);                     // nor turn
+  // Contacts: the right foot's interval is the left's, half a cycle on; the width the mean of both.
+  EXPECT_NEAR(clip.contact[0].sigma, 0.5 * (before.contact[0].sigma + before.contact[1].sigma), 1e-12);
+  EXPECT_NEAR(clip.contact[1].sigma, clip.contact[0].sigma, 1e-12);
+  double dmu = clip.contact[1].mu - clip.contact[0].mu;
+  dmu -= std::floor(dmu);
+  EXPECT_NEAR(dmu, 0.5, 1e-12);
+  EXPECT_NEAR(clip.contact[0].mu, 0.5 * (before.contact[0].mu + before.contact[1].mu - 0.5), 1e-9);  // no wrap here
+  EXPECT_TRUE(clip.implied.empty());
+  const DynamicClip once = clip;
+  symmetrizeGaitClip(clip, robot);  // idempotent
+  EXPECT_TRUE(clip.q.isApprox(once.q, 1e-14));
+  EXPECT_NEAR(clip.contact[0].mu, once.contact[0].mu, 1e-12);
+  // Refused: a side-step (not its own mirror image), an odd sample count, a wrong joint count.
+  DynamicClip lateral = before;
+  lateral.axis = CommandAxis::kLateral;
+  EXPECT_THROW(symmetrizeGaitClip(lateral, robot), std::invalid_argument);
+  DynamicClip odd = before;
+  odd.q.conservativeResize(N - 1, Eigen::NoChange);
+  odd.qd.conservativeResize(N - 1, Eigen::NoChange);
+  try {
+    symmetrizeGaitClip(odd, robot);
+    ADD_FAILURE() << "an odd sample count was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("walk_forward"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("even"), std::string::npos) << e.what();
+  }
+  DynamicClip wrong = before;
+  wrong.q.resize(N, 5);
+  EXPECT_THROW(symmetrizeGaitClip(wrong, robot), std::invalid_argument);
+}
+
 TEST(ClipBuilder, KeepLegDirectionsShortensWithoutTurningTheLegs) {
   const RobotConfig& robot = pmg::test::g1Robot();
   const KinematicModel model(robot);
@@ -289,8 +353,9 @@ TEST(ClipBuilder, RaiseWalkingHeightLengthensBothLegsAlikeAndKeepsTheFeetInPlace
     // Only the legs change.
     for (Eigen::Index j = 0; j < q0.size(); ++j) {
       const std::string& n = names[static_cast<std::size_t>(j)];
-      if (n.find("hip_") == std::string::npos && n.find("knee") == std::string::npos && n.find("ankle_") == std::string::npos)
+      if (n.find("hip_") == std::string::npos && n.find("knee") == std::string::npos && n.find("ankle_") == std::string::npos) {
         EXPECT_EQ(q1(j), q0(j)) << n;
+      }
     }
   }
   EXPECT_NEAR(d.minCoeff(), rep.min_raise, 1e-6);

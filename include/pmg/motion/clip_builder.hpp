@@ -203,6 +203,28 @@ void relabelContactsFromRobotFeet(DynamicClip& clip, const KinematicModel& model
 /// @throws std::invalid_argument if the clip's joint count differs from the robot's.
 void symmetrizeStaticClip(StaticClip& clip, const RobotConfig& robot);
 
+/// Left/right-symmetric gait: each step of a forward (or backward) walking clip is averaged with the
+/// mirror image of the other foot's step, half a cycle on. With h = N / 2 and M the robot's mirror map
+/// (pmg::mirrorJoints), every sample k becomes
+/// - q(k) ← ½ (q(k) + M q(k + h)), and likewise q̇ [rad, rad/s];
+/// - v_base(k) ← ½ (v(k) + S_v v(k + h)), S_v = diag(1, −1, 1) [m/s, heading frame H];
+/// - ω_base(k) ← ½ (ω(k) + S_ω ω(k + h)), S_ω = diag(−1, 1, −1) (a pseudo-vector) [rad/s, H];
+/// - base_height(k) ← ½ (h(k) + h(k + h)) [m];
+/// (indices mod N). Afterwards x(k + h) = M x(k) exactly: the clip walks alike on both feet, so that
+/// the generator's reference for a command and for its mirror image (v_y, ω negated) are mirror images
+/// half a cycle apart, as a symmetric robot's should be. A captured walk is not: its left and right
+/// steps differ (training/README.md "Mirror-symmetry loss": RMS 0.037 rad of 0.127 for the forward
+/// walk at 0.5 m/s, 0.068 of 0.095 backward).
+/// Contacts: the left foot's μ becomes the circular mean of μ_left and μ_right − ½, its σ the mean of
+/// both σ; the right foot's is the left's half a cycle on. Callers with a kinematic model relabel them
+/// from the robot's soles (relabelContactsFromRobotFeet), which also realigns φ = 0 on the left
+/// touchdown. The implied-motion table is cleared (the clip writer recomputes it); the mean forward
+/// velocity, so nominal_scale, is unchanged. Only the forward axis: a side-step or a turn is not its
+/// own mirror image (M turns a left side-step into a right one; pmg_make_clips mirrors those instead).
+/// @throws std::invalid_argument naming the clip if its joint count differs from the robot's, its
+/// sample count is odd (no exact half cycle), or its axis is not forward.
+void symmetrizeGaitClip(DynamicClip& clip, const RobotConfig& robot);
+
 }  // namespace pmg::motion
 
 namespace pmg::motion {
