@@ -12,7 +12,8 @@ and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset
 discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused;
 --warmup-steps (default 0: no warm-up config) parses, its config changes the three tracking widths and
 nothing else, and a negative count, one not below --timesteps, a warm-up width without --warmup-steps or a
-non-positive or non-finite width is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
+non-positive or non-finite width is refused; bench_env_step.py's --parts parses in order and an
+unknown part, an empty list or a count below 1 is refused; --clips parses, and --action-scale-from returns an earlier run's scale and refuses a bad file naming it. (An unknown NAME is refused in
 main(), against EnvConfig.w, which needs JAX: the smoke run's environment.)"""
 import contextlib
 import io
@@ -163,5 +164,19 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train arguments: 51 cases as expected")
+# bench_env_step.py (imports JAX only in main()): parts parse in order; an unknown part or a count < 1 is refused.
+import bench_env_step  # noqa: E402
+if bench_env_step.parse_args(["--parts", "pmg_gco, physics", "--num-envs", "8"]).parts != ["pmg_gco", "physics"]:
+    failures.append("bench_env_step --parts 'pmg_gco, physics' not parsed in order")
+for bad, flag in ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "--parts"), (["--steps", "0"], "--steps"),
+                  (["--num-envs", "-1"], "--num-envs")):
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            bench_env_step.parse_args(bad)
+        failures.append(f"bench_env_step {bad} accepted")
+    except SystemExit as e:
+        if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
+            failures.append(f"bench_env_step {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
+print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train and bench_env_step arguments: 56 cases as expected")
 sys.exit(1 if failures else 0)
