@@ -1,6 +1,7 @@
 // pmg_make_clips is reproducible: two runs give byte-identical files, and they match the shipped
 // set in config/clips/g1 (and, with --walking-height, config/clips/g1_walking_height) (values within 1e-4; bytes may differ only if another compiler/CPU
 // rounds the solver differently in the 6th decimal). Slow (two full runs): label "sil".
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,8 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/clips/clip_io.hpp"
+#include "pmg/clips/clip_transforms.hpp"
+#include "pmg/generator/robot_joint_space.hpp"
 #include "pmg/common/kinematics.hpp"
 #include "pmg/motion/posture_synthesis.hpp"
 #include "temp_dir.hpp"
@@ -43,7 +46,9 @@ int expectMatchesShippedSet(const fs::path& shipped, const fs::path& fresh_dir, 
     const std::string name = e.path().filename().string();
     SCOPED_TRACE(name);
     ++files;
-    if (!again.empty()) EXPECT_EQ(slurp(fresh_dir / name), slurp(again / name)) << "not deterministic";
+    if (!again.empty()) {
+      EXPECT_EQ(slurp(fresh_dir / name), slurp(again / name)) << "not deterministic";
+    }
     if (e.path().extension() != ".yaml") continue;
     if (name == pmg::kConsistencyMapFile) {  // not a clip: the map of the set, compared as numbers
       const auto a = pmg::readConsistencyMap((fresh_dir / name).string()), s = pmg::readConsistencyMap(e.path().string());
@@ -98,6 +103,45 @@ TEST(MakeClips, WalkingHeightSetMatchesTheShippedOneAndWalksTaller) {
   }
   const auto bend = pmg::readStaticClip((out / "bend.yaml").string(), robot);
   EXPECT_EQ(bend.q, pmg::readStaticClip(pmg::test::g1ClipDir() + "/bend.yaml", robot).q) << "postures unchanged";
+}
+
+// --symmetric-gaits with the walking height (docs/motion.md "Symmetric gaits"): the set
+// config/clips/g1_walking_height_symmetric is this run's output; its forward and backward walks step
+// alike on both feet (to the files' 6 decimals), its side-steps, turns and postures are the walking-height set's.
+TEST(MakeClips, SymmetricGaitSetMatchesTheShippedOneAndStepsAlikeOnBothFeet) {
+  const pmg::test::TempDir tmp_dir;
+  const fs::path out = tmp_dir.path() / "sym";
+  fs::create_directories(out);
+  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --walking-height 1.0 --walking-height-min-knee 0.05 --symmetric-gaits --out " +
+                          out.string() + " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const fs::path clips = fs::path(pmg::test::g1ClipDir()).parent_path();
+  EXPECT_GE(expectMatchesShippedSet(clips / "g1_walking_height_symmetric", out), 11);
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
+  const pmg::GeneratorJointSpace joints = pmg::generatorJointSpace(robot);
+  for (const char* clip : {"walk_forward", "walk_backward"}) {
+    SCOPED_TRACE(clip);
+    const auto c = pmg::readDynamicClip((out / (std::string(clip) + ".yaml")).string(), robot);
+    const auto raised = pmg::readDynamicClip((clips / "g1_walking_height" / (std::string(clip) + ".yaml")).string(), robot);
+    const Eigen::Index N = c.q.rows(), h = N / 2;
+    Eigen::MatrixXd half_on(N, c.q.cols()), raised_half_on(N, c.q.cols());
+    for (Eigen::Index k = 0; k < N; ++k) {
+      half_on.row(k) = c.q.row((k + h) % N);
+      raised_half_on.row(k) = raised.q.row((k + h) % N);
+    }
+    EXPECT_LT((half_on - pmg::mirrorJoints(c.q, joints)).cwiseAbs().maxCoeff(), 2e-6);
+    EXPECT_GT((raised_half_on - pmg::mirrorJoints(raised.q, joints)).cwiseAbs().maxCoeff(), 0.05);  // the capture's steps differ
+    EXPECT_NEAR(c.nominal_scale, raised.nominal_scale, 1e-6);
+    double dmu = c.contact[1].mu - c.contact[0].mu;
+    dmu -= std::floor(dmu);
+    EXPECT_NEAR(dmu, 0.5, 1.0 / static_cast<double>(N));
+  }
+  for (const char* clip : {"walk_lateral_left", "turn_right"}) {
+    SCOPED_TRACE(clip);
+    const auto c = pmg::readDynamicClip((out / (std::string(clip) + ".yaml")).string(), robot);
+    const auto raised = pmg::readDynamicClip((clips / "g1_walking_height" / (std::string(clip) + ".yaml")).string(), robot);
+    EXPECT_EQ(c.q, raised.q);
+  }
 }
 
 // Torso pitch (feet flat) of the standing pose plus the bend template's offset at command p
