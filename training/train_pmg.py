@@ -508,11 +508,11 @@ def main(argv=None):
     if args.action_scale_factor != 1.0:  # the rule's or the earlier run's scale, scaled (before any step is traced)
         env.action_scale = (env.action_scale * args.action_scale_factor).astype(np.float32)
     clip_files = env.clip_files
-    warmup_cfg = warmup_config(cfg, args)
-    warmup_env = None if warmup_cfg is None else G1PmgEnv(warmup_cfg, clip_files, action_scale=env.action_scale)
     if args.smoke:
         smoke(env, args.out)
         return
+    warmup_cfg = warmup_config(cfg, args)
+    warmup_env = None if warmup_cfg is None else G1PmgEnv(warmup_cfg, clip_files, action_scale=env.action_scale)
 
     ppo_cfg = dict(num_timesteps=args.timesteps, num_envs=args.num_envs, episode_length=cfg.episode_length,
                    unroll_length=args.unroll_length, batch_size=args.batch_size, num_minibatches=args.num_minibatches,
