@@ -10,10 +10,14 @@ and the largest difference over 20 phases (pmg_generator.step, the NumPy port of
 without GCO) for the clip library given, and the leg joints' RMS range of motion over the cycle for
 scale.
 
-  .venv-training/bin/python training/reference_symmetry.py [--clips config/clips/g1_walking_height] [--scan-shift]
+  python3 training/reference_symmetry.py [--clips config/clips/g1_walking_height] [--scan-shift]
+      [--plot PNG [--compare-clips DIR]]
 
 --scan-shift adds, per command, the phase shift in [0.30, 0.70] (steps of 0.02) that matches the two
 sides best, and its RMS difference.
+--plot PNG [--compare-clips DIR] draws, for walking forward at 0.5 m/s and backward at 0.3 m/s, four
+left-leg joints over the phase against the right leg's mirror image half a cycle on, for --clips and
+(if given) a second clip set: where the two curves of a set lie on each other, its steps are alike.
 """
 import argparse
 import os
@@ -36,11 +40,15 @@ def main():
     ap.add_argument("--clips", default="config/clips/g1_walking_height")
     ap.add_argument("--robot", default="config/robots/g1/g1.yaml")
     ap.add_argument("--scan-shift", action="store_true")
+    ap.add_argument("--plot", default=None, metavar="PNG")
+    ap.add_argument("--compare-clips", default=None, metavar="DIR", help="--plot: a second clip set beside --clips")
     args = ap.parse_args()
     from pmg_train import pmg_generator as pg
-    from pmg_train.g1_env import LEG
     from pmg_train.symmetry import COMMAND_SIGN
     js = pg.joint_space_from_robot_yaml(os.path.join(REPO, args.robot))
+    # The leg joints lead the joint space (pmg_train/g1_env.LEG, 12); counted from the names here, so
+    # that the script runs on NumPy alone (matplotlib for --plot: the system python3).
+    LEG = sum(1 for n in js.joint_names if n.split("_")[1] in ("hip", "knee", "ankle"))
     model = pg.load_library(os.path.join(REPO, args.clips), js)
     idx, sgn = js.mirror_index, js.mirror_sign
     s_d, s_s = np.array(COMMAND_SIGN[:3]), np.array([1.0, COMMAND_SIGN[4], 1.0])
@@ -69,6 +77,49 @@ def main():
                              for s in np.round(np.arange(0.30, 0.701, 0.02), 2))
             line += f" {shift:10.2f} {rms:7.4f}"
         print(line, flush=True)
+
+
+    if args.plot:
+        plot(args, pg, js, model)
+
+
+PLOT_JOINTS = ("hip_pitch", "hip_roll", "knee", "ankle_pitch")
+
+
+def plot(args, pg, js, model):
+    """Left leg q(phase) against M q(phase + 1/2) of the right leg, forward and backward walks (module doc)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    sets = [(args.clips, model)]
+    if args.compare_clips:
+        sets.append((args.compare_clips, pg.load_library(os.path.join(REPO, args.compare_clips), js)))
+    names = list(js.joint_names)
+    phases = np.arange(60) / 60.0
+    commands = (("forward 0.5 m/s", (0.5, 0.0, 0.0)), ("backward 0.3 m/s", (-0.3, 0.0, 0.0)))
+    fig, axes = plt.subplots(len(commands), len(PLOT_JOINTS), figsize=(15, 6.5), sharex=True)
+    for r, (label, u_d) in enumerate(commands):
+        for ci, (clips, lib) in enumerate(sets):
+            q = np.array([pg.step(lib, p, np.array(u_d), np.zeros(3), 0.01)["q_ref"] for p in phases])
+            q_half = np.roll(q, -len(phases) // 2, axis=0)  # q(phase + 1/2)
+            mirrored = q_half[:, js.mirror_index] * js.mirror_sign  # M q(phase + 1/2)
+            colour = f"C{ci}"
+            for c, j in enumerate(PLOT_JOINTS):
+                k = names.index(f"left_{j}_joint")
+                ax = axes[r, c]
+                rms = float(np.sqrt(np.mean((q[:, k] - mirrored[:, k]) ** 2)))
+                ax.plot(phases, q[:, k], color=colour, label=f"{os.path.basename(clips)}: left (RMS gap {rms:.3f})")
+                ax.plot(phases, mirrored[:, k], color=colour, ls="--", label="  right, mirrored, half a cycle on")
+                ax.set_title(f"{label}: left_{j}", fontsize=9)
+                if r == len(commands) - 1:
+                    ax.set_xlabel("phase")
+                if c == 0:
+                    ax.set_ylabel("rad")
+                ax.legend(fontsize=6, loc="best")
+    fig.suptitle("PMG reference (no GCO): each step against the other foot's step, mirrored", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(args.plot, dpi=110)
+    print("wrote", args.plot)
 
 
 if __name__ == "__main__":
