@@ -35,6 +35,37 @@ COMMANDS = [  # (v_x, v_y, omega), (pitch, roll, height <= 0: standing)
 ]
 
 
+class SideGap:
+    """One command's two sides: the legs' reference q_ref(phase, u) at @p n_phases phases (pmg_generator.step,
+    no GCO) and, for a phase shift, q_ref(phase + shift, M u) - M q_ref(phase, u) over the leg joints [rad].
+    M u negates v_y, omega and roll (pmg_train/symmetry.COMMAND_SIGN); the legs lead the joint space (counted
+    from the joint names, pmg_train/g1_env.LEG, so that this runs on NumPy alone)."""
+
+    def __init__(self, model, js, u_d, u_s, n_phases=20):
+        from pmg_train import pmg_generator as pg
+        from pmg_train.symmetry import COMMAND_SIGN
+        self.pg, self.model = pg, model
+        self.phases = np.arange(n_phases) / float(n_phases)
+        self.n_leg = sum(1 for n in js.joint_names if n.split("_")[1] in ("hip", "knee", "ankle"))
+        a = self.q_ref(u_d, u_s, 0.0)
+        self.legs = a[:, :self.n_leg]
+        self.mirrored = (a[:, js.mirror_index] * js.mirror_sign)[:, :self.n_leg]
+        self.u_dm = np.array(u_d) * np.array(COMMAND_SIGN[:3])
+        self.u_sm = np.array(u_s) * np.array([1.0, COMMAND_SIGN[4], 1.0])
+
+    def q_ref(self, u_d, u_s, shift):
+        """References (all joints) at the phases moved by @p shift, (n_phases, n)."""
+        return np.array([self.pg.step(self.model, (p + shift) % 1.0, np.array(u_d, float), np.array(u_s, float),
+                                      0.01)["q_ref"] for p in self.phases])
+
+    def differences(self, shift):
+        """q_ref(phase + shift, M u) - M q_ref(phase, u), legs, (n_phases, n_leg) [rad]."""
+        return self.q_ref(self.u_dm, self.u_sm, shift)[:, :self.n_leg] - self.mirrored
+
+    def rms(self, shift=0.5):
+        return float(np.sqrt(np.mean(self.differences(shift) ** 2)))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--clips", default="config/clips/g1_walking_height")
@@ -44,41 +75,21 @@ def main():
     ap.add_argument("--compare-clips", default=None, metavar="DIR", help="--plot: a second clip set beside --clips")
     args = ap.parse_args()
     from pmg_train import pmg_generator as pg
-    from pmg_train.symmetry import COMMAND_SIGN
     js = pg.joint_space_from_robot_yaml(os.path.join(REPO, args.robot))
-    # The leg joints lead the joint space (pmg_train/g1_env.LEG, 12); counted from the names here, so
-    # that the script runs on NumPy alone (matplotlib for --plot: the system python3).
-    LEG = sum(1 for n in js.joint_names if n.split("_")[1] in ("hip", "knee", "ankle"))
     model = pg.load_library(os.path.join(REPO, args.clips), js)
-    idx, sgn = js.mirror_index, js.mirror_sign
-    s_d, s_s = np.array(COMMAND_SIGN[:3]), np.array([1.0, COMMAND_SIGN[4], 1.0])
     print(f"clips {args.clips}: legs, 20 phases; q_ref(phase + 1/2, M u) - M q_ref(phase, u) [rad]")
     print(f"{'u_d (vx, vy, wz)':>22} {'u_s (pitch, roll, h)':>22} {'RMS':>7} {'max':>7} {'RMS motion':>11}"
           + (f" {'best shift':>10} {'its RMS':>7}" if args.scan_shift else ""))
-    phases = np.arange(20) / 20.0
-
-    def q_ref(u_d, u_s, shift):
-        """References (all joints) at the 20 phases moved by @p shift, (20, n)."""
-        return np.array([pg.step(model, (p + shift) % 1.0, np.array(u_d), np.array(u_s), 0.01)["q_ref"] for p in phases])
-
     for u_d, u_s in COMMANDS:
-        a = q_ref(u_d, u_s, 0.0)       # this side, once per command
-        mirrored_a = (a[:, idx] * sgn)[:, :LEG]
-        u_dm, u_sm = np.array(u_d) * s_d, np.array(u_s) * s_s
-
-        def differences(shift):
-            return q_ref(u_dm, u_sm, shift)[:, :LEG] - mirrored_a
-
-        d, m = differences(0.5), a[:, :LEG]
+        gap = SideGap(model, js, u_d, u_s)
+        d, m = gap.differences(0.5), gap.legs
         line = (f"{str(u_d):>22} {str(u_s):>22} {np.sqrt(np.mean(d ** 2)):7.4f} {np.abs(d).max():7.4f} "
                 f"{np.sqrt(np.mean((m - m.mean(0)) ** 2)):11.4f}")
         if args.scan_shift:
-            rms, shift = min((float(np.sqrt(np.mean(differences(s) ** 2))), s)
+            rms, shift = min((float(np.sqrt(np.mean(gap.differences(s) ** 2))), s)
                              for s in np.round(np.arange(0.30, 0.701, 0.02), 2))
             line += f" {shift:10.2f} {rms:7.4f}"
         print(line, flush=True)
-
-
     if args.plot:
         plot(args, pg, js, model)
 
