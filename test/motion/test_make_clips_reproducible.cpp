@@ -72,13 +72,19 @@ int expectMatchesShippedSet(const fs::path& shipped, const fs::path& fresh_dir, 
   return files;
 }
 
+// Runs pmg_make_clips with @p flags into @p out (created), output discarded; returns its exit status.
+int runMakeClips(const std::string& flags, const fs::path& out) {
+  fs::create_directories(out);
+  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " " + flags + (flags.empty() ? "" : " ") + "--out " + out.string() +
+                          " > /dev/null 2>&1";
+  return std::system(cmd.c_str());
+}
+
 TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
   const pmg::test::TempDir tmp_dir;  // removed at the end, also when an assertion stops the test
   const fs::path tmp = tmp_dir.path();
   for (const char* run : {"a", "b"}) {
-    fs::create_directories(tmp / run);
-    const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --out " + (tmp / run).string() + " > /dev/null 2>&1";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    ASSERT_EQ(runMakeClips("", tmp / run), 0) << run;
   }
   EXPECT_GE(expectMatchesShippedSet(pmg::test::g1ClipDir(), tmp / "a", tmp / "b"), 11);  // 9 clips + map + report.md
 }
@@ -88,10 +94,7 @@ TEST(MakeClips, TwoRunsAreByteIdenticalAndMatchTheShippedSet) {
 TEST(MakeClips, WalkingHeightSetMatchesTheShippedOneAndWalksTaller) {
   const pmg::test::TempDir tmp_dir;
   const fs::path out = tmp_dir.path() / "wh";
-  fs::create_directories(out);
-  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --walking-height 1.0 --walking-height-min-knee 0.05 --out " +
-                          out.string() + " > /dev/null 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  ASSERT_EQ(runMakeClips("--walking-height 1.0 --walking-height-min-knee 0.05", out), 0);
   const fs::path shipped = fs::path(pmg::test::g1ClipDir()).parent_path() / "g1_walking_height";
   EXPECT_GE(expectMatchesShippedSet(shipped, out), 11);
   const pmg::RobotConfig& robot = pmg::test::g1Robot();
@@ -111,10 +114,7 @@ TEST(MakeClips, WalkingHeightSetMatchesTheShippedOneAndWalksTaller) {
 TEST(MakeClips, SymmetricGaitSetMatchesTheShippedOneAndStepsAlikeOnBothFeet) {
   const pmg::test::TempDir tmp_dir;
   const fs::path out = tmp_dir.path() / "sym";
-  fs::create_directories(out);
-  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --walking-height 1.0 --walking-height-min-knee 0.05 --symmetric-gaits --out " +
-                          out.string() + " > /dev/null 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  ASSERT_EQ(runMakeClips("--walking-height 1.0 --walking-height-min-knee 0.05 --symmetric-gaits", out), 0);
   const fs::path clips = fs::path(pmg::test::g1ClipDir()).parent_path();
   EXPECT_GE(expectMatchesShippedSet(clips / "g1_walking_height_symmetric", out), 11);
   const pmg::RobotConfig& robot = pmg::test::g1Robot();
@@ -164,9 +164,7 @@ double pitchOnStandingPose(const pmg::StaticClip& c, double p, pmg::motion::Post
 TEST(MakeClips, BendOnStandingPoseCarriesTheCommandedTorsoPitch) {
   const pmg::test::TempDir tmp_dir;
   const fs::path out = tmp_dir.path() / "opt";
-  fs::create_directories(out);
-  const std::string cmd = std::string(PMG_MAKE_CLIPS_EXE) + " --bend-on-standing-pose --out " + out.string() + " > /dev/null 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  ASSERT_EQ(runMakeClips("--bend-on-standing-pose", out), 0);
   const pmg::RobotConfig& robot = pmg::test::g1Robot();
   const pmg::StaticClip relabelled = pmg::readStaticClip((out / "bend.yaml").string(), robot);
   const pmg::StaticClip shipped = pmg::readStaticClip((fs::path(pmg::test::g1ClipDir()) / "bend.yaml").string(), robot);
