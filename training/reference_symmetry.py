@@ -43,15 +43,15 @@ class SideGap:
 
     def __init__(self, model, js, u_d, u_s, n_phases=20):
         from pmg_train import pmg_generator as pg
-        from pmg_train.symmetry import COMMAND_SIGN
+        from pmg_train.symmetry import COMMAND_SIGN, mirror
         self.pg, self.model = pg, model
         self.phases = np.arange(n_phases) / float(n_phases)
         self.n_leg = sum(1 for n in js.joint_names if n.split("_")[1] in ("hip", "knee", "ankle"))
-        a = self.q_ref(u_d, u_s, 0.0)
-        self.legs = a[:, :self.n_leg]
-        self.mirrored = (a[:, js.mirror_index] * js.mirror_sign)[:, :self.n_leg]
+        self.q = self.q_ref(u_d, u_s, 0.0)  # (n_phases, n), all joints
+        self.legs = self.q[:, :self.n_leg]
+        self.mirrored = mirror(self.q, js.mirror_index, js.mirror_sign)[:, :self.n_leg]
         self.u_dm = np.array(u_d) * np.array(COMMAND_SIGN[:3])
-        self.u_sm = np.array(u_s) * np.array([1.0, COMMAND_SIGN[4], 1.0])
+        self.u_sm = np.array(u_s) * np.array(COMMAND_SIGN[3:])
 
     def q_ref(self, u_d, u_s, shift):
         """References (all joints) at the phases moved by @p shift, (n_phases, n)."""
@@ -102,6 +102,7 @@ def plot(args, pg, js, model):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from pmg_train.symmetry import mirror
     sets = [(args.clips, model)]
     if args.compare_clips:
         sets.append((args.compare_clips, pg.load_library(os.path.join(REPO, args.compare_clips), js)))
@@ -111,9 +112,8 @@ def plot(args, pg, js, model):
     fig, axes = plt.subplots(len(commands), len(PLOT_JOINTS), figsize=(15, 6.5), sharex=True)
     for r, (label, u_d) in enumerate(commands):
         for ci, (clips, lib) in enumerate(sets):
-            q = np.array([pg.step(lib, p, np.array(u_d), np.zeros(3), 0.01)["q_ref"] for p in phases])
-            q_half = np.roll(q, -len(phases) // 2, axis=0)  # q(phase + 1/2)
-            mirrored = q_half[:, js.mirror_index] * js.mirror_sign  # M q(phase + 1/2)
+            q = SideGap(lib, js, u_d, (0.0, 0.0, 0.0), n_phases=len(phases)).q
+            mirrored = mirror(np.roll(q, -len(phases) // 2, axis=0), js.mirror_index, js.mirror_sign)  # M q(phase + 1/2)
             colour = f"C{ci}"
             for c, j in enumerate(PLOT_JOINTS):
                 k = names.index(f"left_{j}_joint")

@@ -562,20 +562,15 @@ void symmetrizeGaitClip(DynamicClip& clip, const RobotConfig& robot) {
                                             "mirror image)", clip.name, toString(clip.axis)));
   if (clip.v_base.rows() != N || clip.omega_base.rows() != N || clip.base_height.size() != N)
     throw std::invalid_argument(fmt::format("symmetrizeGaitClip({}): v_base, omega_base or base_height has not {} rows", clip.name, N));
-  const Eigen::Index h = N / 2;
-  auto half_on = [&](const Eigen::MatrixXd& x) {  // row k takes row k + h (mod N)
-    Eigen::MatrixXd y(x.rows(), x.cols());
-    for (Eigen::Index k = 0; k < N; ++k) y.row(k) = x.row((k + h) % N);
-    return y;
-  };
+  DynamicClip half = clip;
+  rotateClipPhase(half, N / 2);  // sample k of `half` is sample k + N/2 of the clip
   const GeneratorJointSpace joints = generatorJointSpace(robot);
-  clip.q = 0.5 * (clip.q + mirrorJoints(half_on(clip.q), joints));
-  clip.qd = 0.5 * (clip.qd + mirrorJoints(half_on(clip.qd), joints));
+  clip.q = 0.5 * (clip.q + mirrorJoints(half.q, joints));
+  clip.qd = 0.5 * (clip.qd + mirrorJoints(half.qd, joints));
   const Eigen::Vector3d s_v(1.0, -1.0, 1.0), s_w(-1.0, 1.0, -1.0);
-  clip.v_base = 0.5 * (clip.v_base + half_on(clip.v_base) * s_v.asDiagonal());
-  clip.omega_base = 0.5 * (clip.omega_base + half_on(clip.omega_base) * s_w.asDiagonal());
-  const Eigen::MatrixXd height = clip.base_height;
-  clip.base_height = 0.5 * (height + half_on(height)).col(0);
+  clip.v_base = 0.5 * (clip.v_base + half.v_base * s_v.asDiagonal());
+  clip.omega_base = 0.5 * (clip.omega_base + half.omega_base * s_w.asDiagonal());
+  clip.base_height = 0.5 * (clip.base_height + half.base_height);
   FootContact& left = clip.contact[static_cast<std::size_t>(Foot::kLeft)];
   const FootContact right = clip.contact[static_cast<std::size_t>(Foot::kRight)];
   const double a = 2.0 * M_PI * left.mu, b = 2.0 * M_PI * (right.mu - 0.5);
