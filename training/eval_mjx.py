@@ -1,15 +1,26 @@
 #!/usr/bin/env python3
-"""Roll out an exported actor in MJX on the preset command sequence (config/policies/eval_commands.yaml)
-with nominal parameters (no randomisation, no noise, no latency, no arm perturbation, no teleop arms).
+"""Roll out an exported actor in MJX on a command schedule (default: the preset sequence,
+config/policies/eval_commands.yaml) with nominal parameters (no randomisation, no noise, no latency, no
+arm perturbation, no teleop arms, no payloads or hand forces).
 
-  python3 training/eval_mjx.py RUN/actor.npz --out RUN/mjx_eval.npz
-Records per control tick: command, leg joint positions, PMG references, pelvis height, velocity in
-the heading frame, yaw rate, torso pitch/roll; prints the Table I metrics with the definitions of
-apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration
-whose actor observes u'). training/compare_sim2sim.py compares it with the MuJoCo 2.2 SIL log.
+  python3 training/eval_mjx.py RUN/actor.npz --out RUN/mjx_eval.npz [--commands S.yaml] [--duration T]
+
+The environment is the run's own: EnvConfig is built from the train_config.json beside the actor (or
+--train-config), so its clips, gains, actuator models, command slew and reward widths are the ones it
+was trained with, and only the randomisation is switched off (--clips overrides the clip folder). Every
+tick the schedule's command (ramped as the schedule says) is the environment's command u and its drawn
+goal ("command", "command_goal"), so neither the environment's own draws nor its slew change it.
+
+Records per control tick: the schedule's command, the environment's command u, leg joint positions, PMG
+references, pelvis height, velocity in the heading frame, yaw rate, torso pitch/roll. Prints the Table I
+metrics with the definitions of apps/policy/pmg_policy_sil.cpp (errors against the user's command u,
+also for the GCO configuration whose actor observes u') and, per segment of the schedule, the commanded
+and achieved means over the last 60 % of the segment (pmg_policy_sil's per-segment window), so that an
+actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise false`).
 """
 import argparse
-import glob
+import dataclasses
+import json
 import os
 import sys
 
@@ -20,31 +31,73 @@ import yaml
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
+KEYS = ["vx", "vy", "wz", "pitch", "roll", "height"]
+
+
 def schedule(path):
+    """(command at time t (6,), duration [s], segments [(name, start [s], end [s])]) of a schedule file."""
     with open(path) as f:
         s = yaml.safe_load(f)
-    keys = ["vx", "vy", "wz", "pitch", "roll", "height"]
-    segs = [(g["t"], np.array([g[k] for k in keys], float)) for g in s["segments"]]
+    segs = [(g["t"], np.array([g[k] for k in KEYS], float)) for g in s["segments"]]
+    names = [g.get("name", f"segment_{i}") for i, g in enumerate(s["segments"])]
+    ends = [t0 for t0, _ in segs[1:]] + [s["duration"]]
+    spans = [(n, t0, t1) for n, (t0, _), t1 in zip(names, segs, ends)]
 
     def at(t):
         k = max(i for i, (t0, _) in enumerate(segs) if t >= t0)
         prev = segs[k - 1][1] if k > 0 else segs[0][1]
         a = np.clip((t - segs[k][0]) / s["ramp"], 0, 1) if s["ramp"] > 0 else 1.0
         return prev + a * (segs[k][1] - prev)
-    return at, s["duration"]
+    return at, s["duration"], spans
 
 
-def main():
+def segment_means(t, command, achieved, spans, alive):
+    """Per segment: (name, commanded (6,), achieved (6,) or None where no tick of its window is alive),
+    means over the last 60 % of the segment. achieved (ticks, 6): vx, vy [m/s] heading frame, wz
+    [rad/s], torso pitch, roll [rad], pelvis height [m]."""
+    out = []
+    for name, t0, t1 in spans:
+        window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        sel = window & alive
+        out.append((name, command[window].mean(0) if window.any() else np.full(6, np.nan),
+                    achieved[sel].mean(0) if sel.any() else None))
+    return out
+
+
+def env_from_train_config(path):
+    """EnvConfig keyword arguments of a training run, from its train_config.json ("env"); {} without one.
+    Lists come back from JSON where the config holds tuples and are restored."""
+    if path is None:
+        return {}
+    try:
+        with open(path) as f:
+            env = dict(json.load(f)["env"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise SystemExit(f"--train-config {path}: cannot read a train_config.json with an 'env' entry ({e})")
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in env.items()}
+
+
+def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("actor")
     ap.add_argument("--out", required=True)
     ap.add_argument("--commands", default=None, help="command schedule (default: config/policies/eval_commands.yaml)")
     ap.add_argument("--duration", type=float, default=None)
+    ap.add_argument("--train-config", default=None,
+                    help="the run's train_config.json: the environment is built as trained, then made nominal "
+                         "(default: train_config.json beside the actor if there is one, else EnvConfig's defaults)")
+    ap.add_argument("--clips", default=None,
+                    help="clip folder (default: the train config's, else EnvConfig's: config/clips/g1)")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     from pmg_train.paths import repo_root
     args.actor, args.out = os.path.abspath(args.actor), os.path.abspath(args.out)
     args.commands = os.path.abspath(args.commands) if args.commands else None
+    args.clips = os.path.abspath(args.clips) if args.clips else None
+    if args.train_config is None:
+        beside = os.path.join(os.path.dirname(args.actor), "train_config.json")
+        args.train_config = beside if os.path.exists(beside) else None
+    args.train_config = os.path.abspath(args.train_config) if args.train_config else None
     os.chdir(repo_root(args.repo))  # the environment's files are named relative to the checkout
     args.commands = args.commands or "config/policies/eval_commands.yaml"
     import jax
@@ -52,11 +105,15 @@ def main():
     from export_onnx import load_actor
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
-    cfg = EnvConfig(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
-                    command_resample=10 ** 9,
-                    episode_length=10 ** 9, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
-    env = G1PmgEnv(cfg, sorted(glob.glob("config/clips/g1/*.yaml")), action_scale=action_scale)
-    at, duration = schedule(args.commands)
+    nominal = dict(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
+                   p_payload=0.0, p_hand_force=0.0, command_resample=10 ** 9, episode_length=10 ** 9,
+                   noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
+    trained = env_from_train_config(args.train_config)
+    if args.clips:
+        nominal["clips"] = args.clips
+    cfg = EnvConfig(**{**trained, **nominal})
+    env = G1PmgEnv(cfg, action_scale=action_scale)  # the clip folder EnvConfig.clips
+    at, duration, spans = schedule(args.commands)
     duration = args.duration or duration
     ticks = int(round(duration / cfg.control_dt))
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
@@ -73,14 +130,15 @@ def main():
     def body(state, cmd):
         info = dict(state.info)
         info["command"] = cmd
+        info["command_goal"] = cmd  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
         a = actor(state.obs["state"])
         state = env.step(state, a)
         m = state.info["measured"]  # v_H (3), height, contacts (2), pitch, roll
         ps = state.pipeline_state
         wz = (_quat_to_rot(ps.qpos[3:7]) @ ps.qvel[3:6])[2]  # pelvis yaw rate, world z
-        rec = {"q": ps.qpos[7:7 + LEG], "q_ref": state.info["ref_q"][:LEG], "measured": m,
-               "ref_height": state.info["ref_height"], "wz": wz, "done": state.done}
+        rec = {"command_env": state.info["command"], "q": ps.qpos[7:7 + LEG], "q_ref": state.info["ref_q"][:LEG],
+               "measured": m, "ref_height": state.info["ref_height"], "wz": wz, "done": state.done}
         return state, rec
 
     state = jax.jit(env.reset)(jax.random.PRNGKey(0))
@@ -99,7 +157,20 @@ def main():
                "height": float(np.mean(np.abs(cm[sel, 5] - meas[sel, 3]))),
                "fell": bool(not alive.all()), "survived_s": float(alive.sum() * cfg.control_dt)}
     print("MJX rollout:", metrics)
-    np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]))
+    achieved = np.column_stack([meas[:, 0], meas[:, 1], rec["wz"], meas[:, 6], meas[:, 7], meas[:, 3]])
+    per_segment = segment_means(t, cm, achieved, spans, alive)
+    print("per segment (means over the last 60 % of each segment): commanded / achieved")
+    print(f"{'segment':14s} " + " ".join(f"{k:>15s}" for k in KEYS))
+    for name, c_seg, a_seg in per_segment:
+        cells = [f"{c:7.3f} {'   fell' if a_seg is None else f'{a:7.3f}'}" for c, a in
+                 zip(c_seg, a_seg if a_seg is not None else c_seg)]
+        print(f"{name:14s} " + " ".join(cells))
+    np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]),
+             env_config=np.array(json.dumps(dataclasses.asdict(cfg))),
+             segment_names=np.array([n for n, _, _ in per_segment]),
+             segment_command=np.array([c for _, c, _ in per_segment]),
+             segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]))
+    return metrics
 
 
 if __name__ == "__main__":

@@ -56,13 +56,17 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped; with a calibrated robot config
    that identifies a waist joint it is refused (the actuator model has no feed-forward term).
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
-   one training step of 80 env steps, 32-32 MLPs, no evaluation rollouts, the mirror-symmetry loss at
+   two training steps of 80 env steps, the first in the reward-width warm-up (--warmup-steps), 32-32 MLPs,
+   no evaluation rollouts, the mirror-symmetry loss at
    weight 0.5): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
    model passes onnx.checker and carries the pmg.contract, whose pmg.clips_digest names the clips
    trained on; progress.jsonl reached the step count
    with finite metrics, the mirror loss among them (> 0: Brax ran the patched loss); both devices were used; the same actor marked as trained with residual
    actions (action_offset "reference") is refused by the export.
+2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s): the environment runs the schedule's
+   command every tick and reports both segments' commanded means; it is the run's environment
+   (train_config.json beside the actor: the run's reward widths and clips) made nominal.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -658,6 +662,44 @@ def ppo_checks(check, workdir, obs):
         msg = str(e)
     check("action_offset" in msg and not os.path.exists(os.path.join(out, "residual.onnx")),
           f"a residual actor is refused by the export, naming action_offset ({msg[:60]}...)")
+    mjx_eval_checks(check, workdir, out, tc)
+
+
+def mjx_eval_checks(check, workdir, run_dir, tc):
+    """2b. eval_mjx.py on the tiny run's actor: the environment is the run's own (its train_config.json
+    beside the actor) made nominal, and the schedule's command is the one the environment runs and
+    reports per segment. (It once set only the environment's command u, which each step replaced by the
+    environment's own drawn goal, so every rollout commanded standing.)"""
+    import numpy as np
+    import yaml
+
+    import eval_mjx
+
+    sched = os.path.join(workdir, "mjx_schedule.yaml")
+    segs = [{"name": "walk", "t": 0.0, "vx": 0.4, "vy": -0.1, "wz": 0.3, "pitch": 0.1, "roll": 0.0, "height": 0.7},
+            {"name": "back", "t": 0.2, "vx": -0.2, "vy": 0.0, "wz": 0.0, "pitch": 0.0, "roll": 0.05, "height": 0.75}]
+    with open(sched, "w") as f:
+        yaml.safe_dump({"ramp": 0.0, "duration": 0.4, "segments": segs}, f)
+    out = os.path.join(workdir, "mjx_eval.npz")
+    cwd = os.getcwd()
+    try:
+        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", out, "--commands", sched])
+    finally:
+        os.chdir(cwd)
+    z = np.load(out)
+    want = np.array([[s[k] for k in eval_mjx.KEYS] for s in segs])
+    check(z["command"].shape[0] == 40 and np.allclose(z["command_env"], z["command"], atol=1e-6) and
+          np.allclose(z["command_env"][0], want[0], atol=1e-6) and np.allclose(z["command_env"][-1], want[1], atol=1e-6),
+          f"eval_mjx: the environment runs the schedule's command ({z['command'].shape[0]} ticks; first "
+          f"{np.round(z['command_env'][0], 3)}, last {np.round(z['command_env'][-1], 3)})")
+    check(list(z["segment_names"]) == ["walk", "back"] and np.allclose(z["segment_command"], want, atol=1e-6) and
+          z["segment_achieved"].shape == (2, 6),
+          f"eval_mjx: per-segment commanded means {np.round(z['segment_command'], 3).tolist()}")
+    env = json.loads(str(z["env_config"]))
+    check(env["lin_vel_sigma"] == tc["env"]["lin_vel_sigma"] == 0.05 and env["clips"] == tc["env"]["clips"] and
+          env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()),
+          f"eval_mjx: the run's environment (lin_vel_sigma {env['lin_vel_sigma']}, clips {env['clips']}) made "
+          f"nominal (deterministic reset, no delay, noise {env['noise']})")
 
 
 def action_offset_checks(check):
