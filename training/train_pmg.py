@@ -259,6 +259,10 @@ def parse_args(argv=None):
     ap.add_argument("--stop-keeps-posture", type=float, default=None, metavar="P",
                     help="probability that a stop (--p-stop) keeps the walking goal's posture, so the robot stops "
                          "where it is crouched or bent (EnvConfig.p_stop_keep_posture, default 0: drawn anew)")
+    ap.add_argument("--p-reset-reference", type=float, default=None, metavar="P",
+                    help="probability that an episode starts in the PMG reference's pose for its first command and "
+                         "phase instead of standing (reference state initialisation; EnvConfig.p_reset_reference, "
+                         "default 0: every episode starts standing)")
     ap.add_argument("--push-vel", default=None, metavar="LO,HI",
                     help="range of the pushes' horizontal velocity change [m/s] (EnvConfig.push_vel, default 0,0.4)")
     ap.add_argument("--p-posture-walk", type=float, default=None, metavar="P",
@@ -320,6 +324,8 @@ def parse_args(argv=None):
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
     if args.p_stop is not None and not 0.0 <= args.p_stop <= 1.0:
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
+    if args.p_reset_reference is not None and not 0.0 <= args.p_reset_reference <= 1.0:
+        ap.error(f"--p-reset-reference = {args.p_reset_reference}: expected in [0, 1]")
     if args.stop_keeps_posture is not None and not 0.0 <= args.stop_keeps_posture <= 1.0:
         ap.error(f"--stop-keeps-posture = {args.stop_keeps_posture}: expected in [0, 1]")
     if args.joint_stop_timeconst is not None and not 0.01 - 1e-12 <= args.joint_stop_timeconst <= 1.0:
@@ -494,6 +500,7 @@ def main(argv=None):
             cfg.upper_body_max_torque, "N m")
     # Command-mix and push overrides (flag -> EnvConfig field), logged as set.
     for flag, field in (("p_stop", "p_stop"), ("stop_keeps_posture", "p_stop_keep_posture"), ("push_vel", "push_vel"),
+                        ("p_reset_reference", "p_reset_reference"),
                         ("p_posture_walk", "p_posture_walk"), ("p_combined", "p_combined"),
                         ("joint_stop_timeconst", "joint_stop_timeconst")):
         if getattr(args, flag) is not None:

@@ -114,6 +114,17 @@ to MuJoCo's qfrc_bias at zero velocity) minus upper_body_damping x qd, clamped, 
 torque. An actor trained with it is deployed with `upper_body: enabled: true` (its contract's
 pmg.upper_body_ff).
 
+Reference state initialisation (EnvConfig.p_reset_reference, `--p-reset-reference`; off by default):
+with that probability a reset puts the robot in the PMG reference's pose for its first command and
+phase (all 29 joints, plus the reset's joint noise) instead of the standing pose, the pelvis upright and
+lowered or raised until the lowest sole sphere touches the floor, at rest. A crouched or bent command
+then starts crouched or bent, and a walking one mid-stride, so the policy meets those states and their
+rewards before it has learned to reach them (DeepMimic's reference state initialisation). In PPO
+training, Brax's AutoResetWrapper (0.14.2) restarts a finished episode from the physics state of the
+environment's first reset and keeps the rest of its state (command, phase, GCO state) running: so a
+share p_reset_reference of the environments restart every episode in the reference pose of their first
+command and phase, whatever the command is then, and the rest standing.
+
 Privileged critic observation: the actor's terms without noise, plus base linear velocity in the
 heading frame, pelvis height, measured and PMG foot contacts, torso pitch/roll, kp scale, delay,
 the 14 arm joint targets (relative to the default pose) and the two hand payloads [kg] (90 values).
@@ -277,6 +288,12 @@ class EnvConfig:
     p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
     p_posture_stand: float = 0.75  # posture commanded while standing
     p_posture_axis: float = 0.6    # each posture axis set in a commanded posture (at least one)
+    # Reference state initialisation: with this probability an episode starts in the PMG reference's
+    # pose for its first command and phase (all 29 joints, the lowest sole sphere on the floor, at
+    # rest) instead of the standing pose, so that a policy meets crouched, bent and mid-stride states
+    # from its first steps rather than only after it has learned to reach them (module docstring: how
+    # Brax's auto-reset repeats it). 0 (the default, as every policy so far): every episode starts standing.
+    p_reset_reference: float = 0.0
     # Domain randomisation.
     friction: tuple = (0.4, 1.25)
     mass_scale: tuple = (0.9, 1.1)
@@ -566,6 +583,12 @@ class G1PmgEnv(Env):
             b = mj.body(f"{side}_ankle_roll_link").id
             foot_geoms.append([g for g in range(mj.ngeom) if mj.geom_bodyid[g] == b and mj.geom_contype[g] != 0])
         self.foot_geoms = foot_geoms
+        # The sole spheres (the feet's floor contacts): the reference-pose reset puts the lowest on the floor.
+        spheres = [g for geoms in foot_geoms for g in geoms if mj.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE]
+        if len(spheres) < 2:
+            raise ValueError(f"{cfg.mjcf}: expected sphere collision geoms on both ankle_roll_links, found {len(spheres)}")
+        self.sole_spheres = np.array(spheres)
+        self.sole_radius = mj.geom_size[spheres, 0].astype(np.float32)
         self.floor_geom = mj.geom("floor").id
         self.obs_scale = _scale_vector()
         self.arm_idx = np.arange(ARM0, ARM0 + ARM)
@@ -858,8 +881,9 @@ class G1PmgEnv(Env):
         k = jax.random.split(rng, 16)
         qpos = jnp.asarray(self.mj_model.qpos0).at[7:].set(self.q_default)
         qpos = qpos.at[2].set(0.79)
-        if not c.deterministic_reset:
-            qpos = qpos.at[7:].add(jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
+        joint_noise = (jnp.zeros(29) if c.deterministic_reset else
+                       jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
+        qpos = qpos.at[7:].add(joint_noise)
         data = mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv))
         data = mjx.forward(self.sys, data)
         info = {
@@ -907,10 +931,22 @@ class G1PmgEnv(Env):
         info["next_phase"] = jnp.asarray(ref["next_phase"], jnp.float32)
         info["measured"] = jnp.zeros(8)
         info["arm_des_rel"] = info["ref_q"][ARM0:] - jnp.asarray(self.arm_default)
+        if c.p_reset_reference > 0:
+            use = jax.random.uniform(jax.random.fold_in(k[15], 1)) < c.p_reset_reference
+            data = jax.lax.cond(use, lambda d: self._reference_pose(d, info["ref_q"] + joint_noise), lambda d: d, data)
         obs = self._obs(data, info, k[10])
         metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
                                               "ref_q_err", "contact_match", "energy"]}
         return State(data, obs, jnp.zeros(()), jnp.zeros(()), metrics, info)
+
+    def _reference_pose(self, data, q):
+        """@p data at rest in joint pose @p q (29,) [rad], the pelvis upright at the standing pose's
+        place, lowered or raised so that the lowest sole sphere touches the floor (world z = 0)."""
+        qpos = data.qpos.at[7:].set(jnp.clip(q, self.q_lower, self.q_upper))
+        kin = mjx.kinematics(self.sys, data.replace(qpos=qpos))
+        bottom = jnp.min(kin.geom_xpos[self.sole_spheres, 2] - self.sole_radius)
+        qpos = qpos.at[2].add(-bottom)
+        return mjx.forward(self.sys, data.replace(qpos=qpos, qvel=jnp.zeros_like(data.qvel)))
 
     def step(self, state: State, action):
         c = self.cfg

@@ -11,7 +11,7 @@ PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
 it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as two tests
-(training_smoke_env: 1 to 1f, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
+(training_smoke_env: 1 to 1g, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
 env's reset and step takes most of the time, so parts 1 to 1e share one env with every training
 option on (make_smoke_env), compiled once; the default configuration is the PPO run's (2).
 
@@ -55,6 +55,11 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    moving: their torques equal the PD plus MuJoCo's own gravity torque (mj_rne at zero velocity on
    the CPU model, nominal masses) minus 5 N m s/rad x qd, clamped; with a calibrated robot config
    that identifies a waist joint it is refused (the actuator model has no feed-forward term).
+1g. Reference state initialisation (EnvConfig.p_reset_reference = 0.5, its own env): of 12 resets some
+   stand (0.79 m, the standing pose) and some start in the PMG reference's pose for their first command
+   and phase (joints within the reset noise of ref_q, the lowest sole sphere on the floor to 0.1 mm, at
+   rest, the pelvis within 0.04 m of the commanded height); from each of those, 50 steps of actions
+   holding the reference end no episode and move the pelvis by less than 0.06 m.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    two training steps of 80 env steps, the first in the reward-width warm-up (--warmup-steps), 32-32 MLPs,
    no evaluation rollouts, the mirror-symmetry loss at
@@ -702,6 +707,51 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"nominal (deterministic reset, no delay, noise {env['noise']})")
 
 
+def reset_reference_checks(check, n_resets=12, hold_steps=50):
+    """1g. Reference state initialisation (EnvConfig.p_reset_reference = 0.5, its own env, randomised
+    reset): a reset either stands (pelvis at 0.79 m, legs within the reset noise of the standing pose)
+    or starts in the PMG reference's pose for its first command and phase (every joint within the
+    noise of ref_q, the lowest sole sphere on the floor to 0.1 mm, at rest, the pelvis within 0.04 m of
+    the commanded height); both occur. From a reference start, actions that hold the reference keep
+    the robot up for hold_steps (0.5 s) with the pelvis within 0.06 m of where it started."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+    from pmg_train import g1_env
+    t0 = time.time()
+    env = g1_env.G1PmgEnv(g1_env.EnvConfig(p_reset_reference=0.5), sorted(glob.glob("config/clips/g1/*.yaml")))
+    reset, step = jax.jit(env.reset), jax.jit(env.step)
+    scale, q_stand = jnp.asarray(env.action_scale), jnp.asarray(env.q_default[:g1_env.LEG])
+    standing, reference, bad, held = 0, 0, [], []
+    for seed in range(n_resets):
+        st = reset(jax.random.PRNGKey(seed))
+        ps = st.pipeline_state
+        q, ref_q = np.asarray(ps.qpos[7:]), np.asarray(st.info["ref_q"])
+        z0, cmd = float(ps.qpos[2]), np.asarray(st.info["command"])
+        if abs(z0 - 0.79) < 1e-6 and np.abs(q - env.q_default).max() <= 0.05 + 1e-6:
+            standing += 1
+            continue
+        reference += 1
+        bottom = float(np.min(np.asarray(ps.geom_xpos)[env.sole_spheres, 2] - env.sole_radius))
+        if not (np.abs(q - ref_q).max() <= 0.05 + 1e-5 and abs(bottom) < 1e-4 and
+                float(np.abs(np.asarray(ps.qvel)).max()) == 0.0 and abs(z0 - cmd[5]) < 0.04):
+            bad.append((seed, float(np.abs(q - ref_q).max()), bottom, z0, float(cmd[5])))
+            continue
+        for _ in range(hold_steps):
+            st = step(st, jnp.clip((st.info["ref_q"][:g1_env.LEG] - q_stand) / scale, -1.0, 1.0))
+        held.append((seed, z0, float(st.pipeline_state.qpos[2]), float(st.done)))
+    print(f"reference-pose resets {time.time() - t0:.1f} s (compile included): standing {standing}, "
+          f"reference {reference}; held (seed, z0, z, done): {held}", flush=True)
+    check(standing > 0 and reference > 0 and not bad,
+          f"p_reset_reference 0.5: {standing} standing and {reference} reference-pose resets of {n_resets}; "
+          f"every reference start in ref_q's pose, a sole on the floor, at rest, at the commanded height "
+          f"(off: {bad})")
+    check(len(held) == reference - len(bad) and all(d == 0.0 and abs(z - z0) < 0.06 for _, z0, z, d in held),
+          f"held at the reference for {hold_steps} steps from each reference start: no episode ended, pelvis "
+          f"within 0.06 m of its start (largest change "
+          f"{max((abs(z - z0) for _, z0, z, _ in held), default=float('nan')):.3f} m)")
+
+
 def action_offset_checks(check):
     """Residual actions (EnvConfig.action_offset = "reference"): the leg PD targets are the PMG reference
     of the step plus scale x action, not the standing pose plus it. One physics substep from a
@@ -785,8 +835,8 @@ def main():
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
-                    help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f: rollout, actuator models, gains, "
-                         "hand forces, command slew, stops, residual actions); ppo: the tiny PPO run (2); all: both")
+                    help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f, 1g: rollout, actuator models, gains, "
+                         "hand forces, command slew, stops, residual actions, reference-pose resets); ppo: the tiny PPO run (2); all: both")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -808,6 +858,7 @@ def main():
         actuator_env_checks(check, env, cal_path, starts)
         hand_force_checks(check, env, reset, step)
         action_offset_checks(check)
+        reset_reference_checks(check)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
     print(f"smoke run {time.time() - t_start:.1f} s")

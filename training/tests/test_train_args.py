@@ -4,7 +4,8 @@
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
 --command-slew is off unless given; --joint-stop-timeconst parses and one below 2 physics steps (0.01 s) or
-non-finite is refused; --p-stop, --stop-keeps-posture and --p-posture-walk parse and a value outside
+non-finite is refused; --p-stop, --stop-keeps-posture, --p-posture-walk and --p-reset-reference (unset by
+default) parse and a value outside
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
 and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
 --action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
@@ -34,6 +35,10 @@ if args.command_slew or not train_pmg.parse_args(["--out", "/tmp/x", "--command-
     failures.append("--command-slew: off by default, on with the flag")
 if train_pmg.parse_args(["--out", "/tmp/x", "--p-stop", "0.5"]).p_stop != 0.5:
     failures.append("--p-stop 0.5 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x", "--p-reset-reference", "0.3"]).p_reset_reference != 0.3:
+    failures.append("--p-reset-reference 0.3 not parsed")
+if train_pmg.parse_args(["--out", "/tmp/x"]).p_reset_reference is not None:
+    failures.append("--p-reset-reference: unset by default (EnvConfig.p_reset_reference 0 stays)")
 if train_pmg.parse_args(["--out", "/tmp/x", "--stop-keeps-posture", "0.6"]).stop_keeps_posture != 0.6:
     failures.append("--stop-keeps-posture 0.6 not parsed")
 if train_pmg.parse_args(["--out", "/tmp/x", "--push-vel", "0.1,0.6"]).push_vel != (0.1, 0.6):
@@ -63,6 +68,9 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_s
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--p-stop", "nan"], "--p-stop"),
+                  (["--p-reset-reference", "1.5"], "--p-reset-reference"),
+                  (["--p-reset-reference", "nan"], "--p-reset-reference"),
+                  (["--p-reset-reference", "-0.1"], "--p-reset-reference"),
                   (["--stop-keeps-posture", "1.2"], "--stop-keeps-posture"),
                   (["--stop-keeps-posture", "nan"], "--stop-keeps-posture"),
                   (["--push-vel", "0.6,0.1"], "--push-vel"),
