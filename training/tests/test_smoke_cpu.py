@@ -62,7 +62,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    holding the reference end no episode and move the pelvis by less than 0.06 m.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    two training steps of 80 env steps, the first in the reward-width warm-up (--warmup-steps), 32-32 MLPs,
-   no evaluation rollouts, the mirror-symmetry loss at
+   no evaluation rollouts, half the episodes from the reference's pose (--p-reset-reference 0.5), the
+   mirror-symmetry loss at
    weight 0.5): checkpoint, actor.npz and ONNX
    export written; the exported actor equals Brax's inference (the export check, < 1e-4); the ONNX
    model passes onnx.checker and carries the pmg.contract, whose pmg.clips_digest names the clips
@@ -71,7 +72,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    actions (action_offset "reference") is refused by the export.
 2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s): the environment runs the schedule's
    command every tick and reports both segments' commanded means; it is the run's environment
-   (train_config.json beside the actor: the run's reward widths and clips) made nominal.
+   (train_config.json beside the actor: the run's reward widths and clips) made nominal, its resets
+   standing.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -602,7 +604,8 @@ def ppo_checks(check, workdir, obs):
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
             "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
-            "--warmup-steps", str(warmup), "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03"]
+            "--warmup-steps", str(warmup), "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03",
+            "--p-reset-reference", "0.5"]
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
     t0 = time.time()
@@ -627,9 +630,10 @@ def ppo_checks(check, workdir, obs):
     stages = [(r.get("stage"), r.get("step")) for r in recs]
     check(stages[0] == ("warmup", warmup) and stages[-1][0] == "main" and stages[-1][1] >= timesteps and
           tc.get("warmup") == {"steps": warmup, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03} and
-          tc["env"]["lin_vel_sigma"] == 0.05,
+          tc["env"]["lin_vel_sigma"] == 0.05 and tc["env"]["p_reset_reference"] == 0.5,
           f"the warm-up ran first with its own widths, then the run's (stage, step): {stages}; "
-          f"train_config warmup {tc.get('warmup')}, env lin_vel_sigma {tc['env']['lin_vel_sigma']}")
+          f"train_config warmup {tc.get('warmup')}, env lin_vel_sigma {tc['env']['lin_vel_sigma']}, "
+          f"p_reset_reference {tc['env']['p_reset_reference']}")
     check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
     mean, std, layers, action_scale, clips, mode = export_onnx.load_actor(os.path.join(out, "actor.npz"))
     check([w.shape for w, _ in layers] == [(62, 32), (32, 32), (32, 24)] and mode == "pmg_gco" and len(clips) > 0,
@@ -702,9 +706,11 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"eval_mjx: per-segment commanded means {np.round(z['segment_command'], 3).tolist()}")
     env = json.loads(str(z["env_config"]))
     check(env["lin_vel_sigma"] == tc["env"]["lin_vel_sigma"] == 0.05 and env["clips"] == tc["env"]["clips"] and
-          env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()),
+          env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()) and
+          env["p_reset_reference"] == 0.0 and tc["env"]["p_reset_reference"] == 0.5,
           f"eval_mjx: the run's environment (lin_vel_sigma {env['lin_vel_sigma']}, clips {env['clips']}) made "
-          f"nominal (deterministic reset, no delay, noise {env['noise']})")
+          f"nominal (deterministic standing reset, p_reset_reference {env['p_reset_reference']} of the run's "
+          f"{tc['env']['p_reset_reference']}, no delay, noise {env['noise']})")
 
 
 def reset_reference_checks(check, n_resets=12, hold_steps=50):
