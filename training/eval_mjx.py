@@ -106,11 +106,15 @@ def main(argv=None):
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
     nominal = dict(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
-                   p_payload=0.0, p_hand_force=0.0, p_reset_reference=0.0, command_resample=10 ** 9, episode_length=10 ** 9,
-                   noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
+                   p_payload=0.0, p_hand_force=0.0, p_reset_reference=0.0, command_resample=10 ** 9,
+                   episode_length=10 ** 9, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
     trained = env_from_train_config(args.train_config)
     if args.clips:
         nominal["clips"] = args.clips
+    unknown = sorted(set(trained) - {f.name for f in dataclasses.fields(EnvConfig)})
+    if unknown:
+        raise SystemExit(f"--train-config {args.train_config}: 'env' has keys this EnvConfig does not know: "
+                         f"{', '.join(unknown)} (a run from another version of pmg_train)")
     cfg = EnvConfig(**{**trained, **nominal})
     env = G1PmgEnv(cfg, action_scale=action_scale)  # the clip folder EnvConfig.clips
     at, duration, spans = schedule(args.commands)
