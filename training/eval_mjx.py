@@ -11,7 +11,10 @@ was trained with, and only the randomisation is switched off (--clips overrides 
 tick the schedule's command (ramped as the schedule says) is the environment's command u and its drawn
 goal ("command", "command_goal"), so neither the environment's own draws nor its slew change it.
 
-Records per control tick: the schedule's command, the environment's command u, leg joint positions, PMG
+--start-reference starts the robot in the PMG reference's pose for the schedule's first command (the
+sole on the floor, at rest) instead of standing: whether an actor holds a crouch or a bend it is put in.
+
+Records the start's pelvis height and, per control tick, the schedule's command, the environment's command u, leg joint positions, PMG
 references, pelvis height, velocity in the heading frame, yaw rate, torso pitch/roll. Prints the Table I
 metrics with the definitions of apps/policy/pmg_policy_sil.cpp (errors against the user's command u,
 also for the GCO configuration whose actor observes u') and, per segment of the schedule, the commanded
@@ -88,6 +91,10 @@ def main(argv=None):
                          "(default: train_config.json beside the actor if there is one, else EnvConfig's defaults)")
     ap.add_argument("--clips", default=None,
                     help="clip folder (default: the train config's, else EnvConfig's: config/clips/g1)")
+    ap.add_argument("--start-reference", action="store_true",
+                    help="start in the PMG reference's pose for the schedule's first command (EnvConfig."
+                         "p_reset_reference; the sole on the floor, at rest) instead of standing: does the actor "
+                         "hold a crouch or a bend it is put in?")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args(argv)
     from pmg_train.paths import repo_root
@@ -106,7 +113,8 @@ def main(argv=None):
     from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
     nominal = dict(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
-                   p_payload=0.0, p_hand_force=0.0, p_reset_reference=0.0, command_resample=10 ** 9,
+                   p_payload=0.0, p_hand_force=0.0, p_reset_reference=1.0 if args.start_reference else 0.0,
+                   command_resample=10 ** 9,
                    episode_length=10 ** 9, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
     trained = env_from_train_config(args.train_config)
     if args.clips:
@@ -145,7 +153,12 @@ def main(argv=None):
                "measured": m, "ref_height": state.info["ref_height"], "wz": wz, "done": state.done}
         return state, rec
 
+    if args.start_reference:  # the reset's command (its reference pose) is the schedule's first, not a draw
+        env._sample_command = lambda rng: cmds[0]
     state = jax.jit(env.reset)(jax.random.PRNGKey(0))
+    start_height = float(state.pipeline_state.qpos[2])
+    print(f"start: pelvis {start_height:.3f} m "
+          f"({'the reference pose of the first command' if args.start_reference else 'standing'})")
     run = jax.jit(lambda s, c: jax.lax.scan(body, s, c))
     _, rec = run(state, cmds)
     rec = {k: np.asarray(v) for k, v in rec.items()}
@@ -170,7 +183,7 @@ def main(argv=None):
                  zip(c_seg, a_seg if a_seg is not None else c_seg)]
         print(f"{name:14s} " + " ".join(cells))
     np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]),
-             env_config=np.array(json.dumps(dataclasses.asdict(cfg))),
+             env_config=np.array(json.dumps(dataclasses.asdict(cfg))), start_height=np.array(start_height),
              segment_names=np.array([n for n, _, _ in per_segment]),
              segment_command=np.array([c for _, c, _ in per_segment]),
              segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]))

@@ -72,8 +72,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    actions (action_offset "reference") is refused by the export.
 2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s): the environment runs the schedule's
    command every tick and reports both segments' commanded means; it is the run's environment
-   (train_config.json beside the actor: the run's reward widths and clips) made nominal, its resets
-   standing.
+   (train_config.json beside the actor: the run's reward widths and clips) made nominal; with
+   --start-reference it starts in the first command's reference pose (pelvis within 0.04 m of its height).
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -692,7 +692,7 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
     out = os.path.join(workdir, "mjx_eval.npz")
     cwd = os.getcwd()
     try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", out, "--commands", sched])
+        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", out, "--commands", sched, "--start-reference"])
     finally:
         os.chdir(cwd)
     z = np.load(out)
@@ -706,11 +706,14 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"eval_mjx: per-segment commanded means {np.round(z['segment_command'], 3).tolist()}")
     env = json.loads(str(z["env_config"]))
     check(env["lin_vel_sigma"] == tc["env"]["lin_vel_sigma"] == 0.05 and env["clips"] == tc["env"]["clips"] and
-          env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()) and
-          env["p_reset_reference"] == 0.0 and tc["env"]["p_reset_reference"] == 0.5,
+          env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()),
           f"eval_mjx: the run's environment (lin_vel_sigma {env['lin_vel_sigma']}, clips {env['clips']}) made "
-          f"nominal (deterministic standing reset, p_reset_reference {env['p_reset_reference']} of the run's "
-          f"{tc['env']['p_reset_reference']}, no delay, noise {env['noise']})")
+          f"nominal (deterministic reset, no delay, noise {env['noise']})")
+    start = float(z["start_height"])
+    check(env["p_reset_reference"] == 1.0 and tc["env"]["p_reset_reference"] == 0.5 and abs(start - want[0][5]) < 0.04,
+          f"eval_mjx --start-reference: started in the first command's reference pose, pelvis {start:.3f} m for "
+          f"{want[0][5]} m commanded (standing: 0.79; p_reset_reference {env['p_reset_reference']}, the run's "
+          f"{tc['env']['p_reset_reference']})")
 
 
 def reset_reference_checks(check, n_resets=12, hold_steps=50):
