@@ -13,12 +13,15 @@ goal ("command", "command_goal"), so neither the environment's own draws nor its
 
 --start-reference starts the robot in the PMG reference's pose for the schedule's first command (the
 sole on the floor, at rest) instead of standing: whether an actor holds a crouch or a bend it is put in.
+--hold-reference replaces the actor by actions that hold the reference's leg pose: what the training
+reward gives the reference itself, to set beside the actor's (is the reference the reward's optimum?).
 
 Records the start's pelvis height and, per control tick, the schedule's command, the environment's command u, leg joint positions, PMG
 references, pelvis height, velocity in the heading frame, yaw rate, torso pitch/roll. Prints the Table I
 metrics with the definitions of apps/policy/pmg_policy_sil.cpp (errors against the user's command u,
 also for the GCO configuration whose actor observes u') and, per segment of the schedule, the commanded
-and achieved means over the last 60 % of the segment (pmg_policy_sil's per-segment window), so that an
+and achieved means and the reward per step over the last 60 % of the segment (pmg_policy_sil's
+per-segment window), so that an
 actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise false`).
 """
 import argparse
@@ -95,6 +98,9 @@ def main(argv=None):
                     help="start in the PMG reference's pose for the schedule's first command (EnvConfig."
                          "p_reset_reference; the sole on the floor, at rest) instead of standing: does the actor "
                          "hold a crouch or a bend it is put in?")
+    ap.add_argument("--hold-reference", action="store_true",
+                    help="instead of the actor, actions that hold the PMG reference's leg pose (the PD targets at "
+                         "ref_q, within the actor's action range): what the reward gives the reference itself")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args(argv)
     from pmg_train.paths import repo_root
@@ -139,18 +145,24 @@ def main(argv=None):
                 h = h * jax.nn.sigmoid(h)
         return jnp.tanh(h[:LEG])
 
+    q_stand, scale = jnp.asarray(env.q_default[:LEG]), jnp.asarray(env.action_scale)
+
+    def hold(ref_q):  # the action whose PD target is the reference (offset: the standing pose or the reference)
+        return jnp.zeros(LEG) if cfg.action_offset == "reference" else jnp.clip((ref_q - q_stand) / scale, -1.0, 1.0)
+
     def body(state, cmd):
         info = dict(state.info)
         info["command"] = cmd
         info["command_goal"] = cmd  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
-        a = actor(state.obs["state"])
+        a = hold(state.info["ref_q"][:LEG]) if args.hold_reference else actor(state.obs["state"])
         state = env.step(state, a)
         m = state.info["measured"]  # v_H (3), height, contacts (2), pitch, roll
         ps = state.pipeline_state
         wz = (_quat_to_rot(ps.qpos[3:7]) @ ps.qvel[3:6])[2]  # pelvis yaw rate, world z
         rec = {"command_env": state.info["command"], "q": ps.qpos[7:7 + LEG], "q_ref": state.info["ref_q"][:LEG],
-               "measured": m, "ref_height": state.info["ref_height"], "wz": wz, "done": state.done}
+               "measured": m, "ref_height": state.info["ref_height"], "wz": wz, "done": state.done,
+               "reward": state.reward}
         return state, rec
 
     if args.start_reference:  # the reset's command (its reference pose) is the schedule's first, not a draw
@@ -176,17 +188,20 @@ def main(argv=None):
     print("MJX rollout:", metrics)
     achieved = np.column_stack([meas[:, 0], meas[:, 1], rec["wz"], meas[:, 6], meas[:, 7], meas[:, 3]])
     per_segment = segment_means(t, cm, achieved, spans, alive)
-    print("per segment (means over the last 60 % of each segment): commanded / achieved")
-    print(f"{'segment':14s} " + " ".join(f"{k:>15s}" for k in KEYS))
-    for name, c_seg, a_seg in per_segment:
+    reward = [r for _, _, r in segment_means(t, cm, rec["reward"][:, None], spans, alive)]
+    print(f"per segment (means over the last 60 % of each segment): commanded / achieved, and the reward per "
+          f"step ({'actions holding the reference' if args.hold_reference else 'the actor'})")
+    print(f"{'segment':14s} " + " ".join(f"{k:>15s}" for k in KEYS) + "  reward")
+    for (name, c_seg, a_seg), r in zip(per_segment, reward):
         cells = [f"{c:7.3f} {'   fell' if a_seg is None else f'{a:7.3f}'}" for c, a in
                  zip(c_seg, a_seg if a_seg is not None else c_seg)]
-        print(f"{name:14s} " + " ".join(cells))
+        print(f"{name:14s} " + " ".join(cells) + ("    fell" if r is None else f" {r[0]:7.3f}"))
     np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]),
              env_config=np.array(json.dumps(dataclasses.asdict(cfg))), start_height=np.array(start_height),
              segment_names=np.array([n for n, _, _ in per_segment]),
              segment_command=np.array([c for _, c, _ in per_segment]),
-             segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]))
+             segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]),
+             segment_reward=np.array([r[0] if r is not None else np.nan for r in reward]))
     return metrics
 
 

@@ -73,7 +73,9 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s): the environment runs the schedule's
    command every tick and reports both segments' commanded means; it is the run's environment
    (train_config.json beside the actor: the run's reward widths and clips) made nominal; with
-   --start-reference it starts in the first command's reference pose (pelvis within 0.04 m of its height).
+   --start-reference it starts in the first command's reference pose (pelvis within 0.04 m of its height);
+   with --hold-reference (0.1 s) the legs follow the reference (mean |q - q_ref| below 0.1 rad and half the
+   untrained actor's), and the rewards are finite.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -709,6 +711,18 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()),
           f"eval_mjx: the run's environment (lin_vel_sigma {env['lin_vel_sigma']}, clips {env['clips']}) made "
           f"nominal (deterministic reset, no delay, noise {env['noise']})")
+    hold_out = os.path.join(workdir, "mjx_hold.npz")
+    try:
+        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", hold_out, "--commands", sched, "--start-reference",
+                       "--hold-reference", "--duration", "0.1"])
+    finally:
+        os.chdir(cwd)
+    h = np.load(hold_out)
+    dev_hold, dev_actor = np.abs(h["q"] - h["q_ref"]).mean(), np.abs(z["q"][:10] - z["q_ref"][:10]).mean()
+    check(np.isfinite(h["reward"]).all() and np.isfinite(z["reward"]).all() and dev_hold < 0.1 and
+          dev_hold < 0.5 * dev_actor and len(h["segment_reward"]) == 2,
+          f"eval_mjx --hold-reference: the legs follow the reference (mean |q - q_ref| {dev_hold:.3f} rad over 0.1 s, "
+          f"the untrained actor {dev_actor:.3f}); rewards finite and reported per segment")
     start = float(z["start_height"])
     check(env["p_reset_reference"] == 1.0 and tc["env"]["p_reset_reference"] == 0.5 and abs(start - want[0][5]) < 0.04,
           f"eval_mjx --start-reference: started in the first command's reference pose, pelvis {start:.3f} m for "
