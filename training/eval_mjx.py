@@ -145,17 +145,12 @@ def main(argv=None):
                 h = h * jax.nn.sigmoid(h)
         return jnp.tanh(h[:LEG])
 
-    q_stand, scale = jnp.asarray(env.q_default[:LEG]), jnp.asarray(env.action_scale)
-
-    def hold(ref_q):  # the action whose PD target is the reference (offset: the standing pose or the reference)
-        return jnp.zeros(LEG) if cfg.action_offset == "reference" else jnp.clip((ref_q - q_stand) / scale, -1.0, 1.0)
-
     def body(state, cmd):
         info = dict(state.info)
         info["command"] = cmd
         info["command_goal"] = cmd  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
-        a = hold(state.info["ref_q"][:LEG]) if args.hold_reference else actor(state.obs["state"])
+        a = env.hold_action(state.info["ref_q"][:LEG]) if args.hold_reference else actor(state.obs["state"])
         state = env.step(state, a)
         m = state.info["measured"]  # v_H (3), height, contacts (2), pitch, roll
         ps = state.pipeline_state

@@ -948,6 +948,14 @@ class G1PmgEnv(Env):
         qpos = qpos.at[2].add(-bottom)
         return mjx.forward(self.sys, data.replace(qpos=qpos, qvel=jnp.zeros_like(data.qvel)))
 
+    def hold_action(self, ref_q_legs):
+        """The action (12,) whose leg PD targets are @p ref_q_legs (12,) [rad], within the action range
+        [-1, 1]: zero with residual actions (action_offset "reference"), else (ref_q - standing pose) /
+        action_scale. The inverse of step()'s target q_des = offset + action_scale x action."""
+        if self.cfg.action_offset == "reference":
+            return jnp.zeros(LEG)
+        return jnp.clip((ref_q_legs - jnp.asarray(self.q_default[:LEG])) / jnp.asarray(self.action_scale), -1.0, 1.0)
+
     def step(self, state: State, action):
         c = self.cfg
         info = dict(state.info)

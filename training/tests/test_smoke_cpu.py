@@ -678,8 +678,8 @@ def ppo_checks(check, workdir, obs):
 
 def mjx_eval_checks(check, workdir, run_dir, tc):
     """2b. eval_mjx.py on the tiny run's actor: the environment is the run's own (its train_config.json
-    beside the actor) made nominal, and the schedule's command is the one the environment runs and
-    reports per segment. (It once set only the environment's command u, which each step replaced by the
+    beside the actor) made nominal, the schedule's command is the one the environment runs and reports
+    per segment, --start-reference starts in the reference pose, --hold-reference holds it. (It once set only the environment's command u, which each step replaced by the
     environment's own drawn goal, so every rollout commanded standing.)"""
     import numpy as np
     import yaml
@@ -738,13 +738,11 @@ def reset_reference_checks(check, n_resets=12, hold_steps=50):
     the commanded height); both occur. From a reference start, actions that hold the reference keep
     the robot up for hold_steps (0.5 s) with the pelvis within 0.06 m of where it started."""
     import jax
-    import jax.numpy as jnp
     import numpy as np
     from pmg_train import g1_env
     t0 = time.time()
     env = g1_env.G1PmgEnv(g1_env.EnvConfig(p_reset_reference=0.5), sorted(glob.glob("config/clips/g1/*.yaml")))
     reset, step = jax.jit(env.reset), jax.jit(env.step)
-    scale, q_stand = jnp.asarray(env.action_scale), jnp.asarray(env.q_default[:g1_env.LEG])
     standing, reference, bad, held = 0, 0, [], []
     for seed in range(n_resets):
         st = reset(jax.random.PRNGKey(seed))
@@ -761,7 +759,7 @@ def reset_reference_checks(check, n_resets=12, hold_steps=50):
             bad.append((seed, float(np.abs(q - ref_q).max()), bottom, z0, float(cmd[5])))
             continue
         for _ in range(hold_steps):
-            st = step(st, jnp.clip((st.info["ref_q"][:g1_env.LEG] - q_stand) / scale, -1.0, 1.0))
+            st = step(st, env.hold_action(st.info["ref_q"][:g1_env.LEG]))
         held.append((seed, z0, float(st.pipeline_state.qpos[2]), float(st.done)))
     print(f"reference-pose resets {time.time() - t0:.1f} s (compile included): standing {standing}, "
           f"reference {reference}; held (seed, z0, z, done): {held}", flush=True)
