@@ -884,8 +884,6 @@ class G1PmgEnv(Env):
         joint_noise = (jnp.zeros(29) if c.deterministic_reset else
                        jax.random.uniform(k[0], (29,), minval=-0.05, maxval=0.05))
         qpos = qpos.at[7:].add(joint_noise)
-        data = mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv))
-        data = mjx.forward(self.sys, data)
         info = {
             "rng": k[1],
             "step": jnp.zeros((), jnp.int32),
@@ -932,21 +930,24 @@ class G1PmgEnv(Env):
         info["measured"] = jnp.zeros(8)
         info["arm_des_rel"] = info["ref_q"][ARM0:] - jnp.asarray(self.arm_default)
         if c.p_reset_reference > 0:
+            # Under vmap both candidates are computed, so the pose is chosen before the one forward pass
+            # (two forward passes in this graph cost 50 s more of compile per stage on an H200 host).
             use = jax.random.uniform(jax.random.fold_in(k[15], 1)) < c.p_reset_reference
-            data = jax.lax.cond(use, lambda d: self._reference_pose(d, info["ref_q"] + joint_noise), lambda d: d, data)
+            qpos = jnp.where(use, self._reference_qpos(qpos, info["ref_q"] + joint_noise), qpos)
+        data = mjx.forward(self.sys, mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv)))
         obs = self._obs(data, info, k[10])
         metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
                                               "ref_q_err", "contact_match", "energy"]}
         return State(data, obs, jnp.zeros(()), jnp.zeros(()), metrics, info)
 
-    def _reference_pose(self, data, q):
-        """@p data at rest in joint pose @p q (29,) [rad], the pelvis upright at the standing pose's
-        place, lowered or raised so that the lowest sole sphere touches the floor (world z = 0)."""
-        qpos = data.qpos.at[7:].set(jnp.clip(q, self.q_lower, self.q_upper))
-        kin = mjx.kinematics(self.sys, data.replace(qpos=qpos))
+    def _reference_qpos(self, qpos, q):
+        """Generalised position (nq,) of the standing @p qpos with joint pose @p q (29,) [rad] (clipped to
+        the joint limits), the pelvis upright at the same place in x, y, lowered or raised so that the lowest
+        sole sphere touches the floor (world z = 0). One kinematics pass, no forward pass."""
+        qpos = qpos.at[7:].set(jnp.clip(q, self.q_lower, self.q_upper))
+        kin = mjx.kinematics(self.sys, mjx.make_data(self.sys).replace(qpos=qpos))
         bottom = jnp.min(kin.geom_xpos[self.sole_spheres, 2] - self.sole_radius)
-        qpos = qpos.at[2].add(-bottom)
-        return mjx.forward(self.sys, data.replace(qpos=qpos, qvel=jnp.zeros_like(data.qvel)))
+        return qpos.at[2].add(-bottom)
 
     def hold_action(self, ref_q_legs):
         """The action (12,) whose leg PD targets are @p ref_q_legs (12,) [rad], within the action range
