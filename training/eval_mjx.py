@@ -11,18 +11,27 @@ was trained with, and only the randomisation is switched off (--clips overrides 
 tick the schedule's command (ramped as the schedule says) is the environment's command u and its drawn
 goal ("command", "command_goal"), so neither the environment's own draws nor its slew change it.
 
+--randomized N rolls N robots out at once in the training distribution instead: the run's domain
+randomisation (friction, masses and torso payload, armature, frictionloss, joint damping; EnvConfig's
+ranges as trained, drawn with --seed), its kp scale, actuation delay, sensor noise and reset noise, but no
+pushes, teleoperated arms, hand payloads, hand forces or arm perturbation (the SIL has none of those). It
+reports how many robots fell in each segment and the achieved means over the robots still standing: does
+the actor fall in its own training simulator where it falls in the SIL, or only there (a sim-to-sim gap)?
+
 --start-reference starts the robot in the PMG reference's pose for the schedule's first command (the
 sole on the floor, at rest) instead of standing: whether an actor holds a crouch or a bend it is put in.
 --hold-reference replaces the actor by actions that hold the reference's leg pose: what the training
 reward gives the reference itself, to set beside the actor's (is the reference the reward's optimum?).
 
-Records the start's pelvis height and, per control tick, the schedule's command, the environment's command u, leg joint positions, PMG
-references, pelvis height, velocity in the heading frame, yaw rate, torso pitch/roll. Prints the Table I
-metrics with the definitions of apps/policy/pmg_policy_sil.cpp (errors against the user's command u,
-also for the GCO configuration whose actor observes u') and, per segment of the schedule, the commanded
-and achieved means and the reward per step over the last 60 % of the segment (pmg_policy_sil's
-per-segment window), so that an
-actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise false`).
+Records the start's pelvis height and, per control tick, the schedule's command, the environment's
+command u, leg joint positions, PMG references, pelvis height, velocity in the heading frame, yaw rate,
+torso pitch/roll (with --randomized, each with a leading robot axis, plus each robot's drawn friction and
+total mass, and the robots that fell per segment). Prints the Table I metrics with the definitions of
+apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration whose
+actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
+means and the reward per step over the last 60 % of the segment (pmg_policy_sil's per-segment window), so
+that an actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise
+false`).
 """
 import argparse
 import dataclasses
@@ -58,16 +67,24 @@ def schedule(path):
 
 
 def segment_means(t, command, achieved, spans, alive):
-    """Per segment: (name, commanded (6,), achieved (6,) or None where no tick of its window is alive),
-    means over the last 60 % of the segment. achieved (ticks, 6): vx, vy [m/s] heading frame, wz
-    [rad/s], torso pitch, roll [rad], pelvis height [m]."""
+    """Per segment: (name, commanded (6,), achieved (k,) or None where no tick of its window is alive),
+    means over the last 60 % of the segment, pooled over the robots. command (ticks, 6); achieved
+    (robots, ticks, k), e.g. k = 6: vx, vy [m/s] heading frame, wz [rad/s], torso pitch, roll [rad], pelvis
+    height [m]; alive (robots, ticks) bool."""
     out = []
     for name, t0, t1 in spans:
         window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
-        sel = window & alive
+        sel = window[None, :] & alive
         out.append((name, command[window].mean(0) if window.any() else np.full(6, np.nan),
                     achieved[sel].mean(0) if sel.any() else None))
     return out
+
+
+def segment_falls(t, done, spans):
+    """Robots whose first fall (done (robots, ticks)) came within each segment [t0, t1)."""
+    fell = done.any(axis=1)
+    t_fall = np.where(fell, t[np.argmax(done, axis=1)], np.inf)
+    return [int(np.sum((t_fall >= t0) & (t_fall < t1))) for _, t0, t1 in spans]
 
 
 def env_from_train_config(path):
@@ -101,8 +118,14 @@ def main(argv=None):
     ap.add_argument("--hold-reference", action="store_true",
                     help="instead of the actor, actions that hold the PMG reference's leg pose (the PD targets at "
                          "ref_q, within the actor's action range): what the reward gives the reference itself")
+    ap.add_argument("--randomized", type=int, default=0, metavar="N",
+                    help="N robots in the run's training distribution (domain randomisation, kp scale, delay, noise, "
+                         "reset noise; no pushes, teleop arms, payloads or hand forces) instead of one nominal robot")
+    ap.add_argument("--seed", type=int, default=0, help="--randomized: the draws' seed")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args(argv)
+    if args.randomized < 0:
+        ap.error(f"--randomized {args.randomized}: expected 0 (one nominal robot) or a number of robots")
     from pmg_train.paths import repo_root
     args.actor, args.out = os.path.abspath(args.actor), os.path.abspath(args.out)
     args.commands = os.path.abspath(args.commands) if args.commands else None
@@ -116,12 +139,15 @@ def main(argv=None):
     import jax
     import jax.numpy as jnp
     from export_onnx import load_actor
-    from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot
+    from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot, make_randomization_fn
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
-    nominal = dict(mode=mode, deterministic_reset=True, arm_perturb=0.0, p_teleop=0.0, p_delay=0.0,
-                   p_payload=0.0, p_hand_force=0.0, p_reset_reference=1.0 if args.start_reference else 0.0,
-                   command_resample=10 ** 9,
-                   episode_length=10 ** 9, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
+    nominal = dict(mode=mode, arm_perturb=0.0, p_teleop=0.0, p_payload=0.0, p_hand_force=0.0,
+                   p_reset_reference=1.0 if args.start_reference else 0.0, command_resample=10 ** 9,
+                   episode_length=10 ** 9)
+    if args.randomized:
+        nominal.update(push_vel=(0.0, 0.0))
+    else:
+        nominal.update(deterministic_reset=True, p_delay=0.0, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
     trained = env_from_train_config(args.train_config)
     if args.clips:
         nominal["clips"] = args.clips
@@ -133,6 +159,7 @@ def main(argv=None):
     env = G1PmgEnv(cfg, action_scale=action_scale)  # the clip folder EnvConfig.clips
     at, duration, spans = schedule(args.commands)
     duration = args.duration or duration
+    spans = [(name, t0, min(t1, duration)) for name, t0, t1 in spans if t0 < duration]  # --duration: the segments run
     ticks = int(round(duration / cfg.control_dt))
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
     W = [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers]
@@ -143,56 +170,84 @@ def main(argv=None):
             h = h @ w + b
             if i + 1 < len(W):
                 h = h * jax.nn.sigmoid(h)
-        return jnp.tanh(h[:LEG])
+        return jnp.tanh(h[..., :LEG])
+
+    n = max(1, args.randomized)
+    if args.start_reference:  # the reset's command (its reference pose) is the schedule's first, not a draw
+        env._sample_command = lambda rng: cmds[0]
+    if args.randomized:  # one randomised model per robot, as in training (Brax's wrapper vmaps over them)
+        from brax.envs.wrappers.training import DomainRandomizationVmapWrapper
+        k_sys, k_reset = jax.random.split(jax.random.PRNGKey(args.seed))
+        randomize = make_randomization_fn(env)
+        venv = DomainRandomizationVmapWrapper(env, lambda sys: randomize(sys, jax.random.split(k_sys, n)))
+        reset, step, keys = venv.reset, venv.step, jax.random.split(k_reset, n)
+        drawn = {"friction": np.asarray(venv._sys_v.geom_friction[:, 0, 0]),  # sliding friction of every geom
+                 "mass": np.asarray(venv._sys_v.body_mass.sum(axis=1))}     # total mass [kg], payloads included
+    else:
+        reset, step, keys = jax.vmap(env.reset), jax.vmap(env.step), jax.random.PRNGKey(0)[None]
+        drawn = {}
+    yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
 
     def body(state, cmd):
         info = dict(state.info)
-        info["command"] = cmd
-        info["command_goal"] = cmd  # the step shapes "command" towards "command_goal" (command_slew)
+        info["command"] = jnp.broadcast_to(cmd, (n, 6))
+        info["command_goal"] = info["command"]  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
-        a = env.hold_action(state.info["ref_q"][:LEG]) if args.hold_reference else actor(state.obs["state"])
-        state = env.step(state, a)
-        m = state.info["measured"]  # v_H (3), height, contacts (2), pitch, roll
+        a = (jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]) if args.hold_reference
+             else actor(state.obs["state"]))
+        state = step(state, a)
         ps = state.pipeline_state
-        wz = (_quat_to_rot(ps.qpos[3:7]) @ ps.qvel[3:6])[2]  # pelvis yaw rate, world z
-        rec = {"command_env": state.info["command"], "q": ps.qpos[7:7 + LEG], "q_ref": state.info["ref_q"][:LEG],
-               "measured": m, "ref_height": state.info["ref_height"], "wz": wz, "done": state.done,
+        rec = {"command_env": state.info["command"], "q": ps.qpos[:, 7:7 + LEG], "q_ref": state.info["ref_q"][:, :LEG],
+               "measured": state.info["measured"],  # v_H (3), height, contacts (2), pitch, roll
+               "ref_height": state.info["ref_height"], "wz": yaw_rate(ps.qpos, ps.qvel), "done": state.done,
                "reward": state.reward}
         return state, rec
 
-    if args.start_reference:  # the reset's command (its reference pose) is the schedule's first, not a draw
-        env._sample_command = lambda rng: cmds[0]
-    state = jax.jit(env.reset)(jax.random.PRNGKey(0))
-    start_height = float(state.pipeline_state.qpos[2])
-    print(f"start: pelvis {start_height:.3f} m "
-          f"({'the reference pose of the first command' if args.start_reference else 'standing'})")
+    state = jax.jit(reset)(keys)
+    start = np.asarray(state.pipeline_state.qpos[:, 2])
+    print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
+          f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
+          + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
     run = jax.jit(lambda s, c: jax.lax.scan(body, s, c))
     _, rec = run(state, cmds)
-    rec = {k: np.asarray(v) for k, v in rec.items()}
+    rec = {k: np.swapaxes(np.asarray(v), 0, 1) for k, v in rec.items()}  # (robots, ticks, ...)
     cm = np.asarray(cmds)
     t = np.arange(ticks) * cfg.control_dt
-    alive = np.cumsum(rec["done"] > 0) == 0
-    sel = alive & (t >= 1.0)
+    done = rec["done"] > 0
+    alive = np.cumsum(done, axis=1) == 0
+    sel = alive & (t >= 1.0)[None, :]
     meas = rec["measured"]
-    metrics = {"lin_vel": float(np.mean(np.hypot(cm[sel, 0] - meas[sel, 0], cm[sel, 1] - meas[sel, 1]))),
-               "yaw_vel": float(np.mean(np.abs(cm[sel, 2] - rec["wz"][sel]))),
-               "roll": float(np.mean(np.abs(cm[sel, 4] - meas[sel, 7]))),
-               "pitch": float(np.mean(np.abs(cm[sel, 3] - meas[sel, 6]))),
-               "height": float(np.mean(np.abs(cm[sel, 5] - meas[sel, 3]))),
-               "fell": bool(not alive.all()), "survived_s": float(alive.sum() * cfg.control_dt)}
+    c_sel = np.broadcast_to(cm, (n,) + cm.shape)[sel]
+    metrics = {"lin_vel": float(np.mean(np.hypot(c_sel[:, 0] - meas[sel][:, 0], c_sel[:, 1] - meas[sel][:, 1]))),
+               "yaw_vel": float(np.mean(np.abs(c_sel[:, 2] - rec["wz"][sel]))),
+               "roll": float(np.mean(np.abs(c_sel[:, 4] - meas[sel][:, 7]))),
+               "pitch": float(np.mean(np.abs(c_sel[:, 3] - meas[sel][:, 6]))),
+               "height": float(np.mean(np.abs(c_sel[:, 5] - meas[sel][:, 3])))}
+    survived = alive.sum(axis=1) * cfg.control_dt
+    if args.randomized:
+        metrics.update(robots=n, fell=int((~alive[:, -1]).sum()), survived_s=[round(float(x), 2) for x in survived])
+    else:
+        metrics.update(fell=bool(not alive.all()), survived_s=float(survived[0]))
     print("MJX rollout:", metrics)
-    achieved = np.column_stack([meas[:, 0], meas[:, 1], rec["wz"], meas[:, 6], meas[:, 7], meas[:, 3]])
+    achieved = np.stack([meas[..., 0], meas[..., 1], rec["wz"], meas[..., 6], meas[..., 7], meas[..., 3]], axis=-1)
     per_segment = segment_means(t, cm, achieved, spans, alive)
-    reward = [r for _, _, r in segment_means(t, cm, rec["reward"][:, None], spans, alive)]
-    print(f"per segment (means over the last 60 % of each segment): commanded / achieved, and the reward per "
-          f"step ({'actions holding the reference' if args.hold_reference else 'the actor'})")
-    print(f"{'segment':14s} " + " ".join(f"{k:>15s}" for k in KEYS) + "  reward")
-    for (name, c_seg, a_seg), r in zip(per_segment, reward):
+    reward = [r for _, _, r in segment_means(t, cm, rec["reward"][..., None], spans, alive)]
+    falls = segment_falls(t, done, spans)
+    print(f"per segment (means over the last 60 % of each segment{'' if n == 1 else ' and the robots standing'}): "
+          f"commanded / achieved, and the reward per step "
+          f"({'actions holding the reference' if args.hold_reference else 'the actor'})"
+          + ("" if n == 1 else "; robots that fell in the segment"))
+    print(f"{'segment':14s} " + " ".join(f"{k:>15s}" for k in KEYS) + "  reward" + ("" if n == 1 else "  fell"))
+    for (name, c_seg, a_seg), r, f in zip(per_segment, reward, falls):
         cells = [f"{c:7.3f} {'   fell' if a_seg is None else f'{a:7.3f}'}" for c, a in
                  zip(c_seg, a_seg if a_seg is not None else c_seg)]
-        print(f"{name:14s} " + " ".join(cells) + ("    fell" if r is None else f" {r[0]:7.3f}"))
+        print(f"{name:14s} " + " ".join(cells) + ("    fell" if r is None else f" {r[0]:7.3f}")
+              + ("" if n == 1 else f"  {f:4d}"))
+    if n == 1:  # one nominal robot: the arrays without the robot axis, as before --randomized
+        rec, start = {k: v[0] for k, v in rec.items()}, start[0]
     np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]),
-             env_config=np.array(json.dumps(dataclasses.asdict(cfg))), start_height=np.array(start_height),
+             env_config=np.array(json.dumps(dataclasses.asdict(cfg))), start_height=np.array(start),
+             segment_falls=np.array(falls), **{f"drawn_{k}": v for k, v in drawn.items()},
              segment_names=np.array([n for n, _, _ in per_segment]),
              segment_command=np.array([c for _, c, _ in per_segment]),
              segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]),
