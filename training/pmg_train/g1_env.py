@@ -931,7 +931,8 @@ class G1PmgEnv(Env):
         info["arm_des_rel"] = info["ref_q"][ARM0:] - jnp.asarray(self.arm_default)
         if c.p_reset_reference > 0:
             # Under vmap both candidates are computed, so the pose is chosen before the one forward pass
-            # (two forward passes in this graph cost 50 s more of compile per stage on an H200 host).
+            # (with two, V20b compiled about 50 s longer per stage on an H200 host than V20a without reference
+            # starts; on the CPU, 57 s against 40 s for jit(vmap(reset)) with one).
             use = jax.random.uniform(jax.random.fold_in(k[15], 1)) < c.p_reset_reference
             qpos = jnp.where(use, self._reference_qpos(qpos, info["ref_q"] + joint_noise), qpos)
         data = mjx.forward(self.sys, mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv)))
