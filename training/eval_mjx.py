@@ -25,10 +25,10 @@ reward gives the reference itself, to set beside the actor's (is the reference t
 
 Records the start's pelvis height and, per control tick, the schedule's command, the environment's
 command u, leg joint positions, PMG references, pelvis height, velocity in the heading frame, yaw rate,
-torso pitch/roll (with --randomized, each with a leading robot axis, plus each robot's drawn friction and
-total mass, and the robots that fell per segment). Prints the Table I metrics with the definitions of
-apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration whose
-actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
+torso pitch/roll, the feet's x, y (with --randomized, each with a leading robot axis, plus each robot's drawn friction and
+total mass, and the robots that fell per segment). Prints the Table I metrics and the foot slip with the definitions
+of apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration
+whose actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
 means and the reward per step over the last 60 % of the segment (pmg_policy_sil's per-segment window), so
 that an actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise
 false`).
@@ -187,6 +187,7 @@ def main(argv=None):
         reset, step, keys = jax.vmap(env.reset), jax.vmap(env.step), jax.random.PRNGKey(0)[None]
         drawn = {}
     yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
+    feet = jnp.asarray([env.mj_model.body(f"{side}_ankle_roll_link").id for side in ("left", "right")])
 
     def body(state, cmd):
         info = dict(state.info)
@@ -200,7 +201,7 @@ def main(argv=None):
         rec = {"command_env": state.info["command"], "q": ps.qpos[:, 7:7 + LEG], "q_ref": state.info["ref_q"][:, :LEG],
                "measured": state.info["measured"],  # v_H (3), height, contacts (2), pitch, roll
                "ref_height": state.info["ref_height"], "wz": yaw_rate(ps.qpos, ps.qvel), "done": state.done,
-               "reward": state.reward}
+               "reward": state.reward, "foot_xy": ps.xpos[:, feet, :2]}  # ankle_roll_link origins, world x, y [m]
         return state, rec
 
     state = jax.jit(reset)(keys)
@@ -223,6 +224,11 @@ def main(argv=None):
                "roll": float(np.mean(np.abs(c_sel[:, 4] - meas[sel][:, 7]))),
                "pitch": float(np.mean(np.abs(c_sel[:, 3] - meas[sel][:, 6]))),
                "height": float(np.mean(np.abs(c_sel[:, 5] - meas[sel][:, 3])))}
+    # Foot slip as pmg_policy_sil defines it: the mean horizontal speed of a foot (ankle_roll_link origin)
+    # while it touches the floor (the environment's contact flags, measured[4:6]), from t = 1 s while standing.
+    foot_speed = np.linalg.norm(np.diff(rec["foot_xy"], axis=1), axis=-1) / cfg.control_dt  # (robots, ticks - 1, 2)
+    touching = (meas[:, 1:, 4:6] > 0.5) & sel[:, 1:, None]
+    metrics["foot_slip"] = float(foot_speed[touching].mean()) if touching.any() else float("nan")
     survived = alive.sum(axis=1) * cfg.control_dt
     if args.randomized:
         metrics.update(robots=n, fell=int((~alive[:, -1]).sum()), survived_s=[round(float(x), 2) for x in survived])

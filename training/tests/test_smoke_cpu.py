@@ -744,11 +744,14 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           bool(np.all((r["drawn_friction"] >= lo) & (r["drawn_friction"] <= hi))) and
           len(set(np.round(r["drawn_mass"], 4))) == 3 and not renv["deterministic_reset"] and
           renv["p_delay"] == tc["env"]["p_delay"] and renv["noise"] == tc["env"]["noise"] and
-          tuple(renv["push_vel"]) == (0.0, 0.0) and renv["p_teleop"] == 0.0 and renv["p_hand_force"] == 0.0,
+          tuple(renv["push_vel"]) == (0.0, 0.0) and renv["p_teleop"] == 0.0 and renv["p_hand_force"] == 0.0 and
+          r["foot_xy"].shape == (3, 20, 2, 2) and 0.1 < float(np.abs(r["foot_xy"][:, 0, 0, 1] - r["foot_xy"][:, 0, 1, 1]).min())
+          and float(np.abs(r["foot_xy"][:, 0, 0, 1] - r["foot_xy"][:, 0, 1, 1]).max()) < 0.4,
           f"eval_mjx --randomized 3: three robots in the run's training distribution (friction "
           f"{np.round(r['drawn_friction'], 3).tolist()} within {[lo, hi]}, masses {np.round(r['drawn_mass'], 2).tolist()} kg; "
           f"the run's delay {renv['p_delay']} and noise; no pushes, teleop arms or hand forces); --duration 0.2 "
-          f"reports only the segment it reaches ({list(r['segment_names'])})")
+          f"reports only the segment it reaches ({list(r['segment_names'])}); the feet recorded for the foot slip "
+          f"{np.round(np.abs(r['foot_xy'][:, 0, 0, 1] - r['foot_xy'][:, 0, 1, 1]), 3).tolist()} m apart")
 
 
 def reset_reference_checks(check, n_resets=12, hold_steps=50):
