@@ -178,11 +178,11 @@ def main(argv=None):
     if args.randomized:  # one randomised model per robot, as in training (Brax's wrapper vmaps over them)
         from brax.envs.wrappers.training import DomainRandomizationVmapWrapper
         k_sys, k_reset = jax.random.split(jax.random.PRNGKey(args.seed))
-        randomize = make_randomization_fn(env)
-        venv = DomainRandomizationVmapWrapper(env, lambda sys: randomize(sys, jax.random.split(k_sys, n)))
+        sys_v, in_axes = make_randomization_fn(env)(env.sys, jax.random.split(k_sys, n))
+        venv = DomainRandomizationVmapWrapper(env, lambda sys: (sys_v, in_axes))
         reset, step, keys = venv.reset, venv.step, jax.random.split(k_reset, n)
-        drawn = {"friction": np.asarray(venv._sys_v.geom_friction[:, 0, 0]),  # sliding friction of every geom
-                 "mass": np.asarray(venv._sys_v.body_mass.sum(axis=1))}     # total mass [kg], payloads included
+        drawn = {"friction": np.asarray(sys_v.geom_friction[:, 0, 0]),  # sliding friction of every geom
+                 "mass": np.asarray(sys_v.body_mass.sum(axis=1))}     # total mass [kg], payloads included
     else:
         reset, step, keys = jax.vmap(env.reset), jax.vmap(env.step), jax.random.PRNGKey(0)[None]
         drawn = {}
@@ -218,12 +218,12 @@ def main(argv=None):
     alive = np.cumsum(done, axis=1) == 0
     sel = alive & (t >= 1.0)[None, :]
     meas = rec["measured"]
-    c_sel = np.broadcast_to(cm, (n,) + cm.shape)[sel]
-    metrics = {"lin_vel": float(np.mean(np.hypot(c_sel[:, 0] - meas[sel][:, 0], c_sel[:, 1] - meas[sel][:, 1]))),
+    c_sel, m_sel = np.broadcast_to(cm, (n,) + cm.shape)[sel], meas[sel]
+    metrics = {"lin_vel": float(np.mean(np.hypot(c_sel[:, 0] - m_sel[:, 0], c_sel[:, 1] - m_sel[:, 1]))),
                "yaw_vel": float(np.mean(np.abs(c_sel[:, 2] - rec["wz"][sel]))),
-               "roll": float(np.mean(np.abs(c_sel[:, 4] - meas[sel][:, 7]))),
-               "pitch": float(np.mean(np.abs(c_sel[:, 3] - meas[sel][:, 6]))),
-               "height": float(np.mean(np.abs(c_sel[:, 5] - meas[sel][:, 3])))}
+               "roll": float(np.mean(np.abs(c_sel[:, 4] - m_sel[:, 7]))),
+               "pitch": float(np.mean(np.abs(c_sel[:, 3] - m_sel[:, 6]))),
+               "height": float(np.mean(np.abs(c_sel[:, 5] - m_sel[:, 3])))}
     # Foot slip as pmg_policy_sil defines it: the mean horizontal speed of a foot (ankle_roll_link origin)
     # while it touches the floor (the environment's contact flags, measured[4:6]), from t = 1 s while standing.
     foot_speed = np.linalg.norm(np.diff(rec["foot_xy"], axis=1), axis=-1) / cfg.control_dt  # (robots, ticks - 1, 2)
