@@ -391,10 +391,14 @@ class EnvConfig:
     # Width of the pelvis-height reward exp(-(h - u_h)^2 / sigma) [m^2]. With 0.005 a robot walking
     # 15 mm below its commanded height (Table I's Height column) loses 4 % of the term; 0.001: 20 %.
     height_sigma: float = 0.005
-    # Reward weights (per control step).
+    # Reward weights (per control step). foot_slip multiplies the summed horizontal speed [m/s] of the
+    # feet touching the floor (a penalty when negative; 0, the default, leaves it out of the reward): the
+    # actors trained from scratch slide their stance feet (0.12-0.30 m/s in the SIL against the default's
+    # 0.07; training/README.md "Foot-slip penalty").
     w: dict = dataclasses.field(default_factory=lambda: {
         "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
-        "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0})
+        "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0,
+        "foot_slip": 0.0})
 
 
 def _quat_to_rot(q):
@@ -578,9 +582,9 @@ class G1PmgEnv(Env):
         self.n_substeps = int(round(cfg.control_dt / cfg.sim_dt))
         self.torso_body = mj.body("torso_link").id
         self.pelvis_body = mj.body("pelvis").id
+        self.foot_bodies = np.array([mj.body(f"{side}_ankle_roll_link").id for side in ("left", "right")])
         foot_geoms = []
-        for side in ("left", "right"):
-            b = mj.body(f"{side}_ankle_roll_link").id
+        for b in self.foot_bodies:
             foot_geoms.append([g for g in range(mj.ngeom) if mj.geom_bodyid[g] == b and mj.geom_contype[g] != 0])
         self.foot_geoms = foot_geoms
         # The sole spheres (the feet's floor contacts): the reference-pose reset puts the lowest on the floor.
@@ -938,7 +942,7 @@ class G1PmgEnv(Env):
         data = mjx.forward(self.sys, mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv)))
         obs = self._obs(data, info, k[10])
         metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
-                                              "ref_q_err", "contact_match", "energy"]}
+                                              "ref_q_err", "contact_match", "energy", "foot_slip"]}
         return State(data, obs, jnp.zeros(()), jnp.zeros(()), metrics, info)
 
     def _reference_qpos(self, qpos, q):
@@ -1024,6 +1028,7 @@ class G1PmgEnv(Env):
             data = data.replace(xfrc_applied=xfrc)
         if not c.deterministic_reset and c.push_vel[1] > 0:
             data, info["push_timer"] = self._push(data, info["push_timer"], k_push)
+        foot_xy_start = data.xpos[self.foot_bodies, :2]  # ankle_roll_link origins, world x, y [m]
         (data, line), taus = jax.lax.scan(substep, (data, info.get("act_line")), None, length=self.n_substeps)
         if ident:
             info["act_line"] = line
@@ -1076,6 +1081,10 @@ class G1PmgEnv(Env):
         ref_q_err = jnp.sum((q - info["ref_q"][:LEG]) ** 2)
         ref_qd_err = jnp.sum((qd - info["ref_qd"][:LEG]) ** 2)
         contact_match = jnp.mean((contact == ref_prev_contact).astype(jnp.float32))
+        # Foot slip [m/s]: the horizontal speed of each ankle_roll_link origin over this control step,
+        # summed over the feet that touch the floor at its end (pmg_policy_sil's and eval_mjx's foot_slip).
+        foot_speed = jnp.linalg.norm(data.xpos[self.foot_bodies, :2] - foot_xy_start, axis=-1) / c.control_dt
+        foot_slip = jnp.sum(contact * foot_speed)
         energy = jnp.sum(jnp.abs(tau[:LEG] * qd))
         action_rate = jnp.sum((a - info["last_action"]) ** 2)
         R_up = R[2, 2]
@@ -1087,6 +1096,8 @@ class G1PmgEnv(Env):
                   w["ref_q"] * jnp.exp(-ref_q_err / 0.5) + w["ref_qd"] * jnp.exp(-ref_qd_err / 50.0) +
                   w["contact"] * contact_match + w["energy"] * energy + w["action_rate"] * action_rate +
                   w["alive"] + w["termination"] * done)
+        if w.get("foot_slip", 0.0) != 0.0:  # configs saved before the term have no entry
+            reward = reward + w["foot_slip"] * foot_slip
         reward = jnp.where(jnp.isfinite(reward), reward, 0.0)
 
         info["prev_action"] = info["last_action"]
@@ -1112,7 +1123,7 @@ class G1PmgEnv(Env):
         metrics.update({"lin_vel_err": jnp.sqrt(lin_err), "yaw_rate_err": jnp.sqrt(yaw_err),
                    "pitch_err": jnp.abs(cmd[3] - pitch), "roll_err": jnp.abs(cmd[4] - roll),
                    "height_err": jnp.sqrt(h_err), "ref_q_err": jnp.sqrt(ref_q_err / LEG),
-                   "contact_match": contact_match, "energy": energy})
+                   "contact_match": contact_match, "energy": energy, "foot_slip": foot_slip})
         data = jax.tree_util.tree_map(lambda new, old: jnp.where(jnp.all(jnp.isfinite(data.qpos)), new, old),
                                       data, state.pipeline_state)
         return state.replace(pipeline_state=data, obs=obs, reward=reward, done=done.astype(jnp.float32),

@@ -25,7 +25,10 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    within 0.3 rad of upright; rewards at most the sum of the positive reward weights, mean > 0;
    the references in the observation equal the float64 NumPy ports (pmg_generator.step at the
    env's phase and command, then gco.level_soles: q_ref to 1e-4 rad; gco.step from the env's
-   previous GCO state: u' to 1e-3) and the phase advances by the port's own update.
+   previous GCO state: u' to 1e-3) and the phase advances by the port's own update; the foot_slip
+   metric equals the recorded feet's horizontal speed while touching (and stays below 0.05 m/s
+   standing), and with EnvConfig.w["foot_slip"] = -1 a state shoved at 0.8 m/s loses exactly its slip
+   from the reward.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
    effect on; part 1's env is built with a calibrated robot config written into the workdir (left
@@ -81,6 +84,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
+import copy
+import dataclasses
 import glob
 import json
 import math
@@ -239,6 +244,26 @@ def env_checks(check, env, n_envs, n_steps):
     check(reward.max() <= w_pos + 1e-4 and reward.mean() > 0.0,
           f"reward per step in (.., {w_pos:.2f}] (sum of positive weights), mean > 0 "
           f"(min {reward.min():.3f}, mean {reward.mean():.3f}, max {reward.max():.3f})")
+
+    # Foot slip (EnvConfig.w["foot_slip"]): the metric is the summed horizontal speed of the ankle_roll_link
+    # origins touching the floor, from the recorded poses; standing with the legs held, the feet stay put.
+    feet_xy = np.asarray(traj.pipeline_state.xpos, np.float64)[:, :, env.foot_bodies, :2]   # (T+1, n, 2, 2)
+    touching = np.asarray(info["measured"], np.float64)[1:, :, 4:6]                            # (T, n, 2)
+    slip = np.sum(touching * np.linalg.norm(np.diff(feet_xy, axis=0), axis=-1), axis=-1) / cfg.control_dt
+    slip_metric = np.asarray(traj.metrics["foot_slip"], np.float64)[1:]
+    check(np.abs(slip_metric - slip).max() < 1e-4 and touching.mean() > 0.5 and slip.mean() < 0.05,
+          f"foot_slip metric = recorded feet's speed while touching (max |diff| {np.abs(slip_metric - slip).max():.1e} m/s; "
+          f"touching {touching.mean():.2f} of foot-steps, mean slip {slip.mean():.4f} m/s < 0.05 standing)")
+    # The weight: the same pushed state stepped with foot_slip = -1 loses exactly the slip from its reward.
+    slipping = copy.copy(env)
+    slipping.cfg = dataclasses.replace(cfg, w=dict(cfg.w, foot_slip=-1.0))
+    st = jax.tree_util.tree_map(lambda a: jnp.asarray(a[-1, 0]), traj)
+    st = st.replace(pipeline_state=st.pipeline_state.replace(qvel=st.pipeline_state.qvel.at[0].add(0.8)))
+    plain, penalised = step(st, zero), jax.jit(slipping.step)(st, zero)
+    lost = float(plain.reward - penalised.reward)
+    check(float(plain.metrics["foot_slip"]) > 0.05 and abs(lost - float(plain.metrics["foot_slip"])) < 1e-4,
+          f"foot_slip weight -1: a robot shoved at 0.8 m/s slides {float(plain.metrics['foot_slip']):.3f} m/s "
+          f"(> 0.05) and its reward drops by that ({lost:.4f})")
 
     # References in the (noise-free) privileged observation against the float64 NumPy ports.
     phase = np.asarray(info["phase"], np.float64)                # (T+1, n)
