@@ -18,6 +18,12 @@ pushes, teleoperated arms, hand payloads, hand forces or arm perturbation (the S
 reports how many robots fell in each segment and the achieved means over the robots still standing: does
 the actor fall in its own training simulator where it falls in the SIL, or only there (a sim-to-sim gap)?
 
+--physics mujoco steps the same model with MuJoCo's C engine (mj_step, through a host callback; one nominal
+robot, slower) instead of MJX; --pd-damping explicit computes the PD's D term from each physics step's
+velocity (EnvConfig.pd_damping), as the SIL's motor-driver emulation does, instead of training's implicit
+joint damping; --sim-dt sets the physics step (the SIL's: 0.001 s). Together they tell which of the
+engine, the step and the damping an actor's behaviour in the SIL belongs to.
+
 --start-reference starts the robot in the PMG reference's pose for the schedule's first command (the
 sole on the floor, at rest) instead of standing: whether an actor holds a crouch or a bend it is put in.
 --hold-reference replaces the actor by actions that hold the reference's leg pose: what the training
@@ -25,7 +31,7 @@ reward gives the reference itself, to set beside the actor's (is the reference t
 
 Records the start's pelvis height and, per control tick, the schedule's command, the environment's
 command u, leg joint positions, PMG references, pelvis height, velocity in the heading frame, yaw rate,
-torso pitch/roll, the feet's x, y (with --randomized, each with a leading robot axis, plus each robot's drawn friction and
+torso pitch/roll, the gait phase, the feet's x, y (with --randomized, each with a leading robot axis, plus each robot's drawn friction and
 total mass, and the robots that fell per segment). Prints the Table I metrics and the foot slip with the definitions
 of apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration
 whose actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
@@ -87,6 +93,38 @@ def segment_falls(t, done, spans):
     return [int(np.sum((t_fall >= t0) & (t_fall < t1))) for _, t0, t1 in spans]
 
 
+def mujoco_physics_step(env):
+    """A physics step (sys, data) -> data for G1PmgEnv.physics_step that runs MuJoCo's C engine (mj_step) on
+    the environment's own model (env.mj_model: the same geoms, contacts, solver settings, damping and
+    timestep) instead of MJX, then MJX's forward pass on the new state for what the environment reads
+    (bodies, contacts). One robot: the C state (warm start) lives in this closure, so the rollout must be
+    sequential (the callback's vmap_method)."""
+    import jax
+    import jax.numpy as jnp
+    import mujoco
+    from mujoco import mjx
+    m = env.mj_model
+    d = mujoco.MjData(m)
+
+    def host(qpos, qvel, ctrl, qfrc_applied, xfrc_applied):
+        d.qpos[:], d.qvel[:], d.ctrl[:] = qpos, qvel, ctrl
+        d.qfrc_applied[:], d.xfrc_applied[:] = qfrc_applied, xfrc_applied
+        mujoco.mj_step(m, d)
+        return d.qpos.astype(np.float32), d.qvel.astype(np.float32)
+
+    def step(sys, data):
+        shapes = (jax.ShapeDtypeStruct(data.qpos.shape, jnp.float32), jax.ShapeDtypeStruct(data.qvel.shape, jnp.float32))
+        qpos, qvel = jax.pure_callback(host, shapes, data.qpos, data.qvel, data.ctrl, data.qfrc_applied,
+                                       data.xfrc_applied, vmap_method="sequential")
+        return mjx.forward(sys, data.replace(qpos=qpos, qvel=qvel, time=data.time + m.opt.timestep))
+    return step
+
+
+def mujoco_version():
+    import mujoco
+    return mujoco.__version__
+
+
 def env_from_train_config(path):
     """EnvConfig keyword arguments of a training run, from its train_config.json ("env"); {} without one.
     Lists come back from JSON where the config holds tuples and are restored."""
@@ -122,10 +160,22 @@ def main(argv=None):
                     help="N robots in the run's training distribution (domain randomisation, kp scale, delay, noise, "
                          "reset noise; no pushes, teleop arms, payloads or hand forces) instead of one nominal robot")
     ap.add_argument("--seed", type=int, default=0, help="--randomized: the draws' seed")
+    ap.add_argument("--physics", choices=["mjx", "mujoco"], default="mjx",
+                    help="the physics step: MJX's (training's), or MuJoCo's C engine (mj_step on the same model, "
+                         "through a host callback; one nominal robot): which engine an actor's behaviour belongs to")
+    ap.add_argument("--pd-damping", choices=["implicit", "explicit"], default=None,
+                    help="the PD's D term (EnvConfig.pd_damping; default: as trained): explicit computes kd (qd_des - qd) "
+                         "from each physics step's qd, as the SIL's motor-driver emulator does")
+    ap.add_argument("--sim-dt", type=float, default=None, metavar="S",
+                    help="physics step [s] (EnvConfig.sim_dt; default: as trained, 0.005); the SIL's is 0.001")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args(argv)
     if args.randomized < 0:
         ap.error(f"--randomized {args.randomized}: expected 0 (one nominal robot) or a number of robots")
+    if args.physics == "mujoco" and args.randomized:
+        ap.error("--physics mujoco runs one nominal robot: leave out --randomized")
+    if args.sim_dt is not None and not 0.0 < args.sim_dt <= 0.01:
+        ap.error(f"--sim-dt {args.sim_dt}: expected a physics step in (0, 0.01] s")
     from pmg_train.paths import repo_root
     args.actor, args.out = os.path.abspath(args.actor), os.path.abspath(args.out)
     args.commands = os.path.abspath(args.commands) if args.commands else None
@@ -148,6 +198,10 @@ def main(argv=None):
         nominal.update(push_vel=(0.0, 0.0))
     else:
         nominal.update(deterministic_reset=True, p_delay=0.0, noise={"gyro": 0.0, "gravity": 0.0, "q": 0.0, "qd": 0.0})
+    if args.pd_damping:
+        nominal["pd_damping"] = args.pd_damping
+    if args.sim_dt:
+        nominal["sim_dt"] = args.sim_dt
     trained = env_from_train_config(args.train_config)
     if args.clips:
         nominal["clips"] = args.clips
@@ -173,6 +227,8 @@ def main(argv=None):
         return jnp.tanh(h[..., :LEG])
 
     n = max(1, args.randomized)
+    if args.physics == "mujoco":
+        env.physics_step = mujoco_physics_step(env)
     if args.start_reference:  # the reset's command (its reference pose) is the schedule's first, not a draw
         env._sample_command = lambda rng: cmds[0]
     if args.randomized:  # one randomised model per robot, as in training (Brax's wrapper vmaps over them)
@@ -201,11 +257,14 @@ def main(argv=None):
         rec = {"command_env": state.info["command"], "q": ps.qpos[:, 7:7 + LEG], "q_ref": state.info["ref_q"][:, :LEG],
                "measured": state.info["measured"],  # v_H (3), height, contacts (2), pitch, roll
                "ref_height": state.info["ref_height"], "wz": yaw_rate(ps.qpos, ps.qvel), "done": state.done,
-               "reward": state.reward, "foot_xy": ps.xpos[:, feet, :2]}  # ankle_roll_link origins, world x, y [m]
+               "reward": state.reward, "foot_xy": ps.xpos[:, feet, :2],  # ankle_roll_link origins, world x, y [m]
+               "phase": state.info["phase"]}  # the gait phase in [0, 1) the step's reference was generated at
         return state, rec
 
     state = jax.jit(reset)(keys)
     start = np.asarray(state.pipeline_state.qpos[:, 2])
+    print(f"physics: {'MuJoCo C engine (mj_step)' if args.physics == 'mujoco' else 'MJX'} {mujoco_version()}, "
+          f"step {cfg.sim_dt * 1e3:g} ms, PD damping {cfg.pd_damping}")
     print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
           + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
@@ -234,7 +293,7 @@ def main(argv=None):
         metrics.update(robots=n, fell=int((~alive[:, -1]).sum()), survived_s=[round(float(x), 2) for x in survived])
     else:
         metrics.update(fell=bool(not alive.all()), survived_s=float(survived[0]))
-    print("MJX rollout:", metrics)
+    print(f"{args.physics} rollout:", metrics)
     achieved = np.stack([meas[..., 0], meas[..., 1], rec["wz"], meas[..., 6], meas[..., 7], meas[..., 3]], axis=-1)
     per_segment = segment_means(t, cm, achieved, spans, alive)
     reward = [r for _, _, r in segment_means(t, cm, rec["reward"][..., None], spans, alive)]

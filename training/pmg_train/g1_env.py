@@ -333,6 +333,12 @@ class EnvConfig:
     # Leg position targets clamped to the joint limits, as the deployed HAL supervisor clamps every
     # setpoint (src/hal/safety/envelope.cpp, clampSetpoint); matters where kp x scale reaches past a limit.
     clamp_targets: bool = True
+    # The PD's D term: "implicit" (every actor so far) puts kd into dof_damping, so the Euler step
+    # integrates -kd qd implicitly (stable at 5 ms); "explicit" computes tau = kp (q_des - q) + kd (qd_des - qd)
+    # from each substep's measured qd, as the SIL's motor-driver emulator and the real drivers do (saturation
+    # included), leaving dof_damping at the joints' own 0.05 N m s/rad. Identified actuator models keep
+    # their own split (implicit) and refuse "explicit".
+    pd_damping: str = "implicit"
     # Joint stops (the limit constraints' solref time constant [s] on every hinge joint): 0 keeps the
     # MJCF's (MuJoCo's default 0.02 s), soft enough that crouched walks press the ankles 0.06 rad past
     # their range. The SIL models metal stops (0.004 s, mujoco.joint_stops); here at least 2 physics steps.
@@ -498,6 +504,8 @@ class G1PmgEnv(Env):
                              f"{cfg.actuator_dr_z}: expected 0 <= min <= max < 1 and z >= 0")
         if cfg.action_offset not in ("default", "reference"):
             raise ValueError(f"EnvConfig.action_offset = {cfg.action_offset!r}: expected 'default' or 'reference'")
+        if cfg.pd_damping not in ("implicit", "explicit"):
+            raise ValueError(f"EnvConfig.pd_damping = {cfg.pd_damping!r}: expected 'implicit' or 'explicit'")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
         if clip_files is None:
@@ -561,7 +569,11 @@ class G1PmgEnv(Env):
         mj.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER  # joint damping (incl. PD kd) implicit
         mj.dof_armature[6:] = self.armature
         mj.dof_frictionloss[6:] = MODEL_FRICTIONLOSS
-        mj.dof_damping[6:] = 0.05 + self.kd  # the PD's D term, integrated implicitly
+        # The PD's D term, integrated implicitly (EnvConfig.pd_damping "implicit"), else only the joints' own.
+        mj.dof_damping[6:] = 0.05 + (self.kd if cfg.pd_damping == "implicit" else 0.0)
+        if self.act_idx.size and cfg.pd_damping == "explicit":
+            raise ValueError("EnvConfig.pd_damping = 'explicit' with identified actuator models (EnvConfig.actuators): "
+                             "their D term stays implicit (module docstring)")
         if self.act_idx.size:  # identified joints: their armature and model friction (the step sets them per episode)
             v = 6 + self.act_idx
             c = self.act_center
@@ -578,6 +590,9 @@ class G1PmgEnv(Env):
         mj.opt.iterations = 4
         mj.opt.ls_iterations = 8
         self.mj_model = mj
+        # One physics step, (sys, data) -> data: MJX's. eval_mjx.py --physics mujoco puts MuJoCo's C engine
+        # (mj_step on mj_model) here to tell the two engines apart.
+        self.physics_step = mjx.step
         self.sys = mjx.put_model(mj)
         self.n_substeps = int(round(cfg.control_dt / cfg.sim_dt))
         self.torso_body = mj.body("torso_link").id
@@ -1005,7 +1020,10 @@ class G1PmgEnv(Env):
         def substep(carry, _):
             data, line = carry
             q = data.qpos[7:]
-            tau = kp * (q_des - q) + kd * qd_des + tau_ff  # -kd*qd is the implicit joint damping
+            if c.pd_damping == "explicit":
+                tau = kp * (q_des - q) + kd * (qd_des - data.qvel[6:]) + tau_ff
+            else:
+                tau = kp * (q_des - q) + kd * qd_des + tau_ff  # -kd*qd is the implicit joint damping
             tau = jnp.clip(tau, -self.tau_max, self.tau_max)
             sys_k = sys
             if ident:
@@ -1017,7 +1035,7 @@ class G1PmgEnv(Env):
                 data = data.replace(qfrc_applied=jnp.zeros_like(data.qfrc_applied).at[v].set(d_explicit))
                 sys_k = sys.replace(dof_frictionloss=sys.dof_frictionloss.at[v].set(friction))
             data = data.replace(ctrl=tau)
-            return (mjx.step(sys_k, data), line), tau
+            return (self.physics_step(sys_k, data), line), tau
 
         data = state.pipeline_state
         if c.p_hand_force > 0:

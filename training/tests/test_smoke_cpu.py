@@ -80,7 +80,9 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    with --hold-reference (0.1 s) the legs follow the reference (mean |q - q_ref| below 0.1 rad and half the
    untrained actor's), and the rewards are finite; with --randomized 3 (0.2 s) three robots run in the
    run's training distribution (three different frictions within its range and three masses, its delay
-   and noise, no pushes or teleop arms), and only the segment the duration reaches is reported.
+   and noise, no pushes or teleop arms), and only the segment the duration reaches is reported; with
+   --physics mujoco --pd-damping explicit --sim-dt 0.001 (0.2 s) MuJoCo's C engine steps the same model
+   and the legs stay within 30 % of their motion of MJX's rollout.
 Prints one line per check and "N passed, N failed"; exit code 0 iff every check passed.
 """
 import argparse
@@ -750,6 +752,23 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           dev_hold < 0.5 * dev_actor and len(h["segment_reward"]) == 1,
           f"eval_mjx --hold-reference: the legs follow the reference (mean |q - q_ref| {dev_hold:.3f} rad over 0.1 s, "
           f"the untrained actor {dev_actor:.3f}); rewards finite and reported for the one segment 0.1 s reaches")
+    # --physics mujoco: MuJoCo's C engine steps the same model; with the SIL's 1 ms step and explicit PD damping the
+    # first 0.2 s stay close to MJX's 5 ms implicit ones (a sign error in the explicit D term, or a physics step
+    # whose result is dropped, would not).
+    cpu_out = os.path.join(workdir, "mjx_mujoco.npz")
+    try:
+        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", cpu_out, "--commands", sched, "--start-reference",
+                       "--physics", "mujoco", "--pd-damping", "explicit", "--sim-dt", "0.001", "--duration", "0.2"])
+    finally:
+        os.chdir(cwd)
+    c = np.load(cpu_out)
+    cenv = json.loads(str(c["env_config"]))
+    moved = float(np.abs(z["q"][:20] - z["q"][0]).max())
+    apart = float(np.abs(c["q"] - z["q"][:20]).max())
+    check(cenv["pd_damping"] == "explicit" and cenv["sim_dt"] == 0.001 and c["q"].shape == (20, 12) and
+          apart < 0.3 * moved and np.isfinite(c["reward"]).all(),
+          f"eval_mjx --physics mujoco (C engine, 1 ms, explicit PD): the legs follow MJX's 5 ms implicit rollout to "
+          f"{apart:.4f} rad over 0.2 s, while they move {moved:.3f} rad")
     start = float(z["start_height"])
     check(env["p_reset_reference"] == 1.0 and tc["env"]["p_reset_reference"] == 0.5 and abs(start - want[0][5]) < 0.04,
           f"eval_mjx --start-reference: started in the first command's reference pose, pelvis {start:.3f} m for "
