@@ -336,8 +336,8 @@ class EnvConfig:
     # The PD's D term: "implicit" (every actor so far) puts kd into dof_damping, so the Euler step
     # integrates -kd qd implicitly (stable at 5 ms); "explicit" computes tau = kp (q_des - q) + kd (qd_des - qd)
     # from each substep's measured qd, as the SIL's motor-driver emulator and the real drivers do (saturation
-    # included), leaving dof_damping at the joints' own 0.05 N m s/rad. Identified actuator models keep
-    # their own split (implicit) and refuse "explicit".
+    # included), leaving dof_damping at the joints' own 0.05 N m s/rad (and the DR's kd scale unused).
+    # Identified actuator models keep their own split (implicit) and refuse "explicit".
     pd_damping: str = "implicit"
     # Joint stops (the limit constraints' solref time constant [s] on every hinge joint): 0 keeps the
     # MJCF's (MuJoCo's default 0.02 s), soft enough that crouched walks press the ankles 0.06 rad past
@@ -400,7 +400,7 @@ class EnvConfig:
     # Reward weights (per control step). foot_slip multiplies the summed horizontal speed [m/s] of the
     # feet touching the floor (a penalty when negative; 0, the default, leaves it out of the reward): the
     # actors trained from scratch slide their stance feet (0.12-0.30 m/s in the SIL against the default's
-    # 0.07; training/README.md "Foot-slip penalty").
+    # 0.07; training/README.md "A foot-slip penalty").
     w: dict = dataclasses.field(default_factory=lambda: {
         "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
         "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0,
@@ -1233,8 +1233,10 @@ def make_randomization_fn(env: G1PmgEnv):
                                                                      maxval=c.armature[1]))
             fl = sys.dof_frictionloss.at[6:].set(jax.random.uniform(k[4], (29,), minval=c.frictionloss[0],
                                                                     maxval=c.frictionloss[1]))
-            damp = sys.dof_damping.at[6:].set(0.05 + jnp.asarray(env.kd) * jax.random.uniform(
-                k[5], (), minval=c.kd_scale[0], maxval=c.kd_scale[1]))
+            # The PD's kd, scaled, where it is implicit; with pd_damping "explicit" the step computes it, and the
+            # joints keep their own 0.05 (no kd draw).
+            damp = (sys.dof_damping.at[6:].set(0.05 + jnp.asarray(env.kd) * jax.random.uniform(
+                k[5], (), minval=c.kd_scale[0], maxval=c.kd_scale[1])) if c.pd_damping == "implicit" else sys.dof_damping)
             return friction, mass, arm, fl, damp
 
         friction, mass, arm, fl, damp = one(rng)

@@ -11,7 +11,7 @@ PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
 it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as two tests
-(training_smoke_env: 1 to 1g, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
+(training_smoke_env: 1 to 1h, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
 env's reset and step takes most of the time, so parts 1 to 1e share one env with every training
 option on (make_smoke_env), compiled once; the default configuration is the PPO run's (2).
 
@@ -63,6 +63,9 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    and phase (joints within the reset noise of ref_q, the lowest sole sphere on the floor to 0.1 mm, at
    rest, the pelvis within 0.04 m of the commanded height); from each of those, 50 steps of actions
    holding the reference end no episode and move the pelvis by less than 0.06 m.
+1h. PD damping (EnvConfig.pd_damping, no compile): "implicit" puts kd into the joints' damping (0.05 + kd)
+   and the DR draws it within kd_scale; "explicit" leaves 0.05 in the model and in every draw; others
+   are refused.
 2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
    two training steps of 80 env steps, the first in the reward-width warm-up (--warmup-steps), 32-32 MLPs,
    no evaluation rollouts, half the episodes from the reference's pose (--p-reset-reference 0.5), the
@@ -798,6 +801,33 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"{np.round(np.abs(r['foot_xy'][:, 0, 0, 1] - r['foot_xy'][:, 0, 1, 1]), 3).tolist()} m apart")
 
 
+def pd_damping_checks(check):
+    """1h. EnvConfig.pd_damping (no compile: the models and the DR draws only): "implicit" puts the PD's kd into
+    the joints' damping (0.05 + kd) and the DR scales it; "explicit" leaves the joints' own 0.05 in the model and
+    in every draw (the step computes kd (qd_des - qd)); anything else is refused."""
+    import jax
+    import numpy as np
+    from pmg_train import g1_env
+    drawn = {}
+    for pd in ("implicit", "explicit"):
+        env = g1_env.G1PmgEnv(g1_env.EnvConfig(pd_damping=pd))
+        sys_v, _ = g1_env.make_randomization_fn(env)(env.sys, jax.random.split(jax.random.PRNGKey(0), 4))
+        drawn[pd] = (np.asarray(env.mj_model.dof_damping[6:]), np.asarray(sys_v.dof_damping[:, 6:]), np.asarray(env.kd))
+    (m_i, d_i, kd), (m_e, d_e, _) = drawn["implicit"], drawn["explicit"]
+    lo, hi = g1_env.EnvConfig().kd_scale
+    scale = (d_i - 0.05) / kd
+    check(np.allclose(m_i, 0.05 + kd, atol=1e-6) and np.all((scale >= lo - 1e-5) & (scale <= hi + 1e-5)) and
+          np.allclose(m_e, 0.05) and np.allclose(d_e, 0.05),
+          f"pd_damping: implicit knee damping {m_i[3]:.2f} N m s/rad (0.05 + kd), drawn {[f'{x:.2f}' for x in d_i[:, 3]]}; "
+          f"explicit {m_e[3]:.2f}, drawn {[f'{x:.2f}' for x in d_e[:, 3]]}")
+    try:
+        g1_env.G1PmgEnv(g1_env.EnvConfig(pd_damping="semi"))
+        refused = ""
+    except ValueError as e:
+        refused = str(e)
+    check("pd_damping" in refused and "'explicit'" in refused, f"pd_damping 'semi' refused: {refused}")
+
+
 def reset_reference_checks(check, n_resets=12, hold_steps=50):
     """1g. Reference state initialisation (EnvConfig.p_reset_reference = 0.5, its own env, randomised
     reset): a reset either stands (pelvis at 0.79 m, legs within the reset noise of the standing pose)
@@ -924,8 +954,8 @@ def main():
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
     ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
-                    help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f, 1g: rollout, actuator models, gains, "
-                         "hand forces, command slew, stops, residual actions, reference-pose resets); ppo: the tiny PPO run (2); all: both")
+                    help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f, 1g, 1h: rollout, actuator models, gains, "
+                         "hand forces, command slew, stops, residual actions, reference-pose resets, PD damping); ppo: the tiny PPO run (2); all: both")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -947,6 +977,7 @@ def main():
         actuator_env_checks(check, env, cal_path, starts)
         hand_force_checks(check, env, reset, step)
         action_offset_checks(check)
+        pd_damping_checks(check)
         reset_reference_checks(check)
     if args.part in ("ppo", "all"):
         ppo_checks(check, workdir, obs)
