@@ -120,11 +120,6 @@ def mujoco_physics_step(env):
     return step
 
 
-def mujoco_version():
-    import mujoco
-    return mujoco.__version__
-
-
 def env_from_train_config(path):
     """EnvConfig keyword arguments of a training run, from its train_config.json ("env"); {} without one.
     Lists come back from JSON where the config holds tuples and are restored."""
@@ -243,7 +238,7 @@ def main(argv=None):
         reset, step, keys = jax.vmap(env.reset), jax.vmap(env.step), jax.random.PRNGKey(0)[None]
         drawn = {}
     yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
-    feet = jnp.asarray([env.mj_model.body(f"{side}_ankle_roll_link").id for side in ("left", "right")])
+    feet = jnp.asarray(env.foot_bodies)  # the ankle_roll_links, left and right
 
     def body(state, cmd):
         info = dict(state.info)
@@ -263,7 +258,8 @@ def main(argv=None):
 
     state = jax.jit(reset)(keys)
     start = np.asarray(state.pipeline_state.qpos[:, 2])
-    print(f"physics: {'MuJoCo C engine (mj_step)' if args.physics == 'mujoco' else 'MJX'} {mujoco_version()}, "
+    import mujoco
+    print(f"physics: {'MuJoCo C engine (mj_step)' if args.physics == 'mujoco' else 'MJX'} {mujoco.__version__}, "
           f"step {cfg.sim_dt * 1e3:g} ms, PD damping {cfg.pd_damping}")
     print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
