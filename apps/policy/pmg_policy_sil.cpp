@@ -96,6 +96,7 @@
 #include "pmg/gco/foot_slip.hpp"
 #include "pmg/gco/generator_bridge.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/safety/safe_backend.hpp"
 #include "pmg/policy/policy_stage.hpp"
 
 namespace {
@@ -214,6 +215,9 @@ struct Totals {
     double value = 0;                 // the offending value (q [rad], tilt [rad], height [m], ...)
   };
   std::vector<FaultRecord> faults;    // every episode's latched supervisor fault, in order
+  // The HAL supervisor's slew limit (safety.q_rate_max): joint-cycles it held a command back, of all
+  // supervisor cycles x joints (every episode).
+  unsigned long long slew_joint_cycles = 0, joint_cycles = 0;
 };
 
 }  // namespace
@@ -228,6 +232,8 @@ int main(int argc, char** argv) {
   int first_seed = 0;
   bool noise = true, native = true, restart_after_fall = false;
   double duration = -1, frame_period = 0.1;
+  std::string probe_path;
+  double q_rate_max = -1;
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
   app.add_option("--robot", robot_path, "robot config YAML (default: the controller config's)");
@@ -286,6 +292,15 @@ int main(int argc, char** argv) {
                "results for the rest of the script; the Table I metrics stop at the first fall)");
   app.add_option("--frame-period", frame_period, "period of the body-position log <out>/frames<k>.csv [s] (frame strips)")
       ->check(pmg::cli::finiteIn(0.01, 10.0));
+  app.add_option("--probe", probe_path,
+                 "CSV of the first seed's first episode, one row per loop tick: MuJoCo's qpos and qvel (truth when "
+                 "the tick read its state), the state the tick read, the actor's observation and action, and the "
+                 "motor commands it wrote (q, qd, kp, kd, tau_ff of every motor); for sim-to-sim comparisons "
+                 "(training/probe_sil.py)");
+  app.add_option("--q-rate-max", q_rate_max,
+                 "the HAL supervisor's slew limit on commanded joint positions [rad/s] (default: the controller "
+                 "config's safety.q_rate_max; 20 = before 2026-11-30)")
+      ->check(pmg::cli::finiteIn(1.0, 2000.0));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
@@ -298,6 +313,7 @@ int main(int argc, char** argv) {
     base.gco.enabled = config == "pmg_gco";
     if (!blending.empty()) base.generator.blending = blending == "paper" ? pmg::Blending::kPaper : pmg::Blending::kConsistent;
     if (!model_path.empty()) base.policy_file = model_path;
+    if (q_rate_max > 0) base.q_rate_max = q_rate_max;
     if (base.policy_file.empty()) throw pmg::ConfigError(controller_path + ": policy.model: missing (or give --model)");
     base.policy_native = native;
     if (!velocity_feedback.empty()) base.velocity_feedback.enabled = velocity_feedback == "on";
@@ -371,6 +387,12 @@ int main(int argc, char** argv) {
     Eigen::Isometry3d X_BT = Eigen::Isometry3d::Identity();
     Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
 
+    std::ofstream probe;
+    if (!probe_path.empty()) {
+      probe.open(probe_path);
+      if (!probe) throw std::runtime_error("--probe " + probe_path + ": cannot open for writing");
+      probe.precision(10);
+    }
     for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
       std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -464,6 +486,23 @@ int main(int argc, char** argv) {
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
           frames << "\n";
+        }
+        const bool probing = probe.is_open() && seed == first_seed && episode == 0;
+        std::uint64_t probe_slew = 0;
+        const int n_obs = controller.policy()->runner().observationSize();
+        if (probing) {  // columns: t, qpos[nq], qvel[nv], q/qd of the motors read, IMU, obs, action, commands
+          probe << "t";
+          for (int i = 0; i < m->nq; ++i) probe << ",qpos" << i;
+          for (int i = 0; i < m->nv; ++i) probe << ",qvel" << i;
+          for (int j = 0; j < nj; ++j) probe << ",state_q" << j;
+          for (int j = 0; j < nj; ++j) probe << ",state_qd" << j;
+          // hal_slew: joint-cycles the supervisor's slew limit held back since the previous row
+          probe << ",imu_qw,imu_qx,imu_qy,imu_qz,gyro_x,gyro_y,gyro_z,mode,hal_slew";
+          for (int i = 0; i < n_obs; ++i) probe << ",obs" << i;
+          for (int i = 0; i < na; ++i) probe << ",action" << i;
+          for (const char* f : {"cmd_q", "cmd_qd", "cmd_kp", "cmd_kd", "cmd_tau"})
+            for (int j = 0; j < nj; ++j) probe << ',' << f << j;
+          probe << '\n';
         }
         std::atomic<bool> stop{false};
         double fall_time = -1;
@@ -615,6 +654,32 @@ int main(int argc, char** argv) {
             const pmg::VelocityCommand& us = controller.commands().velocity();
             csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan) << '\n';
           }
+          if (probing) {
+            const pmg::LowState& st = controller.lastState();
+            probe << t_local;
+            for (int i = 0; i < m->nq; ++i) probe << ',' << d->qpos[i];
+            for (int i = 0; i < m->nv; ++i) probe << ',' << d->qvel[i];
+            for (int j = 0; j < nj; ++j) probe << ',' << st.motors[static_cast<std::size_t>(j)].q;
+            for (int j = 0; j < nj; ++j) probe << ',' << st.motors[static_cast<std::size_t>(j)].qd;
+            for (double x : st.imu.quat_wxyz) probe << ',' << x;
+            for (double x : st.imu.gyro) probe << ',' << x;
+            probe << ',' << pmg::toString(status.mode);
+            pmg::hal::safety::SafetyStatus hs;
+            const std::uint64_t slew_now = loop.safety().status(hs) ? hs.slew_clamped_joint_ticks : probe_slew;
+            probe << ',' << (slew_now - probe_slew);
+            probe_slew = slew_now;
+            const float* o = controller.policy()->observation();
+            for (int i = 0; i < n_obs; ++i) probe << ',' << o[i];
+            const float* a = controller.policy()->runner().action();
+            for (int i = 0; i < na; ++i) probe << ',' << a[i];
+            const pmg::LowCommand& lc = controller.lastCommand();
+            for (int f = 0; f < 5; ++f)
+              for (int j = 0; j < nj; ++j) {
+                const pmg::MotorCommand& mc = lc.motors[static_cast<std::size_t>(j)];
+                probe << ',' << (f == 0 ? mc.q : f == 1 ? mc.qd : f == 2 ? mc.kp : f == 3 ? mc.kd : mc.tau_ff);
+              }
+            probe << '\n';
+          }
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips
             frames << t;
             for (int b = 1; b < m->nbody; ++b)
@@ -636,6 +701,10 @@ int main(int argc, char** argv) {
         if (rs.fault != pmg::FaultCode::kNone)
           tot.faults.push_back({offset + rs.fault_time, pmg::toString(rs.fault), rs.fault_joint_name, rs.fault_value});
         held += static_cast<unsigned long long>(controller.policy()->runner().counters().held);
+        if (pmg::hal::safety::SafetyStatus ss; loop.safety().status(ss)) {
+          tot.slew_joint_cycles += ss.slew_clamped_joint_ticks;
+          tot.joint_cycles += ss.ticks * static_cast<unsigned long long>(nj);
+        }
         if (fall_time < 0 || !restart_after_fall) break;
         // Go on after the segment it fell in (or after the first one of this episode when it
         // fell while standing before it), as long as the script has one left.
@@ -647,9 +716,11 @@ int main(int argc, char** argv) {
       }
       totals.push_back(tot);
       const double n = std::max<long>(1, tot.n);
-      std::printf("seed %d: %s after %.2f s | LinVel %.4f m/s  YawVel %.4f rad/s  Roll %.4f rad  Pitch %.4f rad  Height %.4f m  slip %.4f m/s  (policy holds %llu; final mode %s, fault %s)",
+      std::printf("seed %d: %s after %.2f s | LinVel %.4f m/s  YawVel %.4f rad/s  Roll %.4f rad  Pitch %.4f rad  Height %.4f m  slip %.4f m/s  (policy holds %llu; HAL slew %.2f %% of joint-cycles; final mode %s, fault %s)",
                   seed, tot.fell ? "FELL" : "ok", tot.survived, tot.lin / n, tot.yaw / n, tot.roll / n, tot.pitch / n,
-                  tot.height / n, tot.slip / std::max<long>(1, tot.slip_n), held, pmg::toString(rs.final_mode),
+                  tot.height / n, tot.slip / std::max<long>(1, tot.slip_n), held,
+                  100.0 * static_cast<double>(tot.slew_joint_cycles) / static_cast<double>(std::max(1ULL, tot.joint_cycles)),
+                  pmg::toString(rs.final_mode),
                   pmg::toString(rs.fault));
       for (const Totals::FaultRecord& f : tot.faults) {
         std::printf(" | %s", f.cause.c_str());
@@ -746,7 +817,7 @@ int main(int argc, char** argv) {
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)
-       << ", \"duration_s\": " << T << ", \"runs\": [";
+       << ", \"duration_s\": " << T << ", \"hal_q_rate_max\": " << base.q_rate_max << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {
       const Totals& t = totals[s];
       const double n = std::max<long>(1, t.n);
@@ -757,6 +828,7 @@ int main(int argc, char** argv) {
          << ", \"lin_vel\": " << vals[0] << ", \"yaw_vel\": " << vals[1] << ", \"roll\": " << vals[2] << ", \"pitch\": " << vals[3]
          << ", \"height\": " << vals[4] << ", \"foot_slip\": " << vals[5]
          << ", \"fall_time_s\": " << jnum(t.fell ? t.fall_time : kNaN) << ", \"restarts\": " << t.restarts
+         << ", \"hal_slew_clamped_joint_cycles\": " << t.slew_joint_cycles << ", \"hal_joint_cycles\": " << t.joint_cycles
          << ", \"falls_s\": " << jtimes(t.falls) << ", \"upsets_s\": " << jtimes(t.upsets) << ", \"faults\": [";
       for (std::size_t f = 0; f < t.faults.size(); ++f)
         js << (f ? ", " : "") << "{\"t\": " << jnum(t.faults[f].t) << ", \"cause\": " << jstr(t.faults[f].cause)

@@ -256,16 +256,19 @@ struct PostureFeedbackYaml {
 struct SafetyYaml {
   double soft_stand_duration_s = 1.0;
   double damping_kd_scale = 1.0;
+  double q_rate_max = hal::safety::EnvelopeOptions{}.q_rate_max;
   StartupMode startup = StartupMode::kActive;
   template <class A>
   void Serialize(A* a) {
     a->Visit("soft_stand_duration_s", &soft_stand_duration_s, "supervisor soft stand (0, 60] s");
     a->Visit("damping_kd_scale", &damping_kd_scale, "damping kd = scale * robot kd, (0, 5]");
     a->Visit("startup", &startup, "active (stand up and engage) | passive (wait for an operator)");
+    a->Visit("q_rate_max", &q_rate_max, "slew limit on the commanded joint positions [rad/s], per HAL cycle, [1, 2000]");
   }
   std::string validate() const {
     if (!(soft_stand_duration_s > 0 && soft_stand_duration_s <= 60)) return "soft_stand_duration_s: expected (0, 60] s";
     if (!(damping_kd_scale > 0 && damping_kd_scale <= 5)) return "damping_kd_scale: expected (0, 5]";
+    if (!(q_rate_max >= 1 && q_rate_max <= 2000)) return "q_rate_max: expected [1, 2000] rad/s";
     return {};
   }
 };
@@ -362,6 +365,7 @@ HalStackConfig ControllerConfig::halStack() const {
   h.lockstep = timing == TimingMode::kLockstep;
   h.soft_stand_duration_s = soft_stand_duration;
   h.damping_kd_scale = damping_kd_scale;
+  h.q_rate_max = q_rate_max;
   return h;
 }
 
@@ -432,6 +436,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   if (const std::string e = c.upper_body.validate(); !e.empty()) fail("upper_body", e);
   c.soft_stand_duration = y.safety.soft_stand_duration_s;
   c.damping_kd_scale = y.safety.damping_kd_scale;
+  c.q_rate_max = y.safety.q_rate_max;
   c.startup = y.safety.startup;
   if (y.policy) {
     c.policy_file = y.policy->model;

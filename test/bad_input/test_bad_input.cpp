@@ -549,6 +549,12 @@ std::vector<Case> allCases() {
       // --- controller configs ----------------------------------------------------------------------
       {"ctrl_hal_supervisr", Kind::kControllerConfig, ctrl("g1_sil.yaml", "soft_stand_duration_s: 1.0", "soft_stand_duration_s: 1.0\n  hal_supervisr: true"),
        error({"hal_supervisr"})},
+      {"ctrl_q_rate_max_zero", Kind::kControllerConfig,
+       ctrl("g1_sil.yaml", "soft_stand_duration_s: 1.0", "soft_stand_duration_s: 1.0\n  q_rate_max: 0"), error({"q_rate_max"})},
+      {"ctrl_q_rate_max_nan", Kind::kControllerConfig,
+       ctrl("g1_sil.yaml", "soft_stand_duration_s: 1.0", "soft_stand_duration_s: 1.0\n  q_rate_max: .nan"), error({"q_rate_max"})},
+      {"ctrl_q_rate_max_huge", Kind::kControllerConfig,
+       ctrl("g1_sil.yaml", "soft_stand_duration_s: 1.0", "soft_stand_duration_s: 1.0\n  q_rate_max: 1e6"), error({"q_rate_max"})},
       {"ctrl_policyy", Kind::kControllerConfig, ctrl("g1_sil_policy.yaml", "\npolicy:", "\npolicyy:"),
        error({"policyy"})},
       {"ctrl_inf_max_velocity", Kind::kControllerConfig,

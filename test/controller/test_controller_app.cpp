@@ -15,6 +15,7 @@
 #include "pmg/controller/controller_app.hpp"
 #include "pmg/policy/contract.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/safety/safe_backend.hpp"
 #include "temp_dir.hpp"
 
 namespace pmg {
@@ -289,6 +290,37 @@ TEST(ControllerApp, RefusesAPolicyOnClipsItWasNotTrainedOn) {
   } catch (const policy::ContractError& e) {
     EXPECT_EQ(e.field(), "pmg.clips_digest") << e.what();
   }
+}
+
+// The supervisor's slew limit on commanded positions comes from the config (safety.q_rate_max) and
+// every joint-cycle it acts in is counted. The shipped actor steps its leg targets every tick, as in
+// training: at the former 20 rad/s the HAL held them back in most cycles of a walk (the SIL then
+// walked 20-40 % slower than the actor's own environment, training/README.md "The HAL's slew
+// limit"); at the default it lets them through.
+TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
+  const auto walk = [](double q_rate_max) {
+    ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+    if (q_rate_max > 0) config.q_rate_max = q_rate_max;
+    ControllerApp app(config);
+    EXPECT_DOUBLE_EQ(app.safety().supervisor().options().envelope.q_rate_max, config.q_rate_max);
+    CommandSample sample;
+    for (int k = 0; k < 400; ++k) {
+      sample.command.vx = k < 100 ? 0.0 : 0.5;
+      sample.velocity_time = k * 0.01;
+      app.stepLockstep(sample);
+    }
+    EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+    EXPECT_GT(app.controller().lastState().base_position[0], 0.5) << "walked forward";
+    hal::safety::SafetyStatus st;
+    EXPECT_TRUE(app.safety().status(st));
+    return st.slew_clamped_joint_ticks;
+  };
+  const std::uint64_t slow = walk(20.0);
+  const std::uint64_t fast = walk(-1.0);
+  std::printf("[ SIL ] slew-limited joint-cycles over 4 s: %llu at 20 rad/s, %llu at the default\n",
+              static_cast<unsigned long long>(slow), static_cast<unsigned long long>(fast));
+  EXPECT_GT(slow, 1000u) << "20 rad/s holds back the actor's leg targets";
+  EXPECT_LT(fast, slow / 100) << "the default lets them through";
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,

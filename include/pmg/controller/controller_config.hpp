@@ -68,6 +68,7 @@ struct ControllerConfig {
   UpperBodyConfig upper_body;
   double soft_stand_duration = 1.0;  ///< supervisor soft stand: measured → standing pose [s]
   double damping_kd_scale = 1.0;     ///< damping mode: kd = scale · robot config kd
+  double q_rate_max = hal::safety::EnvelopeOptions{}.q_rate_max;  ///< supervisor slew on commanded q [rad/s]
   StartupMode startup = StartupMode::kActive;
   /// Trained actor (ONNX with its pmg contract); "" = none (PMG references go to the motors
   /// directly, as in the gantry bring-up). With a policy the gantry is normally off.

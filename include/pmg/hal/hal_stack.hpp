@@ -16,6 +16,7 @@
 
 #include "pmg/hal/backend.hpp"
 #include "pmg/hal/mujoco_backend.hpp"
+#include "pmg/hal/safety/supervisor.hpp"
 
 namespace pmg {
 struct RobotConfig;
@@ -44,6 +45,8 @@ struct HalStackConfig {
   bool lockstep = true;                ///< CAN: lockstep with pmg_sil (else real time)
   double soft_stand_duration_s = 1.0;  ///< supervisor soft stand [s]
   double damping_kd_scale = 1.0;       ///< damping mode kd = scale · robot config kd
+  /// Supervisor slew limit on the commanded q [rad/s] (hal::safety::EnvelopeOptions::q_rate_max).
+  double q_rate_max = hal::safety::EnvelopeOptions{}.q_rate_max;
   /// Per-joint gain ceilings of the supervisor [N·m/rad, N·m·s/rad] (n values or empty). A tool
   /// that needs stiffer gains than 2 kp / 4 kd of the robot config (the zero-point protocol's
   /// 400 N·m/rad legs) declares them here; the ceiling is the larger of the two.

@@ -69,6 +69,9 @@ class PolicyStage {
 
   const PolicyContract& contract() const noexcept { return runner_->contract(); }
   const PolicyRunner& runner() const noexcept { return *runner_; }
+  /// The actor input of the last step() (runner().observationSize() floats: scaled, clipped, stacked
+  /// as the contract lays it out), for probes that compare it with the training environment's.
+  const float* observation() const noexcept { return obs_->data(); }
   std::uint64_t rejectedTicks() const noexcept { return rejected_; }
 
  private:

@@ -137,6 +137,7 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
   s.ticks = out_.ticks;
   s.refused_requests = out_.refused_requests;
   s.clamped_joint_ticks = out_.clamped_joint_ticks;
+  s.slew_clamped_joint_ticks = out_.slew_clamped_joint_ticks;
   s.nonfinite_commands = nonfinite_;
   s.held_replies = held_count_;
   s.nonfinite_replies = nonfinite_replies_;

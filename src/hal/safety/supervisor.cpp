@@ -350,6 +350,7 @@ void SafetySupervisor::writeCommand(const SafetyInput& in, SafetyOutput& out) no
     out.cmd_tau[j] = sp.tau_ff;
     out.clamp_bits[j] = bits;
     if (bits) ++out.clamped_joint_ticks;
+    if (bits & kClampSlew) ++out.slew_clamped_joint_ticks;
     prev_q_[j] = sp.q;
     prev_tau_[j] = sp.tau_ff;
   }

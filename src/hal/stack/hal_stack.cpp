@@ -45,6 +45,7 @@ HalStack makeHalStack(const RobotConfig& robot, const HalStackConfig& config, st
   options.period_s = backend->cyclePeriod();
   options.soft_stand_duration_s = config.soft_stand_duration_s;
   for (double& kd : options.damping_kd) kd *= config.damping_kd_scale;
+  options.envelope.q_rate_max = config.q_rate_max;
   const std::size_t n = options.joints.size();
   if ((!config.kp_max.empty() && config.kp_max.size() != n) || (!config.kd_max.empty() && config.kd_max.size() != n))
     throw std::invalid_argument("makeHalStack: kp_max / kd_max need " + std::to_string(n) + " values (one per joint) or none");

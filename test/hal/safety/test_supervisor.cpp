@@ -350,13 +350,17 @@ TEST(Supervisor, WatchdogsDoNotActInPassive) {
 }
 
 TEST(Supervisor, ActiveCommandIsClampedAndSlewLimited) {
-  Rig r;
+  SafetyOptions o = twoJoints();
+  o.envelope.q_rate_max = 20.0;  // rad/s: 0.04 rad a cycle
+  Rig r(o);
   r.toActive();
-  const double dq = EnvelopeOptions{}.q_rate_max * kDt;
+  const double dq = 20.0 * kDt;
+  const std::uint64_t slewed = r.out.slew_clamped_joint_ticks;
   r.in.cmd_q = {1.8, 0.1};  // a 1 rad step on joint 0
   r.tick();
   EXPECT_NEAR(r.out.cmd_q[0], 0.8 + dq, 1e-12);
   EXPECT_TRUE(r.out.clamp_bits[0] & kClampSlew);
+  EXPECT_EQ(r.out.slew_clamped_joint_ticks, slewed + 1) << "counted, joint 0 only";
   r.ticks(200);
   EXPECT_NEAR(r.out.cmd_q[0], 0.8 + 50.0 / 100.0, 1e-9) << "torque bound: kp (q - q_meas) <= tau_max";
   EXPECT_TRUE(r.out.clamp_bits[0] & kClampTorque);
@@ -364,6 +368,31 @@ TEST(Supervisor, ActiveCommandIsClampedAndSlewLimited) {
   r.in.q = {1.9, 0.1};
   r.ticks(200);
   EXPECT_LE(r.out.cmd_q[0], 2.0) << "position limit";
+}
+
+// The default slew (600 rad/s, 1.2 rad a 2 ms cycle) lets a policy's position target step through
+// within the cycle, as in training (an actor steps a leg target by up to 1.15 rad a tick); a larger
+// step is spread over cycles and counted.
+TEST(Supervisor, DefaultSlewPassesAPolicyStepAndSpreadsALargerOne) {
+  SafetyOptions o = twoJoints();
+  o.joints[0].tau_max = 1e4;  // no torque bound in the way
+  Rig r(o);
+  r.toActive();
+  const double q0 = r.out.cmd_q[0];
+  const double dq = EnvelopeOptions{}.q_rate_max * kDt;
+  ASSERT_GE(dq, 1.15) << "the shipped actor's largest leg-target step a tick must pass in one cycle";
+  const std::uint64_t slewed = r.out.slew_clamped_joint_ticks;
+  r.in.cmd_q = {q0 + 1.0, 0.1};
+  r.tick();
+  EXPECT_NEAR(r.out.cmd_q[0], q0 + 1.0, 1e-12);
+  EXPECT_FALSE(r.out.clamp_bits[0] & kClampSlew);
+  EXPECT_EQ(r.out.slew_clamped_joint_ticks, slewed);
+  r.in.cmd_q = {q0 + 1.0 - 3.0, 0.1};  // 3 rad back: more than one cycle's slew
+  r.in.q = {q0 + 1.0, 0.1};
+  r.tick();
+  EXPECT_NEAR(r.out.cmd_q[0], std::max(q0 + 1.0 - dq, -2.0), 1e-12);
+  EXPECT_TRUE(r.out.clamp_bits[0] & kClampSlew);
+  EXPECT_EQ(r.out.slew_clamped_joint_ticks, slewed + 1);
 }
 
 TEST(Supervisor, RandomCommandsNeverExceedTorqueLimits) {

@@ -47,6 +47,9 @@ struct SafetyStatus {
   std::uint64_t ticks = 0;
   std::uint64_t refused_requests = 0;
   std::uint64_t clamped_joint_ticks = 0;
+  /// Joint-cycles whose q or tau_ff the slew limit (EnvelopeOptions::q_rate_max, tau_rate_max) held
+  /// back: where it counts, the motors follow the loop's command late.
+  std::uint64_t slew_clamped_joint_ticks = 0;
   std::uint64_t nonfinite_commands = 0;  ///< Loop commands that contained NaN/Inf.
   std::uint64_t held_replies = 0;        ///< Missing motor replies / IMU samples replaced by the last valid one.
   std::uint64_t nonfinite_replies = 0;   ///< Replies / IMU samples with NaN/Inf, treated as missing.

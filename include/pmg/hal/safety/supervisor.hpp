@@ -96,7 +96,14 @@ struct EnvelopeOptions {
   double q_fault_margin = 0.1;      ///< Measured q beyond a limit by more than this: fault [rad].
   double qd_fault_factor = 1.5;     ///< Measured |qd| > factor * qd_max: fault.
   double tau_fault_factor = 1.5;    ///< Measured |tau| > factor * tau_max: fault.
-  double q_rate_max = 20.0;         ///< Slew limit on the commanded q [rad/s].
+  /// Slew limit on the commanded q [rad/s], applied every HAL cycle (2 ms: 1.2 rad a cycle at 600).
+  /// An actor's position targets are PD set-points that step every loop tick, as in training (which
+  /// has no slew); the shipped actor steps a leg target by up to 1.15 rad a tick over the envelope
+  /// grid. The former 20 rad/s (0.04 rad a cycle) held back leg targets in 93 % of its ticks and made
+  /// the SIL walk 20-40 % slower than the actor's own environment, and fall at 1 m/s
+  /// (training/README.md "The HAL's slew limit"). What a step can do is bounded by the torque clamp
+  /// (clampSetpoint); references are bounded upstream (ReferenceRateLimiter, 6 rad/s).
+  double q_rate_max = 600.0;
   double tau_rate_max = 5000.0;     ///< Slew limit on the commanded tau_ff [N m/s].
   double max_tilt_rad = 0.9;        ///< Fall: base tilt above this (about 52 deg) [rad].
   double min_base_height_m = 0.35;  ///< Fall: base height below this [m] (when known).
@@ -150,6 +157,7 @@ struct SafetyOutput {
   std::uint64_t ticks = 0;
   std::uint64_t refused_requests = 0;
   std::uint64_t clamped_joint_ticks = 0;               ///< Sum over ticks of joints with clamp bits.
+  std::uint64_t slew_clamped_joint_ticks = 0;          ///< The same, kClampSlew only (q or tau_ff slew-limited).
   std::array<std::uint32_t, kNumFaultCodes> fault_counts{};  ///< Faults detected, by code.
 };
 
