@@ -165,6 +165,19 @@ def main(argv=None):
     ap.add_argument("--substeps", type=int, default=10, help="physics steps per control period (SIL: 10 of 1 ms)")
     ap.add_argument("--skip-physics", action="store_true")
     args = ap.parse_args(argv)
+    res = probe(args.probe, args.actor, args.sil_mjcf, args.substeps, not args.skip_physics)
+    text = json.dumps(res, indent=1)
+    print(text)
+    if args.out:
+        with open(args.out, "w") as f:
+            f.write(text + "\n")
+
+
+def probe(probe_csv, actor, sil_mjcf="config/robots/g1/g1_29dof_rev_1_0.xml", substeps=10, physics=True):
+    """The three comparisons (module docstring) as a dict; SystemExit naming the file on bad input."""
+    from types import SimpleNamespace
+    args = SimpleNamespace(probe=probe_csv, actor=actor, sil_mjcf=os.path.abspath(sil_mjcf), substeps=substeps,
+                           skip_physics=not physics)
     cols = read_probe(args.probe)
     npz = np.load(args.actor)
     active = cols["mode"] == "active"
@@ -212,6 +225,7 @@ def main(argv=None):
         from pmg_train.paths import repo_root
         cmd = {k: block(cols, f"cmd_{k}") for k in ("q", "qd", "kp", "kd", "tau")}
         tc = os.path.join(os.path.dirname(os.path.abspath(args.actor)), "train_config.json")
+        cwd = os.getcwd()
         os.chdir(repo_root(None))
         trained = env_from_train_config(tc if os.path.exists(tc) else None)
         env = G1PmgEnv(EnvConfig(**{**trained, "pd_damping": "explicit", "sim_dt": 0.001}))
@@ -224,11 +238,8 @@ def main(argv=None):
         phys.append(physics_compare(m_sil, qpos, qvel, cmd, active, args.substeps, slew, label="SIL MJCF, MuJoCo "
                                     + mujoco.__version__))
         res["physics"] = phys
-    text = json.dumps(res, indent=1)
-    print(text)
-    if args.out:
-        with open(args.out, "w") as f:
-            f.write(text + "\n")
+        os.chdir(cwd)
+    return res
 
 
 if __name__ == "__main__":

@@ -665,7 +665,8 @@ int main(int argc, char** argv) {
             for (double x : st.imu.gyro) probe << ',' << x;
             probe << ',' << pmg::toString(status.mode);
             pmg::hal::safety::SafetyStatus hs;
-            const std::uint64_t slew_now = loop.safety().status(hs) ? hs.slew_clamped_joint_ticks : probe_slew;
+            loop.safety().status(hs);  // the newest status (lockstep: this thread ran the cycles)
+            const std::uint64_t slew_now = hs.slew_clamped_joint_ticks;
             probe << ',' << (slew_now - probe_slew);
             probe_slew = slew_now;
             const float* o = controller.policy()->observation();
@@ -701,10 +702,8 @@ int main(int argc, char** argv) {
         if (rs.fault != pmg::FaultCode::kNone)
           tot.faults.push_back({offset + rs.fault_time, pmg::toString(rs.fault), rs.fault_joint_name, rs.fault_value});
         held += static_cast<unsigned long long>(controller.policy()->runner().counters().held);
-        if (pmg::hal::safety::SafetyStatus ss; loop.safety().status(ss)) {
-          tot.slew_joint_cycles += ss.slew_clamped_joint_ticks;
-          tot.joint_cycles += ss.ticks * static_cast<unsigned long long>(nj);
-        }
+        tot.slew_joint_cycles += rs.slew_clamped_joint_cycles;
+        tot.joint_cycles += rs.hal_cycles * static_cast<unsigned long long>(nj);
         if (fall_time < 0 || !restart_after_fall) break;
         // Go on after the segment it fell in (or after the first one of this episode when it
         // fell while standing before it), as long as the script has one left.

@@ -50,6 +50,8 @@ std::string RunSummary::text() const {
   }
   os << "\nmode requests posted " << mode_requests_posted << ", refused by the supervisor " << mode_requests_refused
      << "; telemetry frames written " << telemetry_written << ", dropped " << telemetry_dropped << "\n";
+  os << "supervisor: " << hal_cycles << " HAL cycles, joint-cycles clamped " << clamped_joint_cycles << ", of them by the slew limit "
+     << slew_clamped_joint_cycles << "\n";
   os << "final mode: " << toString(final_mode) << "; fault: " << toString(fault);
   if (fault != FaultCode::kNone) {
     std::snprintf(line, sizeof line, " (joint %d, value %.3f, at %.3f s)", fault_joint, fault_value, fault_time);
@@ -200,16 +202,18 @@ RunSummary ControllerApp::finish() {
     s.teleop_stale_events = t->status().stale_events;
   }
   hal::safety::SafetyStatus hs;
-  if (safety_->status(hs)) {
-    s.final_mode = hs.mode;
-    s.fault = hs.fault.code;
-    s.fault_joint = hs.fault.index;
-    if (s.fault_joint >= 0 && static_cast<std::size_t>(s.fault_joint) < config_.robot.joints.size())
-      s.fault_joint_name = config_.robot.joints[static_cast<std::size_t>(s.fault_joint)].name;
-    s.fault_time = hs.fault.time_s;
-    s.fault_value = hs.fault.value;
-    s.mode_requests_refused = hs.refused_requests;
-  }
+  safety_->status(hs);  // the newest status (fresh or not: the last cycle may have been read already)
+  s.final_mode = hs.mode;
+  s.fault = hs.fault.code;
+  s.fault_joint = hs.fault.index;
+  if (s.fault_joint >= 0 && static_cast<std::size_t>(s.fault_joint) < config_.robot.joints.size())
+    s.fault_joint_name = config_.robot.joints[static_cast<std::size_t>(s.fault_joint)].name;
+  s.fault_time = hs.fault.time_s;
+  s.fault_value = hs.fault.value;
+  s.mode_requests_refused = hs.refused_requests;
+  s.hal_cycles = hs.ticks;
+  s.clamped_joint_cycles = hs.clamped_joint_ticks;
+  s.slew_clamped_joint_cycles = hs.slew_clamped_joint_ticks;
   return s;
 }
 

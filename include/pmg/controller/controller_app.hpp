@@ -45,6 +45,9 @@ struct RunSummary {
   std::uint64_t lcm_rejected = 0;     ///< LCM command packets rejected (all causes)
   std::uint64_t reference_limited_ticks = 0;  ///< ticks the reference rate limiter acted
   std::uint64_t mode_requests_posted = 0, mode_requests_refused = 0;
+  /// HAL supervisor cycles, and joint-cycles whose command it clamped (position, velocity, gains,
+  /// torque or slew), of which by its slew limit (safety.q_rate_max): the motors got a later set-point.
+  std::uint64_t hal_cycles = 0, clamped_joint_cycles = 0, slew_clamped_joint_cycles = 0;
   std::uint64_t telemetry_written = 0, telemetry_dropped = 0;
   Mode final_mode = Mode::kPassive;
   FaultCode fault = FaultCode::kNone;  ///< the supervisor's latched fault at the end
