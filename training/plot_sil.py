@@ -3,11 +3,12 @@
 sim-to-sim joint error against an MJX rollout of the same sequence (training/eval_mjx.py).
 
   python3 training/plot_sil.py OUT/seed0.csv --out tracking.png [--mjx RUN/mjx_eval.npz --sim2sim s2s.png]
-      [--compare "LABEL=rollout.npz" ... --compare-out engines.png]
+      [--compare "LABEL=rollout.npz|other_seed.csv" ... --compare-out engines.png] [--label "SIL"]
 
---compare adds eval_mjx.py rollouts of the same sequence (any --physics, --pd-damping, --sim-dt) and
---compare-out plots their forward velocity and torso pitch (1 s moving means) against the SIL's and the
-command: which simulator setting reproduces the SIL's behaviour.
+--compare adds eval_mjx.py rollouts of the same sequence (any --physics, --pd-damping, --sim-dt), or
+other pmg_policy_sil seed CSVs of it (another HAL setting, say), and --compare-out plots their forward
+velocity and torso pitch (1 s moving means) against the SIL's (--label) and the command: which
+simulator setting reproduces the SIL's behaviour.
 """
 import argparse
 import csv
@@ -34,23 +35,29 @@ def moving_mean(x, n):
     return (c[k] - c[lo]) / (k - lo)
 
 
-def compare(t, d, items, out, csv_path):
+def compare(t, d, items, out, csv_path, main_label="MuJoCo 2.2 SIL"):
     """Forward velocity [m/s] (heading frame) and torso pitch [rad], 1 s moving means, of the SIL run and each
-    eval_mjx.py rollout (LABEL=npz; measured[:, 0] and [:, 6], one robot) against the command."""
+    eval_mjx.py rollout (LABEL=npz; measured[:, 0] and [:, 6], one robot) or SIL seed CSV (LABEL=csv; vx,
+    pitch) against the command."""
     dt = float(np.median(np.diff(t)))
     n = max(1, int(round(1.0 / dt)))
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     axes[0].plot(t, d["vx_cmd"], "--", color="0.5", lw=1, label="command")
     for item in items:
         label, path = item.split("=", 1)
+        if path.endswith(".csv"):
+            o, _ = load(path)
+            axes[0].plot(o["t"], moving_mean(o["vx"], n), lw=1.5, label=label)
+            axes[1].plot(o["t"], moving_mean(o["pitch"], n), lw=1.5, label=label)
+            continue
         m = np.load(path)
         meas = m["measured"] if m["measured"].ndim == 2 else m["measured"][0]
         alive = np.cumsum(m["done"] if m["done"].ndim == 1 else m["done"][0]) == 0
         tm = m["t"][alive]
         axes[0].plot(tm, moving_mean(meas[alive, 0], n), lw=1, label=label)
         axes[1].plot(tm, moving_mean(meas[alive, 6], n), lw=1, label=label)
-    axes[0].plot(t, moving_mean(d["vx"], n), "k", lw=2, label="MuJoCo 2.2 SIL")
-    axes[1].plot(t, moving_mean(d["pitch"], n), "k", lw=2, label="MuJoCo 2.2 SIL")
+    axes[0].plot(t, moving_mean(d["vx"], n), "k", lw=2, label=main_label)
+    axes[1].plot(t, moving_mean(d["pitch"], n), "k", lw=2, label=main_label)
     axes[0].set_ylabel("forward velocity [m/s], 1 s mean")
     axes[1].set_ylabel("torso pitch [rad], 1 s mean")
     axes[1].set_xlabel("time [s]")
@@ -71,12 +78,13 @@ def main():
     ap.add_argument("--sim2sim")
     ap.add_argument("--compare", action="append", default=[], metavar="LABEL=NPZ")
     ap.add_argument("--compare-out")
+    ap.add_argument("--label", default="MuJoCo 2.2 SIL", help="--compare-out: the legend of the main CSV's run")
     a = ap.parse_args()
     if bool(a.compare) != bool(a.compare_out):
         ap.error("--compare and --compare-out go together")
     for item in a.compare:
         if "=" not in item:
-            ap.error(f"--compare {item!r}: expected LABEL=rollout.npz")
+            ap.error(f"--compare {item!r}: expected LABEL=rollout.npz or LABEL=seed.csv")
     d, _ = load(a.csv)
     t = d["t"]
     pairs = [("vx", "forward velocity [m/s]"), ("vy", "lateral velocity [m/s]"), ("wz", "yaw rate [rad/s]"),
@@ -94,7 +102,7 @@ def main():
     fig.savefig(a.out, dpi=100)
     print("wrote", a.out)
     if a.compare:
-        compare(t, d, a.compare, a.compare_out, a.csv)
+        compare(t, d, a.compare, a.compare_out, a.csv, a.label)
     if a.mjx and a.sim2sim:
         m = np.load(a.mjx)
         n = min(len(t), len(m["t"]))

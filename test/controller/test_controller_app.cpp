@@ -294,13 +294,14 @@ TEST(ControllerApp, RefusesAPolicyOnClipsItWasNotTrainedOn) {
 
 // The supervisor's slew limit on commanded positions comes from the config (safety.q_rate_max) and
 // every joint-cycle it acts in is counted. The shipped actor steps its leg targets every tick, as in
-// training: at the former 20 rad/s the HAL held them back in most cycles of a walk (the SIL then
-// walked 20-40 % slower than the actor's own environment, training/README.md "The HAL's slew
-// limit"); at the default it lets them through.
+// training: at 20 rad/s (its config's, the value its settings were tuned with) the HAL holds them back
+// in most cycles of a walk (the SIL walks 20-40 % slower than the actor's own environment,
+// training/README.md "The HAL's slew limit"); at the HAL's default, 600 rad/s, it lets them through.
 TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
   const auto walk = [](double q_rate_max) {
     ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
-    if (q_rate_max > 0) config.q_rate_max = q_rate_max;
+    EXPECT_DOUBLE_EQ(config.q_rate_max, 20.0) << "the shipped config pins the value it was tuned with";
+    config.q_rate_max = q_rate_max;
     ControllerApp app(config);
     EXPECT_DOUBLE_EQ(app.safety().supervisor().options().envelope.q_rate_max, config.q_rate_max);
     CommandSample sample;
@@ -316,7 +317,8 @@ TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
     return st.slew_clamped_joint_ticks;
   };
   const std::uint64_t slow = walk(20.0);
-  const std::uint64_t fast = walk(-1.0);
+  const std::uint64_t fast = walk(HalStackConfig{}.q_rate_max);
+  EXPECT_DOUBLE_EQ(HalStackConfig{}.q_rate_max, 600.0);
   std::printf("[ SIL ] slew-limited joint-cycles over 4 s: %llu at 20 rad/s, %llu at the default\n",
               static_cast<unsigned long long>(slow), static_cast<unsigned long long>(fast));
   EXPECT_GT(slow, 1000u) << "20 rad/s holds back the actor's leg targets";

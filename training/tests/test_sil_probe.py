@@ -9,7 +9,8 @@ Why: for weeks the SIL walked 20-40 % slower than every actor's own environment 
 and nothing said why. The cause was the HAL supervisor's slew limit on commanded positions (then
 20 rad/s), which the environment does not have (training/README.md "The HAL's slew limit"). This test
 runs V20b (training/results/fidelity/fast20_gamma97) walking forward in the SIL with
-`pmg_policy_sil --probe` (features off, no noise) and compares with training/probe_sil.py:
+`pmg_policy_sil --probe --q-rate-max 600` (the HAL's default; features off, no noise) and compares with
+training/probe_sil.py:
 1. the runner: the actor (actor.npz, NumPy) on the SIL's observations gives the SIL's actions (1e-5);
 2. the observation: the SIL's joint velocities and default pose are the environment's (1e-5 rad/s,
    1e-6 rad), its projected gravity within 0.005, its gyro within 20 % of the signal (the IMU sensor
@@ -61,7 +62,7 @@ def main():
             raise SystemExit(f"FAIL {' '.join(cmd)}: exit {r.returncode}")
         return probe(csv, f"{RUN}/actor.npz")
 
-    r = run("default", [])
+    r = run("slew600", ["--q-rate-max", "600"])
     a = r["runner"]["action"]
     check(a["rms"] < 1e-5 and a["signal_rms"] > 0.1,
           f"runner: actor.npz on the SIL's observations gives its actions, rms {a['rms']:.1e} (actions rms {a['signal_rms']:.2f})")
