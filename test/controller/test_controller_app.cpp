@@ -243,7 +243,8 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
 // the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
 // also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:
 // upright walking and levelled stance soles, with the actor fine-tuned on them), and
-// g1_sil_policy_walking_height.yaml (the raised walking templates and their actor): the actor keeps the
+// g1_sil_policy_walking_height.yaml (the raised walking templates and their actor), and
+// g1_sil_policy_v20b.yaml (V20b, trained from scratch, at the HAL's default slew): the actor keeps the
 // G1 upright and walks it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
@@ -327,7 +328,8 @@ TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
-                                                           "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml"));
+                                                           "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml",
+                                                           "g1_sil_policy_v20b.yaml"));
 
 }  // namespace
 }  // namespace pmg
