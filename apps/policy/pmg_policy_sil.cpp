@@ -71,7 +71,11 @@
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
 // command before the feedback, --feedback-within-envelopes on|off), <out>/frames<k>.csv and
-// <out>/summary.json.
+// <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
+// supervisor's slew limit, hal_q_rate_max, held a joint's command back; --q-rate-max sets it).
+// --probe FILE writes the first seed's first episode tick by tick for training/probe_sil.py: MuJoCo's
+// qpos/qvel when the tick read its state, the state it read, the actor's observation and action, the
+// motor commands it wrote, and hal_slew, the joint-cycles the slew held back since the previous row.
 #include <algorithm>
 #include <array>
 #include <atomic>
