@@ -175,17 +175,15 @@ def main(argv=None):
 
 def probe(probe_csv, actor, sil_mjcf="config/robots/g1/g1_29dof_rev_1_0.xml", substeps=10, physics=True):
     """The three comparisons (module docstring) as a dict; SystemExit naming the file on bad input."""
-    from types import SimpleNamespace
-    args = SimpleNamespace(probe=probe_csv, actor=actor, sil_mjcf=os.path.abspath(sil_mjcf), substeps=substeps,
-                           skip_physics=not physics)
-    cols = read_probe(args.probe)
-    npz = np.load(args.actor)
+    sil_mjcf = os.path.abspath(sil_mjcf)
+    cols = read_probe(probe_csv)
+    npz = np.load(actor)
     active = cols["mode"] == "active"
     if active.sum() < 2:
-        raise SystemExit(f"{args.probe}: fewer than 2 ticks in mode active")
+        raise SystemExit(f"{probe_csv}: fewer than 2 ticks in mode active")
     obs, act = block(cols, "obs"), block(cols, "action")
     qpos, qvel = block(cols, "qpos"), block(cols, "qvel")
-    res = {"probe": args.probe, "actor": args.actor, "ticks_active": int(active.sum())}
+    res = {"probe": probe_csv, "actor": actor, "ticks_active": int(active.sum())}
     slew = cols.get("hal_slew")
     if slew is not None:  # joint-cycles the HAL's slew limit held back in the period before each row
         res["hal_slew"] = {"periods with a slew-limited joint": float(np.mean(slew[active] > 0)),
@@ -218,13 +216,13 @@ def probe(probe_csv, actor, sil_mjcf="config/robots/g1/g1_29dof_rev_1_0.xml", su
     res["observation"]["implied q_default (mean)"] = [float(x) for x in q_default_sil.mean(axis=0)]
 
     # 3. physics
-    if not args.skip_physics:
+    if physics:
         import mujoco
         from eval_mjx import env_from_train_config
         from pmg_train.g1_env import EnvConfig, G1PmgEnv
         from pmg_train.paths import repo_root
         cmd = {k: block(cols, f"cmd_{k}") for k in ("q", "qd", "kp", "kd", "tau")}
-        tc = os.path.join(os.path.dirname(os.path.abspath(args.actor)), "train_config.json")
+        tc = os.path.join(os.path.dirname(os.path.abspath(actor)), "train_config.json")
         cwd = os.getcwd()
         os.chdir(repo_root(None))
         trained = env_from_train_config(tc if os.path.exists(tc) else None)
@@ -232,10 +230,10 @@ def probe(probe_csv, actor, sil_mjcf="config/robots/g1/g1_29dof_rev_1_0.xml", su
         res["observation"]["env q_default"] = [float(x) for x in env.q_default[:LEG]]
         phys = []
         m_env = env.mj_model
-        phys.append(physics_compare(m_env, qpos, qvel, cmd, active, args.substeps, slew, label="env model, MuJoCo "
+        phys.append(physics_compare(m_env, qpos, qvel, cmd, active, substeps, slew, label="env model, MuJoCo "
                                     + mujoco.__version__))
-        m_sil = mujoco.MjModel.from_xml_string(sil_mjcf_text(args.sil_mjcf))
-        phys.append(physics_compare(m_sil, qpos, qvel, cmd, active, args.substeps, slew, label="SIL MJCF, MuJoCo "
+        m_sil = mujoco.MjModel.from_xml_string(sil_mjcf_text(sil_mjcf))
+        phys.append(physics_compare(m_sil, qpos, qvel, cmd, active, substeps, slew, label="SIL MJCF, MuJoCo "
                                     + mujoco.__version__))
         res["physics"] = phys
         os.chdir(cwd)
