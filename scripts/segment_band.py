@@ -10,7 +10,9 @@ segments whose achieved value is within the band
 (issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the posture segments
 against pitch / roll within 0.03 rad and height within 0.015 m, for each missed velocity segment
 the share of its window in which the velocity feedback was held or decayed (when the summary has
-it), the torso roll in the side-steps
+it), the runaways (a segment moving beyond its command, or through a stop, by more than half the
+command and 0.2 m/s / 0.3 rad/s, with the controller's velocity estimate beside it), the torso roll
+in the side-steps
 and, in every segment, the torso pitch or roll that it does not command (cross-coupling, target
 <= 0.05 rad). Frames: commands and achieved velocities in the robot's
 heading frame, as pmg_policy_sil writes them. A segment that no seed reached (every seed fell
@@ -24,6 +26,10 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # The issue's bands, as the envelope plot draws them (one definition).
 from plot_segments import COUPLING_ABS, POSTURE_ABS, VEL_ABS, VEL_REL, neutral_height  # noqa: E402
+
+
+# A runaway: |achieved| beyond |command| by more than RUNAWAY_REL |command| and RUNAWAY_ABS [m/s, rad/s].
+RUNAWAY_REL, RUNAWAY_ABS = 0.5, {"vx": 0.2, "vy": 0.2, "wz": 0.3}
 
 
 def in_band(cmd, ach, tol):
@@ -95,6 +101,23 @@ def score(path):
     worst = max((abs(a) for _, _, a in uncommanded), default=0.0)
     print(f"cross-coupling beyond {COUPLING_ABS} rad (pitch/roll not commanded, every segment; largest {worst:.3f}): "
           f"{', '.join(coupling) or 'none'}")
+    # Runaways: the robot moving well beyond its command on an axis, in the commanded direction or
+    # with none commanded (a stop it runs on through): what a user fears more than a shortfall, and
+    # what the band alone lists as one miss among many. With the velocity estimate the controller
+    # acted on beside it (pmg_policy_sil's `estimate`, the velocity feedback's): a runaway that estimate
+    # does not see is one the velocity feedback cannot correct.
+    runaways = []
+    for s in segs:
+        for axis, floor in RUNAWAY_ABS.items():
+            cmd, ach = s["command"][axis], s["achieved"][axis]
+            if abs(ach) <= abs(cmd) or (abs(cmd) > 1e-9 and ach * cmd < 0.0):
+                continue
+            if abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), floor):
+                est = (s.get("estimate") or {}).get(axis)
+                runaways.append(f"{s['name']} {axis} {ach:+.3f} of {cmd:+.3f}" +
+                                (f" (estimated {est:+.3f})" if est is not None else ""))
+    print(f"runaways (beyond the command by more than {RUNAWAY_REL:.0%} of it or "
+          f"{RUNAWAY_ABS['vx']} m/s / {RUNAWAY_ABS['wz']} rad/s): {', '.join(runaways) or 'none'}")
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
     where = [f"{s['name']} {s['fallen']}" for s in summary["segments"] if s.get("fallen", 0)]
     print(f"seeds fallen (summed over segments): {falls}" + (f"; in {', '.join(where)}" if where else ""))

@@ -6,7 +6,9 @@ walk rolling 0.06 rad (cross-coupling beyond 0.05 rad), the bend itself on targe
 fallen in the backward walk (named with the segment), and the velocity feedback held for 25 % and
 decayed for 40 % of the backward walk's window (named with the missed segment), and a crouched walk
 that no seed reached (every seed fell before its window: `achieved` all null), a miss on both axes
-it commands.
+it commands. Runaways: a crouched backward walk at 2.2 times its command that the controller's
+estimate reads at 1.2 times, and the stop after it still moving 0.3 m/s, are named; a forward walk
+at 1.4 times (0.2 m/s over) and a turn the wrong way are not.
 Usage: test_segment_band.py
 """
 import json
@@ -35,6 +37,11 @@ def main():
         seg("bent_walk", {"vx": 0.3, "pitch": 0.25}, {"vx": 0.3, "pitch": 0.25, "roll": 0.06}),
         {**seg("crouch_walk", {"vx": 0.4, "height": 0.68}, {}), "seeds": 0, "fallen": 2,
          "achieved": {k: None for k in ("vx", "vy", "wz", "pitch", "roll", "height")}},
+        {**seg("back_crouched", {"vx": -0.5, "height": 0.74}, {"vx": -1.1, "height": 0.74}),
+         "estimate": {"vx": -0.6, "vy": 0.0, "wz": 0.0, "pitch": None, "roll": None, "height": 0.74}},
+        seg("stop_back_crouched", {"height": 0.74}, {"vx": -0.3, "height": 0.74}),
+        seg("fwd_fast", {"vx": 0.5}, {"vx": 0.7}),
+        seg("turn_wrong_way", {"wz": 0.5}, {"wz": -0.6}),
     ]}
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "summary.json")
@@ -44,9 +51,12 @@ def main():
                              capture_output=True, text=True, check=True).stdout
     print(out)
     expect = [
-        "vx: 2/4 in band; misses: back (-0.400 of -0.500), crouch_walk (no seed in its window)",
+        "vx: 2/6 in band; misses: back (-0.400 of -0.500), back_crouched (-1.100 of -0.500), "
+        "fwd_fast (+0.700 of +0.500), crouch_walk (no seed in its window)",
         "vy: 1/1 in band; misses: none",
-        "velocity segments in band: 3/5",
+        "velocity segments in band: 3/8",
+        "runaways (beyond the command by more than 50% of it or 0.2 m/s / 0.3 rad/s): back_crouched vx -1.100 "
+        "of -0.500 (estimated -0.600), stop_back_crouched vx -0.300 of +0.000",
         "posture misses: crouch height +0.640 of +0.620, crouch_walk height (no seed in its window)",
         "torso roll in the side-steps: 0.070-0.070 rad",
         "cross-coupling beyond 0.05 rad (pitch/roll not commanded, every segment; largest 0.070): "
