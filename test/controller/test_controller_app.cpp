@@ -279,6 +279,40 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
               app.controller().lastState().base_position[0], min_height);
 }
 
+// Crouched to 0.74 m and told to walk backward 0.5 m/s, then to stop: the default actor walks at its
+// command and stops (here -0.46 m/s, and 0.07 m/s at most 2-3 s after the stop). The actors of V20b's
+// recipe break into a faster backward gait there and run on through the stop (training/README.md
+// "V20b's recipe over three seeds"): with g1_sil_policy_v20b.yaml this test measures -0.92 m/s and
+// 0.69 m/s, with V20e's config -1.19 and 2.19, and fails, so a default actor that runs away crouched
+// cannot ship unnoticed. Velocities are the pelvis's, world frame (the robot starts facing +x; the
+// heading drifts a few degrees at most).
+TEST(ControllerApp, DefaultWalksBackwardCrouchedAtItsCommandAndStops) {
+  ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  ControllerApp app(config);
+  CommandSample sample;
+  sample.command.height = 0.74;
+  double walk_vx = 0.0, stop_speed = 0.0, min_height = 10.0;
+  int walk_n = 0;
+  for (int k = 0; k < 1000; ++k) {  // 0-3 s crouch, 3-7 s backward, 7-10 s stop
+    const double now = k * 0.01;
+    sample.velocity_time = sample.posture_time = now;
+    sample.command.vx = now >= 3.0 && now < 7.0 ? -0.5 : 0.0;
+    app.stepLockstep(sample);
+    const auto& st = app.controller().lastState();
+    min_height = std::min(min_height, st.base_position[2]);
+    if (now >= 4.6 && now < 7.0) walk_vx += st.base_linear_velocity[0], ++walk_n;  // last 60 % of the walk
+    if (now >= 9.0) stop_speed = std::max(stop_speed, std::hypot(st.base_linear_velocity[0], st.base_linear_velocity[1]));
+  }
+  walk_vx /= walk_n;
+  std::printf("[ SIL ] crouched 0.74 m, backward 0.5 m/s: %.3f m/s; largest speed 2-3 s after the stop %.3f m/s\n",
+              walk_vx, stop_speed);
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+  EXPECT_GT(min_height, 0.5) << "the robot fell";
+  EXPECT_LT(walk_vx, -0.35) << "walked backward at its command, not short of it";
+  EXPECT_GT(walk_vx, -0.7) << "a runaway: beyond the command by 0.2 m/s";
+  EXPECT_LT(stop_speed, 0.2) << "stopped";
+}
+
 // The controller refuses to start an actor on clips other than those it was trained on
 // (pmg.clips_digest, docs/policy.md "The contract"): wh6hs, trained on the raised walking
 // templates, on the captured ones; its own config starts (PolicyConfigTest).
