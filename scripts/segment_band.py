@@ -110,9 +110,8 @@ def score(path):
     for s in segs:
         for axis, floor in RUNAWAY_ABS.items():
             cmd, ach = s["command"][axis], s["achieved"][axis]
-            if abs(ach) <= abs(cmd) or (abs(cmd) > 1e-9 and ach * cmd < 0.0):
-                continue
-            if abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), floor):
+            wrong_way = abs(cmd) > 1e-9 and ach * cmd < 0.0  # a miss, not a runaway
+            if not wrong_way and abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), floor):
                 est = (s.get("estimate") or {}).get(axis)
                 runaways.append(f"{s['name']} {axis} {ach:+.3f} of {cmd:+.3f}" +
                                 (f" (estimated {est:+.3f})" if est is not None else ""))
