@@ -400,11 +400,15 @@ class EnvConfig:
     # Reward weights (per control step). foot_slip multiplies the summed horizontal speed [m/s] of the
     # feet touching the floor (a penalty when negative; 0, the default, leaves it out of the reward): the
     # actors trained from scratch slide their stance feet (0.12-0.30 m/s in the SIL against the default's
-    # 0.07; training/README.md "A foot-slip penalty").
+    # 0.07; training/README.md "A foot-slip penalty"). lin_vel_abs and yaw_rate_abs multiply the tracking
+    # errors themselves, |u_xy - v_xy| [m/s] and |u_w - w_z| [rad/s] (penalties when negative; 0 leaves them
+    # out): the Gaussian terms above are flat beyond about two widths (with sigma 0.05, past 0.3 m/s of error
+    # exp(-err^2/sigma) < 0.2 % of its weight), so an actor that overshoots a command by more has no gradient
+    # back towards it from them (training/README.md "A linear tracking-error penalty").
     w: dict = dataclasses.field(default_factory=lambda: {
         "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
         "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0,
-        "foot_slip": 0.0})
+        "foot_slip": 0.0, "lin_vel_abs": 0.0, "yaw_rate_abs": 0.0})
 
 
 def _quat_to_rot(q):
@@ -1116,6 +1120,8 @@ class G1PmgEnv(Env):
                   w["alive"] + w["termination"] * done)
         if w.get("foot_slip", 0.0) != 0.0:  # configs saved before the term have no entry
             reward = reward + w["foot_slip"] * foot_slip
+        if w.get("lin_vel_abs", 0.0) != 0.0 or w.get("yaw_rate_abs", 0.0) != 0.0:
+            reward = reward + w.get("lin_vel_abs", 0.0) * jnp.sqrt(lin_err) + w.get("yaw_rate_abs", 0.0) * jnp.sqrt(yaw_err)
         reward = jnp.where(jnp.isfinite(reward), reward, 0.0)
 
         info["prev_action"] = info["last_action"]

@@ -28,7 +28,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    previous GCO state: u' to 1e-3) and the phase advances by the port's own update; the foot_slip
    metric equals the recorded feet's horizontal speed while touching (and stays below 0.05 m/s
    standing), and with EnvConfig.w["foot_slip"] = -1 a state shoved at 0.8 m/s loses exactly its slip
-   from the reward.
+   from the reward; with w["lin_vel_abs"] = -1 and w["yaw_rate_abs"] = -0.5 it loses exactly its
+   velocity error plus half its yaw-rate error.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
    effect on; part 1's env is built with a calibrated robot config written into the workdir (left
@@ -269,6 +270,17 @@ def env_checks(check, env, n_envs, n_steps):
     check(float(plain.metrics["foot_slip"]) > 0.05 and abs(lost - float(plain.metrics["foot_slip"])) < 1e-4,
           f"foot_slip weight -1: a robot shoved at 0.8 m/s slides {float(plain.metrics['foot_slip']):.3f} m/s "
           f"(> 0.05) and its reward drops by that ({lost:.4f})")
+    # The linear tracking-error penalties: with lin_vel_abs = -1 and yaw_rate_abs = -0.5 the shoved state
+    # loses its velocity error [m/s] plus half its yaw-rate error [rad/s], from the step's own metrics.
+    linear = copy.copy(env)
+    linear.cfg = dataclasses.replace(cfg, w=dict(cfg.w, lin_vel_abs=-1.0, yaw_rate_abs=-0.5))
+    tracked = jax.jit(linear.step)(st, zero)
+    want = float(plain.metrics["lin_vel_err"]) + 0.5 * float(plain.metrics["yaw_rate_err"])
+    lost = float(plain.reward - tracked.reward)
+    check(float(plain.metrics["lin_vel_err"]) > 0.3 and abs(lost - want) < 1e-4,
+          f"lin_vel_abs -1, yaw_rate_abs -0.5: the shoved robot misses its command by "
+          f"{float(plain.metrics['lin_vel_err']):.3f} m/s (> 0.3) and {float(plain.metrics['yaw_rate_err']):.3f} rad/s, "
+          f"and its reward drops by {want:.4f} ({lost:.4f})")
 
     # References in the (noise-free) privileged observation against the float64 NumPy ports.
     phase = np.asarray(info["phase"], np.float64)                # (T+1, n)
