@@ -37,7 +37,9 @@ of apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for
 whose actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
 means and the reward per step over the last 60 % of the segment (pmg_policy_sil's per-segment window), so
 that an actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise
-false`).
+false`), and over the same windows the gait (segment_gait: the share of ticks in flight and in double
+support, contact onsets per second per foot, the speed of a touching foot), which tells a walk from a run,
+a hop or a shuffle.
 """
 import argparse
 import dataclasses
@@ -83,6 +85,33 @@ def segment_means(t, command, achieved, spans, alive):
         sel = window[None, :] & alive
         out.append((name, command[window].mean(0) if window.any() else np.full(6, np.nan),
                     achieved[sel].mean(0) if sel.any() else None))
+    return out
+
+
+def segment_gait(t, contact, foot_speed, spans, alive, dt):
+    """Per segment: the gait over the last 60 % of the segment (pmg_policy_sil's window), pooled over the
+    robots alive there, as a dict, or None where none is: "flight" and "double" (share of ticks with no foot
+    and with both feet touching the floor), "touchdowns_per_s" (contact onsets per second per foot, both
+    feet pooled) and "slip" (mean horizontal speed [m/s] of a touching foot). contact (robots, ticks, 2)
+    bool, the environment's foot contacts (left, right); foot_speed (robots, ticks, 2) [m/s], each foot's
+    ankle_roll_link origin speed over the tick that ends there; alive (robots, ticks) bool; dt [s] the tick.
+    A walk that follows a PMG gait has no flight; an actor that hops or runs has flight, and one that
+    shuffles has double support most of the time and slips (training/README.md "A linear tracking-error
+    penalty", where this found V20e's crouched backward run: 45 % flight)."""
+    onset = np.zeros_like(contact)
+    onset[:, 1:] = contact[:, 1:] & ~contact[:, :-1]
+    out = []
+    for name, t0, t1 in spans:
+        window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        sel = window[None, :] & alive
+        if not sel.any():
+            out.append(None)
+            continue
+        c = contact[sel]  # (ticks pooled, 2)
+        touching = c & (foot_speed[sel] >= 0)
+        out.append({"flight": float(np.mean(~c.any(axis=1))), "double": float(np.mean(c.all(axis=1))),
+                    "touchdowns_per_s": float(onset[sel].sum() / (2 * sel.sum() * dt)),
+                    "slip": float(foot_speed[sel][touching].mean()) if touching.any() else float("nan")})
     return out
 
 
@@ -304,6 +333,15 @@ def main(argv=None):
                  zip(c_seg, a_seg if a_seg is not None else c_seg)]
         print(f"{name:14s} " + " ".join(cells) + ("    fell" if r is None else f" {r[0]:7.3f}")
               + ("" if n == 1 else f"  {f:4d}"))
+    contact = meas[..., 4:6] > 0.5
+    speed = np.concatenate([np.full_like(foot_speed[:, :1], np.nan), foot_speed], axis=1)  # (robots, ticks, 2)
+    gait = segment_gait(t, contact, np.nan_to_num(speed, nan=-1.0), spans, alive, cfg.control_dt)
+    print("gait per segment (same windows): share of ticks with no foot / both feet on the floor, "
+          "contact onsets per second per foot, speed of a touching foot [m/s]")
+    print(f"{'segment':14s}  flight  double  onsets/s   slip")
+    for (name, _, _), g in zip(per_segment, gait):
+        print(f"{name:14s} " + ("   fell" if g is None else
+                                f" {g['flight']:6.2f}  {g['double']:6.2f}  {g['touchdowns_per_s']:8.2f}  {g['slip']:5.3f}"))
     if n == 1:  # one nominal robot: the arrays without the robot axis, as before --randomized
         rec, start = {k: v[0] for k, v in rec.items()}, start[0]
     np.savez(args.out, t=t, command=cm, **rec, metrics=np.array([str(metrics)]),
@@ -312,7 +350,9 @@ def main(argv=None):
              segment_names=np.array([n for n, _, _ in per_segment]),
              segment_command=np.array([c for _, c, _ in per_segment]),
              segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]),
-             segment_reward=np.array([r[0] if r is not None else np.nan for r in reward]))
+             segment_reward=np.array([r[0] if r is not None else np.nan for r in reward]),
+             segment_gait=np.array([[np.nan] * 4 if g is None else [g["flight"], g["double"], g["touchdowns_per_s"],
+                                     g["slip"]] for g in gait]))  # columns: flight, double, onsets/s, slip
     return metrics
 
 
