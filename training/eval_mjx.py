@@ -94,10 +94,11 @@ def segment_gait(t, contact, foot_speed, spans, alive, dt):
     and with both feet touching the floor), "touchdowns_per_s" (contact onsets per second per foot, both
     feet pooled) and "slip" (mean horizontal speed [m/s] of a touching foot). contact (robots, ticks, 2)
     bool, the environment's foot contacts (left, right); foot_speed (robots, ticks, 2) [m/s], each foot's
-    ankle_roll_link origin speed over the tick that ends there; alive (robots, ticks) bool; dt [s] the tick.
+    ankle_roll_link origin speed over the tick that ends there, negative where it is unknown (the first
+    tick; left out of "slip"); alive (robots, ticks) bool; dt [s] the tick.
     A walk that follows a PMG gait has no flight; an actor that hops or runs has flight, and one that
-    shuffles has double support most of the time and slips (training/README.md "A linear tracking-error
-    penalty", where this found V20e's crouched backward run: 45 % flight)."""
+    shuffles has double support most of the time and slips (training/README.md "The runaway is a run",
+    where this found V20e's crouched backward run: 45 % flight)."""
     onset = np.zeros_like(contact)
     onset[:, 1:] = contact[:, 1:] & ~contact[:, :-1]
     out = []

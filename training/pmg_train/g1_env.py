@@ -404,7 +404,7 @@ class EnvConfig:
     # errors themselves, |u_xy - v_xy| [m/s] and |u_w - w_z| [rad/s] (penalties when negative; 0 leaves them
     # out): the Gaussian terms above are flat beyond about two widths (with sigma 0.05, past 0.3 m/s of error
     # exp(-err^2/sigma) < 0.2 % of its weight), so an actor that overshoots a command by more has no gradient
-    # back towards it from them (training/README.md "A linear tracking-error penalty"). flight multiplies 1 on
+    # back towards it from them (training/README.md "The runaway is a run"). flight multiplies 1 on
     # a control step that ends with neither foot touching the floor (a penalty when negative; 0 leaves it
     # out): PMG's gaits are walks and never leave the floor, while the actors trained from scratch run their
     # crouched backward walks away with both feet off the floor for 32-51 % of the time (the default: 5-13 %;

@@ -77,7 +77,8 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    trained on; progress.jsonl reached the step count
    with finite metrics, the mirror loss among them (> 0: Brax ran the patched loss); both devices were used; the same actor marked as trained with residual
    actions (action_offset "reference") is refused by the export.
-2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s): the environment runs the schedule's
+2b. eval_mjx.py on that actor over a two-segment schedule (0.4 s) (its per-segment flight and double
+   support equal the recorded contacts): the environment runs the schedule's
    command every tick and reports both segments' commanded means; it is the run's environment
    (train_config.json beside the actor: the run's reward widths and clips) made nominal; with
    --start-reference it starts in the first command's reference pose (pelvis within 0.04 m of its height);
@@ -761,6 +762,16 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
     check(list(z["segment_names"]) == ["walk", "back"] and np.allclose(z["segment_command"], want, atol=1e-6) and
           z["segment_achieved"].shape == (2, 6),
           f"eval_mjx: per-segment commanded means {np.round(z['segment_command'], 3).tolist()}")
+    # The gait columns (flight, double support) equal the recorded contacts over each segment's window.
+    contact = z["measured"][:, 4:6] > 0.5
+    t = z["t"]
+    want_gait = []
+    for t0, t1 in ((0.0, 0.2), (0.2, 0.4)):
+        w = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        want_gait.append([np.mean(~contact[w].any(axis=1)), np.mean(contact[w].all(axis=1))])
+    check(z["segment_gait"].shape == (2, 4) and np.allclose(z["segment_gait"][:, :2], want_gait),
+          f"eval_mjx: per-segment flight and double support {np.round(z['segment_gait'][:, :2], 3).tolist()} = "
+          f"the recorded contacts' {np.round(want_gait, 3).tolist()}")
     env = json.loads(str(z["env_config"]))
     check(env["lin_vel_sigma"] == tc["env"]["lin_vel_sigma"] == 0.05 and env["clips"] == tc["env"]["clips"] and
           env["deterministic_reset"] and env["p_delay"] == 0.0 and not any(env["noise"].values()),
