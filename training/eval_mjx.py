@@ -94,8 +94,8 @@ def segment_gait(t, contact, foot_speed, spans, alive, dt):
     and with both feet touching the floor), "touchdowns_per_s" (contact onsets per second per foot, both
     feet pooled) and "slip" (mean horizontal speed [m/s] of a touching foot). contact (robots, ticks, 2)
     bool, the environment's foot contacts (left, right); foot_speed (robots, ticks, 2) [m/s], each foot's
-    ankle_roll_link origin speed over the tick that ends there, negative where it is unknown (the first
-    tick; left out of "slip"); alive (robots, ticks) bool; dt [s] the tick.
+    ankle_roll_link origin speed over the tick that ends there, NaN where it is unknown (the first tick;
+    left out of "slip"); alive (robots, ticks) bool; dt [s] the tick.
     A walk that follows a PMG gait has no flight; an actor that hops or runs has flight, and one that
     shuffles has double support most of the time and slips (training/README.md "The runaway is a run",
     where this found V20e's crouched backward run: 45 % flight)."""
@@ -109,7 +109,7 @@ def segment_gait(t, contact, foot_speed, spans, alive, dt):
             out.append(None)
             continue
         c = contact[sel]  # (ticks pooled, 2)
-        touching = c & (foot_speed[sel] >= 0)
+        touching = c & np.isfinite(foot_speed[sel])
         out.append({"flight": float(np.mean(~c.any(axis=1))), "double": float(np.mean(c.all(axis=1))),
                     "touchdowns_per_s": float(onset[sel].sum() / (2 * sel.sum() * dt)),
                     "slip": float(foot_speed[sel][touching].mean()) if touching.any() else float("nan")})
@@ -336,7 +336,7 @@ def main(argv=None):
               + ("" if n == 1 else f"  {f:4d}"))
     contact = meas[..., 4:6] > 0.5
     speed = np.concatenate([np.full_like(foot_speed[:, :1], np.nan), foot_speed], axis=1)  # (robots, ticks, 2)
-    gait = segment_gait(t, contact, np.nan_to_num(speed, nan=-1.0), spans, alive, cfg.control_dt)
+    gait = segment_gait(t, contact, speed, spans, alive, cfg.control_dt)
     print("gait per segment (same windows): share of ticks with no foot / both feet on the floor, "
           "contact onsets per second per foot, speed of a touching foot [m/s]")
     print(f"{'segment':14s}  flight  double  onsets/s   slip")
