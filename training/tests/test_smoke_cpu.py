@@ -10,8 +10,9 @@ steps run fast enough without). It installs nothing. A missing environment is a 
 PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
-it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as two tests
-(training_smoke_env: 1 to 1h, training_smoke_ppo: 2) so that they compile in parallel. Compiling an
+it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as three tests
+(training_smoke_env: 1 to 1h, training_smoke_ppo: 2, training_smoke_eval: 2b on part 2's actor, after
+it) so that the environment's compiles run beside the other two. Compiling an
 env's reset and step takes most of the time, so parts 1 to 1e share one env with every training
 option on (make_smoke_env), compiled once; the default configuration is the PPO run's (2).
 
@@ -67,8 +68,12 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 1h. PD damping (EnvConfig.pd_damping, no compile): "implicit" puts kd into the joints' damping (0.05 + kd)
    and the DR draws it within kd_scale; "explicit" leaves 0.05 in the model and in every draw; others
    are refused.
-2. One tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host devices,
-   two training steps of 80 env steps, the first in the reward-width warm-up (--warmup-steps), 32-32 MLPs,
+2. The reward-width warm-up's staging (--warmup-steps 400 of 1000, train_pmg.main with Brax's ppo.train
+   replaced by a recorder, nothing compiled): the warm-up environment (its widths, the run's other fields)
+   trains 400 steps without evaluations, then the run's environment the remaining 600 from the
+   warm-up's parameters with seed + 1; progress.jsonl marks the stages; Brax's Evaluator and loss are
+   restored. Then one tiny PPO run through the real entry point (train_pmg.main: 8 envs on both host
+   devices, two training steps of 80 env steps in one stage (a warm-up would compile it all twice), 32-32 MLPs,
    no evaluation rollouts, half the episodes from the reference's pose (--p-reset-reference 0.5), the
    mirror-symmetry loss at
    weight 0.5): checkpoint, actor.npz and ONNX
@@ -656,13 +661,13 @@ def ppo_checks(check, workdir, obs):
 
     out = os.path.join(workdir, "ppo")
     n_dev = len(jax.local_devices())
-    # Two training steps (batch 8 x 2 minibatches x unroll 5 = 80 env steps each): the first in the
-    # reward-width warm-up (--warmup-steps), the second with the run's own widths, from the first's params.
-    timesteps, warmup = 160, 80
+    # Two training steps (batch 8 x 2 minibatches x unroll 5 = 80 env steps each), in one ppo.train. The
+    # reward-width warm-up (--warmup-steps) would compile the whole training step a second time (160 s on
+    # CI's CPUs); its staging is checked without compiling (warmup_staging_checks).
+    timesteps = 160
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
             "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
-            "--warmup-steps", str(warmup), "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03",
             "--p-reset-reference", "0.5"]
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
@@ -686,10 +691,9 @@ def ppo_checks(check, workdir, obs):
           f"the mirror-symmetry loss ran inside Brax's PPO (--mirror-loss 0.5): training/mirror_loss "
           f"{last.get('training/mirror_loss')}")
     stages = [(r.get("stage"), r.get("step")) for r in recs]
-    check(stages[0] == ("warmup", warmup) and stages[-1][0] == "main" and stages[-1][1] >= timesteps and
-          tc.get("warmup") == {"steps": warmup, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03} and
+    check(all(st == "main" for st, _ in stages) and tc.get("warmup") is None and
           tc["env"]["lin_vel_sigma"] == 0.05 and tc["env"]["p_reset_reference"] == 0.5,
-          f"the warm-up ran first with its own widths, then the run's (stage, step): {stages}; "
+          f"without --warmup-steps one stage with the run's widths (stage, step): {stages}; "
           f"train_config warmup {tc.get('warmup')}, env lin_vel_sigma {tc['env']['lin_vel_sigma']}, "
           f"p_reset_reference {tc['env']['p_reset_reference']}")
     check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
@@ -729,7 +733,75 @@ def ppo_checks(check, workdir, obs):
         msg = str(e)
     check("action_offset" in msg and not os.path.exists(os.path.join(out, "residual.onnx")),
           f"a residual actor is refused by the export, naming action_offset ({msg[:60]}...)")
-    mjx_eval_checks(check, workdir, out, tc)
+
+
+class _MainStageReached(Exception):
+    pass
+
+
+def warmup_staging_checks(check, workdir):
+    """2. The reward-width warm-up's staging in train_pmg.main (--warmup-steps), with Brax's ppo.train
+    replaced by a recorder, so nothing compiles: the first call trains the warm-up environment (the
+    warm-up widths, every other field the run's) for --warmup-steps without evaluations; the second
+    trains the run's environment for the remaining steps from the first call's parameters with the
+    next seed; progress.jsonl marks the stages and numbers the second's steps from the warm-up's end;
+    Brax's Evaluator and PPO loss are Brax's own again afterwards."""
+    import train_pmg
+    from brax.training.agents.ppo import train as ppo
+
+    out = os.path.join(workdir, "staging")
+    calls = []
+    warmup_params = {"warm-up": "params"}
+
+    def recorder(environment, **kw):
+        calls.append({"cfg": environment.cfg, "evaluator": ppo.acting.Evaluator, **kw})
+        kw["progress_fn"](kw["num_timesteps"], {"training/policy_loss": 0.5})
+        if len(calls) == 1:
+            return None, warmup_params, {}
+        raise _MainStageReached()
+
+    argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
+            "--timesteps", "1000", "--num-evals", "2", "--num-eval-envs", "4", "--episode-length", "20",
+            "--hidden", "32,32", "--seed", "7", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
+            "--warmup-steps", "400", "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03"]
+    train, evaluator, loss = ppo.train, ppo.acting.Evaluator, ppo.ppo_losses.compute_ppo_loss
+    if os.path.exists(os.path.join(out, "progress.jsonl")):
+        os.remove(os.path.join(out, "progress.jsonl"))
+    cwd = os.getcwd()
+    ppo.train = recorder
+    reached = False
+    try:
+        train_pmg.main(argv)
+    except _MainStageReached:
+        reached = True
+    finally:
+        ppo.train = train
+        os.chdir(cwd)
+    check(reached and len(calls) == 2, f"--warmup-steps: train_pmg.main calls ppo.train twice ({len(calls)} calls)")
+    if len(calls) != 2:
+        return
+    w, m = calls
+    same = [k for k in ("clips", "friction", "p_reset_reference", "noise", "push_vel")
+            if getattr(w["cfg"], k) == getattr(m["cfg"], k)]
+    check(w["num_timesteps"] == 400 and not w["run_evals"] and w["num_evals"] == 1 and w["restore_params"] is None and
+          (w["cfg"].lin_vel_sigma, w["cfg"].yaw_rate_sigma, w["cfg"].height_sigma) == (0.3, 0.3, 0.03) and
+          len(same) == 5 and w["evaluator"] is not evaluator,
+          f"warm-up stage: {w['num_timesteps']} steps, no evaluations (a stand-in Evaluator), widths "
+          f"{(w['cfg'].lin_vel_sigma, w['cfg'].yaw_rate_sigma, w['cfg'].height_sigma)}, the run's {same}")
+    check(m["num_timesteps"] == 600 and m["restore_params"] is warmup_params and m["seed"] == 8 and m["run_evals"] and
+          (m["cfg"].lin_vel_sigma, m["cfg"].yaw_rate_sigma) == (0.05, 0.05) and m["evaluator"] is evaluator,
+          f"main stage: the remaining {m['num_timesteps']} steps from the warm-up's parameters, seed {m['seed']} "
+          f"(the run's 7 + 1), widths {(m['cfg'].lin_vel_sigma, m['cfg'].yaw_rate_sigma)}, Brax's Evaluator")
+    with open(os.path.join(out, "progress.jsonl")) as f:
+        stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
+    with open(os.path.join(out, "train_config.json")) as f:
+        tc = json.load(f)
+    check(stages == [("warmup", 400), ("main", 1000)] and
+          tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03} and
+          tc["env"]["lin_vel_sigma"] == 0.05 and ppo.acting.Evaluator is evaluator and
+          ppo.ppo_losses.compute_ppo_loss is loss,
+          f"progress.jsonl (stage, step) {stages}; train_config warmup {tc['warmup']}; Brax's Evaluator and "
+          f"PPO loss restored")
 
 
 def mjx_eval_checks(check, workdir, run_dir, tc):
@@ -987,9 +1059,14 @@ def main():
     ap.add_argument("--workdir", default=None, help="outputs (default: a temporary directory)")
     ap.add_argument("--envs", type=int, default=8)
     ap.add_argument("--steps", type=int, default=60)
-    ap.add_argument("--part", choices=["env", "ppo", "all"], default="all",
+    ap.add_argument("--part", choices=["env", "ppo", "eval", "all"], default="all",
                     help="env: the environment checks (1, 1b, 1c, 1d, 1e, 1f, 1g, 1h: rollout, actuator models, gains, "
-                         "hand forces, command slew, stops, residual actions, reference-pose resets, PD damping); ppo: the tiny PPO run (2); all: both")
+                         "hand forces, command slew, stops, residual actions, reference-pose resets, PD damping); ppo: "
+                         "the warm-up's staging and the tiny PPO run (2); eval: eval_mjx.py on that run's actor (2b, "
+                         "--run-dir); all: every part")
+    ap.add_argument("--run-dir", default=None,
+                    help="eval: the tiny PPO run's output directory (the ppo part's <workdir>/ppo; default "
+                         "<workdir>/ppo)")
     args = ap.parse_args()
     if os.environ.get(CHILD) != "1":
         relaunch()
@@ -1014,7 +1091,15 @@ def main():
         pd_damping_checks(check)
         reset_reference_checks(check)
     if args.part in ("ppo", "all"):
+        warmup_staging_checks(check, workdir)
         ppo_checks(check, workdir, obs)
+    if args.part in ("eval", "all"):
+        run_dir = os.path.abspath(args.run_dir) if args.run_dir else os.path.join(workdir, "ppo")
+        if check(os.path.exists(os.path.join(run_dir, "actor.npz")) and
+                 os.path.exists(os.path.join(run_dir, "train_config.json")),
+                 f"the tiny PPO run's actor.npz and train_config.json in {run_dir} (the ppo part writes them)"):
+            with open(os.path.join(run_dir, "train_config.json")) as f:
+                mjx_eval_checks(check, workdir, run_dir, json.load(f))
     print(f"smoke run {time.time() - t_start:.1f} s")
     print(f"{check.passed} passed, {check.failed} failed")
     return 0 if check.failed == 0 else 1
