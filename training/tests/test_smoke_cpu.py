@@ -28,9 +28,9 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    env's phase and command, then gco.level_soles: q_ref to 1e-4 rad; gco.step from the env's
    previous GCO state: u' to 1e-3) and the phase advances by the port's own update; the foot_slip
    metric equals the recorded feet's horizontal speed while touching (and stays below 0.05 m/s
-   standing), and with EnvConfig.w["foot_slip"] = -1 a state shoved at 0.8 m/s loses exactly its slip
-   from the reward; with w["lin_vel_abs"] = -1, w["yaw_rate_abs"] = -0.5 and w["flight"] = -1 it loses
-   exactly its velocity error plus half its yaw-rate error, and lifted 5 cm off the floor 1 more.
+   standing); with EnvConfig.w["foot_slip"] = -1, w["lin_vel_abs"] = -1, w["yaw_rate_abs"] = -0.5 and
+   w["flight"] = -1 (one compiled step) a state shoved at 0.8 m/s loses exactly its slip plus its
+   velocity error plus half its yaw-rate error, and lifted 5 cm off the floor 1 more.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
    effect on; part 1's env is built with a calibrated robot config written into the workdir (left
@@ -266,38 +266,36 @@ def env_checks(check, env, n_envs, n_steps):
     check(np.abs(slip_metric - slip).max() < 1e-4 and touching.mean() > 0.5 and slip.mean() < 0.05,
           f"foot_slip metric = recorded feet's speed while touching (max |diff| {np.abs(slip_metric - slip).max():.1e} m/s; "
           f"touching {touching.mean():.2f} of foot-steps, mean slip {slip.mean():.4f} m/s < 0.05 standing)")
-    # The weight: the same pushed state stepped with foot_slip = -1 loses exactly the slip from its reward.
-    slipping = copy.copy(env)
-    slipping.cfg = dataclasses.replace(cfg, w=dict(cfg.w, foot_slip=-1.0))
+    # The penalty weights, in one compiled step (foot_slip = -1, lin_vel_abs = -1, yaw_rate_abs = -0.5,
+    # flight = -1; each step of a differently weighted env is a compile of its own, 40 s here): the
+    # pushed state (feet on the floor, sliding) loses exactly its slip [m/s] plus its velocity error
+    # [m/s] plus half its yaw-rate error [rad/s], from the step's own metrics; a state lifted 5 cm off
+    # the floor (neither foot touching at the end of the step, so no slip) loses 1 more than its errors
+    # cost.
     st = jax.tree_util.tree_map(lambda a: jnp.asarray(a[-1, 0]), traj)
     st = st.replace(pipeline_state=st.pipeline_state.replace(qvel=st.pipeline_state.qvel.at[0].add(0.8)))
-    plain, penalised = step(st, zero), jax.jit(slipping.step)(st, zero)
-    lost = float(plain.reward - penalised.reward)
-    check(float(plain.metrics["foot_slip"]) > 0.05 and abs(lost - float(plain.metrics["foot_slip"])) < 1e-4,
-          f"foot_slip weight -1: a robot shoved at 0.8 m/s slides {float(plain.metrics['foot_slip']):.3f} m/s "
-          f"(> 0.05) and its reward drops by that ({lost:.4f})")
-    # The linear tracking-error penalties and the flight penalty, in one compiled step (lin_vel_abs = -1,
-    # yaw_rate_abs = -0.5, flight = -1): the shoved state (feet on the floor) loses its velocity error
-    # [m/s] plus half its yaw-rate error [rad/s], from the step's own metrics; a state lifted 5 cm off
-    # the floor (neither foot touching at the end of the step) loses 1 more than its errors cost.
     extra = copy.copy(env)
-    extra.cfg = dataclasses.replace(cfg, w=dict(cfg.w, lin_vel_abs=-1.0, yaw_rate_abs=-0.5, flight=-1.0))
+    extra.cfg = dataclasses.replace(cfg, w=dict(cfg.w, foot_slip=-1.0, lin_vel_abs=-1.0, yaw_rate_abs=-0.5,
+                                                 flight=-1.0))
     step_extra = jax.jit(extra.step)
 
-    def errors_cost(state):
+    def terms(state):
         m = state.metrics
-        return float(m["lin_vel_err"]) + 0.5 * float(m["yaw_rate_err"])
-    tracked = step_extra(st, zero)
-    lost = float(plain.reward - tracked.reward)
-    check(float(plain.metrics["lin_vel_err"]) > 0.3 and abs(lost - errors_cost(plain)) < 1e-4,
-          f"lin_vel_abs -1, yaw_rate_abs -0.5: the shoved robot misses its command by "
-          f"{float(plain.metrics['lin_vel_err']):.3f} m/s (> 0.3) and {float(plain.metrics['yaw_rate_err']):.3f} rad/s, "
-          f"and its reward drops by {errors_cost(plain):.4f} ({lost:.4f})")
+        return float(m["foot_slip"]), float(m["lin_vel_err"]), float(m["yaw_rate_err"])
+    plain = step(st, zero)
+    slip_p, lin_p, yaw_p = terms(plain)
+    lost = float(plain.reward - step_extra(st, zero).reward)
+    check(slip_p > 0.05 and lin_p > 0.3 and abs(lost - (slip_p + lin_p + 0.5 * yaw_p)) < 1e-4,
+          f"foot_slip -1, lin_vel_abs -1, yaw_rate_abs -0.5: a robot shoved at 0.8 m/s slides {slip_p:.3f} m/s "
+          f"(> 0.05), misses its command by {lin_p:.3f} m/s (> 0.3) and {yaw_p:.3f} rad/s, and its reward drops by "
+          f"{lost:.4f} (their weighted sum {slip_p + lin_p + 0.5 * yaw_p:.4f})")
     lifted = st.replace(pipeline_state=st.pipeline_state.replace(qpos=st.pipeline_state.qpos.at[2].add(0.05)))
     lifted_plain = step(lifted, zero)
-    lost_air = float(lifted_plain.reward - step_extra(lifted, zero).reward) - errors_cost(lifted_plain)
-    check(abs(lost_air - 1.0) < 1e-4,
-          f"flight -1: a robot lifted 5 cm loses {lost_air:.4f} (1) beyond its tracking errors; on the floor, 0 (above)")
+    slip_l, lin_l, yaw_l = terms(lifted_plain)
+    lost_air = float(lifted_plain.reward - step_extra(lifted, zero).reward) - (slip_l + lin_l + 0.5 * yaw_l)
+    check(slip_l == 0.0 and abs(lost_air - 1.0) < 1e-4,
+          f"flight -1: a robot lifted 5 cm (no foot touching, slip {slip_l}) loses {lost_air:.4f} (1) beyond its "
+          f"tracking errors; on the floor, 0 (above)")
 
     # References in the (noise-free) privileged observation against the float64 NumPy ports.
     phase = np.asarray(info["phase"], np.float64)                # (T+1, n)
