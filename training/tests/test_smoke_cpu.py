@@ -661,7 +661,7 @@ def ppo_checks(check, workdir, obs):
     n_dev = len(jax.local_devices())
     # Two training steps (batch 8 x 2 minibatches x unroll 5 = 80 env steps each), in one ppo.train. The
     # reward-width warm-up (--warmup-steps) would compile the whole training step a second time (160 s on
-    # CI's CPUs); its staging is checked without compiling (warmup_staging_checks).
+    # this 2-core machine); its staging is checked without compiling (warmup_staging_checks).
     timesteps = 160
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
