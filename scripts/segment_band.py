@@ -17,7 +17,9 @@ and, in every segment, the torso pitch or roll that it does not command (cross-c
 <= 0.05 rad). Frames: commands and achieved velocities in the robot's
 heading frame, as pmg_policy_sil writes them. A segment that no seed reached (every seed fell
 before its window: `achieved` all null) counts as a miss on every axis it commands. Exit status 2 on
-a file without `segments`.
+a file without `segments`. score(path) prints and also returns the counts (in_band, velocity_segments,
+velocity_misses, posture_misses, coupling, coupling_largest, runaways, falls) for other scripts
+(scripts/evaluate_candidate.py).
 """
 import json
 import os
@@ -120,6 +122,9 @@ def score(path):
     falls = sum(s.get("fallen", 0) for s in summary["segments"])
     where = [f"{s['name']} {s['fallen']}" for s in summary["segments"] if s.get("fallen", 0)]
     print(f"seeds fallen (summed over segments): {falls}" + (f"; in {', '.join(where)}" if where else ""))
+    return {"in_band": total_in, "velocity_segments": total, "velocity_misses": sorted(missed),
+            "posture_misses": posture_miss, "coupling": coupling, "coupling_largest": worst,
+            "runaways": runaways, "falls": falls}
 
 
 if __name__ == "__main__":

@@ -1,0 +1,258 @@
+#!/usr/bin/env python3
+"""Evaluate a trained actor against issue 12's targets through the product path, in one command.
+
+  python3 scripts/evaluate_candidate.py --model RUN/g1_pmg_policy.onnx --out RUN/eval \\
+      [--base-config config/controller/g1_sil_policy_v20b.yaml] [--bin build/bin] [--jobs 2] [--quick]
+      [--mjx-actor RUN/actor.npz]
+  python3 scripts/evaluate_candidate.py --report-only --out RUN/eval      # the report from what is there
+
+What a person otherwise types by hand for each candidate (training/results/fidelity/seeds_V20b/README.md):
+1. (with --mjx-actor) the actor alone in its own training simulator: training/eval_mjx.py on the
+   crouched backward walks (training/results/fidelity/seeds_V20b/crouched_backward.yaml), whose gait
+   table shows a run (both feet off the floor) before any SIL time is spent. Needs .venv-training
+   and the run's train_config.json beside the actor. Written to mjx_crouched_backward.{npz,txt}.
+2. The command-response feed-forward fitted for this actor: pmg_policy_sil on the calibration sweeps
+   config/policies/response_sweep_{1,2,3}.yaml with the base config, this model and the feed-forward
+   off (feedforward/calibration_*/), then scripts/fit_command_response.py (feedforward/fit.yaml, .txt,
+   .png). Evaluation scripts are never used for the fit.
+3. controller.yaml: the base config with this model and the fitted feed-forward; its relative paths
+   (robot, clips, gco, policy.model) rewritten for the output folder, everything else unchanged.
+4. The battery, through pmg_policy_sil --controller controller.yaml, --jobs runs at a time: the
+   envelope grid and its mirror image (seeds 0-11), Table I (seeds 0-9, no restart), the posture walks
+   (seeds 120-131), the crouched probe (seeds 36-47) and the crouched backward walks (seeds 0-1).
+   --quick runs one seed of each and one sweep (a smoke of the pipeline, not a verdict).
+5. report.md: per battery the velocity segments in band (±15 % or 0.05 m/s / 0.08 rad/s), posture
+   misses (pitch/roll 0.03 rad, height 0.015 m), cross-coupling beyond 0.05 rad, runaways and falls
+   (scripts/segment_band.py's score), Table I's mean errors, and the MJX gait: what issue 12 asks.
+Each step writes its command line into its folder (command.txt) and skips work whose summary already
+exists, so an interrupted evaluation resumes. Units: m/s, rad/s, rad, m.
+"""
+import argparse
+import glob
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import segment_band  # noqa: E402
+
+CROUCHED_BACKWARD = "training/results/fidelity/seeds_V20b/crouched_backward.yaml"
+# name -> (command script, first seed, seeds, restart after a fall)
+BATTERY = {
+    "grid": ("config/policies/eval_envelope.yaml", 0, 12, True),
+    "mirror": ("config/policies/eval_envelope_mirrored.yaml", 0, 12, True),
+    "table1": ("config/policies/eval_commands.yaml", 0, 10, False),
+    "posture_walks": ("training/results/fidelity/crouched/posture_walks.yaml", 120, 12, True),
+    "probe_heights": ("training/results/fidelity/crouched/probe_heights.yaml", 36, 12, True),
+    "crouched_backward": (CROUCHED_BACKWARD, 0, 2, True),
+}
+# (sweep, first seed, seeds): the calibration runs of the feed-forward fit
+SWEEPS = [(1, 0, 2), (1, 2, 2), (2, 0, 2), (3, 0, 2)]
+PATH_KEYS = ("robot", "clips", "gco")  # top-level keys holding paths relative to the config file
+FLIGHT_LIMIT = 0.15  # share of a crouched walk's window with neither foot down that marks a run
+
+
+def run(cmd, folder, log_name="log.txt", ok=(0,)):
+    """Run @p cmd (argv) with its command line in folder/command.txt and its output in folder/log_name;
+    an exit status outside @p ok raises RuntimeError naming the log. Returns the exit status."""
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "command.txt"), "w") as f:
+        f.write(" ".join(shlex.quote(c) for c in cmd) + "\n")
+    with open(os.path.join(folder, log_name), "w") as log:
+        rc = subprocess.run(cmd, cwd=REPO, stdout=log, stderr=subprocess.STDOUT).returncode
+    if rc not in ok:
+        raise RuntimeError(f"{' '.join(cmd[:2])} ... exited {rc}; see {os.path.join(folder, log_name)}")
+    return rc
+
+
+def sil(args, folder, commands, first_seed, seeds, restart, extra):
+    """pmg_policy_sil into @p folder unless folder/summary.json exists; returns its path."""
+    summary = os.path.join(folder, "summary.json")
+    if not os.path.exists(summary):
+        cmd = [os.path.join(args.bin, "pmg_policy_sil"), *extra, "--commands", commands, "--seeds", str(seeds),
+               "--first-seed", str(first_seed), "--out", folder] + (["--restart-after-fall"] if restart else [])
+        # Exit status 3: a run fell. That is a result (the report counts the falls), not a failed tool.
+        if run(cmd, folder, ok=(0, 3)) == 3 and not os.path.exists(summary):
+            raise RuntimeError(f"pmg_policy_sil exited 3 without {summary}; see {os.path.join(folder, 'log.txt')}")
+    return summary
+
+
+def rewrite_config(base_path, out_path, model_path, fit_path):
+    """controller.yaml (step 3): @p base_path's text with policy.model = @p model_path, the
+    velocity_feedback.feedforward axis lines (vx, vy, wz) of @p fit_path, and the relative paths
+    of PATH_KEYS and policy.model rewritten relative to @p out_path's folder. Comments and every other
+    line stay. Raises ValueError naming the key when the base lacks one of them."""
+    import yaml
+    with open(base_path) as f:
+        lines = f.read().split("\n")
+    with open(fit_path) as f:
+        fit = yaml.safe_load(f)["feedforward"]
+    base_dir, out_dir = os.path.dirname(os.path.abspath(base_path)), os.path.dirname(os.path.abspath(out_path))
+
+    def moved(value):
+        return os.path.relpath(os.path.normpath(os.path.join(base_dir, value)), out_dir)
+    done, section, sub = set(), None, None
+    for i, line in enumerate(lines):
+        m = re.match(r"^(\s*)([A-Za-z_]+):(\s*)([^#\s][^#]*?)?(\s*#.*)?$", line)
+        if not m:
+            continue
+        indent, key, value, comment = len(m.group(1)), m.group(2), m.group(4), m.group(5) or ""
+        if indent == 0:
+            section, sub = key, None
+            if key in PATH_KEYS and value:
+                lines[i] = f"{key}: {moved(value)}{comment}"
+                done.add(key)
+        elif indent == 2 and section is not None:
+            sub = key
+            if section == "policy" and key == "model":
+                lines[i] = f"  model: {os.path.relpath(os.path.abspath(model_path), out_dir)}{comment}"
+                done.add("policy.model")
+        elif indent == 4 and section == "velocity_feedback" and sub == "feedforward" and key in ("vx", "vy", "wz"):
+            t = fit[key]
+            flow = ", ".join(f"{k}: {json.dumps(v)}" for k, v in t.items())
+            lines[i] = f"    {key}: {{{flow}}}"
+            done.add(f"feedforward.{key}")
+    want = set(PATH_KEYS) | {"policy.model", "feedforward.vx", "feedforward.vy", "feedforward.wz"}
+    if want - done:
+        raise ValueError(f"{base_path}: no {', '.join(sorted(want - done))} to rewrite (expected a policy "
+                         f"controller config such as config/controller/g1_sil_policy_v20b.yaml)")
+    text = "\n".join(lines)
+    header = (f"# Generated by scripts/evaluate_candidate.py from {os.path.relpath(base_path, REPO)}: its model and "
+              f"feed-forward replaced\n# (feed-forward fitted for this actor: feedforward/fit.yaml), paths relative "
+              f"to this file, everything else the base's.\n")
+    with open(out_path, "w") as f:
+        f.write(header + text)
+    with open(out_path) as f:  # it must load, with the fit in it
+        check = yaml.safe_load(f)
+    got = check["velocity_feedback"]["feedforward"]
+    for key in ("vx", "vy", "wz"):
+        if got[key] != fit[key]:
+            raise ValueError(f"{out_path}: velocity_feedback.feedforward.{key} {got[key]} is not the fit's {fit[key]}")
+    return out_path
+
+
+def mjx_gait(args, out):
+    """Step 1: eval_mjx.py on the crouched backward walks; the gait table written to mjx_crouched_backward.txt."""
+    npz = os.path.join(out, "mjx_crouched_backward.npz")
+    if not os.path.exists(npz):
+        py = os.path.join(REPO, ".venv-training", "bin", "python")
+        run([py, "training/eval_mjx.py", os.path.abspath(args.mjx_actor), "--commands", CROUCHED_BACKWARD,
+             "--out", npz], out, "mjx_crouched_backward.txt")
+
+
+def mjx_lines(out):
+    """The MJX gait of the crouched walks (height below 0.76 m): name, v_x commanded and achieved, flight
+    share, and whether the robot fell in the segment or before it."""
+    npz = os.path.join(out, "mjx_crouched_backward.npz")
+    if not os.path.exists(npz):
+        return []
+    import numpy as np
+    z = np.load(npz)
+    rows = []
+    for k, name in enumerate(z["segment_names"]):
+        cmd = z["segment_command"][k]
+        if cmd[5] >= 0.76 or abs(cmd[0]) < 1e-9:
+            continue
+        ach, flight = float(z["segment_achieved"][k][0]), float(z["segment_gait"][k][0])
+        # Fell in it, or fell before it (nothing left standing in its window: NaN means).
+        fell = bool(z["segment_falls"][k]) or not (np.isfinite(ach) and np.isfinite(flight))
+        rows.append((str(name), float(cmd[0]), ach, flight, fell))
+    return rows
+
+
+def report(out):
+    """Step 5: report.md from the summaries under @p out; returns its text."""
+    lines = ["# Candidate against issue 12's targets", "",
+             "| battery | velocity segments in band | posture misses | coupling > 0.05 rad (largest) | runaways | falls |",
+             "|---|---|---|---|---|---|"]
+    table1 = None
+    for name in BATTERY:
+        path = os.path.join(out, name, "summary.json")
+        if not os.path.exists(path):
+            lines.append(f"| {name} | not run | | | | |")
+            continue
+        s = segment_band.score(path)
+        lines.append(f"| {name} | {s['in_band']}/{s['velocity_segments']}"
+                     f"{' (' + ', '.join(s['velocity_misses']) + ')' if s['velocity_misses'] else ''} | "
+                     f"{len(s['posture_misses'])} | {len(s['coupling'])} ({s['coupling_largest']:.3f}) | "
+                     f"{len(s['runaways'])} | {s['falls']} |")
+        if name == "table1":
+            with open(path) as f:
+                t = json.load(f)
+            table1, t1_seeds = t["mean"], [r["seed"] for r in t["runs"]]
+    if table1:
+        lines += ["", f"Table I (mean absolute errors against u, seeds {', '.join(map(str, t1_seeds))}):", "",
+                  "| LinVel [m/s] | YawVel [rad/s] | Roll [rad] | Pitch [rad] | Height [m] | foot slip [m/s] | falls |",
+                  "|---|---|---|---|---|---|---|",
+                  f"| {table1['lin_vel']:.4f} | {table1['yaw_vel']:.4f} | {table1['roll']:.4f} | {table1['pitch']:.4f} | "
+                  f"{table1['height']:.4f} | {table1['foot_slip']:.3f} | {table1['falls']} |"]
+    gait = mjx_lines(out)
+    if gait:
+        runs = [r for r in gait if r[3] > FLIGHT_LIMIT or r[4]]
+        lines += ["", f"MJX, the actor alone (crouched backward walks): flight share above {FLIGHT_LIMIT} or fallen "
+                      f"in {len(runs)} of {len(gait)} crouched walks", "",
+                  "| segment | v_x commanded | achieved | flight share | fallen (in it or before) |", "|---|---|---|---|---|"]
+        lines += [f"| {n} | {c:+.2f} | {a:+.2f} | {f:.2f} | {'yes' if fl else 'no'} |" for n, c, a, f, fl in gait]
+    text = "\n".join(lines) + "\n"
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write(text)
+    return text
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--model", help="the exported ONNX actor (with its pmg.contract)")
+    ap.add_argument("--out", required=True, help="output folder")
+    ap.add_argument("--base-config", default="config/controller/g1_sil_policy_v20b.yaml",
+                    help="controller config whose model and feed-forward are replaced (default: V20b's, the HAL at "
+                         "q_rate_max 600 as in training)")
+    ap.add_argument("--bin", default="build/bin", help="folder of pmg_policy_sil")
+    ap.add_argument("--jobs", type=int, default=2, help="SIL runs at a time (default 2)")
+    ap.add_argument("--quick", action="store_true", help="one seed per battery and one sweep: the pipeline, not a verdict")
+    ap.add_argument("--mjx-actor", help="the run's actor.npz (train_config.json beside it): step 1 in MJX")
+    ap.add_argument("--report-only", action="store_true", help="only write report.md from the summaries in --out")
+    args = ap.parse_args(argv)
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    if args.report_only:
+        print(report(out))
+        return 0
+    if not args.model or not os.path.exists(args.model):
+        ap.error(f"--model {args.model!r}: expected an existing ONNX actor")
+    if args.jobs < 1:
+        ap.error(f"--jobs {args.jobs}: expected 1 or more")
+    args.bin = os.path.abspath(args.bin)
+    model = os.path.abspath(args.model)
+    base = os.path.abspath(args.base_config)
+    if args.mjx_actor:
+        print("step 1: MJX gait of the crouched backward walks", flush=True)
+        mjx_gait(args, out)
+    sweeps = [(k, first, 1) for k, first, _ in SWEEPS[:1]] if args.quick else SWEEPS
+    ff = os.path.join(out, "feedforward")
+    print(f"step 2: {len(sweeps)} calibration run(s) of the feed-forward", flush=True)
+    with ThreadPoolExecutor(args.jobs) as pool:
+        summaries = list(pool.map(lambda s: sil(args, os.path.join(ff, f"calibration_sweep{s[0]}_{s[1]}-{s[1] + s[2] - 1}"),
+                                                f"config/policies/response_sweep_{s[0]}.yaml", s[1], s[2], True,
+                                                ["--controller", base, "--model", model, "--feedforward", "off"]),
+                                  sweeps))
+    fit = os.path.join(ff, "fit.yaml")
+    run([sys.executable, os.path.join(HERE, "fit_command_response.py"), *summaries, "--out", fit,
+         "--plot", os.path.join(ff, "fit.png")], ff, "fit.txt")
+    controller = rewrite_config(base, os.path.join(out, "controller.yaml"), model, fit)
+    print(f"step 3: {controller}", flush=True)
+    print(f"step 4: the battery ({', '.join(BATTERY)}), {args.jobs} at a time", flush=True)
+    with ThreadPoolExecutor(args.jobs) as pool:
+        list(pool.map(lambda kv: sil(args, os.path.join(out, kv[0]), kv[1][0], kv[1][1], 1 if args.quick else kv[1][2],
+                                     kv[1][3], ["--controller", controller]), BATTERY.items()))
+    print(report(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

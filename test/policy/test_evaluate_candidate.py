@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""Tests scripts/evaluate_candidate.py without running the SIL (ctest evaluate_candidate_config_and_report,
+label unit):
+- its controller.yaml for V20e (V20b's config, V20e's actor, V20e's feed-forward fit) loads to the same
+  settings as the one written by hand in training/results/fidelity/seeds_V20b/V20e/controller.yaml
+  (every path resolved from its own file), although written into another folder;
+- a base config without a policy or a feed-forward block is refused, naming what is missing;
+- the report of V20e's committed summaries (grid seeds 0-11, Table I seeds 0-4, crouched backward)
+  gives V20e's grid 28/33 in band, its Table I means from the summary, and "not run" for the
+  batteries that are missing; a synthetic MJX gait file with one crouched walk in flight 0.35, one that
+  fell and one after the fall (NaN means) is reported as 3 of 4 crouched walks flagged (the standing
+  walk and the stop left out).
+Usage: test_evaluate_candidate.py
+"""
+import json
+import os
+import shutil
+import sys
+import tempfile
+
+import numpy as np
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import evaluate_candidate as ec  # noqa: E402
+
+V20E = os.path.join(ROOT, "training", "results", "fidelity", "seeds_V20b", "V20e")
+failures = []
+
+
+def check(ok, what):
+    print(f"{'ok  ' if ok else 'FAIL'} {what}")
+    if not ok:
+        failures.append(what)
+
+
+def resolved(path):
+    """The config at @p path with its file paths made absolute."""
+    with open(path) as f:
+        c = yaml.safe_load(f)
+    here = os.path.dirname(os.path.abspath(path))
+    for key in ec.PATH_KEYS:
+        c[key] = os.path.normpath(os.path.join(here, c[key]))
+    c["policy"]["model"] = os.path.normpath(os.path.join(here, c["policy"]["model"]))
+    return c
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="pmg_eval_candidate_")
+    try:
+        out = os.path.join(tmp, "a", "b")
+        os.makedirs(out)
+        generated = ec.rewrite_config(os.path.join(ROOT, "config", "controller", "g1_sil_policy_v20b.yaml"),
+                                      os.path.join(out, "controller.yaml"), os.path.join(V20E, "g1_pmg_policy.onnx"),
+                                      os.path.join(V20E, "feedforward", "fit.yaml"))
+        mine, by_hand = resolved(generated), resolved(os.path.join(V20E, "controller.yaml"))
+        differ = sorted(k for k in set(mine) | set(by_hand) if mine.get(k) != by_hand.get(k))
+        check(not differ and os.path.exists(mine["policy"]["model"]) and os.path.isdir(mine["clips"]),
+              f"controller.yaml for V20e = the hand-written one (keys that differ: {differ or 'none'}); "
+              f"model {os.path.relpath(mine['policy']['model'], ROOT)}")
+        try:
+            ec.rewrite_config(os.path.join(ROOT, "config", "controller", "g1_sil.yaml"), os.path.join(out, "x.yaml"),
+                              os.path.join(V20E, "g1_pmg_policy.onnx"), os.path.join(V20E, "feedforward", "fit.yaml"))
+            msg = ""
+        except ValueError as e:
+            msg = str(e)
+        check("g1_sil.yaml" in msg and "policy.model" in msg and "feedforward.vx" in msg,
+              f"a base config without a policy is refused, naming it: {msg[:120]}")
+
+        ev = os.path.join(tmp, "eval")
+        for name, src in (("grid", "grid_0-11_summary.json"), ("table1", "t1_0-4_summary.json"),
+                          ("crouched_backward", "crouched_backward_summary.json")):
+            os.makedirs(os.path.join(ev, name))
+            shutil.copy(os.path.join(V20E, src), os.path.join(ev, name, "summary.json"))
+        names = ["back0.3_0.78", "back0.3_0.74", "stop_0.74", "back0.5_0.74", "back0.5_0.7", "back0.3_0.7"]
+        cmd = np.zeros((6, 6))
+        cmd[:, 0] = [-0.3, -0.3, 0.0, -0.5, -0.5, -0.3]
+        cmd[:, 5] = [0.78, 0.74, 0.74, 0.74, 0.70, 0.70]
+        ach = cmd.copy()
+        gait = np.zeros((6, 4))
+        gait[:, 0] = [0.40, 0.10, 0.0, 0.35, 0.05, 0.0]
+        ach[5], gait[5] = np.nan, np.nan  # after the fall: no robot in its window
+        np.savez(os.path.join(ev, "mjx_crouched_backward.npz"), segment_names=np.array(names), segment_command=cmd,
+                 segment_achieved=ach, segment_gait=gait, segment_falls=np.array([0, 0, 0, 0, 1, 0]))
+        text = ec.main(["--report-only", "--out", ev]) == 0 and open(os.path.join(ev, "report.md")).read()
+        with open(os.path.join(V20E, "t1_0-4_summary.json")) as f:
+            t1 = json.load(f)["mean"]
+        rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| ")}
+        check(rows.get("grid", "").startswith("| grid | 28/33") and "not run" in rows.get("mirror", "") and
+              "not run" in rows.get("posture_walks", ""),
+              f"report: V20e's grid 28/33, mirror and posture walks not run ({rows.get('grid', '')[:40]})")
+        check(f"| {t1['lin_vel']:.4f} | {t1['yaw_vel']:.4f} |" in text and rows.get("table1", "").startswith("| table1 | 9/9")
+              and "seeds 0, 1, 2, 3, 4)" in text,
+              f"report: Table I means from the summary (LinVel {t1['lin_vel']:.4f}) and 9/9 in band")
+        check("in 3 of 4 crouched walks" in text and "| back0.5_0.7 | -0.50 | -0.50 | 0.05 | yes |" in text and
+              "| back0.3_0.74 | -0.30 | -0.30 | 0.10 | no |" in text and "| back0.3_0.7 | -0.30 | +nan | nan | yes |" in text
+              and "back0.3_0.78" not in text and "stop_0.74" not in text,
+              "report: MJX gait, 3 of 4 crouched walks flagged (flight 0.35, a fall, one after the fall); standing walk "
+              "and stop left out")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(f"{'FAILED: ' + str(len(failures)) if failures else 'all passed'}")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
