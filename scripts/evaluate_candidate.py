@@ -85,7 +85,8 @@ def sil(args, folder, commands, first_seed, seeds, restart, extra):
 
 def rewrite_config(base_path, out_path, model_path, fit_path):
     """controller.yaml (step 3): @p base_path's text with policy.model = @p model_path, the
-    velocity_feedback.feedforward axis lines (vx, vy, wz) of @p fit_path, and the relative paths
+    velocity_feedback.feedforward lines of @p fit_path's keys (enabled, vx, vy, wz, max_correction; each
+    must be one line in the base), and the relative paths
     of PATH_KEYS and policy.model rewritten relative to @p out_path's folder. Comments and every other
     line stay. Raises ValueError naming the key when the base lacks one of them."""
     import yaml
@@ -113,10 +114,11 @@ def rewrite_config(base_path, out_path, model_path, fit_path):
             if section == "policy" and key == "model":
                 lines[i] = f"  model: {os.path.relpath(os.path.abspath(model_path), out_dir)}{comment}"
                 done.add("policy.model")
-        elif indent == 4 and section == "velocity_feedback" and sub == "feedforward" and key in ("vx", "vy", "wz"):
+        elif indent == 4 and section == "velocity_feedback" and sub == "feedforward" and key in fit:
             t = fit[key]
-            flow = ", ".join(f"{k}: {json.dumps(v)}" for k, v in t.items())
-            lines[i] = f"    {key}: {{{flow}}}"
+            value = ("{" + ", ".join(f"{k}: {json.dumps(v)}" for k, v in t.items()) + "}" if isinstance(t, dict)
+                     else json.dumps(t))
+            lines[i] = f"    {key}: {value}"
             done.add(f"feedforward.{key}")
     want = set(PATH_KEYS) | {"policy.model", "feedforward.vx", "feedforward.vy", "feedforward.wz"}
     if want - done:
@@ -131,8 +133,8 @@ def rewrite_config(base_path, out_path, model_path, fit_path):
     with open(out_path) as f:  # it must load, with the fit in it
         check = yaml.safe_load(f)
     got = check["velocity_feedback"]["feedforward"]
-    for key in ("vx", "vy", "wz"):
-        if got[key] != fit[key]:
+    for key in fit:
+        if got.get(key) != fit[key]:
             raise ValueError(f"{out_path}: velocity_feedback.feedforward.{key} {got[key]} is not the fit's {fit[key]}")
     return out_path
 
