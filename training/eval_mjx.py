@@ -43,6 +43,7 @@ a hop or a shuffle.
 """
 import argparse
 import dataclasses
+import functools
 import json
 import os
 import sys
@@ -270,13 +271,14 @@ def main(argv=None):
     yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
     feet = jnp.asarray(env.foot_bodies)  # the ankle_roll_links, left and right
 
-    def body(state, cmd):
+    def body(hold, state, cmd):
         info = dict(state.info)
         info["command"] = jnp.broadcast_to(cmd, (n, 6))
         info["command_goal"] = info["command"]  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
-        a = (jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]) if args.hold_reference
-             else actor(state.obs["state"]))
+        # --hold-reference is an input of the compiled rollout, not a Python branch: the actor's rollout and the
+        # reference's compile to one program (JAX's persistent cache serves the second the first's compile).
+        a = jnp.where(hold, jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]), actor(state.obs["state"]))
         state = step(state, a)
         ps = state.pipeline_state
         rec = {"command_env": state.info["command"], "q": ps.qpos[:, 7:7 + LEG], "q_ref": state.info["ref_q"][:, :LEG],
@@ -294,8 +296,8 @@ def main(argv=None):
     print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
           + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
-    run = jax.jit(lambda s, c: jax.lax.scan(body, s, c))
-    _, rec = run(state, cmds)
+    run = jax.jit(lambda h, s, c: jax.lax.scan(functools.partial(body, h), s, c))
+    _, rec = run(jnp.asarray(args.hold_reference), state, cmds)
     rec = {k: np.swapaxes(np.asarray(v), 0, 1) for k, v in rec.items()}  # (robots, ticks, ...)
     cm = np.asarray(cmds)
     t = np.arange(ticks) * cfg.control_dt
