@@ -75,6 +75,11 @@ def schedule(path):
     return at, s["duration"], spans
 
 
+def segment_window(t, t0, t1):
+    """The ticks of @p t (s) a segment [t0, t1) is judged on: its last 60 % (pmg_policy_sil's window)."""
+    return (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+
+
 def segment_means(t, command, achieved, spans, alive):
     """Per segment: (name, commanded (6,), achieved (k,) or None where no tick of its window is alive),
     means over the last 60 % of the segment, pooled over the robots. command (ticks, 6); achieved
@@ -82,7 +87,7 @@ def segment_means(t, command, achieved, spans, alive):
     height [m]; alive (robots, ticks) bool."""
     out = []
     for name, t0, t1 in spans:
-        window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        window = segment_window(t, t0, t1)
         sel = window[None, :] & alive
         out.append((name, command[window].mean(0) if window.any() else np.full(6, np.nan),
                     achieved[sel].mean(0) if sel.any() else None))
@@ -104,7 +109,7 @@ def segment_gait(t, contact, foot_speed, spans, alive, dt):
     onset[:, 1:] = contact[:, 1:] & ~contact[:, :-1]
     out = []
     for name, t0, t1 in spans:
-        window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        window = segment_window(t, t0, t1)
         sel = window[None, :] & alive
         if not sel.any():
             out.append(None)

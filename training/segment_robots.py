@@ -27,7 +27,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from eval_mjx import schedule  # noqa: E402
+from eval_mjx import schedule, segment_window  # noqa: E402
 
 
 def summarize(npz, commands):
@@ -43,7 +43,7 @@ def summarize(npz, commands):
     alive = np.cumsum(z["done"] > 0, axis=1) == 0
     out = {}
     for name, t0, t1 in spans:
-        window = (t >= t0 + 0.4 * (t1 - t0)) & (t < t1)
+        window = segment_window(t, t0, t1)
         vx, flight, fallen = [], [], []
         for r in range(meas.shape[0]):
             standing = window & alive[r]
