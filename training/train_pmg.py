@@ -196,6 +196,11 @@ def parse_args(argv=None):
     ap.add_argument("--warmup-height-sigma", type=float, default=None, metavar="S",
                     help="width of the pelvis height reward during the warm-up [m^2] (default 0.02: a 0.16 m "
                          "shortfall keeps 28 %% of the term); needs --warmup-steps")
+    ap.add_argument("--warmup-p-posture-walk", type=float, default=None, metavar="P",
+                    help="EnvConfig.p_posture_walk during the warm-up (default: the run's own, --p-posture-walk): 0 "
+                         "trains the warm-up's walks at the standing posture, so walking crouched, bent or leaning starts "
+                         "from a gait that already walks at its command (a posture curriculum; training/README.md "
+                         "\"A posture curriculum\"); needs --warmup-steps")
     ap.add_argument("--num-minibatches", type=int, default=32)
     ap.add_argument("--unroll-length", type=int, default=20)
     ap.add_argument("--episode-length", type=int, default=None,
@@ -314,6 +319,11 @@ def parse_args(argv=None):
             ap.error(f"{name} = {value}: expected a finite width > 0")
         if value is None:
             setattr(args, flag, default)
+    if args.warmup_p_posture_walk is not None:
+        if args.warmup_steps == 0:
+            ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: has no effect without --warmup-steps N > 0")
+        if not 0.0 <= args.warmup_p_posture_walk <= 1.0:
+            ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: expected in [0, 1]")
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
     if args.height_sigma is not None and not args.height_sigma > 0:
@@ -396,12 +406,14 @@ def parse_args(argv=None):
 
 def warmup_config(cfg, args):
     """The warm-up stage's EnvConfig (--warmup-steps): @p cfg with the velocity-tracking widths
-    (lin_vel_sigma, yaw_rate_sigma) set to --warmup-tracking-sigma and height_sigma to
-    --warmup-height-sigma, every other field as it is; None when --warmup-steps is 0."""
+    (lin_vel_sigma, yaw_rate_sigma) set to --warmup-tracking-sigma, height_sigma to
+    --warmup-height-sigma and, when given, p_posture_walk to --warmup-p-posture-walk, every other field
+    as it is; None when --warmup-steps is 0."""
     if args.warmup_steps <= 0:
         return None
+    posture = {} if args.warmup_p_posture_walk is None else {"p_posture_walk": args.warmup_p_posture_walk}
     return dataclasses.replace(cfg, lin_vel_sigma=args.warmup_tracking_sigma, yaw_rate_sigma=args.warmup_tracking_sigma,
-                               height_sigma=args.warmup_height_sigma)
+                               height_sigma=args.warmup_height_sigma, **posture)
 
 
 def select_devices(args):
@@ -536,7 +548,8 @@ def main(argv=None):
                    "devices": [str(d) for d in devices], "jax": jax.__version__, "mirror_loss": args.mirror_loss,
                    "warmup": None if warmup_env is None else {
                        "steps": args.warmup_steps, "lin_vel_sigma": args.warmup_tracking_sigma,
-                       "yaw_rate_sigma": args.warmup_tracking_sigma, "height_sigma": args.warmup_height_sigma},
+                       "yaw_rate_sigma": args.warmup_tracking_sigma, "height_sigma": args.warmup_height_sigma,
+                       "p_posture_walk": warmup_cfg.p_posture_walk},
                    "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
                    "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
@@ -593,7 +606,7 @@ def main(argv=None):
         if warmup_env is not None:  # stage 1: wide rewards, no evaluations, one checkpoint at its end
             stage["name"] = "warmup"
             log(f"warm-up: {args.warmup_steps} steps with tracking sigma {args.warmup_tracking_sigma}, "
-                f"height sigma {args.warmup_height_sigma}")
+                f"height sigma {args.warmup_height_sigma}, p_posture_walk {warmup_cfg.p_posture_walk}")
             _, restore, _ = train(warmup_env, num_timesteps=args.warmup_steps, num_evals=1, run_evals=False,
                                   restore_params=restore)
             stage.update(name="main", offset=stage["last"])

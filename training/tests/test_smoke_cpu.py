@@ -762,7 +762,8 @@ def warmup_staging_checks(check, workdir):
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", "1000", "--num-evals", "2", "--num-eval-envs", "4", "--episode-length", "20",
             "--hidden", "32,32", "--seed", "7", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
-            "--warmup-steps", "400", "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03"]
+            "--warmup-steps", "400", "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03",
+            "--p-posture-walk", "0.6", "--warmup-p-posture-walk", "0.0"]
     train, evaluator, loss = ppo.train, ppo.acting.Evaluator, ppo.ppo_losses.compute_ppo_loss
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
@@ -784,20 +785,24 @@ def warmup_staging_checks(check, workdir):
             if getattr(w["cfg"], k) == getattr(m["cfg"], k)]
     check(w["num_timesteps"] == 400 and not w["run_evals"] and w["num_evals"] == 1 and w["restore_params"] is None and
           (w["cfg"].lin_vel_sigma, w["cfg"].yaw_rate_sigma, w["cfg"].height_sigma) == (0.3, 0.3, 0.03) and
-          len(same) == 5 and w["evaluator"] is not evaluator,
+          w["cfg"].p_posture_walk == 0.0 and len(same) == 5 and w["evaluator"] is not evaluator,
           f"warm-up stage: {w['num_timesteps']} steps, no evaluations (a stand-in Evaluator), widths "
-          f"{(w['cfg'].lin_vel_sigma, w['cfg'].yaw_rate_sigma, w['cfg'].height_sigma)}, the run's {same}")
+          f"{(w['cfg'].lin_vel_sigma, w['cfg'].yaw_rate_sigma, w['cfg'].height_sigma)}, p_posture_walk "
+          f"{w['cfg'].p_posture_walk} (--warmup-p-posture-walk 0), the run's {same}")
     check(m["num_timesteps"] == 600 and m["restore_params"] is warmup_params and m["seed"] == 8 and m["run_evals"] and
-          (m["cfg"].lin_vel_sigma, m["cfg"].yaw_rate_sigma) == (0.05, 0.05) and m["evaluator"] is evaluator,
+          (m["cfg"].lin_vel_sigma, m["cfg"].yaw_rate_sigma) == (0.05, 0.05) and m["cfg"].p_posture_walk == 0.6 and
+          m["evaluator"] is evaluator,
           f"main stage: the remaining {m['num_timesteps']} steps from the warm-up's parameters, seed {m['seed']} "
-          f"(the run's 7 + 1), widths {(m['cfg'].lin_vel_sigma, m['cfg'].yaw_rate_sigma)}, Brax's Evaluator")
+          f"(the run's 7 + 1), widths {(m['cfg'].lin_vel_sigma, m['cfg'].yaw_rate_sigma)}, p_posture_walk "
+          f"{m['cfg'].p_posture_walk} (the run's 0.6), Brax's Evaluator")
     with open(os.path.join(out, "progress.jsonl")) as f:
         stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
     with open(os.path.join(out, "train_config.json")) as f:
         tc = json.load(f)
     check(stages == [("warmup", 400), ("main", 1000)] and
-          tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03} and
-          tc["env"]["lin_vel_sigma"] == 0.05 and ppo.acting.Evaluator is evaluator and
+          tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03,
+                           "p_posture_walk": 0.0} and
+          tc["env"]["lin_vel_sigma"] == 0.05 and tc["env"]["p_posture_walk"] == 0.6 and ppo.acting.Evaluator is evaluator and
           ppo.ppo_losses.compute_ppo_loss is loss,
           f"progress.jsonl (stage, step) {stages}; train_config warmup {tc['warmup']}; Brax's Evaluator and "
           f"PPO loss restored")
