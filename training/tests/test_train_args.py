@@ -25,6 +25,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import train_pmg  # noqa: E402
 
 failures = []
+n_cases = 0  # refusal cases run (both loops below)
 args = train_pmg.parse_args(["--out", "/tmp/x", "--reward-weight", "orientation=1.0", "--reward-weight", "height=2"])
 if args.reward_weight != {"orientation": 1.0, "height": 2.0}:
     failures.append(f"--reward-weight parsed as {args.reward_weight}")
@@ -117,7 +118,13 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-tracking-sigma", "0"],
                    "--warmup-tracking-sigma"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-height-sigma", "nan"],
-                   "--warmup-height-sigma")):
+                   "--warmup-height-sigma"),
+                  (["--warmup-p-posture-walk", "0"], "--warmup-p-posture-walk"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-p-posture-walk", "1.5"],
+                   "--warmup-p-posture-walk"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-p-posture-walk", "nan"],
+                   "--warmup-p-posture-walk")):
+    n_cases += 1
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err):
@@ -131,12 +138,13 @@ import dataclasses  # noqa: E402
 
 
 @dataclasses.dataclass(frozen=True)
-class _Cfg:  # EnvConfig's width fields (the smoke run's PPO part uses the real one)
+class _Cfg:  # EnvConfig's width fields and p_posture_walk (the smoke run's PPO part uses the real one)
     lin_vel_sigma: float = 0.05
     yaw_rate_sigma: float = 0.05
     height_sigma: float = 0.0005
     orientation_sigma: float = 0.05
     episode_length: int = 1000
+    p_posture_walk: float = 0.6
 
 
 args = train_pmg.parse_args(["--out", "/tmp/x"])
@@ -150,6 +158,10 @@ args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup
 if (args.warmup_steps, train_pmg.warmup_config(_Cfg(), args)) != (400, _Cfg(0.3, 0.3, 0.01, 0.05, 1000)):
     failures.append(f"--warmup-steps 400 with widths 0.3, 0.01: {args.warmup_steps}, "
                     f"{train_pmg.warmup_config(_Cfg(), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400",
+                             "--warmup-p-posture-walk", "0"])
+if train_pmg.warmup_config(_Cfg(), args) != _Cfg(0.25, 0.25, 0.02, 0.05, 1000, 0.0):
+    failures.append(f"--warmup-p-posture-walk 0: warm-up config {train_pmg.warmup_config(_Cfg(), args)}")
 if train_pmg.parse_args(["--out", "/tmp/x", "--clips", "config/clips/other"]).clips != "config/clips/other":
     failures.append("--clips not parsed")
 # --action-scale-from: the scale of an earlier run's train_config.json; a bad file is refused naming the flag.
@@ -178,6 +190,7 @@ if bench_env_step.parse_args(["--parts", "pmg_gco, physics", "--num-envs", "8"])
     failures.append("bench_env_step --parts 'pmg_gco, physics' not parsed in order")
 for bad, flag in ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "--parts"), (["--steps", "0"], "--steps"),
                   (["--num-envs", "-1"], "--num-envs")):
+    n_cases += 1
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err):
@@ -186,5 +199,6 @@ for bad, flag in ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "-
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"bench_env_step {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else "pmg-train and bench_env_step arguments: 56 cases as expected")
+print("\n".join("FAIL: " + f for f in failures) if failures else f"pmg-train and bench_env_step arguments: {n_cases} refusals as expected, "
+      f"and the parsed values")
 sys.exit(1 if failures else 0)
