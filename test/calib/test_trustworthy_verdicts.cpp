@@ -155,8 +155,11 @@ TEST(TrustworthyVerdicts, DelayBelowSamplePeriodNotNamed) {
   const CalibrationReport rep =
       calibrate_dynamics(rig, logs.train, logs.heldout, quick_options({"transport_delay", "viscous_friction"}));
   EXPECT_FALSE(is_named(rep, "transport_delay")) << "named: " << named(rep);
-  for (const auto& c : rep.candidates)
-    if (c.name == "transport_delay") EXPECT_FALSE(c.significant) << c.verdict;
+  for (const auto& c : rep.candidates) {
+    if (c.name == "transport_delay") {
+      EXPECT_FALSE(c.significant) << c.verdict;
+    }
+  }
 }
 
 // (d) The held-out logs report and do not choose: replacing the held-out log by a corrupted one

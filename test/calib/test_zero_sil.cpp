@@ -164,7 +164,9 @@ TEST_F(ZeroSilTest, RecoversRandomLegOffsets) {
       z = r.z;
       const double e = error(z);
       std::printf(", pass %d %.5f", pass + 1, e);
-      if (pass > 0) EXPECT_LT(e, e_prev) << "seed " << seed << " pass " << pass + 1 << " did not improve";
+      if (pass > 0) {
+        EXPECT_LT(e, e_prev) << "seed " << seed << " pass " << pass + 1 << " did not improve";
+      }
       e_prev = e;
     }
     std::printf(" rad\n");

@@ -98,7 +98,7 @@ INSTANTIATE_TEST_SUITE_P(
                               "zero_offsets.left_knee_joint: expected |offset| <= 0.5 rad, got 0.7"},
                       BadCase{"missing_urdf", "urdf: \\S*g1_29dof_rev_1_0.urdf", "urdf: nope.urdf", "robot.urdf"},
                       BadCase{"syntax", "joints:", "joints: [", "YAML syntax error"}),
-    [](const auto& info) { return std::string(info.param.name); });
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 // A typo names the file and the line of the misspelt key, the key and the nearest valid key.
 TEST(RobotConfig, TypoNamesFileLineKeyAndNearestKey) {

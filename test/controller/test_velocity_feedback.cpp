@@ -1537,7 +1537,9 @@ TEST(UpsetGuard, UprightStraightensTheTorsoWhileLatchedAndGivesThePostureBackCon
     ASSERT_LE(std::fabs(on[i].pitch - on[i - 1].pitch), limits.posture_rate * dt + 1e-12) << k;
     ASSERT_LE(std::fabs(on[i].roll - on[i - 1].roll), limits.posture_rate * dt + 1e-12) << k;
     EXPECT_EQ(on[i].height, off[i].height) << "the height goes on: " << k;
-    if (!held_on[i] && k < first) EXPECT_EQ(on[i].pitch, off[i].pitch) << k;
+    if (!held_on[i] && k < first) {
+      EXPECT_EQ(on[i].pitch, off[i].pitch) << k;
+    }
     if (held_on[i]) min_pitch_held = std::min(min_pitch_held, on[i].pitch);
   }
   EXPECT_EQ(min_pitch_held, 0.0) << "upright within the hold (0.6 s at 0.5 rad/s)";

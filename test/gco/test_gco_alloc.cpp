@@ -85,7 +85,9 @@ TEST_P(GcoNoAllocPipe, GeneratorPlusGcoTickAllocatesNothing) {
   guard.reset();
   EXPECT_EQ(allocations, 0u);
   EXPECT_TRUE(std::isfinite(sum));
-  if (GetParam()) EXPECT_GT(pipe.soleLevelling().correction(Foot::kLeft).norm() + pipe.soleLevelling().correction(Foot::kRight).norm(), 0.0);
+  if (GetParam()) {
+    EXPECT_GT(pipe.soleLevelling().correction(Foot::kLeft).norm() + pipe.soleLevelling().correction(Foot::kRight).norm(), 0.0);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(SoleLevelling, GcoNoAllocPipe, ::testing::Bool());
