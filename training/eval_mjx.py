@@ -35,7 +35,8 @@ torso pitch/roll, the gait phase, the feet's x, y (with --randomized, each with 
 total mass, and the robots that fell per segment). Prints the Table I metrics and the foot slip with the definitions
 of apps/policy/pmg_policy_sil.cpp (errors against the user's command u, also for the GCO configuration
 whose actor observes u') and, per segment of the schedule (those --duration reaches), the commanded and achieved
-means and the reward per step over the last 60 % of the segment (pmg_policy_sil's per-segment window), so
+means and the reward per step over the last 60 % of the segment (pmg_policy_sil's per-segment window), then
+term by term (g1_env.REWARD_TERMS: which terms a gait earns or loses; the npz's reward_terms), so
 that an actor's behaviour in its training simulator can be set beside the SIL's (`pmg_policy_sil --noise
 false`), and over the same windows the gait (segment_gait: the share of ticks in flight and in double
 support, contact onsets per second per foot, the speed of a touching foot), which tells a walk from a run,
@@ -220,7 +221,7 @@ def main(argv=None):
     import jax
     import jax.numpy as jnp
     from export_onnx import load_actor
-    from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, _quat_to_rot, make_randomization_fn
+    from pmg_train.g1_env import EnvConfig, G1PmgEnv, LEG, REWARD_TERMS, _quat_to_rot, make_randomization_fn
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
     nominal = dict(mode=mode, arm_perturb=0.0, p_teleop=0.0, p_payload=0.0, p_hand_force=0.0,
                    p_reset_reference=1.0 if args.start_reference else 0.0, command_resample=10 ** 9,
@@ -290,7 +291,9 @@ def main(argv=None):
                "measured": state.info["measured"],  # v_H (3), height, contacts (2), pitch, roll
                "ref_height": state.info["ref_height"], "wz": yaw_rate(ps.qpos, ps.qvel), "done": state.done,
                "reward": state.reward, "foot_xy": ps.xpos[:, feet, :2],  # ankle_roll_link origins, world x, y [m]
-               "phase": state.info["phase"]}  # the gait phase in [0, 1) the step's reference was generated at
+               "phase": state.info["phase"],  # the gait phase in [0, 1) the step's reference was generated at
+               # the reward's weighted terms (g1_env.REWARD_TERMS order), whose sum is "reward"
+               "reward_terms": jnp.stack([state.metrics[f"reward_{k}"] for k in REWARD_TERMS], axis=-1)}
         return state, rec
 
     state = jax.jit(reset)(keys)
@@ -341,6 +344,14 @@ def main(argv=None):
                  zip(c_seg, a_seg if a_seg is not None else c_seg)]
         print(f"{name:14s} " + " ".join(cells) + ("    fell" if r is None else f" {r[0]:7.3f}")
               + ("" if n == 1 else f"  {f:4d}"))
+    # The reward term by term over the same windows: which terms a gait earns or loses (the terms whose
+    # weight is 0 in this environment are left out of the table; the npz keeps them all).
+    term_means = [r for _, _, r in segment_means(t, cm, rec["reward_terms"], spans, alive)]
+    shown = [i for i, k in enumerate(REWARD_TERMS) if cfg.w.get(k, 0.0) != 0.0]
+    print("reward per step by term (same windows; weighted, summing to the reward column)")
+    print(f"{'segment':14s} " + " ".join(f"{REWARD_TERMS[i][:11]:>11s}" for i in shown))
+    for (name, _, _), r in zip(per_segment, term_means):
+        print(f"{name:14s} " + ("   fell" if r is None else " ".join(f"{r[i]:11.3f}" for i in shown)))
     contact = meas[..., 4:6] > 0.5
     speed = np.concatenate([np.full_like(foot_speed[:, :1], np.nan), foot_speed], axis=1)  # (robots, ticks, 2)
     gait = segment_gait(t, contact, speed, spans, alive, cfg.control_dt)
@@ -359,6 +370,9 @@ def main(argv=None):
              segment_command=np.array([c for _, c, _ in per_segment]),
              segment_achieved=np.array([a if a is not None else np.full(6, np.nan) for _, _, a in per_segment]),
              segment_reward=np.array([r[0] if r is not None else np.nan for r in reward]),
+             reward_term_names=np.array(REWARD_TERMS),
+             segment_reward_terms=np.array([r if r is not None else np.full(len(REWARD_TERMS), np.nan)
+                                            for r in term_means]),
              segment_gait=np.array([[np.nan] * 4 if g is None else [g["flight"], g["double"], g["touchdowns_per_s"],
                                      g["slip"]] for g in gait]))  # columns: flight, double, onsets/s, slip
     return metrics

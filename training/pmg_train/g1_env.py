@@ -133,6 +133,7 @@ The actor's observation does not change (the arms are not in it: the contract st
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -413,6 +414,14 @@ class EnvConfig:
         "lin_vel": 1.5, "yaw_rate": 0.8, "orientation": 0.5, "height": 0.5, "ref_q": 1.0, "ref_qd": 0.2,
         "contact": 0.5, "energy": -2e-4, "action_rate": -0.01, "alive": 0.5, "termination": -10.0,
         "foot_slip": 0.0, "lin_vel_abs": 0.0, "yaw_rate_abs": 0.0, "flight": 0.0})
+
+
+# The reward's terms, in the order they are summed (G1PmgEnv.step): each control step's weighted value of
+# term NAME is the metric "reward_NAME" (0 for the optional terms whose weight is 0), and their sum is the
+# step's reward (before a non-finite reward is replaced by 0). eval_mjx.py reports them per segment, so a
+# gait's reward can be read term by term (training/README.md "Which terms the runaway loses").
+REWARD_TERMS = ("lin_vel", "yaw_rate", "orientation", "height", "ref_q", "ref_qd", "contact", "energy",
+                "action_rate", "alive", "termination", "foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")
 
 
 def _quat_to_rot(q):
@@ -965,7 +974,8 @@ class G1PmgEnv(Env):
         data = mjx.forward(self.sys, mjx.make_data(self.sys).replace(qpos=qpos, qvel=jnp.zeros(self.mj_model.nv)))
         obs = self._obs(data, info, k[10])
         metrics = {n: jnp.zeros(()) for n in ["lin_vel_err", "yaw_rate_err", "pitch_err", "roll_err", "height_err",
-                                              "ref_q_err", "contact_match", "energy", "foot_slip"]}
+                                              "ref_q_err", "contact_match", "energy", "foot_slip"]
+                   + [f"reward_{t}" for t in REWARD_TERMS]}
         return State(data, obs, jnp.zeros(()), jnp.zeros(()), metrics, info)
 
     def _reference_qpos(self, qpos, q):
@@ -1117,17 +1127,24 @@ class G1PmgEnv(Env):
         done = jnp.logical_or(height < 0.4, R_up < 0.5)
         done = jnp.logical_or(done, jnp.logical_not(jnp.all(jnp.isfinite(data.qpos))))
         w = c.w
-        reward = (w["lin_vel"] * jnp.exp(-lin_err / c.lin_vel_sigma) + w["yaw_rate"] * jnp.exp(-yaw_err / c.yaw_rate_sigma) +
-                  w["orientation"] * jnp.exp(-ori_err / c.orientation_sigma) + w["height"] * jnp.exp(-h_err / c.height_sigma) +
-                  w["ref_q"] * jnp.exp(-ref_q_err / 0.5) + w["ref_qd"] * jnp.exp(-ref_qd_err / 50.0) +
-                  w["contact"] * contact_match + w["energy"] * energy + w["action_rate"] * action_rate +
-                  w["alive"] + w["termination"] * done)
-        if w.get("foot_slip", 0.0) != 0.0:  # configs saved before the term have no entry
-            reward = reward + w["foot_slip"] * foot_slip
-        if w.get("lin_vel_abs", 0.0) != 0.0 or w.get("yaw_rate_abs", 0.0) != 0.0:
-            reward = reward + w.get("lin_vel_abs", 0.0) * jnp.sqrt(lin_err) + w.get("yaw_rate_abs", 0.0) * jnp.sqrt(yaw_err)
+        terms = {"lin_vel": w["lin_vel"] * jnp.exp(-lin_err / c.lin_vel_sigma),
+                 "yaw_rate": w["yaw_rate"] * jnp.exp(-yaw_err / c.yaw_rate_sigma),
+                 "orientation": w["orientation"] * jnp.exp(-ori_err / c.orientation_sigma),
+                 "height": w["height"] * jnp.exp(-h_err / c.height_sigma),
+                 "ref_q": w["ref_q"] * jnp.exp(-ref_q_err / 0.5), "ref_qd": w["ref_qd"] * jnp.exp(-ref_qd_err / 50.0),
+                 "contact": w["contact"] * contact_match, "energy": w["energy"] * energy,
+                 "action_rate": w["action_rate"] * action_rate, "alive": jnp.float32(w["alive"]),
+                 "termination": w["termination"] * done}
+        # The optional terms enter the program only with a weight (configs saved before a term have no entry).
+        if w.get("foot_slip", 0.0) != 0.0:
+            terms["foot_slip"] = w["foot_slip"] * foot_slip
+        if w.get("lin_vel_abs", 0.0) != 0.0:
+            terms["lin_vel_abs"] = w["lin_vel_abs"] * jnp.sqrt(lin_err)
+        if w.get("yaw_rate_abs", 0.0) != 0.0:
+            terms["yaw_rate_abs"] = w["yaw_rate_abs"] * jnp.sqrt(yaw_err)
         if w.get("flight", 0.0) != 0.0:
-            reward = reward + w["flight"] * jnp.all(contact < 0.5).astype(jnp.float32)
+            terms["flight"] = w["flight"] * jnp.all(contact < 0.5).astype(jnp.float32)
+        reward = functools.reduce(jnp.add, terms.values())
         reward = jnp.where(jnp.isfinite(reward), reward, 0.0)
 
         info["prev_action"] = info["last_action"]
@@ -1154,6 +1171,7 @@ class G1PmgEnv(Env):
                    "pitch_err": jnp.abs(cmd[3] - pitch), "roll_err": jnp.abs(cmd[4] - roll),
                    "height_err": jnp.sqrt(h_err), "ref_q_err": jnp.sqrt(ref_q_err / LEG),
                    "contact_match": contact_match, "energy": energy, "foot_slip": foot_slip})
+        metrics.update({f"reward_{t}": jnp.asarray(terms.get(t, 0.0), jnp.float32) for t in REWARD_TERMS})
         data = jax.tree_util.tree_map(lambda new, old: jnp.where(jnp.all(jnp.isfinite(data.qpos)), new, old),
                                       data, state.pipeline_state)
         return state.replace(pipeline_state=data, obs=obs, reward=reward, done=done.astype(jnp.float32),

@@ -30,7 +30,9 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
    metric equals the recorded feet's horizontal speed while touching (and stays below 0.05 m/s
    standing); with EnvConfig.w["foot_slip"] = -1, w["lin_vel_abs"] = -1, w["yaw_rate_abs"] = -0.5 and
    w["flight"] = -1 (one compiled step) a state shoved at 0.8 m/s loses exactly its slip plus its
-   velocity error plus half its yaw-rate error, and lifted 5 cm off the floor 1 more.
+   velocity error plus half its yaw-rate error, and lifted 5 cm off the floor 1 more; the metrics
+   reward_<term> (g1_env.REWARD_TERMS) sum to the reward, the optional terms 0 at weight 0 and each
+   penalty's own value when on.
 1b. Actuator models and gains (issue 15): the JAX float32 actuator port (pmg_train/actuator.py) equals
    the float64 NumPy port (itself = C++, ctest actuator_port_equals_cpp) on random sequences with every
    effect on; part 1's env is built with a calibrated robot config written into the workdir (left
@@ -258,6 +260,16 @@ def env_checks(check, env, n_envs, n_steps):
           f"reward per step in (.., {w_pos:.2f}] (sum of positive weights), mean > 0 "
           f"(min {reward.min():.3f}, mean {reward.mean():.3f}, max {reward.max():.3f})")
 
+    # The reward term by term (g1_env.REWARD_TERMS, the metrics "reward_<term>", which eval_mjx.py reports per
+    # segment): the weighted terms sum to the step's reward, and the optional terms, whose weights are 0 here,
+    # are 0.
+    by_term = np.stack([np.asarray(traj.metrics[f"reward_{k}"], np.float64)[1:] for k in g1_env.REWARD_TERMS], -1)
+    optional = [g1_env.REWARD_TERMS.index(k) for k in ("foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")]
+    alive_term = by_term[..., g1_env.REWARD_TERMS.index("alive")]
+    check(np.abs(by_term.sum(-1) - reward).max() < 1e-4 and not by_term[..., optional].any() and
+          np.allclose(alive_term, cfg.w["alive"]),
+          f"reward_<term> metrics ({len(g1_env.REWARD_TERMS)} terms) sum to the reward (max |diff| "
+          f"{np.abs(by_term.sum(-1) - reward).max():.1e}); the optional terms 0 at weight 0; alive {alive_term.mean():.3f}")
     # Foot slip (EnvConfig.w["foot_slip"]): the metric is the summed horizontal speed of the ankle_roll_link
     # origins touching the floor, from the recorded poses; standing with the legs held, the feet stay put.
     feet_xy = np.asarray(traj.pipeline_state.xpos, np.float64)[:, :, env.foot_bodies, :2]   # (T+1, n, 2, 2)
@@ -285,7 +297,14 @@ def env_checks(check, env, n_envs, n_steps):
         return float(m["foot_slip"]), float(m["lin_vel_err"]), float(m["yaw_rate_err"])
     plain = step(st, zero)
     slip_p, lin_p, yaw_p = terms(plain)
-    lost = float(plain.reward - step_extra(st, zero).reward)
+    pushed = step_extra(st, zero)
+    lost = float(plain.reward - pushed.reward)
+    got = {k: float(pushed.metrics[f"reward_{k}"]) for k in ("foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")}
+    check(abs(got["foot_slip"] + slip_p) < 1e-5 and abs(got["lin_vel_abs"] + lin_p) < 1e-5 and
+          abs(got["yaw_rate_abs"] + 0.5 * yaw_p) < 1e-5 and got["flight"] == 0.0 and
+          abs(sum(float(pushed.metrics[f"reward_{k}"]) for k in g1_env.REWARD_TERMS) - float(pushed.reward)) < 1e-4,
+          f"reward_<term> with the penalties on: {got} (−slip, −error, −0.5 × yaw error, 0 on the floor), "
+          f"summing to the reward {float(pushed.reward):.4f}")
     check(slip_p > 0.05 and lin_p > 0.3 and abs(lost - (slip_p + lin_p + 0.5 * yaw_p)) < 1e-4,
           f"foot_slip -1, lin_vel_abs -1, yaw_rate_abs -0.5: a robot shoved at 0.8 m/s slides {slip_p:.3f} m/s "
           f"(> 0.05), misses its command by {lin_p:.3f} m/s (> 0.3) and {yaw_p:.3f} rad/s, and its reward drops by "
@@ -293,8 +312,9 @@ def env_checks(check, env, n_envs, n_steps):
     lifted = st.replace(pipeline_state=st.pipeline_state.replace(qpos=st.pipeline_state.qpos.at[2].add(0.05)))
     lifted_plain = step(lifted, zero)
     slip_l, lin_l, yaw_l = terms(lifted_plain)
-    lost_air = float(lifted_plain.reward - step_extra(lifted, zero).reward) - (slip_l + lin_l + 0.5 * yaw_l)
-    check(slip_l == 0.0 and abs(lost_air - 1.0) < 1e-4,
+    lifted_extra = step_extra(lifted, zero)
+    lost_air = float(lifted_plain.reward - lifted_extra.reward) - (slip_l + lin_l + 0.5 * yaw_l)
+    check(slip_l == 0.0 and abs(lost_air - 1.0) < 1e-4 and float(lifted_extra.metrics["reward_flight"]) == -1.0,
           f"flight -1: a robot lifted 5 cm (no foot touching, slip {slip_l}) loses {lost_air:.4f} (1) beyond its "
           f"tracking errors; on the floor, 0 (above)")
 
