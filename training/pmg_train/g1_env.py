@@ -420,8 +420,10 @@ class EnvConfig:
 # term NAME is the metric "reward_NAME" (0 for the optional terms whose weight is 0), and their sum is the
 # step's reward (before a non-finite reward is replaced by 0). eval_mjx.py reports them per segment, so a
 # gait's reward can be read term by term (training/README.md "Which terms the runaway loses").
+# The last four are optional: they enter the reward (and the compiled step) only with a weight != 0.
+OPTIONAL_REWARD_TERMS = ("foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")
 REWARD_TERMS = ("lin_vel", "yaw_rate", "orientation", "height", "ref_q", "ref_qd", "contact", "energy",
-                "action_rate", "alive", "termination", "foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")
+                "action_rate", "alive", "termination") + OPTIONAL_REWARD_TERMS
 
 
 def _quat_to_rot(q):
@@ -1135,15 +1137,12 @@ class G1PmgEnv(Env):
                  "contact": w["contact"] * contact_match, "energy": w["energy"] * energy,
                  "action_rate": w["action_rate"] * action_rate, "alive": jnp.float32(w["alive"]),
                  "termination": w["termination"] * done}
-        # The optional terms enter the program only with a weight (configs saved before a term have no entry).
-        if w.get("foot_slip", 0.0) != 0.0:
-            terms["foot_slip"] = w["foot_slip"] * foot_slip
-        if w.get("lin_vel_abs", 0.0) != 0.0:
-            terms["lin_vel_abs"] = w["lin_vel_abs"] * jnp.sqrt(lin_err)
-        if w.get("yaw_rate_abs", 0.0) != 0.0:
-            terms["yaw_rate_abs"] = w["yaw_rate_abs"] * jnp.sqrt(yaw_err)
-        if w.get("flight", 0.0) != 0.0:
-            terms["flight"] = w["flight"] * jnp.all(contact < 0.5).astype(jnp.float32)
+        # The optional terms (OPTIONAL_REWARD_TERMS, unweighted values in its order) enter the reward only with a
+        # weight; configs saved before a term have no entry.
+        unweighted = (foot_slip, jnp.sqrt(lin_err), jnp.sqrt(yaw_err), jnp.all(contact < 0.5).astype(jnp.float32))
+        for name, value in zip(OPTIONAL_REWARD_TERMS, unweighted):
+            if w.get(name, 0.0) != 0.0:
+                terms[name] = w[name] * value
         reward = functools.reduce(jnp.add, terms.values())
         reward = jnp.where(jnp.isfinite(reward), reward, 0.0)
 

@@ -264,7 +264,7 @@ def env_checks(check, env, n_envs, n_steps):
     # segment): the weighted terms sum to the step's reward, and the optional terms, whose weights are 0 here,
     # are 0.
     by_term = np.stack([np.asarray(traj.metrics[f"reward_{k}"], np.float64)[1:] for k in g1_env.REWARD_TERMS], -1)
-    optional = [g1_env.REWARD_TERMS.index(k) for k in ("foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")]
+    optional = [g1_env.REWARD_TERMS.index(k) for k in g1_env.OPTIONAL_REWARD_TERMS]
     alive_term = by_term[..., g1_env.REWARD_TERMS.index("alive")]
     check(np.abs(by_term.sum(-1) - reward).max() < 1e-4 and not by_term[..., optional].any() and
           np.allclose(alive_term, cfg.w["alive"]),
@@ -299,7 +299,7 @@ def env_checks(check, env, n_envs, n_steps):
     slip_p, lin_p, yaw_p = terms(plain)
     pushed = step_extra(st, zero)
     lost = float(plain.reward - pushed.reward)
-    got = {k: float(pushed.metrics[f"reward_{k}"]) for k in ("foot_slip", "lin_vel_abs", "yaw_rate_abs", "flight")}
+    got = {k: float(pushed.metrics[f"reward_{k}"]) for k in g1_env.OPTIONAL_REWARD_TERMS}
     check(abs(got["foot_slip"] + slip_p) < 1e-5 and abs(got["lin_vel_abs"] + lin_p) < 1e-5 and
           abs(got["yaw_rate_abs"] + 0.5 * yaw_p) < 1e-5 and got["flight"] == 0.0 and
           abs(sum(float(pushed.metrics[f"reward_{k}"]) for k in g1_env.REWARD_TERMS) - float(pushed.reward)) < 1e-4,
