@@ -18,6 +18,12 @@ pushes, teleoperated arms, hand payloads, hand forces or arm perturbation (the S
 reports how many robots fell in each segment and the achieved means over the robots still standing: does
 the actor fall in its own training simulator where it falls in the SIL, or only there (a sim-to-sim gap)?
 
+--stochastic [SCALE] draws every action from the policy's own distribution, as PPO did while it trained and
+explored (Brax's NormalTanhDistribution: tanh of a Gaussian around the actor's mean, the actor's own std times
+SCALE, default 1, and the run's --action-noise-scale), instead of playing the mean, which export_onnx.py ships and the runner plays. With
+--randomized it is the training's rollout: does a gait survive, and what does it earn, under the noise PPO
+judged it by? The metrics add the sampled std (mean over legs and ticks); the npz records it per tick.
+
 --physics mujoco steps the same model with MuJoCo's C engine (mj_step, through a host callback; one nominal
 robot, slower) instead of MJX; --pd-damping explicit computes the PD's D term from each physics step's
 velocity (EnvConfig.pd_damping), as the SIL's motor-driver emulation does, instead of training's implicit
@@ -74,6 +80,20 @@ def schedule(path):
         a = np.clip((t - segs[k][0]) / s["ramp"], 0, 1) if s["ramp"] > 0 else 1.0
         return prev + a * (segs[k][1] - prev)
     return at, s["duration"], spans
+
+
+def policy_action(h, eps=None, noise=1.0, min_std=0.001):
+    """The action in [-1, 1] of an actor whose last layer put out @p h (..., 2 LEG): loc = h[..., :LEG], then the
+    pre-softplus scale. Without @p eps, tanh(loc): the distribution's mode, which export_onnx.py ships and the
+    runner plays. With @p eps ~ N(0, 1) (..., LEG), a draw from the policy PPO trained and explored with, Brax's
+    NormalTanhDistribution: tanh(loc + noise (softplus(scale) + min_std) eps) (@p noise 1: the training's
+    spread; 0: the mode). Returns (action (..., LEG), the Gaussian's std (..., LEG) before tanh, times noise)."""
+    import jax
+    import jax.numpy as jnp
+    from pmg_train.g1_env import LEG
+    loc = h[..., :LEG]
+    std = noise * (jax.nn.softplus(h[..., LEG:2 * LEG]) + min_std)
+    return jnp.tanh(loc if eps is None else loc + std * eps), std
 
 
 def segment_window(t, t0, t1):
@@ -188,6 +208,10 @@ def main(argv=None):
     ap.add_argument("--hold-reference", action="store_true",
                     help="instead of the actor, actions that hold the PMG reference's leg pose (the PD targets at "
                          "ref_q, within the actor's action range): what the reward gives the reference itself")
+    ap.add_argument("--stochastic", type=float, nargs="?", const=1.0, default=0.0, metavar="SCALE",
+                    help="sample each action from the policy's own distribution, as PPO did while training "
+                         "(tanh of a Gaussian around the actor's mean, its std the actor's, times SCALE; default 1) "
+                         "instead of playing the mean (the deployed actor): does the gait PPO explored survive?")
     ap.add_argument("--randomized", type=int, default=0, metavar="N",
                     help="N robots in the run's training distribution (domain randomisation, kp scale, delay, noise, "
                          "reset noise; no pushes, teleop arms, payloads or hand forces) instead of one nominal robot")
@@ -202,6 +226,10 @@ def main(argv=None):
                     help="physics step [s] (EnvConfig.sim_dt; default: as trained, 0.005); the SIL's is 0.001")
     ap.add_argument("--repo", default=None, help="pmg checkout (default: $PMG_REPO, the package's checkout, cwd)")
     args = ap.parse_args(argv)
+    if args.stochastic < 0:
+        ap.error(f"--stochastic {args.stochastic}: expected a scale >= 0 of the policy's std")
+    if args.stochastic and args.hold_reference:
+        ap.error("--stochastic samples the actor's actions; --hold-reference plays no actor")
     if args.randomized < 0:
         ap.error(f"--randomized {args.randomized}: expected 0 (one nominal robot) or a number of robots")
     if args.physics == "mujoco" and args.randomized:
@@ -235,6 +263,10 @@ def main(argv=None):
     if args.sim_dt:
         nominal["sim_dt"] = args.sim_dt
     trained = env_from_train_config(args.train_config)
+    var_scale = 1.0  # the run's --action-noise-scale (Brax's var_scale): --stochastic draws with the noise it trained with
+    if args.train_config:
+        with open(args.train_config) as f:
+            var_scale = float(json.load(f).get("action_noise_scale", 1.0))
     if args.clips:
         nominal["clips"] = args.clips
     unknown = sorted(set(trained) - {f.name for f in dataclasses.fields(EnvConfig)})
@@ -250,13 +282,17 @@ def main(argv=None):
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
     W = [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers]
 
-    def actor(o):
+    if W[-1][0].shape[1] != 2 * LEG:
+        raise SystemExit(f"{args.actor}: the last layer puts out {W[-1][0].shape[1]} values; expected {2 * LEG} "
+                         f"(the mean and the scale of {LEG} leg actions)")
+
+    def actor(o, eps, noise):
         h = (o - mean) / std
         for i, (w, b) in enumerate(W):
             h = h @ w + b
             if i + 1 < len(W):
                 h = h * jax.nn.sigmoid(h)
-        return jnp.tanh(h[..., :LEG])
+        return policy_action(h, eps, noise)
 
     n = max(1, args.randomized)
     if args.physics == "mujoco":
@@ -277,20 +313,24 @@ def main(argv=None):
     yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
     feet = jnp.asarray(env.foot_bodies)  # the ankle_roll_links, left and right
 
-    def body(hold, state, cmd):
+    def body(hold, noise, state, xs):
+        cmd, key = xs
         info = dict(state.info)
         info["command"] = jnp.broadcast_to(cmd, (n, 6))
         info["command_goal"] = info["command"]  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
         # --hold-reference is an input of the compiled rollout, not a Python branch: the actor's rollout and the
         # reference's compile to one program (JAX's persistent cache serves the second the first's compile).
-        a = jnp.where(hold, jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]), actor(state.obs["state"]))
+        # --stochastic likewise: the noise's scale is an input (0: the mean action, bit for bit).
+        a_actor, a_std = actor(state.obs["state"], jax.random.normal(key, (n, LEG)), noise)
+        a = jnp.where(hold, jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]), a_actor)
         state = step(state, a)
         ps = state.pipeline_state
         rec = {"command_env": state.info["command"], "q": ps.qpos[:, 7:7 + LEG], "q_ref": state.info["ref_q"][:, :LEG],
                "measured": state.info["measured"],  # v_H (3), height, contacts (2), pitch, roll
                "ref_height": state.info["ref_height"], "wz": yaw_rate(ps.qpos, ps.qvel), "done": state.done,
                "reward": state.reward, "foot_xy": ps.xpos[:, feet, :2],  # ankle_roll_link origins, world x, y [m]
+               "action_std": a_std.mean(axis=-1),  # the sampled Gaussian's std, mean over the legs (0: the mean)
                "phase": state.info["phase"],  # the gait phase in [0, 1) the step's reference was generated at
                # the reward's weighted terms (g1_env.REWARD_TERMS order), whose sum is "reward"
                "reward_terms": jnp.stack([state.metrics[f"reward_{k}"] for k in REWARD_TERMS], axis=-1)}
@@ -304,8 +344,9 @@ def main(argv=None):
     print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
           + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
-    run = jax.jit(lambda h, s, c: jax.lax.scan(functools.partial(body, h), s, c))
-    _, rec = run(jnp.asarray(args.hold_reference), state, cmds)
+    run = jax.jit(lambda h, z, s, c, k: jax.lax.scan(functools.partial(body, h, z), s, (c, k)))
+    _, rec = run(jnp.asarray(args.hold_reference), jnp.float32(args.stochastic * var_scale), state, cmds,
+                 jax.random.split(jax.random.PRNGKey(1000 + args.seed), ticks))
     rec = {k: np.swapaxes(np.asarray(v), 0, 1) for k, v in rec.items()}  # (robots, ticks, ...)
     cm = np.asarray(cmds)
     t = np.arange(ticks) * cfg.control_dt
@@ -329,7 +370,10 @@ def main(argv=None):
         metrics.update(robots=n, fell=int((~alive[:, -1]).sum()), survived_s=[round(float(x), 2) for x in survived])
     else:
         metrics.update(fell=bool(not alive.all()), survived_s=float(survived[0]))
-    print(f"{args.physics} rollout:", metrics)
+    if args.stochastic:
+        metrics["action_std"] = float(rec["action_std"][alive].mean())
+    print(f"{args.physics} rollout{f' (actions drawn from the policy, std x {args.stochastic:g})' if args.stochastic else ''}:",
+          metrics)
     achieved = np.stack([meas[..., 0], meas[..., 1], rec["wz"], meas[..., 6], meas[..., 7], meas[..., 3]], axis=-1)
     per_segment = segment_means(t, cm, achieved, spans, alive)
     reward = [r for _, _, r in segment_means(t, cm, rec["reward"][..., None], spans, alive)]

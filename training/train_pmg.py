@@ -14,12 +14,12 @@ calls in one process; progress.jsonl names each record's "stage").
 """
 import argparse
 import dataclasses
-import functools
 import glob
 import json
 import math
 import os
 import pickle
+import shutil
 import sys
 import time
 
@@ -201,6 +201,19 @@ def parse_args(argv=None):
                          "trains the warm-up's walks at the standing posture, so walking crouched, bent or leaning starts "
                          "from a gait that already walks at its command (a posture curriculum; training/README.md "
                          "\"A posture curriculum\"); needs --warmup-steps")
+    ap.add_argument("--action-noise-scale", type=float, default=1.0, metavar="V",
+                    help="the exploration noise's scale: each action is drawn as tanh(loc + (softplus(s) + 0.001) V eps), "
+                         "Brax NormalTanhDistribution's var_scale (default 1, Brax's own), finite and > 0. The deployed "
+                         "action is tanh(loc) whatever V; V < 1 trains, from the first step, with less noise than the "
+                         "actor's own std (training/README.md \"The runaway under the training's noise\")")
+    ap.add_argument("--warmup-evals", type=int, default=1, metavar="K",
+                    help="checkpoints of the warm-up (Brax's num_evals for its ppo.train, no evaluation rollouts; the "
+                         "first at its step 0, the last at its end): with --keep-actors, the warm-up's actors; needs "
+                         "--warmup-steps")
+    ap.add_argument("--keep-actors", action="store_true",
+                    help="every checkpoint also writes actors/actor_<step>.npz, the actor at that step (the warm-up's "
+                         "included): when a gait forms, rolled out with eval_mjx.py ACTOR --train-config "
+                         "RUN/train_config.json")
     ap.add_argument("--num-minibatches", type=int, default=32)
     ap.add_argument("--unroll-length", type=int, default=20)
     ap.add_argument("--episode-length", type=int, default=None,
@@ -324,6 +337,12 @@ def parse_args(argv=None):
             ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: has no effect without --warmup-steps N > 0")
         if not 0.0 <= args.warmup_p_posture_walk <= 1.0:
             ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: expected in [0, 1]")
+    if not (math.isfinite(args.action_noise_scale) and args.action_noise_scale > 0):
+        ap.error(f"--action-noise-scale = {args.action_noise_scale}: expected a finite scale > 0")
+    if args.warmup_evals != 1 and args.warmup_steps == 0:
+        ap.error(f"--warmup-evals = {args.warmup_evals}: has no effect without --warmup-steps N > 0")
+    if args.warmup_evals < 1:
+        ap.error(f"--warmup-evals = {args.warmup_evals}: expected 1 or more checkpoints")
     if args.orientation_sigma is not None and not args.orientation_sigma > 0:
         ap.error(f"--orientation-sigma = {args.orientation_sigma}: expected > 0")
     if args.height_sigma is not None and not args.height_sigma > 0:
@@ -546,10 +565,11 @@ def main(argv=None):
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
                    "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
                    "devices": [str(d) for d in devices], "jax": jax.__version__, "mirror_loss": args.mirror_loss,
+                   "action_noise_scale": args.action_noise_scale,
                    "warmup": None if warmup_env is None else {
                        "steps": args.warmup_steps, "lin_vel_sigma": args.warmup_tracking_sigma,
                        "yaw_rate_sigma": args.warmup_tracking_sigma, "height_sigma": args.warmup_height_sigma,
-                       "p_posture_walk": warmup_cfg.p_posture_walk},
+                       "p_posture_walk": warmup_cfg.p_posture_walk, "evals": args.warmup_evals},
                    "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
                    "actuators": {"file": cfg.actuators, "dr": cfg.actuator_dr,
@@ -582,6 +602,10 @@ def main(argv=None):
 
     def policy_params_fn(step, make_policy, params):  # checkpoint at every eval
         save_params(params, args.out, env, clip_names)
+        if args.keep_actors:  # the actor at this step beside the latest (zero-padded: the names sort by step)
+            os.makedirs(os.path.join(args.out, "actors"), exist_ok=True)
+            shutil.copyfile(os.path.join(args.out, "actor.npz"),
+                            os.path.join(args.out, "actors", f"actor_{step + stage['offset']:011d}.npz"))
         log(f"checkpoint at step {step + stage['offset']}")
 
     # Brax builds its Evaluator even with run_evals=False, and the Evaluator compiles the evaluation env's
@@ -594,20 +618,29 @@ def main(argv=None):
                                                            *env_maps(env))
         log("mirror-symmetry loss, weight", args.mirror_loss)
 
+    def network_factory(observation_size, action_size, **kw):  # Brax's networks; the noise's scale (--action-noise-scale)
+        nets = ppo_networks.make_ppo_networks(observation_size, action_size, **kw, **net_cfg)
+        if args.action_noise_scale != 1.0:
+            from brax.training import distribution
+            nets = nets.replace(parametric_action_distribution=distribution.NormalTanhDistribution(
+                event_size=action_size, var_scale=args.action_noise_scale))
+        return nets
+
     def train(environment, **overrides):
         run_cfg = {**ppo_cfg, **overrides}
         ppo.acting.Evaluator = evaluator_cls if run_cfg["run_evals"] else _NoEvaluator
         return ppo.train(environment=environment,
-                         network_factory=functools.partial(ppo_networks.make_ppo_networks, **net_cfg),
+                         network_factory=network_factory,
                          randomization_fn=make_randomization_fn(environment), progress_fn=progress_fn,
                          policy_params_fn=policy_params_fn, **run_cfg)
 
     try:
-        if warmup_env is not None:  # stage 1: wide rewards, no evaluations, one checkpoint at its end
+        if warmup_env is not None:  # stage 1: wide rewards, no evaluations; checkpoints at its start and end (--warmup-evals)
             stage["name"] = "warmup"
             log(f"warm-up: {args.warmup_steps} steps with tracking sigma {args.warmup_tracking_sigma}, "
                 f"height sigma {args.warmup_height_sigma}, p_posture_walk {warmup_cfg.p_posture_walk}")
-            _, restore, _ = train(warmup_env, num_timesteps=args.warmup_steps, num_evals=1, run_evals=False,
+            _, restore, _ = train(warmup_env, num_timesteps=args.warmup_steps, num_evals=args.warmup_evals,
+                                  run_evals=False,
                                   restore_params=restore)
             stage.update(name="main", offset=stage["last"])
             log(f"warm-up done after {stage['offset']} steps, {time.time() - t_start:.0f} s; the run's own widths from here")

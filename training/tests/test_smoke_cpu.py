@@ -105,6 +105,7 @@ import glob
 import json
 import math
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -687,7 +688,9 @@ def ppo_checks(check, workdir, obs):
     argv = ["--out", out, "--num-envs", "8", "--batch-size", "8", "--num-minibatches", "2", "--unroll-length", "5",
             "--timesteps", str(timesteps), "--num-evals", "2", "--num-eval-envs", "0", "--episode-length", "20",
             "--hidden", "32,32", "--seed", "1", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
-            "--p-reset-reference", "0.5"]
+            "--p-reset-reference", "0.5", "--keep-actors"]
+    if os.path.exists(os.path.join(out, "actors")):
+        shutil.rmtree(os.path.join(out, "actors"))
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
     t0 = time.time()
@@ -716,6 +719,14 @@ def ppo_checks(check, workdir, obs):
           f"train_config warmup {tc.get('warmup')}, env lin_vel_sigma {tc['env']['lin_vel_sigma']}, "
           f"p_reset_reference {tc['env']['p_reset_reference']}")
     check(os.path.getsize(os.path.join(out, "params.pkl")) > 0, "checkpoint params.pkl written")
+    # --keep-actors: one actor per checkpoint (steps 0 and the last), named by step; the last is the final actor.
+    kept = sorted(os.listdir(os.path.join(out, "actors"))) if os.path.isdir(os.path.join(out, "actors")) else []
+    steps = [int(k[len("actor_"):-len(".npz")]) for k in kept]
+    first, final = (np.load(os.path.join(out, "actors", k)) for k in (kept[0], kept[-1])) if len(kept) >= 2 else (None, None)
+    z_final = np.load(os.path.join(out, "actor.npz"))
+    check(len(kept) == 2 and steps[0] == 0 and steps[-1] >= timesteps and
+          np.array_equal(final["w0"], z_final["w0"]) and not np.array_equal(first["w0"], final["w0"]),
+          f"--keep-actors: actors/{kept} (the untrained actor at step 0 and the last checkpoint's, which is actor.npz)")
     mean, std, layers, action_scale, clips, mode = export_onnx.load_actor(os.path.join(out, "actor.npz"))
     check([w.shape for w, _ in layers] == [(62, 32), (32, 32), (32, 24)] and mode == "pmg_gco" and len(clips) > 0,
           f"actor.npz: 62-32-32-24 MLP, mode {mode}, {len(clips)} clips")
@@ -783,7 +794,8 @@ def warmup_staging_checks(check, workdir):
             "--timesteps", "1000", "--num-evals", "2", "--num-eval-envs", "4", "--episode-length", "20",
             "--hidden", "32,32", "--seed", "7", "--mirror-loss", "0.5", "--tracking-sigma", "0.05",
             "--warmup-steps", "400", "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03",
-            "--p-posture-walk", "0.6", "--warmup-p-posture-walk", "0.0"]
+            "--p-posture-walk", "0.6", "--warmup-p-posture-walk", "0.0", "--warmup-evals", "3",
+            "--action-noise-scale", "0.5"]
     train, evaluator, loss = ppo.train, ppo.acting.Evaluator, ppo.ppo_losses.compute_ppo_loss
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
@@ -803,10 +815,11 @@ def warmup_staging_checks(check, workdir):
     w, m = calls
     same = [k for k in ("clips", "friction", "p_reset_reference", "noise", "push_vel")
             if getattr(w["cfg"], k) == getattr(m["cfg"], k)]
-    check(w["num_timesteps"] == 400 and not w["run_evals"] and w["num_evals"] == 1 and w["restore_params"] is None and
+    check(w["num_timesteps"] == 400 and not w["run_evals"] and w["num_evals"] == 3 and w["restore_params"] is None and
           (w["cfg"].lin_vel_sigma, w["cfg"].yaw_rate_sigma, w["cfg"].height_sigma) == (0.3, 0.3, 0.03) and
           w["cfg"].p_posture_walk == 0.0 and len(same) == 5 and w["evaluator"] is not evaluator,
-          f"warm-up stage: {w['num_timesteps']} steps, no evaluations (a stand-in Evaluator), widths "
+          f"warm-up stage: {w['num_timesteps']} steps, {w['num_evals']} checkpoints (--warmup-evals 3) and no "
+          f"evaluations (a stand-in Evaluator), widths "
           f"{(w['cfg'].lin_vel_sigma, w['cfg'].yaw_rate_sigma, w['cfg'].height_sigma)}, p_posture_walk "
           f"{w['cfg'].p_posture_walk} (--warmup-p-posture-walk 0), the run's {same}")
     check(m["num_timesteps"] == 600 and m["restore_params"] is warmup_params and m["seed"] == 8 and m["run_evals"] and
@@ -815,15 +828,25 @@ def warmup_staging_checks(check, workdir):
           f"main stage: the remaining {m['num_timesteps']} steps from the warm-up's parameters, seed {m['seed']} "
           f"(the run's 7 + 1), widths {(m['cfg'].lin_vel_sigma, m['cfg'].yaw_rate_sigma)}, p_posture_walk "
           f"{m['cfg'].p_posture_walk} (the run's 0.6), Brax's Evaluator")
+    # --action-noise-scale 0.5: both stages' networks draw with half the std; the policy network is Brax's own.
+    import jax.numpy as jnp
+    import numpy as np
+    nets = [c["network_factory"](62, 12) for c in calls]
+    zero_std = [float(np.asarray(n.parametric_action_distribution.create_dist(jnp.zeros(24)).scale).mean()) for n in nets]
+    want_std = 0.5 * (math.log(2.0) + 0.001)
+    check(all(abs(v - want_std) < 1e-6 for v in zero_std) and
+          nets[0].policy_network.init is not None and nets[0].parametric_action_distribution.param_size == 24,
+          f"--action-noise-scale 0.5: at a zero scale logit both stages' policies draw with std {zero_std} "
+          f"(Brax's own: {2 * want_std:.4f}), 12 actions from 24 outputs")
     with open(os.path.join(out, "progress.jsonl")) as f:
         stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
     with open(os.path.join(out, "train_config.json")) as f:
         tc = json.load(f)
     check(stages == [("warmup", 400), ("main", 1000)] and
           tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03,
-                           "p_posture_walk": 0.0} and
+                           "p_posture_walk": 0.0, "evals": 3} and
           tc["env"]["lin_vel_sigma"] == 0.05 and tc["env"]["p_posture_walk"] == 0.6 and ppo.acting.Evaluator is evaluator and
-          ppo.ppo_losses.compute_ppo_loss is loss,
+          ppo.ppo_losses.compute_ppo_loss is loss and tc["action_noise_scale"] == 0.5,
           f"progress.jsonl (stage, step) {stages}; train_config warmup {tc['warmup']}; Brax's Evaluator and "
           f"PPO loss restored")
 
@@ -885,6 +908,33 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           dev_hold < 0.5 * dev_actor and len(h["segment_reward"]) == 2,
           f"eval_mjx --hold-reference: the legs follow the reference (mean |q - q_ref| {dev_hold:.3f} rad over the "
           f"first 0.1 s, the untrained actor {dev_actor:.3f}); rewards finite and reported for both segments")
+    # --stochastic: the actions PPO explored with. policy_action draws as Brax's NormalTanhDistribution does (the
+    # same key, the same action), and the rollout with the flag (an input of the same program) leaves the mean's.
+    import jax
+    from brax.training.distribution import NormalTanhDistribution
+    h = jax.random.normal(jax.random.PRNGKey(3), (5, 24)) * 2.0
+    key = jax.random.PRNGKey(4)
+    dist = NormalTanhDistribution(event_size=12)
+    brax_a = np.asarray(dist.postprocess(dist.sample_no_postprocessing(h, key)))
+    ours_a, ours_std = eval_mjx.policy_action(h, jax.random.normal(key, (5, 12)))
+    mode_a, _ = eval_mjx.policy_action(h, jax.random.normal(key, (5, 12)), noise=0.0)
+    check(np.abs(np.asarray(ours_a) - brax_a).max() < 1e-6 and
+          np.array_equal(np.asarray(mode_a), np.asarray(dist.mode(h))) and  # Brax's mode is tanh(loc)
+          np.abs(np.asarray(ours_a) - np.asarray(mode_a)).max() > 0.05,
+          f"eval_mjx.policy_action: a draw equals Brax's NormalTanhDistribution's for the same key (max |diff| "
+          f"{np.abs(np.asarray(ours_a) - brax_a).max():.1e}); noise 0 is its mode, tanh(loc), bit for bit")
+    stoch_out = os.path.join(workdir, "mjx_stochastic.npz")
+    try:
+        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", stoch_out, "--commands", sched, "--start-reference",
+                       "--stochastic"])  # the actor's rollout's program again, the noise's scale an input
+    finally:
+        os.chdir(cwd)
+    st = np.load(stoch_out)
+    apart_st = float(np.abs(st["q"] - z["q"]).max())
+    check(not z["action_std"].any() and float(st["action_std"].min()) > 0.01 and apart_st > 0.01 and
+          np.isfinite(st["reward"]).all(),
+          f"eval_mjx --stochastic: the legs leave the mean action's rollout by {apart_st:.3f} rad, the sampled std "
+          f"{float(st['action_std'].mean()):.3f} (the mean action's rollout records 0)")
     # --physics mujoco: MuJoCo's C engine steps the same model; with the SIL's 1 ms step and explicit PD damping the
     # first 0.2 s stay close to MJX's 5 ms implicit ones (a sign error in the explicit D term, or a physics step
     # whose result is dropped, would not).

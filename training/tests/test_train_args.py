@@ -123,7 +123,12 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-p-posture-walk", "1.5"],
                    "--warmup-p-posture-walk"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-p-posture-walk", "nan"],
-                   "--warmup-p-posture-walk")):
+                   "--warmup-p-posture-walk"),
+                  (["--warmup-evals", "4"], "--warmup-evals"),
+                  (["--action-noise-scale", "0"], "--action-noise-scale"),
+                  (["--action-noise-scale", "-0.5"], "--action-noise-scale"),
+                  (["--action-noise-scale", "inf"], "--action-noise-scale"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "0"], "--warmup-evals")):
     n_cases += 1
     err = io.StringIO()
     try:
@@ -162,6 +167,13 @@ args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup
                              "--warmup-p-posture-walk", "0"])
 if train_pmg.warmup_config(_Cfg(), args) != _Cfg(0.25, 0.25, 0.02, 0.05, 1000, 0.0):
     failures.append(f"--warmup-p-posture-walk 0: warm-up config {train_pmg.warmup_config(_Cfg(), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "5",
+                             "--keep-actors"])
+if (args.warmup_evals, args.keep_actors) != (5, True):
+    failures.append(f"--warmup-evals 5 --keep-actors parsed as {(args.warmup_evals, args.keep_actors)}")
+args = train_pmg.parse_args(["--out", "/tmp/x"])
+if (args.warmup_evals, args.keep_actors, args.action_noise_scale) != (1, False, 1.0):
+    failures.append(f"defaults: warmup_evals {args.warmup_evals}, keep_actors {args.keep_actors} (want 1, False)")
 if train_pmg.parse_args(["--out", "/tmp/x", "--clips", "config/clips/other"]).clips != "config/clips/other":
     failures.append("--clips not parsed")
 # --action-scale-from: the scale of an earlier run's train_config.json; a bad file is refused naming the flag.
