@@ -93,7 +93,8 @@ def report(named, factor, plot=None):
     for name, summary in named:
         fallen, segs = rows(summary, factor)
         n = len(segments(summary)[0][1]["vx"]) if segments(summary) else 0
-        cells = [f"{s} {m:+.2f} / {100 * r:.0f} % / {fl:.2f} ({k})" for s, _, m, r, fl, k in segs]
+        cells = [f"{s} no robot standing (0)" if k == 0 else f"{s} {m:+.2f} / {100 * r:.0f} % / {fl:.2f} ({k})"
+                 for s, _, m, r, fl, k in segs]
         print(f"{name:6s} fallen {fallen:3d}/{n}  " + "  ".join(cells))
     if plot:
         import matplotlib

@@ -6,10 +6,14 @@ label unit). Three robots on a schedule stand 0-1 s, walk backward at -0.3 m/s 1
 - summarize gives the walk's v_x (-0.3, -0.6, None), flight (0, 0.5, None), fallen_by_end (no, no, yes),
   and the stop None for robot 2; the drawn friction comes along;
 - the report row: 1 of 3 fallen by the end, the walk's median -0.45 m/s and 1 of the 2 standing robots
-  beyond 1.5 x the command (none beyond 2.5 x); the stand and the stop are not walking segments;
+  beyond 1.5 x the command (none beyond 2.5 x); the stand and the stop are not walking segments; a walk
+  no robot stood through says so (not nan);
 - a rollout longer than the schedule is refused, naming both; --plot writes the figure.
 Usage: test_segment_robots.py
 """
+import contextlib
+import copy
+import io
 import json
 import os
 import subprocess
@@ -75,6 +79,13 @@ def main():
               rows[0][3] == 0.5 and rows[0][4] == 0.25 and rows[0][5] == 2,
               f"report row: {fallen} fallen; {rows}")
         check(sr.rows(s, 2.5)[1][0][3] == 0.0, "none of them beyond 2.5 x the command")
+        gone = copy.deepcopy(s)  # every robot fell before the walk's window: said so, not printed as nan
+        gone["back"]["vx"], gone["back"]["flight"] = [None] * 3, [None] * 3
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            sr.report([("G", gone)], 1.5)
+        check("back no robot standing (0)" in buf.getvalue() and "nan" not in buf.getvalue(),
+              f"a walk no robot stood through: {buf.getvalue().splitlines()[-1].strip()}")
         long_npz = os.path.join(d, "long.npz")
         rollout(long_npz, ticks=500)
         p = subprocess.run([sys.executable, SCRIPT, "summarize", long_npz, "--commands", sched, "--out", out],
