@@ -52,6 +52,7 @@ import argparse
 import dataclasses
 import functools
 import json
+import math
 import os
 import sys
 
@@ -210,12 +211,13 @@ def main(argv=None):
                          "ref_q, within the actor's action range): what the reward gives the reference itself")
     ap.add_argument("--stochastic", type=float, nargs="?", const=1.0, default=0.0, metavar="SCALE",
                     help="sample each action from the policy's own distribution, as PPO did while training "
-                         "(tanh of a Gaussian around the actor's mean, its std the actor's, times SCALE; default 1) "
+                         "(tanh of a Gaussian around the actor's mean, its std the actor's times SCALE, default 1, and "
+                         "the run's --action-noise-scale; the noise drawn with --seed) "
                          "instead of playing the mean (the deployed actor): does the gait PPO explored survive?")
     ap.add_argument("--randomized", type=int, default=0, metavar="N",
                     help="N robots in the run's training distribution (domain randomisation, kp scale, delay, noise, "
                          "reset noise; no pushes, teleop arms, payloads or hand forces) instead of one nominal robot")
-    ap.add_argument("--seed", type=int, default=0, help="--randomized: the draws' seed")
+    ap.add_argument("--seed", type=int, default=0, help="the draws' seed: --randomized's robots, --stochastic's noise")
     ap.add_argument("--physics", choices=["mjx", "mujoco"], default="mjx",
                     help="the physics step: MJX's (training's), or MuJoCo's C engine (mj_step on the same model, "
                          "through a host callback; one nominal robot): which engine an actor's behaviour belongs to")
@@ -266,7 +268,10 @@ def main(argv=None):
     var_scale = 1.0  # the run's --action-noise-scale (Brax's var_scale): --stochastic draws with the noise it trained with
     if args.train_config:
         with open(args.train_config) as f:
-            var_scale = float(json.load(f).get("action_noise_scale", 1.0))
+            var_scale = json.load(f).get("action_noise_scale", 1.0)
+        if not (isinstance(var_scale, (int, float)) and math.isfinite(var_scale) and var_scale > 0):
+            raise SystemExit(f"--train-config {args.train_config}: 'action_noise_scale' is {var_scale!r}; expected a "
+                             f"finite scale > 0 (train_pmg.py --action-noise-scale)")
     if args.clips:
         nominal["clips"] = args.clips
     unknown = sorted(set(trained) - {f.name for f in dataclasses.fields(EnvConfig)})
