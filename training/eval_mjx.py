@@ -83,18 +83,18 @@ def schedule(path):
     return at, s["duration"], spans
 
 
-def policy_action(h, eps=None, noise=1.0, min_std=0.001):
-    """The action in [-1, 1] of an actor whose last layer put out @p h (..., 2 LEG): loc = h[..., :LEG], then the
-    pre-softplus scale. Without @p eps, tanh(loc): the distribution's mode, which export_onnx.py ships and the
-    runner plays. With @p eps ~ N(0, 1) (..., LEG), a draw from the policy PPO trained and explored with, Brax's
-    NormalTanhDistribution: tanh(loc + noise (softplus(scale) + min_std) eps) (@p noise 1: the training's
-    spread; 0: the mode). Returns (action (..., LEG), the Gaussian's std (..., LEG) before tanh, times noise)."""
-    import jax
+def policy_action(h, eps=None, noise=1.0):
+    """The action in [-1, 1] of an actor whose last layer put out @p h (..., 2 LEG), the parameters of Brax's
+    NormalTanhDistribution (the policy PPO trained and explored with; its loc and std are Brax's own).
+    Without @p eps, tanh(loc): the distribution's mode, which export_onnx.py ships and the runner plays. With
+    @p eps ~ N(0, 1) (..., LEG), a draw tanh(loc + noise std eps) (@p noise 1: the training's spread; 0: the
+    mode). Returns (action (..., LEG), the Gaussian's std (..., LEG) before tanh, times noise)."""
     import jax.numpy as jnp
+    from brax.training.distribution import NormalTanhDistribution
     from pmg_train.g1_env import LEG
-    loc = h[..., :LEG]
-    std = noise * (jax.nn.softplus(h[..., LEG:2 * LEG]) + min_std)
-    return jnp.tanh(loc if eps is None else loc + std * eps), std
+    gaussian = NormalTanhDistribution(event_size=LEG).create_dist(h)
+    std = noise * gaussian.scale
+    return jnp.tanh(gaussian.loc if eps is None else gaussian.loc + std * eps), std
 
 
 def segment_window(t, t0, t1):

@@ -916,7 +916,7 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
     key = jax.random.PRNGKey(4)
     dist = NormalTanhDistribution(event_size=12)
     brax_a = np.asarray(dist.postprocess(dist.sample_no_postprocessing(h, key)))
-    ours_a, ours_std = eval_mjx.policy_action(h, jax.random.normal(key, (5, 12)))
+    ours_a, _ = eval_mjx.policy_action(h, jax.random.normal(key, (5, 12)))
     mode_a, _ = eval_mjx.policy_action(h, jax.random.normal(key, (5, 12)), noise=0.0)
     check(np.abs(np.asarray(ours_a) - brax_a).max() < 1e-6 and
           np.array_equal(np.asarray(mode_a), np.asarray(dist.mode(h))) and  # Brax's mode is tanh(loc)
