@@ -285,14 +285,17 @@ def main(argv=None):
     spans = [(name, t0, min(t1, duration)) for name, t0, t1 in spans if t0 < duration]  # --duration: the segments run
     ticks = int(round(duration / cfg.control_dt))
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
-    W = [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers]
+    # The actor's weights are inputs of the compiled rollout, not constants folded into it: another actor of the
+    # same shapes (a run's other checkpoints, another seed) is served the same compile by JAX's persistent cache.
+    params = (jnp.asarray(mean), jnp.asarray(std), [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers])
 
-    if W[-1][0].shape[1] != 2 * LEG:
-        raise SystemExit(f"{args.actor}: the last layer puts out {W[-1][0].shape[1]} values; expected {2 * LEG} "
-                         f"(the mean and the scale of {LEG} leg actions)")
+    if params[2][-1][0].shape[1] != 2 * LEG:
+        raise SystemExit(f"{args.actor}: the last layer puts out {params[2][-1][0].shape[1]} values; expected "
+                         f"{2 * LEG} (the mean and the scale of {LEG} leg actions)")
 
-    def actor(o, eps, noise):
-        h = (o - mean) / std
+    def actor(p, o, eps, noise):
+        o_mean, o_std, W = p
+        h = (o - o_mean) / o_std
         for i, (w, b) in enumerate(W):
             h = h @ w + b
             if i + 1 < len(W):
@@ -318,7 +321,7 @@ def main(argv=None):
     yaw_rate = jax.vmap(lambda qpos, qvel: (_quat_to_rot(qpos[3:7]) @ qvel[3:6])[2])  # pelvis yaw rate, world z
     feet = jnp.asarray(env.foot_bodies)  # the ankle_roll_links, left and right
 
-    def body(hold, noise, state, xs):
+    def body(p, hold, noise, state, xs):
         cmd, key = xs
         info = dict(state.info)
         info["command"] = jnp.broadcast_to(cmd, (n, 6))
@@ -327,7 +330,7 @@ def main(argv=None):
         # --hold-reference is an input of the compiled rollout, not a Python branch: the actor's rollout and the
         # reference's compile to one program (JAX's persistent cache serves the second the first's compile).
         # --stochastic likewise: the noise's scale is an input (0: the mean action, bit for bit).
-        a_actor, a_std = actor(state.obs["state"], jax.random.normal(key, (n, LEG)), noise)
+        a_actor, a_std = actor(p, state.obs["state"], jax.random.normal(key, (n, LEG)), noise)
         a = jnp.where(hold, jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]), a_actor)
         state = step(state, a)
         ps = state.pipeline_state
@@ -349,8 +352,8 @@ def main(argv=None):
     print(f"start: pelvis {start.min():.3f}{'' if n == 1 else f' to {start.max():.3f}'} m "
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
           + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
-    run = jax.jit(lambda h, z, s, c, k: jax.lax.scan(functools.partial(body, h, z), s, (c, k)))
-    _, rec = run(jnp.asarray(args.hold_reference), jnp.float32(args.stochastic * var_scale), state, cmds,
+    run = jax.jit(lambda p, h, z, s, c, k: jax.lax.scan(functools.partial(body, p, h, z), s, (c, k)))
+    _, rec = run(params, jnp.asarray(args.hold_reference), jnp.float32(args.stochastic * var_scale), state, cmds,
                  jax.random.split(jax.random.PRNGKey(1000 + args.seed), ticks))
     rec = {k: np.swapaxes(np.asarray(v), 0, 1) for k, v in rec.items()}  # (robots, ticks, ...)
     cm = np.asarray(cmds)
