@@ -24,15 +24,10 @@ import yaml
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import evaluate_candidate as ec  # noqa: E402
+from script_checks import Checks  # noqa: E402  (beside this file)
 
 V20E = os.path.join(ROOT, "training", "results", "fidelity", "seeds_V20b", "V20e")
-failures = []
-
-
-def check(ok, what):
-    print(f"{'ok  ' if ok else 'FAIL'} {what}")
-    if not ok:
-        failures.append(what)
+check = Checks()
 
 
 def resolved(path):
@@ -100,8 +95,7 @@ def main():
               "and stop left out")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    print(f"{'FAILED: ' + str(len(failures)) if failures else 'all passed'}")
-    return 1 if failures else 0
+    return check.exit_code()
 
 
 if __name__ == "__main__":

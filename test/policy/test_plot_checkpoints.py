@@ -21,14 +21,9 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "training"))
 import plot_checkpoints as pc  # noqa: E402
+from script_checks import Checks  # noqa: E402  (beside this file)
 
-failures = []
-
-
-def check(ok, what):
-    print(f"{'ok  ' if ok else 'FAIL'} {what}")
-    if not ok:
-        failures.append(what)
+check = Checks()
 
 
 def rollout(path, walk_vx, stop_vx):
@@ -83,7 +78,4 @@ with tempfile.TemporaryDirectory() as d:
     except ImportError:
         print("skip the figure: no matplotlib")
 
-if failures:
-    print(f"{len(failures)} check(s) failed")
-    sys.exit(1)
-print("all checks passed")
+sys.exit(check.exit_code())

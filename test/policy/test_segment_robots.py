@@ -26,14 +26,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPT = os.path.join(ROOT, "training", "segment_robots.py")
 sys.path.insert(0, os.path.join(ROOT, "training"))
 import segment_robots as sr  # noqa: E402
+from script_checks import Checks  # noqa: E402  (beside this file)
 
-failures = []
-
-
-def check(ok, what):
-    print(f"{'ok  ' if ok else 'FAIL'} {what}")
-    if not ok:
-        failures.append(what)
+check = Checks()
 
 
 def rollout(path, ticks=400, dt=0.01):
@@ -97,8 +92,7 @@ def main():
                            text=True)
         check(p.returncode == 0 and os.path.getsize(png) > 1000 and "fallen   1/3" in p.stdout,
               f"report --plot: {p.stdout.strip().splitlines()[-2] if p.stdout else p.stderr}")
-    print(f"{'FAILED: ' + '; '.join(failures) if failures else 'all passed'}")
-    return 1 if failures else 0
+    return check.exit_code()
 
 
 if __name__ == "__main__":
