@@ -285,20 +285,21 @@ def main(argv=None):
     spans = [(name, t0, min(t1, duration)) for name, t0, t1 in spans if t0 < duration]  # --duration: the segments run
     ticks = int(round(duration / cfg.control_dt))
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
+    W = [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers]
+
+    if W[-1][0].shape[1] != 2 * LEG:
+        raise SystemExit(f"{args.actor}: the last layer puts out {W[-1][0].shape[1]} values; expected {2 * LEG} "
+                         f"(the mean and the scale of {LEG} leg actions)")
     # The actor's weights are inputs of the compiled rollout, not constants folded into it: another actor of the
     # same shapes (a run's other checkpoints, another seed) is served the same compile by JAX's persistent cache.
-    params = (jnp.asarray(mean), jnp.asarray(std), [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers])
-
-    if params[2][-1][0].shape[1] != 2 * LEG:
-        raise SystemExit(f"{args.actor}: the last layer puts out {params[2][-1][0].shape[1]} values; expected "
-                         f"{2 * LEG} (the mean and the scale of {LEG} leg actions)")
+    params = (jnp.asarray(mean), jnp.asarray(std), W)
 
     def actor(p, o, eps, noise):
-        o_mean, o_std, W = p
+        o_mean, o_std, layers_p = p
         h = (o - o_mean) / o_std
-        for i, (w, b) in enumerate(W):
+        for i, (w, b) in enumerate(layers_p):
             h = h @ w + b
-            if i + 1 < len(W):
+            if i + 1 < len(layers_p):
                 h = h * jax.nn.sigmoid(h)
         return policy_action(h, eps, noise)
 

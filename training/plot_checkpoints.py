@@ -20,8 +20,11 @@ import sys
 
 import numpy as np
 
-KEYS = ["vx", "vy", "wz", "pitch", "roll", "height"]  # eval_mjx.KEYS (that module imports JAX; this one must not)
-BAND = {"vx": 0.05, "vy": 0.05, "wz": 0.08}  # issue 12: ±15 % or these, whichever is larger [m/s, rad/s]
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "scripts"))
+from eval_mjx import KEYS  # noqa: E402  (the rollout's axes; JAX is imported only by its main)
+import segment_band  # noqa: E402  (issue 12's velocity band, one definition: plot_segments.VEL_REL, VEL_ABS)
 
 
 def checkpoint_step(path):
@@ -53,8 +56,8 @@ def load_run(pattern, segments, axis):
 
 
 def in_band(commanded, achieved, axis):
-    """Issue 12's velocity band: within 15 % of the command or the axis's absolute tolerance, whichever is larger."""
-    return bool(np.isfinite(achieved) and abs(achieved - commanded) <= max(0.15 * abs(commanded), BAND.get(axis, 0.0)))
+    """Issue 12's velocity band (segment_band.in_band); a fallen robot (NaN) is never in it."""
+    return bool(np.isfinite(achieved) and segment_band.in_band(commanded, achieved, segment_band.VEL_ABS.get(axis, 0.0)))
 
 
 def main(argv=None):
@@ -89,7 +92,7 @@ def main(argv=None):
     fig, axes = plt.subplots(1, len(a.segments), figsize=(4.0 * len(a.segments), 3.6), squeeze=False)
     for ax, s in zip(axes[0], a.segments):
         c = runs[0][1][0][1][s][0]
-        tol = max(0.15 * abs(c), BAND.get(a.axis, 0.0))
+        tol = max(segment_band.VEL_REL * abs(c), segment_band.VEL_ABS.get(a.axis, 0.0))
         ax.axhspan(c - tol, c + tol, color="tab:green", alpha=0.15, label="issue 12's band")
         ax.axhline(c, color="tab:green", lw=1)
         values = [v for _, rows in runs for _, row in rows for v in [row[s][1]] if np.isfinite(v)]
