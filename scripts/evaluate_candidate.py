@@ -12,9 +12,10 @@ What a person otherwise types by hand for each candidate (training/results/fidel
    table shows a run (both feet off the floor) before any SIL time is spent. Needs .venv-training
    and the run's train_config.json beside the actor. Written to mjx_crouched_backward.{npz,txt}.
 2. The command-response feed-forward fitted for this actor: pmg_policy_sil on the calibration sweeps
-   config/policies/response_sweep_{1,2,3}.yaml with the base config, this model and the feed-forward
-   off (feedforward/calibration_*/), then scripts/fit_command_response.py (feedforward/fit.yaml, .txt,
-   .png). Evaluation scripts are never used for the fit.
+   config/policies/response_sweep_{1,2,3}.yaml (upright) and _{7,8}.yaml (crouched, 0.66-0.78 m) with
+   the base config, this model and the feed-forward off (feedforward/calibration_*/), then
+   scripts/fit_command_response.py with the base config's standing height and walking floor
+   (feedforward/fit.yaml, .txt, .png). Evaluation scripts are never used for the fit.
 3. controller.yaml: the base config with this model and the fitted feed-forward; its relative paths
    (robot, clips, gco, policy.model) rewritten for the output folder, everything else unchanged.
 4. The battery, through pmg_policy_sil --controller controller.yaml, --jobs runs at a time: the
@@ -52,8 +53,9 @@ BATTERY = {
     "probe_heights": ("training/results/fidelity/crouched/probe_heights.yaml", 36, 12, True),
     "crouched_backward": (CROUCHED_BACKWARD, 0, 2, True),
 }
-# (sweep, first seed, seeds): the calibration runs of the feed-forward fit
-SWEEPS = [(1, 0, 2), (1, 2, 2), (2, 0, 2), (3, 0, 2)]
+# (sweep, first seed, seeds): the calibration runs of the feed-forward fit; 7 and 8 walk crouched (the
+# gains per crouch: docs/controller.md "Gains per crouch")
+SWEEPS = [(1, 0, 2), (1, 2, 2), (2, 0, 2), (3, 0, 2), (7, 0, 2), (8, 0, 2)]
 PATH_KEYS = ("robot", "clips", "gco")  # top-level keys holding paths relative to the config file
 FLIGHT_LIMIT = 0.15  # share of a crouched walk's window with neither foot down that marks a run
 
@@ -244,7 +246,12 @@ def main(argv=None):
                                                 ["--controller", base, "--model", model, "--feedforward", "off"]),
                                   sweeps))
     fit = os.path.join(ff, "fit.yaml")
+    import yaml
+    with open(base) as f:
+        commands = yaml.safe_load(f).get("commands") or {}
     run([sys.executable, os.path.join(HERE, "fit_command_response.py"), *summaries, "--out", fit,
+         "--standing-height", str(commands.get("standing_height", 0.78)),  # CommandLimits' defaults
+         "--walking-min-height", str(commands.get("walking_min_height", 0.0)),
          "--plot", os.path.join(ff, "fit.png")], ff, "fit.txt")
     controller = rewrite_config(base, os.path.join(out, "controller.yaml"), model, fit)
     print(f"step 3: {controller}", flush=True)

@@ -6,7 +6,11 @@ velocity, the mean over the last 60 % of the segment), keeps the walking segment
 leaves out a seed's segment more than UPSET off its command (a stumble, not a response; each is
 printed), averages the seeds of each command, and fits per axis i (v_x, v_y, w, heading frame) by least squares
 
-  v_i = g+_i u_i+ + g-_i u_i- + u_i sum_{j!=i} (m_ij |u_j| + s_ij u_j) + sum_{j!=i} d_ij u_j
+  v_i = (g+_i + k+_i c) u_i+ + (g-_i + k-_i c) u_i- + u_i sum_{j!=i} (m_ij |u_j| + s_ij u_j) + sum_{j!=i} d_ij u_j
+
+with c the crouch [m]: --standing-height minus the command's height, the height floored at
+--walking-min-height as the controller's shaper floors it while walking (0 for upright sweeps; the
+crouched sweep config/policies/response_sweep_4.yaml walks at 0.66-0.78 m)
 
 (include/pmg/controller/velocity_feedback.hpp, CommandResponseModel). Which terms an axis gets is
 chosen by K-fold cross-validation over the commands of these summaries alone (SETS below):
@@ -24,27 +28,34 @@ import numpy as np
 
 AXES = ("vx", "vy", "wz")
 # Term groups of an axis's model: G gains (always), M gain per magnitude, S gain per signed command,
-# D drift. The candidate sets, simplest first (a tie keeps the simpler one).
-SETS = ("G", "G+M", "G+S", "G+D", "G+M+D", "G+S+D", "G+M+S+D")
+# D drift, C gains per metre of crouch. The candidate sets, simplest first (a tie keeps the simpler one;
+# without crouched sweeps the C columns are zero and never win).
+_BASE_SETS = ("G", "G+M", "G+S", "G+D", "G+M+D", "G+S+D", "G+M+S+D")
+SETS = _BASE_SETS + tuple(f"{g}+C" for g in _BASE_SETS)
 # Validation ranges of CommandResponseModel (velocity_feedback.cpp).
 GAIN_RANGE = (0.3, 3.0)
 COUPLING_RANGE = (-3.0, 3.0)
 DRIFT_RANGE = (-1.0, 1.0)
+CROUCH_RANGE = (-10.0, 10.0)  # gain_*_per_crouch [1/m]
 MIN_WALK = (0.05, 0.05, 0.1)  # a segment walks when some |u_i| is at least this
 
 
 UPSET = 0.4  # a seed's segment this far from its command on some axis [m/s, rad/s] is an upset, not a response
 
 
-def load(paths):
-    """Per seed, the walking segments without a fall or an upset; a command is one sample (the mean of its seeds)."""
+def load(paths, standing_height=0.78, walking_min_height=0.66):
+    """Per seed, the walking segments without a fall or an upset; a command (v_x, v_y, w, crouch c [m]) is one
+    sample (the mean of its seeds). U is n x 4, V n x 3."""
     by_command = {}
     dropped = {"fall": 0, "upset": 0}
     for p in paths:
         with open(p) as f:
             d = json.load(f)
         fallen = {s["name"]: s.get("fallen", 0) for s in d["segments"]}
-        commands = {s["name"]: tuple(float(s["command"][a]) for a in AXES) for s in d["segments"]}
+        commands = {s["name"]: tuple(float(s["command"][a]) for a in AXES)
+                    + (round(max(0.0, standing_height - max(float(s["command"].get("height", standing_height)),
+                                                            walking_min_height)), 4),)
+                    for s in d["segments"]}
         for run in d["runs"]:
             for s in run["segments"]:
                 u = commands[s["name"]]
@@ -62,8 +73,8 @@ def load(paths):
                 acc = by_command.setdefault(u, [np.zeros(3), 0])
                 acc[0] += np.array(v, float)
                 acc[1] += 1
-    U = np.array([list(u) for u in by_command], float)
-    V = np.array([acc[0] / acc[1] for acc in by_command.values()], float)
+    U = np.array([list(u) for u in by_command], float).reshape(-1, 4)
+    V = np.array([acc[0] / acc[1] for acc in by_command.values()], float).reshape(-1, 3)
     return U, V, dropped
 
 
@@ -72,10 +83,13 @@ def features(U, i, groups):
     cols = [np.maximum(ui, 0.0), np.minimum(ui, 0.0)]
     labels = [("gain_positive", None), ("gain_negative", None)]
     others = [j for j in range(3) if j != i]
+    if "C" in groups.split("+"):
+        cols += [np.maximum(ui, 0.0) * U[:, 3], np.minimum(ui, 0.0) * U[:, 3]]
+        labels += [("gain_positive_per_crouch", None), ("gain_negative_per_crouch", None)]
     for g, name, col in (("M", "gain_per_magnitude", lambda j: ui * np.abs(U[:, j])),
                          ("S", "gain_per_command", lambda j: ui * U[:, j]),
                          ("D", "drift", lambda j: U[:, j])):
-        if g in groups:
+        if g in groups.split("+"):
             for j in others:
                 cols.append(col(j))
                 labels.append((name, j))
@@ -106,15 +120,18 @@ def rmse(e):
     return float(np.sqrt(np.mean(np.asarray(e) ** 2)))
 
 
-def plot(path, U, V, cv_pred, check):
+def plot(path, U, V, cv_pred, check, block):
     """Per axis: achieved against predicted, the identity (v = u) in grey, the model's
-    cross-validated predictions in colour, and held-out evaluation segments (--check) as crosses."""
+    cross-validated predictions in colour, and held-out evaluation segments (--check) as crosses. With
+    crouched commands a fourth panel: v_x achieved / commanded against the crouch, forward and backward
+    walks (|v_x| >= 0.15 m/s) apart, with the fitted gains g + k c."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     units = ("v_x [m/s]", "v_y [m/s]", "yaw rate [rad/s]")
-    fig, axs = plt.subplots(1, 3, figsize=(15, 5))
-    for i, ax in enumerate(axs):
+    crouched = bool(np.any(U[:, 3] > 0.0))
+    fig, axs = plt.subplots(1, 4 if crouched else 3, figsize=(20 if crouched else 15, 5))
+    for i, ax in enumerate(axs[:3]):
         y = V[:, i]
         ax.scatter(U[:, i], y, s=10, c="0.7", label=f"identity v = u (RMSE {rmse(U[:, i] - y):.3f})")
         ax.scatter(cv_pred[i], y, s=10, c="C0", label=f"model, cross-validated (RMSE {rmse(cv_pred[i] - y):.3f})")
@@ -129,6 +146,22 @@ def plot(path, U, V, cv_pred, check):
         ax.set_title(AXES[i])
         ax.legend(fontsize=7, loc="upper left")
         ax.grid(alpha=0.3)
+    if crouched:
+        ax = axs[3]
+        e = block["vx"]
+        c_line = np.linspace(0.0, U[:, 3].max(), 20)
+        for sign, name, colour in ((1, "positive", "C0"), (-1, "negative", "C3")):
+            sel = sign * U[:, 0] >= 0.15
+            ax.scatter(U[sel, 3], V[sel, 0] / U[sel, 0], s=10, c=colour, alpha=0.6,
+                       label=f"{'forward' if sign > 0 else 'backward'} walks ({int(sel.sum())})")
+            ax.plot(c_line, e[f"gain_{name}"] + e[f"gain_{name}_per_crouch"] * c_line, colour, lw=2,
+                    label=f"g {e[f'gain_{name}']:.2f} {e[f'gain_{name}_per_crouch']:+.2f} c [1/m]")
+        ax.axhline(1.0, color="k", ls="--", lw=0.8)
+        ax.set_xlabel("crouch c: standing height - walking height [m]")
+        ax.set_ylabel("v_x achieved / commanded [-]")
+        ax.set_title("vx gain against the crouch")
+        ax.legend(fontsize=7, loc="upper left")
+        ax.grid(alpha=0.3)
     fig.suptitle("Command-response model: achieved against predicted, per walking command (heading frame)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -136,10 +169,12 @@ def plot(path, U, V, cv_pred, check):
 
 
 def predict(block, U):
-    out = np.zeros_like(U)
+    out = np.zeros((len(U), 3))
     for i, a in enumerate(AXES):
         e = block[a]
-        gain = np.where(U[:, i] >= 0.0, e["gain_positive"], e["gain_negative"])
+        c = U[:, 3]
+        gain = np.where(U[:, i] >= 0.0, e["gain_positive"] + e.get("gain_positive_per_crouch", 0.0) * c,
+                        e["gain_negative"] + e.get("gain_negative_per_crouch", 0.0) * c)
         drift = np.zeros(len(U))
         for j in range(3):
             if j == i:
@@ -157,16 +192,22 @@ def main():
     ap.add_argument("--folds", type=int, default=6)
     ap.add_argument("--max-correction", default="0.15,0.1,0.15",
                     help="the bound written into the block: v_x, v_y [m/s], w [rad/s] (the shipped one, chosen on tuning runs)")
+    ap.add_argument("--standing-height", type=float, default=0.78,
+                    help="the controller's commands.standing_height [m]: the crouch is measured from it")
+    ap.add_argument("--walking-min-height", type=float, default=0.66,
+                    help="the controller's commands.walking_min_height [m] (0: off): a walk commanded lower walks here")
     ap.add_argument("--plot", default=None, help="write achieved-against-predicted scatter plots here (PNG)")
     ap.add_argument("--check", nargs="*", default=None,
                     help="held-out summaries (feed-forward off) to report the model's error on; never used to fit")
     args = ap.parse_args()
-    U, V, dropped = load(args.summaries)
+    U, V, dropped = load(args.summaries, args.standing_height, args.walking_min_height)
     if len(U) < 3 * args.folds:
         sys.exit(f"fit_command_response: {len(U)} usable walking commands in {args.summaries}; need at least {3 * args.folds}")
-    report = [f"# {len(U)} walking commands (seed segments left out: {dropped['fall']} with a fall, {dropped['upset']} upsets "
+    crouched = int(np.count_nonzero(U[:, 3] > 0.0))
+    report = [f"# {len(U)} walking commands, {crouched} of them crouched (seed segments left out: {dropped['fall']} with a fall, {dropped['upset']} upsets "
               f"more than {UPSET} off their command), {args.folds}-fold cross-validation over commands",
-              "# axis: RMSE of the identity (v = u) | of each term set (G gains, M per magnitude, S per signed command, D drift), "
+              "# axis: RMSE of the identity (v = u) | of each term set (G gains, M per magnitude, S per signed command, D drift, "
+              "C gains per crouch), "
               "cross-validated [m/s or rad/s]"]
     block = {}
     cv_best = []
@@ -181,10 +222,11 @@ def main():
         report.append(f"# {a}: identity {ident:.4f} | " + " | ".join(f"{SETS[k]} {scores[k]:.4f}" for k in range(len(SETS)))
                       + f"  -> {SETS[best]}")
         entry = {"gain_positive": 1.0, "gain_negative": 1.0, "gain_per_magnitude": [0.0] * 3,
-                 "gain_per_command": [0.0] * 3, "drift": [0.0] * 3}
+                 "gain_per_command": [0.0] * 3, "drift": [0.0] * 3,
+                 "gain_positive_per_crouch": 0.0, "gain_negative_per_crouch": 0.0}
         for c, (name, j) in zip(coef, labels):
             if j is None:
-                entry[name] = float(np.clip(c, *GAIN_RANGE))
+                entry[name] = float(np.clip(c, *(CROUCH_RANGE if name.endswith("_per_crouch") else GAIN_RANGE)))
             else:
                 entry[name][j] = float(np.clip(c, *(DRIFT_RANGE if name == "drift" else COUPLING_RANGE)))
         block[a] = entry
@@ -195,7 +237,8 @@ def main():
         fmt = lambda xs: "[" + ", ".join(f"{x:.3f}" for x in xs) + "]"  # noqa: E731
         lines.append(f"  {a}: {{gain_positive: {e['gain_positive']:.3f}, gain_negative: {e['gain_negative']:.3f}, "
                      f"gain_per_magnitude: {fmt(e['gain_per_magnitude'])}, gain_per_command: {fmt(e['gain_per_command'])}, "
-                     f"drift: {fmt(e['drift'])}}}")
+                     f"drift: {fmt(e['drift'])}, gain_positive_per_crouch: {e['gain_positive_per_crouch']:.3f}, "
+                     f"gain_negative_per_crouch: {e['gain_negative_per_crouch']:.3f}}}")
     lines.append(f"  max_correction: [{mc[0]}, {mc[1]}, {mc[2]}]")
     text = "\n".join(report + lines) + "\n"
     with open(args.out, "w") as f:
@@ -203,13 +246,13 @@ def main():
     print(text, end="")
     check = None
     if args.check:
-        Uc, Vc, _ = load(args.check)
+        Uc, Vc, _ = load(args.check, args.standing_height, args.walking_min_height)
         check = (Uc, Vc, predict(block, Uc))
         for i, a in enumerate(AXES):
             print(f"# held out ({len(Uc)} commands): {a} RMSE identity {rmse(Uc[:, i] - Vc[:, i]):.4f}, "
                   f"model {rmse(check[2][:, i] - Vc[:, i]):.4f}")
     if args.plot:
-        plot(args.plot, U, V, cv_best, check)
+        plot(args.plot, U, V, cv_best, check, block)
 
 
 if __name__ == "__main__":

@@ -168,6 +168,7 @@ TickStatus Controller::tick(double now) noexcept {
   // ---- generate / optimise
   if (active) {
     if (feedback_ && config_.velocity_feedback.brake_crouch_scaled) feedback_->setBrakeWeight(shaper_.crouchFraction());
+    if (feedback_) feedback_->setCrouch(config_.commands.standing_height - shaper_.posture().height);
     const VelocityCommand* u_fb = feedback_ ? &feedback_->update(shaper_.velocity(), state_, dt_) : &shaper_.velocity();
     if (feedback_ && config_.velocity_feedback.within_posture_envelopes)  // kept inside the crouched and bent envelopes
       u_fb = &feedback_->scaleDown(shaper_.envelopeScale(*u_fb));

@@ -156,6 +156,10 @@ struct ResponseAxisYaml {
     ar->Visit("gain_per_command", &a.gain_per_command,
               "change of that gain per unit u_j (signed) of v_x, v_y, w, -3..3; the axis's own entry 0");
     ar->Visit("drift", &a.drift, "velocity on this axis per unit command on v_x, v_y, w, -1..1; the axis's own entry 0");
+    ar->Visit("gain_positive_per_crouch", &a.gain_positive_per_crouch,
+              "change of gain_positive per metre of crouch below the standing height [1/m], -10..10");
+    ar->Visit("gain_negative_per_crouch", &a.gain_negative_per_crouch,
+              "change of gain_negative per metre of crouch below the standing height [1/m], -10..10");
   }
 };
 

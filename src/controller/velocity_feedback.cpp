@@ -53,6 +53,10 @@ std::string CommandResponseModel::validate() const {
         return at + "gain_per_command" + idx + ": expected -3..3";
       if (!(a.drift[j] >= -1.0 && a.drift[j] <= 1.0)) return at + "drift" + idx + ": expected -1..1";
     }
+    if (!(a.gain_positive_per_crouch >= -10.0 && a.gain_positive_per_crouch <= 10.0))
+      return at + "gain_positive_per_crouch: expected -10..10 [1/m]";
+    if (!(a.gain_negative_per_crouch >= -10.0 && a.gain_negative_per_crouch <= 10.0))
+      return at + "gain_negative_per_crouch: expected -10..10 [1/m]";
     if (!(max_correction[i] >= 0.0 && max_correction[i] <= 1.0))
       return "max_correction[" + std::to_string(i) + "]: expected 0..1 (m/s, rad/s)";
   }
@@ -61,11 +65,16 @@ std::string CommandResponseModel::validate() const {
   return {};
 }
 
-std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>& u) const noexcept {
+double CommandResponseModel::clampCrouch(double crouch_m) noexcept {
+  return crouch_m > 0.0 ? std::min(crouch_m, 0.5) : 0.0;  // NaN fails the comparison: 0
+}
+
+std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>& u, double crouch_m) const noexcept {
+  const double c = clampCrouch(crouch_m);
   std::array<double, 3> v{};
   for (std::size_t i = 0; i < 3; ++i) {
     const CommandResponseAxis& a = axes[i];
-    double gain = u[i] >= 0.0 ? a.gain_positive : a.gain_negative;
+    double gain = u[i] >= 0.0 ? a.gain_positive + a.gain_positive_per_crouch * c : a.gain_negative + a.gain_negative_per_crouch * c;
     double drift = 0.0;
     for (std::size_t j = 0; j < 3; ++j) {
       if (j == i) continue;
@@ -77,7 +86,8 @@ std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>
   return v;
 }
 
-std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& u) const noexcept {
+std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& u, double crouch_m) const noexcept {
+  const double c = clampCrouch(crouch_m);
   std::array<double, 3> x = u;
   for (int sweep = 0; sweep < iterations; ++sweep) {
     for (std::size_t i = 0; i < 3; ++i) {
@@ -89,7 +99,7 @@ std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& 
         r -= a.drift[j] * x[j];
         gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
       }
-      gain += r >= 0.0 ? a.gain_positive : a.gain_negative;
+      gain += r >= 0.0 ? a.gain_positive + a.gain_positive_per_crouch * c : a.gain_negative + a.gain_negative_per_crouch * c;
       x[i] = std::clamp(r / std::max(min_gain, gain), u[i] - max_correction[i], u[i] + max_correction[i]);
     }
   }
@@ -392,7 +402,7 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   }
   const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
   const std::array<double, 3> u_user{u.vx, u.vy, u.wz};
-  u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user) : u_user;
+  u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user, crouch_m_) : u_user;
   for (std::size_t i = 0; i < 3; ++i) {
     // The feed-forward stays inside the limits (a command already beyond them is passed on).
     u_ff_[i] = std::clamp(u_ff_[i], std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));

@@ -612,6 +612,12 @@ std::vector<Case> allCases() {
       {"ctrl_velocity_feedback_upset_guard_upright_not_a_bool", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  upset_guard: {enabled: true, upright: 2}\n"; }),
        error({"upset_guard", "upright"})},
+      {"ctrl_feedforward_crouch_gain_out_of_range", Kind::kControllerConfig,
+       text([] {
+         return controllerText("g1_sil.yaml") +
+                "velocity_feedback:\n  feedforward:\n    vx: {gain_negative: 0.84, gain_negative_per_crouch: 12.0}\n";
+       }),
+       error({"velocity_feedback", "feedforward.vx.gain_negative_per_crouch", "-10..10"})},
       {"ctrl_velocity_feedback_restart_median_not_a_bool", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  restart_median: yes please\n"; }),
        error({"velocity_feedback", "restart_median"})},

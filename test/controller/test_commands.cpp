@@ -10,6 +10,7 @@
 #include "g1_fixture.hpp"
 #include "pmg/common/config_error.hpp"
 #include "pmg/controller/commands.hpp"
+#include "pmg/controller/controller_config.hpp"
 #include "temp_dir.hpp"
 
 namespace pmg {
@@ -441,6 +442,56 @@ TEST(CommandScript, ModeRequestsByName) {
   EXPECT_EQ(s.segments[1].mode, ModeRequest::kDamping);
   EXPECT_EQ(s.segments[2].mode, ModeRequest::kReset);
   EXPECT_EQ(s.segments[3].mode, ModeRequest::kNone);
+}
+
+}  // namespace
+}  // namespace pmg
+
+namespace pmg {
+namespace {
+
+// The crouched calibration sweeps of the command-response feed-forward (config/policies/response_sweep_7
+// and _8, written by scripts/make_response_sweep.py --height-range) draw each walk inside the crouched
+// velocity envelope of the product config at its own height: played through that config's shaper, no
+// tick is slowed by the envelope (the fit would otherwise read the shaper's scaling as the robot's
+// response), every walk reaches its height before the window the summary averages over (the last 60 %),
+// and the sweeps do crouch (heights 0.66-0.78 m) and walk backward.
+TEST(CommandShaper, CrouchedResponseSweepsStayInsideTheProductConfigsCrouchedEnvelope) {
+  const ControllerConfig config = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  ASSERT_GT(config.commands.crouched_height, 0.0);
+  for (const char* file : {"config/policies/response_sweep_7.yaml", "config/policies/response_sweep_8.yaml"}) {
+    const CommandScript script = loadCommandScript(test::sourcePath(file));
+    CommandShaper shaper(config.commands);
+    const double dt = 0.01;
+    double lowest = 1.0;
+    int backward_crouched = 0, walks = 0;
+    std::size_t segment = 0;
+    for (double t = 0.0; t < script.duration(); t += dt) {
+      CommandSample s;
+      s.command = script.at(t);
+      s.velocity_time = s.posture_time = t;
+      shaper.update(s, t, dt);
+      const std::size_t k = script.segmentIndex(t);
+      const CommandSegment& g = script.segments[k];
+      const bool walking = std::fabs(g.command.vx) + std::fabs(g.command.vy) + std::fabs(g.command.wz) > 0.0;
+      if (walking && t >= g.start + 0.4 * g.duration) {
+        ASSERT_TRUE(g.command.height.has_value()) << file << " " << g.name;
+        EXPECT_NEAR(shaper.posture().height, std::max(*g.command.height, config.commands.walking_min_height), 1e-9)
+            << file << " " << g.name << ": the walk's height is reached before its window";
+        if (k != segment) {
+          ++walks;
+          lowest = std::min(lowest, shaper.posture().height);
+          if (g.command.vx <= -0.2 && shaper.posture().height < config.commands.standing_height - 0.03) ++backward_crouched;
+        }
+        segment = k;
+      }
+    }
+    EXPECT_EQ(shaper.counters().crouch_limited_ticks, 0u) << file << ": a walk outside the crouched envelope";
+    EXPECT_EQ(shaper.counters().clamped, 0u) << file;
+    EXPECT_EQ(walks, 72) << file;
+    EXPECT_LT(lowest, 0.68) << file << ": the sweep crouches";
+    EXPECT_GE(backward_crouched, 3) << file << ": backward walks crouched (the gains per crouch' evidence)";
+  }
 }
 
 }  // namespace

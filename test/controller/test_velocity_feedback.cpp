@@ -536,6 +536,63 @@ TEST(CommandResponseModel, InverseAchievesTheCommandIsContinuousAndStandsStill) 
   EXPECT_NE(bad.validate().find("iterations"), std::string::npos);
 }
 
+// The crouch terms: the gains are taken at the crouch (a robot that undershoots backward walks upright
+// and overshoots them crouched), the inverse stays exact and continuous as the crouch is slewed, the
+// crouch is clamped, a zero command still stands, and the feedback passes its crouch to the inverse.
+TEST(CommandResponseModel, CrouchTermsTakeTheGainsAtTheCrouchContinuously) {
+  CommandResponseModel m = coupledModel();
+  m.axes[0].gain_negative = 0.84;
+  m.axes[0].gain_negative_per_crouch = 6.0;  // 1.2 at 0.06 m
+  m.axes[1].gain_positive_per_crouch = -1.0;
+  ASSERT_EQ(m.validate(), "");
+  const std::array<double, 3> back{-0.5, 0.0, 0.0};
+  EXPECT_NEAR(m.invert(back, 0.0)[0], -0.5 / 0.84, 1e-9) << "upright: the upright gain";
+  EXPECT_NEAR(m.invert(back, 0.06)[0], -0.5 / 1.2, 1e-9) << "crouched 0.06 m: the crouched gain";
+  EXPECT_NEAR(m.achieved(m.invert(back, 0.06), 0.06)[0], -0.5, 1e-9);
+  EXPECT_NEAR(m.achieved({-0.5, 0.0, 0.0}, 0.06)[0], -0.6, 1e-9) << "the uncorrected command overshoots by 20 %";
+  EXPECT_EQ(m.invert({0.0, 0.0, 0.0}, 0.1), (std::array<double, 3>{0.0, 0.0, 0.0}));
+  // Clamped: NaN and a negative crouch are upright, beyond 0.5 m it is 0.5 m.
+  EXPECT_EQ(m.invert(back, std::nan("")), m.invert(back, 0.0));
+  EXPECT_EQ(m.invert(back, -0.2), m.invert(back, 0.0));
+  EXPECT_EQ(m.achieved(back, 3.0), m.achieved(back, 0.5));
+  // A combined command over the crouch's range: exact where no bound acts, and continuous in the crouch.
+  const std::array<double, 3> u{-0.3, 0.2, 0.3};
+  std::array<double, 3> prev = m.invert(u, 0.0);
+  const int n = 1200;
+  for (int k = 1; k <= n; ++k) {
+    const double c = 0.12 * k / n;
+    const std::array<double, 3> x = m.invert(u, c);
+    for (std::size_t i = 0; i < 3; ++i) {
+      ASSERT_LE(std::fabs(x[i] - u[i]), m.max_correction[i] + 1e-12);
+      EXPECT_LT(std::fabs(x[i] - prev[i]), 0.01) << "crouch " << c << " axis " << i;
+    }
+    const std::array<double, 3> v = m.achieved(x, c);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(v[i], u[i], 1e-4) << "crouch " << c << " axis " << i;
+    prev = x;
+  }
+  // Validation names the field and its range.
+  CommandResponseModel bad = m;
+  bad.axes[2].gain_positive_per_crouch = 11.0;
+  EXPECT_NE(bad.validate().find("wz.gain_positive_per_crouch: expected -10..10"), std::string::npos) << bad.validate();
+  bad.axes[2].gain_positive_per_crouch = std::nan("");
+  EXPECT_NE(bad.validate().find("wz.gain_positive_per_crouch"), std::string::npos) << bad.validate();
+  // The feedback's feed-forward uses the crouch it was given.
+  Legs legs;
+  VelocityFeedbackConfig c = enabledConfig();
+  c.envelope_min = {-0.65, -0.5, -1.0};  // the upright feed-forward of -0.5 (-0.595) lies inside
+  c.feedforward = m;
+  VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  BaseVelocityEstimate est;
+  fb.correct({-0.5, 0.0, 0.0}, est, 0.01);
+  EXPECT_NEAR(fb.feedforward()[0], m.invert(back, 0.0)[0], 1e-12);
+  fb.setCrouch(0.06);
+  EXPECT_DOUBLE_EQ(fb.crouch(), 0.06);
+  fb.correct({-0.5, 0.0, 0.0}, est, 0.01);
+  EXPECT_NEAR(fb.feedforward()[0], -0.5 / 1.2, 1e-9);
+  fb.setCrouch(std::nan(""));
+  EXPECT_EQ(fb.crouch(), 0.0);
+}
+
 // The model shipped in the default config (a re-fit must keep these): over the issue-12 envelope,
 // every inverse within its bound and where no bound acts exact, no modelled gain below min_gain
 // (the fit's coefficients describe the actor, not the floor), 0 -> 0, and continuous along lines
@@ -788,8 +845,10 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   Legs legs;
   VelocityFeedbackConfig c = enabledConfig();
   c.brake_ratio = 0.8;  // the braking floor's path too
-  c.feedforward = coupledModel();  // and the feed-forward's inverse
+  c.feedforward = coupledModel();  // and the feed-forward's inverse, with its crouch terms
+  c.feedforward.axes[0].gain_negative_per_crouch = 4.0;
   VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  fb.setCrouch(0.05);
   gco::LegVector q[2], qd[2];
   q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
   q[1] << -0.35, -0.05, 0.0, 0.7, -0.35, 0.02;

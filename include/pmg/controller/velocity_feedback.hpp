@@ -53,6 +53,11 @@ struct CommandResponseAxis {
   std::array<double, 3> gain_per_command{0.0, 0.0, 0.0};
   /// Velocity achieved on this axis per unit command on axis j (a drift) [-], [-1, 1]; own entry 0.
   std::array<double, 3> drift{0.0, 0.0, 0.0};
+  /// Change of gain_positive / gain_negative per metre of crouch d = standing height − shaped pelvis
+  /// height [1/m], [-10, 10] (d ≥ 0; the crouched walks span d ≤ 0.12 m). A robot that overshoots
+  /// backward walks crouched while it undershoots them upright is a positive gain_negative_per_crouch.
+  double gain_positive_per_crouch = 0.0;
+  double gain_negative_per_crouch = 0.0;
 };
 
 /// `velocity_feedback.feedforward:` an identified model of the steady velocity the robot achieves
@@ -60,12 +65,14 @@ struct CommandResponseAxis {
 /// feed-forward in front of the integral correction (beyond the paper; issue 12, docs/controller.md
 /// "Command-response feed-forward"). Per axis i, with u⁺ = max(u, 0), u⁻ = min(u, 0):
 ///
-///   v_i(u) = (g⁺_i u_i⁺ + g⁻_i u_i⁻) + u_i Σ_{j≠i} (m_ij |u_j| + s_ij u_j) + Σ_{j≠i} d_ij u_j
+///   v_i(u, c) = ((g⁺_i + k⁺_i c) u_i⁺ + (g⁻_i + k⁻_i c) u_i⁻) + u_i Σ_{j≠i} (m_ij |u_j| + s_ij u_j)
+///               + Σ_{j≠i} d_ij u_j
 ///
-/// g = gain_positive/negative, m = gain_per_magnitude, s = gain_per_command, d = drift. The
-/// coefficients come from a calibration sweep in the SIL, fitted by least squares
-/// (scripts/fit_command_response.py, which writes this block). Units: v_x, v_y [m/s], ω [rad/s], in
-/// the heading frame H.
+/// g = gain_positive/negative, k = gain_positive/negative_per_crouch, c = the crouch [m] (standing
+/// height − the shaped pelvis height, ≥ 0), m = gain_per_magnitude, s = gain_per_command, d = drift.
+/// The coefficients come from calibration sweeps in the SIL, upright and crouched, fitted by least
+/// squares (scripts/fit_command_response.py, which writes this block). Units: v_x, v_y [m/s],
+/// ω [rad/s], in the heading frame H.
 struct CommandResponseModel {
   bool enabled = false;
   std::array<CommandResponseAxis, 3> axes{};
@@ -79,14 +86,17 @@ struct CommandResponseModel {
   int iterations = 8;
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
   std::string validate() const;
-  /// v(u) above. noexcept, no allocation.
-  std::array<double, 3> achieved(const std::array<double, 3>& u) const noexcept;
+  /// v(u, c) above; @p crouch_m c [m] is clamped to [0, 0.5] (NaN → 0). noexcept, no allocation.
+  std::array<double, 3> achieved(const std::array<double, 3>& u, double crouch_m = 0.0) const noexcept;
   /// The command u_ff with v(u_ff) = u: `iterations` Gauss–Seidel sweeps from u_ff = u, each axis
   /// solved exactly for the others' values (u_ff,i = (u_i − Σ d_ij u_ff,j) / max(min_gain, g_i +
   /// Σ (m_ij |u_ff,j| + s_ij u_ff,j)), the gain g⁺ or g⁻ by the sign of the numerator) and kept within
-  /// u_i ± max_correction_i. Continuous in u; u = 0 gives 0 (a robot told to stand is not moved).
-  /// noexcept, no allocation.
-  std::array<double, 3> invert(const std::array<double, 3>& u) const noexcept;
+  /// u_i ± max_correction_i. Continuous in u and in the crouch; u = 0 gives 0 (a robot told to stand
+  /// is not moved). g⁺, g⁻ are those at @p crouch_m [m] (clamped as in achieved()). noexcept, no
+  /// allocation.
+  std::array<double, 3> invert(const std::array<double, 3>& u, double crouch_m = 0.0) const noexcept;
+  /// The crouch c [m] as achieved() and invert() use it: clamped to [0, 0.5], NaN → 0. noexcept.
+  static double clampCrouch(double crouch_m) noexcept;
 };
 
 /// `velocity_feedback.upset_guard:` of the controller config (UpsetGuard; beyond the paper, issue 12,
@@ -395,6 +405,12 @@ class VelocityFeedback {
   /// The weight w ∈ [0, 1] of the braking floor for the next update() when
   /// config().brake_crouch_scaled (clamped; NaN → 0). noexcept.
   void setBrakeWeight(double w) noexcept { brake_weight_ = w >= 0.0 ? (w <= 1.0 ? w : 1.0) : 0.0; }
+  /// The crouch c [m] (standing height − the shaped pelvis height) at which the feed-forward's gains
+  /// are taken for the next update() (CommandResponseModel, gain_*_per_crouch; clamped to [0, 0.5],
+  /// NaN → 0). The controller passes commands.standing_height − CommandShaper::posture().height, which
+  /// the shaper slews, so the feed-forward stays continuous through a crouch. noexcept.
+  void setCrouch(double crouch_m) noexcept { crouch_m_ = CommandResponseModel::clampCrouch(crouch_m); }
+  double crouch() const noexcept { return crouch_m_; }
   /// Ticks on which the braking floor raised the command so far.
   std::uint64_t brakingTicks() const noexcept { return braking_ticks_; }
   /// The estimate (v_x, v_y [m/s], ω [rad/s] in H) the last update integrated on.
@@ -413,6 +429,7 @@ class VelocityFeedback {
   std::array<double, 3> u_anchor_{}, steady_{};
   std::array<double, 2> brake_{};
   double brake_weight_ = 1.0;
+  double crouch_m_ = 0.0;
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{}, u_fb_prev_{};
   std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0, envelope_ticks_ = 0;
