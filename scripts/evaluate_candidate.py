@@ -14,7 +14,7 @@ What a person otherwise types by hand for each candidate (training/results/fidel
 2. The command-response feed-forward fitted for this actor: pmg_policy_sil on the calibration sweeps
    config/policies/response_sweep_{1,2,3}.yaml (upright) and _{7,8}.yaml (crouched, 0.66-0.78 m) with
    the base config, this model and the feed-forward off (feedforward/calibration_*/), then
-   scripts/fit_command_response.py with the base config's standing height and walking floor
+   scripts/fit_command_response.py, the crouch measured from the standing height the runs record
    (feedforward/fit.yaml, .txt, .png). Evaluation scripts are never used for the fit.
 3. controller.yaml: the base config with this model and the fitted feed-forward; its relative paths
    (robot, clips, gco, policy.model) rewritten for the output folder, everything else unchanged.
@@ -246,12 +246,7 @@ def main(argv=None):
                                                 ["--controller", base, "--model", model, "--feedforward", "off"]),
                                   sweeps))
     fit = os.path.join(ff, "fit.yaml")
-    import yaml
-    with open(base) as f:
-        commands = yaml.safe_load(f).get("commands") or {}
     run([sys.executable, os.path.join(HERE, "fit_command_response.py"), *summaries, "--out", fit,
-         "--standing-height", str(commands.get("standing_height", 0.78)),  # CommandLimits' defaults
-         "--walking-min-height", str(commands.get("walking_min_height", 0.0)),
          "--plot", os.path.join(ff, "fit.png")], ff, "fit.txt")
     controller = rewrite_config(base, os.path.join(out, "controller.yaml"), model, fit)
     print(f"step 3: {controller}", flush=True)

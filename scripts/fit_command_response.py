@@ -8,9 +8,11 @@ printed), averages the seeds of each command, and fits per axis i (v_x, v_y, w, 
 
   v_i = (g+_i + k+_i c) u_i+ + (g-_i + k-_i c) u_i- + u_i sum_{j!=i} (m_ij |u_j| + s_ij u_j) + sum_{j!=i} d_ij u_j
 
-with c the crouch [m]: --standing-height minus the command's height, the height floored at
---walking-min-height as the controller's shaper floors it while walking (0 for upright sweeps; the
-crouched sweep config/policies/response_sweep_4.yaml walks at 0.66-0.78 m)
+with c the crouch [m]: the controller's standing height minus the command's height, the height floored
+at the walking floor as the controller's shaper floors it while walking, both as each summary records
+them (standing_height, walking_min_height; --standing-height / --walking-min-height for summaries
+written before they were recorded). c is 0 for the upright sweeps; the crouched sweeps
+config/policies/response_sweep_{7,8}.yaml walk at 0.66-0.78 m.
 
 (include/pmg/controller/velocity_feedback.hpp, CommandResponseModel). Which terms an axis gets is
 chosen by K-fold cross-validation over the commands of these summaries alone (SETS below):
@@ -43,14 +45,22 @@ MIN_WALK = (0.05, 0.05, 0.1)  # a segment walks when some |u_i| is at least this
 UPSET = 0.4  # a seed's segment this far from its command on some axis [m/s, rad/s] is an upset, not a response
 
 
-def load(paths, standing_height=0.78, walking_min_height=0.66):
+def load(paths, standing_height=0.7645, walking_min_height=0.66):
     """Per seed, the walking segments without a fall or an upset; a command (v_x, v_y, w, crouch c [m]) is one
-    sample (the mean of its seeds). U is n x 4, V n x 3."""
+    sample (the mean of its seeds). U is n x 4, V n x 3. The crouch's standing height and walking floor are
+    each summary's own, else the arguments; summaries that disagree are an error (one model, one loop)."""
     by_command = {}
     dropped = {"fall": 0, "upset": 0}
+    seen = {}
     for p in paths:
         with open(p) as f:
             d = json.load(f)
+        for key, fallback in (("standing_height", standing_height), ("walking_min_height", walking_min_height)):
+            value = float(d.get(key, fallback))
+            if seen.setdefault(key, (value, p))[0] != value:
+                sys.exit(f"fit_command_response: {p}: {key} {value} m, but {seen[key][1]} has {seen[key][0]} m "
+                         f"(fit one controller's calibration runs together)")
+        standing_height, walking_min_height = seen["standing_height"][0], seen["walking_min_height"][0]
         fallen = {s["name"]: s.get("fallen", 0) for s in d["segments"]}
         commands = {s["name"]: tuple(float(s["command"][a]) for a in AXES)
                     + (round(max(0.0, standing_height - max(float(s["command"].get("height", standing_height)),
@@ -192,10 +202,12 @@ def main():
     ap.add_argument("--folds", type=int, default=6)
     ap.add_argument("--max-correction", default="0.15,0.1,0.15",
                     help="the bound written into the block: v_x, v_y [m/s], w [rad/s] (the shipped one, chosen on tuning runs)")
-    ap.add_argument("--standing-height", type=float, default=0.78,
-                    help="the controller's commands.standing_height [m]: the crouch is measured from it")
+    ap.add_argument("--standing-height", type=float, default=0.7645,
+                    help="for summaries without standing_height: the controller's standing height [m], the crouch's "
+                         "zero (the policy configs': the squat clip's neutral pelvis height, 0.7645)")
     ap.add_argument("--walking-min-height", type=float, default=0.66,
-                    help="the controller's commands.walking_min_height [m] (0: off): a walk commanded lower walks here")
+                    help="for summaries without walking_min_height: the controller's commands.walking_min_height [m] "
+                         "(0: off): a walk commanded lower walks there")
     ap.add_argument("--plot", default=None, help="write achieved-against-predicted scatter plots here (PNG)")
     ap.add_argument("--check", nargs="*", default=None,
                     help="held-out summaries (feed-forward off) to report the model's error on; never used to fit")

@@ -397,6 +397,9 @@ int main(int argc, char** argv) {
       if (!probe) throw std::runtime_error("--probe " + probe_path + ": cannot open for writing");
       probe.precision(10);
     }
+    // The standing height the controller crouches from (ControllerApp takes the squat clip's neutral
+    // pelvis height): the summary records it for the feed-forward's fit (gains per crouch).
+    double standing_height = base.commands.standing_height;
     for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
       std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -448,6 +451,7 @@ int main(int argc, char** argv) {
                              mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
         const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
         pmg::Controller& controller = loop.controller();
+        standing_height = controller.config().commands.standing_height;
         if (single_gait)  // the forward clip at its nominal speed, neutral posture, whatever the command
           controller.setFixedGeneratorCommand(
               {controller.generator().model().dynamicClip(pmg::CommandAxis::kForward, 1)->nominal_scale, 0.0, 0.0});
@@ -819,6 +823,7 @@ int main(int argc, char** argv) {
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
+       << ", \"standing_height\": " << standing_height << ", \"walking_min_height\": " << base.commands.walking_min_height
        << ", \"crouched_height\": " << base.commands.crouched_height << ", \"bent_pitch\": " << base.commands.bent_pitch << ", \"commands\": " << jstr(commands)
        << ", \"duration_s\": " << T << ", \"hal_q_rate_max\": " << base.q_rate_max << ", \"runs\": [";
     for (std::size_t s = 0; s < totals.size(); ++s) {

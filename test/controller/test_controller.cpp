@@ -304,6 +304,43 @@ TEST(ReferenceContinuity, CrouchScaledBrakingActsOnlyCrouchedAndKeepsReferencesU
   EXPECT_GT(scaled.crouched, 0u) << "crouched it brakes";
 }
 
+// The feed-forward's gains per crouch through the controller: it passes the shaped crouch
+// (standing_height − the shaped pelvis height) to the feedback on every tick, so a backward walk
+// crouched to 0.70 m gets the crouched gain's inverse and upright the upright one, and the
+// feed-forward moves continuously while the height slews between them.
+TEST(Controller, FeedforwardTakesItsGainsAtTheShapedCrouch) {
+  ControllerConfig c = silConfig(true);
+  c.commands.crouched_height = 0.62;
+  CommandResponseModel& ff = c.velocity_feedback.feedforward;
+  ff.enabled = true;
+  ff.axes[0].gain_negative = 0.84;
+  ff.axes[0].gain_negative_per_crouch = 6.0;  // 1.23 at 0.065 m
+  ff.max_correction = {0.3, 0.2, 0.4};
+  Sweep s(std::move(c));
+  s.hold(cmd(0, 0, 0), 1.5, "engage");
+  ASSERT_EQ(s.app->controller().mode(), Mode::kActive);
+  const VelocityFeedback& fb = *s.app->controller().velocityFeedback();
+  s.hold(cmd(-0.3, 0, 0), 1.0, "upright backward");
+  EXPECT_NEAR(fb.crouch(), 0.0, 1e-12);
+  EXPECT_NEAR(fb.feedforward()[0], -0.3 / 0.84, 1e-9) << "upright: the upright gain";
+  double largest_step = 0.0, prev = fb.feedforward()[0];
+  const int ticks = static_cast<int>(std::ceil(0.1 / s.config.commands.height_rate / 0.01)) + 50;  // the height's slew, and on
+  for (int k = 0; k < ticks; ++k) {  // crouch to 0.70 m while walking backward
+    s.hold(cmd(-0.3, 0, 0, 0, 0, 0.70), 0.01, "crouching backward");
+    largest_step = std::max(largest_step, std::fabs(fb.feedforward()[0] - prev));
+    prev = fb.feedforward()[0];
+  }
+  // The controller's standing height is the squat clip's neutral pelvis height (ControllerApp).
+  const double crouch = s.app->controller().config().commands.standing_height - 0.70;
+  ASSERT_GT(crouch, 0.05);
+  EXPECT_NEAR(s.app->controller().commands().posture().height, 0.70, 1e-9);
+  EXPECT_NEAR(fb.crouch(), crouch, 1e-9) << "the standing height - the shaped 0.70 m";
+  EXPECT_NEAR(fb.feedforward()[0], -0.3 / (0.84 + 6.0 * crouch), 1e-9) << "crouched: the crouched gain";
+  EXPECT_LT(largest_step, 0.005) << "the feed-forward follows the slewed height without a jump";
+  EXPECT_LE(s.max_ref_speed, s.config.commands.max_reference_speed + 1e-9) << s.worst_at;
+  EXPECT_EQ(s.app->controller().fault(), FaultCode::kNone);
+}
+
 TEST(Controller, TickAndHalCycleDoNotAllocate) {
   Sweep s(true);  // with every stage on: the velocity feedback too
   s.hold(cmd(0, 0, 0), 1.5, "engage");

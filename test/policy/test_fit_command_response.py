@@ -14,7 +14,9 @@ The fit must recover every hidden coefficient within 0.05 (the gains), 0.06 (the
 metre (the crouch terms, whose column is at most 0.12 x the command), choose the terms that carry them
 and no coupling of v_x's beyond 0.05, report the upset and the fall as left out, and write a block that
 the controller's keys accept (its max_correction given). Without the crouched summary the crouch terms
-stay 0.
+stay 0. The crouch is measured from the standing height the summaries record (0.78 here; the default
+for summaries without it is 0.7645, which would shift v_x's backward gain by 0.08), and summaries of
+two standing heights are refused.
 Usage: test_fit_command_response.py
 """
 import os
@@ -59,14 +61,14 @@ def summary(rng, n, first_name, upset=False, fall=False, crouched=False):
         segs.append({"name": name, "seeds": 2, "fallen": 1 if (fall and k == 5) else 0,
                      "command": {**dict(zip(AX, u)), "pitch": 0, "roll": 0, "height": height},
                      "achieved": {**dict(zip(AX, mean)), "pitch": 0, "roll": 0, "height": max(height, FLOOR)}})
-    return {"segments": segs, "runs": runs}
+    # What pmg_policy_sil records: the controller's standing height and walking floor (the crouch's zero and floor).
+    return {"standing_height": STANDING, "walking_min_height": FLOOR, "segments": segs, "runs": runs}
 
 
 def fit(d, paths, tag):
     out_yaml = os.path.join(d, f"ff_{tag}.yaml")
     out = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/fit_command_response.py"), *paths,
-                          "--out", out_yaml, "--max-correction", "0.15,0.1,0.15",
-                          "--standing-height", str(STANDING), "--walking-min-height", str(FLOOR)],
+                          "--out", out_yaml, "--max-correction", "0.15,0.1,0.15"],  # the heights from the summaries
                          capture_output=True, text=True, check=True).stdout
     print(out)
     return out, open(out_yaml).read()
@@ -95,6 +97,16 @@ def main():
         out, text = fit(d, paths, "all")
         # Upright sweeps alone (their v_x gain is the upright one): no crouch term is made up.
         out_upright, text_upright = fit(d, paths[:2], "upright")
+        # Runs of another controller (another standing height) are not fitted together: refused, naming both.
+        other = summary(rng, 30, 200, crouched=True)
+        other["standing_height"] = 0.7645
+        paths.append(os.path.join(d, "other.json"))
+        with open(paths[-1], "w") as f:
+            json.dump(other, f)
+        mixed = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/fit_command_response.py"), *paths,
+                                "--out", os.path.join(d, "mixed.yaml")], capture_output=True, text=True)
+    if mixed.returncode == 0 or "standing_height 0.7645" not in mixed.stderr or "s0.json" not in mixed.stderr:
+        failures.append(f"summaries of two standing heights fitted together (exit {mixed.returncode}): {mixed.stderr.strip()}")
     for axis in AX:
         got = coeffs(text_upright, axis)
         if got[5] != 0.0 or got[6] != 0.0:
