@@ -53,9 +53,10 @@ struct CommandResponseAxis {
   std::array<double, 3> gain_per_command{0.0, 0.0, 0.0};
   /// Velocity achieved on this axis per unit command on axis j (a drift) [-], [-1, 1]; own entry 0.
   std::array<double, 3> drift{0.0, 0.0, 0.0};
-  /// Change of gain_positive / gain_negative per metre of crouch d = standing height − shaped pelvis
-  /// height [1/m], [-10, 10] (d ≥ 0; the crouched walks span d ≤ 0.12 m). A robot that overshoots
-  /// backward walks crouched while it undershoots them upright is a positive gain_negative_per_crouch.
+  /// Change of gain_positive / gain_negative per metre of crouch c = the controller's standing height
+  /// − the shaped pelvis height [1/m], [-10, 10] (c ≥ 0; walking, commands.walking_min_height bounds
+  /// it: 0.1045 m with the policy configs). A robot that overshoots backward walks crouched while it
+  /// undershoots them upright has a positive gain_negative_per_crouch.
   double gain_positive_per_crouch = 0.0;
   double gain_negative_per_crouch = 0.0;
 };
