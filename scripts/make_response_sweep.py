@@ -18,7 +18,7 @@ slew (commands.height_rate).
   build/bin/pmg_policy_sil --commands config/policies/response_sweep_1.yaml --seeds 2 --restart-after-fall \\
       --feedforward off --out out/response_1
   python3 scripts/fit_command_response.py out/response_*/summary.json --out out/feedforward.yaml
-  python3 scripts/make_response_sweep.py --segments 72 --seed 7 --height-range 0.66 0.78 \
+  python3 scripts/make_response_sweep.py --segments 72 --seed 7 --height-range 0.66 0.78 \\
       --out config/policies/response_sweep_7.yaml   # a crouched sweep (7 and 8 shipped)
 
 The shipped model's data: response_sweep_1.yaml (seeds 0-3), _2 and _3 (seeds 0-1), as
