@@ -30,6 +30,12 @@ Eigen::Matrix3d headingFromBody(const Eigen::Matrix3d& R_WB) noexcept {
 }
 
 double tiltFromVertical(const Eigen::Matrix3d& R_WB) noexcept { return std::acos(std::clamp(R_WB(2, 2), -1.0, 1.0)); }
+
+/// An axis's own gain at the (clamped) crouch @p c [m]: g⁺ + k⁺ c for a positive command, g⁻ + k⁻ c
+/// for a negative one (CommandResponseModel).
+double gainAtCrouch(const CommandResponseAxis& a, bool positive, double c) noexcept {
+  return positive ? a.gain_positive + a.gain_positive_per_crouch * c : a.gain_negative + a.gain_negative_per_crouch * c;
+}
 }  // namespace
 
 std::string CommandResponseModel::validate() const {
@@ -74,7 +80,7 @@ std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>
   std::array<double, 3> v{};
   for (std::size_t i = 0; i < 3; ++i) {
     const CommandResponseAxis& a = axes[i];
-    double gain = u[i] >= 0.0 ? a.gain_positive + a.gain_positive_per_crouch * c : a.gain_negative + a.gain_negative_per_crouch * c;
+    double gain = gainAtCrouch(a, u[i] >= 0.0, c);
     double drift = 0.0;
     for (std::size_t j = 0; j < 3; ++j) {
       if (j == i) continue;
@@ -99,7 +105,7 @@ std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& 
         r -= a.drift[j] * x[j];
         gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
       }
-      gain += r >= 0.0 ? a.gain_positive + a.gain_positive_per_crouch * c : a.gain_negative + a.gain_negative_per_crouch * c;
+      gain += gainAtCrouch(a, r >= 0.0, c);
       x[i] = std::clamp(r / std::max(min_gain, gain), u[i] - max_correction[i], u[i] + max_correction[i]);
     }
   }
