@@ -15,8 +15,11 @@ written before they were recorded). c is 0 for the upright sweeps; the crouched 
 config/policies/response_sweep_{7,8}.yaml walk at 0.66-0.78 m.
 
 (include/pmg/controller/velocity_feedback.hpp, CommandResponseModel). Which terms an axis gets is
-chosen by K-fold cross-validation over the commands of these summaries alone (SETS below):
-evaluation scripts are never read here. Writes the YAML block to paste under velocity_feedback:, a
+chosen by K-fold cross-validation over the commands of these summaries alone (SETS below), with the
+one-standard-error rule (Hastie, Tibshirani & Friedman, The Elements of Statistical Learning, 7.10):
+the set with the fewest coefficients whose cross-validated mean squared error is within one standard
+error (over the folds) of the lowest one's, so that terms whose gain is within the noise stay out.
+Evaluation scripts are never read here. Writes the YAML block to paste under velocity_feedback:, a
 report of the cross-validated errors, and prints both.
 
   python3 scripts/fit_command_response.py out/response/summary.json [more summaries] --out FILE.yaml \
@@ -30,8 +33,8 @@ import numpy as np
 
 AXES = ("vx", "vy", "wz")
 # Term groups of an axis's model: G gains (always), M gain per magnitude, S gain per signed command,
-# D drift, C gains per metre of crouch. The candidate sets, simplest first (a tie keeps the simpler one;
-# without crouched sweeps the C columns are zero and never win).
+# D drift, C gains per metre of crouch. The candidate sets, simplest first (of two with as many
+# coefficients the earlier one is kept; without crouched sweeps the C columns are zero and never win).
 _BASE_SETS = ("G", "G+M", "G+S", "G+D", "G+M+D", "G+S+D", "G+M+S+D")
 SETS = _BASE_SETS + tuple(f"{g}+C" for g in _BASE_SETS)
 # Validation ranges of CommandResponseModel (velocity_feedback.cpp).
@@ -112,18 +115,39 @@ def fit(U, y, i, groups):
     return coef, labels
 
 
+def cv_folds(n, i, folds):
+    """The folds over @p n commands for axis @p i: a fixed shuffle, fold k every folds-th of it."""
+    idx = np.random.default_rng(i).permutation(n)
+    return [idx[k::folds] for k in range(folds)]
+
+
 def cv_predict(U, y, i, groups, folds):
     """Cross-validated predictions: folds over commands (each sample is one command, its seeds
-    averaged), a fixed shuffle; every command predicted by the fit on the other folds."""
-    idx = np.random.default_rng(i).permutation(len(y))
+    averaged; cv_folds); every command predicted by the fit on the other folds."""
+    idx = np.arange(len(y))
     pred = np.empty(len(y))
-    for k in range(folds):
-        test = idx[k::folds]
+    for test in cv_folds(len(y), i, folds):
         train = np.setdiff1d(idx, test)
         coef, _ = fit(U[train], y[train], i, groups)
         X, _ = features(U[test], i, groups)
         pred[test] = X @ coef
     return pred
+
+
+def select_one_se(U, y, i, preds, folds):
+    """The one-standard-error rule over SETS' cross-validated predictions @p preds of axis @p i:
+    the lowest mean squared error and its standard error over the folds; of the sets within that
+    margin, the one with the fewest coefficients (SETS' order between equals). Returns
+    (index of the chosen set, index of the lowest, the margin as an RMSE: sqrt(MSE_min + SE))."""
+    fold_idx = cv_folds(len(y), i, folds)
+    mse = np.array([np.mean((p - y) ** 2) for p in preds])
+    lowest = int(np.argmin(mse))
+    per_fold = [np.mean((preds[lowest][t] - y[t]) ** 2) for t in fold_idx]
+    se = float(np.std(per_fold, ddof=1) / np.sqrt(folds))
+    size = [features(U[:1], i, groups)[0].shape[1] for groups in SETS]
+    within = [k for k in range(len(SETS)) if mse[k] <= mse[lowest] + se]
+    chosen = min(within, key=lambda k: (size[k], k))
+    return chosen, lowest, float(np.sqrt(mse[lowest] + se))
 
 
 def rmse(e):
@@ -220,7 +244,7 @@ def main():
               f"more than {UPSET} off their command), {args.folds}-fold cross-validation over commands",
               "# axis: RMSE of the identity (v = u) | of each term set (G gains, M per magnitude, S per signed command, D drift, "
               "C gains per crouch), "
-              "cross-validated [m/s or rad/s]"]
+              "cross-validated [m/s or rad/s]; the chosen set: the fewest coefficients within one standard error of the lowest"]
     block = {}
     cv_best = []
     for i, a in enumerate(AXES):
@@ -228,11 +252,11 @@ def main():
         ident = rmse(U[:, i] - y)
         preds = [cv_predict(U, y, i, groups, args.folds) for groups in SETS]
         scores = [rmse(p - y) for p in preds]
-        best = int(np.argmin(scores))
+        best, lowest, margin = select_one_se(U, y, i, preds, args.folds)
         cv_best.append(preds[best])
         coef, labels = fit(U, y, i, SETS[best])
         report.append(f"# {a}: identity {ident:.4f} | " + " | ".join(f"{SETS[k]} {scores[k]:.4f}" for k in range(len(SETS)))
-                      + f"  -> {SETS[best]}")
+                      + f"  (lowest {SETS[lowest]}; within one standard error: <= {margin:.4f})  -> {SETS[best]}")
         entry = {"gain_positive": 1.0, "gain_negative": 1.0, "gain_per_magnitude": [0.0] * 3,
                  "gain_per_command": [0.0] * 3, "drift": [0.0] * 3,
                  "gain_positive_per_crouch": 0.0, "gain_negative_per_crouch": 0.0}

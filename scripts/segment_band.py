@@ -7,7 +7,10 @@ Reads `segments` of each summary (command / reference / achieved means over the 
 segment and over seeds; written by `pmg_policy_sil`) and prints, per commanded velocity axis, the
 segments whose achieved value is within the band
     |achieved - command| <= max(0.15 |command|, tol),  tol = 0.05 m/s (v_x, v_y), 0.08 rad/s (omega)
-(issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the posture segments
+(issue 12: "within +-15 %, or +-0.05 m/s / +-0.08 rad/s"), the misses by name, the same count against
+the shaper's command (`shaped`, when the summary has it: the command after the controller's limits
+and envelopes, e.g. a crouched walk slowed by the crouched velocity envelope) with how many segments
+the shaper slowed out of the command's band, the posture segments
 against pitch / roll within 0.03 rad and height within 0.015 m, for each missed velocity segment
 the share of its window in which the velocity feedback was held or decayed (when the summary has
 it), the runaways (a segment moving beyond its command, or through a stop, by more than half the
@@ -18,7 +21,7 @@ and, in every segment, the torso pitch or roll that it does not command (cross-c
 heading frame, as pmg_policy_sil writes them. A segment that no seed reached (every seed fell
 before its window: `achieved` all null) counts as a miss on every axis it commands. Exit status 2 on
 a file without `segments`. score(path) prints and also returns the counts (in_band, velocity_segments,
-velocity_misses, posture_misses, coupling, coupling_largest, runaways, falls) for other scripts
+velocity_misses, in_band_shaped and shaper_slowed (None without `shaped`), posture_misses, coupling, coupling_largest, runaways, falls) for other scripts
 (scripts/evaluate_candidate.py).
 """
 import json
@@ -73,6 +76,23 @@ def score(path):
         total += len(hit) + len(miss)
         print(f"{axis}: {len(hit)}/{len(hit) + len(miss)} in band; misses: {', '.join(miss) or 'none'}")
     print(f"velocity segments in band: {total_in}/{total}")
+    # Against the shaper's command (pmg_policy_sil's `shaped`: the command after the controller's limits
+    # and envelopes, what it chose to attempt): separates the envelopes' deliberate slowing from the
+    # tracking gap. A segment is slowed on an axis when its shaped value is outside the command's band.
+    shaped_in = shaped_total = slowed = None
+    if segs and all(s.get("shaped") and s["shaped"].get("vx") is not None for s in segs):
+        shaped_in = shaped_total = slowed = 0
+        for axis, tol in VEL_ABS.items():
+            for s in segs:
+                cmd = s["command"][axis]
+                if abs(cmd) < 1e-9:
+                    continue
+                shaped_total += 1
+                slowed += not in_band(cmd, s["shaped"][axis], tol)
+                shaped_in += in_band(s["shaped"][axis], s["achieved"][axis], tol)
+            shaped_total += sum(1 for s in unreached if abs(s["command"][axis]) >= 1e-9)
+        print(f"velocity segments in band of the shaper's command: {shaped_in}/{shaped_total} "
+              f"(the shaper's envelopes slowed {slowed} of them out of the command's band)")
     # Where the velocity feedback was on (pmg_policy_sil's feedback_*_fraction), how much of each
     # missed segment's window it could not integrate: held (leg odometry rejected) or decayed (tilt).
     fb = [f"{name} held {s['feedback_held_fraction']:.0%} decayed {s['feedback_decayed_fraction']:.0%}"
@@ -123,6 +143,7 @@ def score(path):
     where = [f"{s['name']} {s['fallen']}" for s in summary["segments"] if s.get("fallen", 0)]
     print(f"seeds fallen (summed over segments): {falls}" + (f"; in {', '.join(where)}" if where else ""))
     return {"in_band": total_in, "velocity_segments": total, "velocity_misses": sorted(missed),
+            "in_band_shaped": shaped_in, "shaper_slowed": slowed,
             "posture_misses": posture_miss, "coupling": coupling, "coupling_largest": worst,
             "runaways": runaways, "falls": falls}
 

@@ -9,6 +9,10 @@ that no seed reached (every seed fell before its window: `achieved` all null), a
 it commands. Runaways: a crouched backward walk at 2.2 times its command that the controller's
 estimate reads at 1.2 times, and the stop after it still moving 0.3 m/s, are named; a forward walk
 at 1.4 times (0.2 m/s over) and a turn the wrong way are not.
+Against the shaper's command (`shaped`): the crouched backward walk was slowed to -0.3 m/s and the
+crouched forward walk to 0.3 (out of their commands' bands), every other segment shaped as commanded:
+in band of the shaped command are fwd, left, bent_walk and the crouched forward walk at 0.28 (which
+misses its command 0.6); the same summary without `shaped` prints no such line.
 Usage: test_segment_band.py
 """
 import json
@@ -23,7 +27,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 def seg(name, command, achieved):
     base = {"vx": 0.0, "vy": 0.0, "wz": 0.0, "pitch": 0.0, "roll": 0.0, "height": 0.78}
     return {"name": name, "seeds": 2, "fallen": 0, "command": {**base, **command}, "reference": dict(base),
-            "achieved": {**base, **achieved}}
+            "achieved": {**base, **achieved}, "shaped": {**base, **command}}
 
 
 def main():
@@ -38,10 +42,13 @@ def main():
         {**seg("crouch_walk", {"vx": 0.4, "height": 0.68}, {}), "seeds": 0, "fallen": 2,
          "achieved": {k: None for k in ("vx", "vy", "wz", "pitch", "roll", "height")}},
         {**seg("back_crouched", {"vx": -0.5, "height": 0.74}, {"vx": -1.1, "height": 0.74}),
-         "estimate": {"vx": -0.6, "vy": 0.0, "wz": 0.0, "pitch": None, "roll": None, "height": 0.74}},
+         "estimate": {"vx": -0.6, "vy": 0.0, "wz": 0.0, "pitch": None, "roll": None, "height": 0.74},
+         "shaped": {"vx": -0.3, "vy": 0.0, "wz": 0.0, "pitch": 0.0, "roll": 0.0, "height": 0.74}},
         seg("stop_back_crouched", {"height": 0.74}, {"vx": -0.3, "height": 0.74}),
         seg("fwd_fast", {"vx": 0.5}, {"vx": 0.7}),
         seg("turn_wrong_way", {"wz": 0.5}, {"wz": -0.6}),
+        {**seg("fwd_crouched", {"vx": 0.6, "height": 0.66}, {"vx": 0.28, "height": 0.66}),
+         "shaped": {"vx": 0.3, "vy": 0.0, "wz": 0.0, "pitch": 0.0, "roll": 0.0, "height": 0.66}},
     ]}
     with tempfile.TemporaryDirectory() as d:
         path = os.path.join(d, "summary.json")
@@ -49,12 +56,20 @@ def main():
             json.dump(summary, f)
         out = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/segment_band.py"), path],
                              capture_output=True, text=True, check=True).stdout
+        for s in summary["segments"]:
+            s.pop("shaped")
+        with open(path, "w") as f:
+            json.dump(summary, f)
+        unshaped = subprocess.run([sys.executable, os.path.join(ROOT, "scripts/segment_band.py"), path],
+                                  capture_output=True, text=True, check=True).stdout
     print(out)
     expect = [
-        "vx: 2/6 in band; misses: back (-0.400 of -0.500), back_crouched (-1.100 of -0.500), "
-        "fwd_fast (+0.700 of +0.500), crouch_walk (no seed in its window)",
+        "vx: 2/7 in band; misses: back (-0.400 of -0.500), back_crouched (-1.100 of -0.500), "
+        "fwd_fast (+0.700 of +0.500), fwd_crouched (+0.280 of +0.600), crouch_walk (no seed in its window)",
         "vy: 1/1 in band; misses: none",
-        "velocity segments in band: 3/8",
+        "velocity segments in band: 3/9",
+        "velocity segments in band of the shaper's command: 4/9 (the shaper's envelopes slowed 2 of them out of "
+        "the command's band)",
         "runaways (beyond the command by more than 50% of it or 0.2 m/s / 0.3 rad/s): back_crouched vx -1.100 "
         "of -0.500 (estimated -0.600), stop_back_crouched vx -0.300 of +0.000",
         "posture misses: crouch height +0.640 of +0.620, crouch_walk height (no seed in its window)",
@@ -67,6 +82,9 @@ def main():
     missing = [e for e in expect if e not in out]
     for e in missing:
         print(f"FAIL expected line: {e}")
+    if "shaper's command" in unshaped or "velocity segments in band: 3/9" not in unshaped:
+        missing.append("without `shaped`")
+        print(f"FAIL without `shaped` the score differs or claims a shaped count:\n{unshaped}")
     return 1 if missing else 0
 
 
