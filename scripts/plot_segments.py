@@ -6,11 +6,15 @@ last 60 % of each segment and over seeds) and <out>/seed<k>.csv (per tick), writ
 
   segments_time.png      commanded vs reference vs achieved over time, one panel per axis
                          (vx, vy [m/s], wz [rad/s], torso pitch, roll [rad], pelvis height [m]) for
-                         one seed; the averaging windows are shaded and their means drawn as bars.
+                         one seed; the averaging windows are shaded and their means drawn as bars;
+                         dashed: the shaper's velocity command (vx_shaped, ... when the CSV has it:
+                         the command after the controller's limits and envelopes).
                          The reference's vx/vy/wz are the base motion its stance feet imply
                          (pmg::gco::stanceImpliedVelocity), smoothed over --smooth seconds.
   segments_envelope.png  the tracking envelope: per segment, achieved/commanded (and the
-                         reference's ratio beside it) for every velocity axis the segment commands,
+                         reference's ratio beside it, and the shaper's command / commanded as a
+                         dashed line when the summary has `shaped`) for every velocity axis the
+                         segment commands,
                          and achieved - commanded for every posture axis it commands away from
                          neutral, against the issue's band (+-15 % or +-0.05 m/s / +-0.08 rad/s;
                          pitch/roll +-0.03 rad, height +-0.015 m); the posture panels also show
@@ -95,6 +99,8 @@ def plot_time(summary, d, seed, smooth, title, path):
         if ref is not None:
             ref = np.where(active, ref, math.nan)
         ax.plot(t, d[a + "_cmd"], color=C_CMD, lw=1.0, label="command u")
+        if a + "_shaped" in d:
+            ax.plot(t, d[a + "_shaped"], color=C_CMD, lw=0.8, ls="--", alpha=0.6, label="shaped command")
         if ref is not None:
             r = nan_smooth(ref, n) if a in ("vx", "vy", "wz") else ref
             ax.plot(t, r, color=C_REF, lw=0.9, alpha=0.9,
@@ -137,7 +143,7 @@ def plot_envelope(summary, title, path):
         return s["name"] + suffix + ("" if s["seeds"] == nmax else f" ({s['seeds']}/{nmax})")
     fig, axes = plt.subplots(2, 3, figsize=(18, 9))
     for ax, a in zip(axes.flat, AXES):
-        names, ach, ref, lo, hi = [], [], [], [], []
+        names, ach, ref, lo, hi, shaped = [], [], [], [], [], []
         for s in segs:
             c = val(s["command"][a])
             if a in VEL_ABS:
@@ -147,6 +153,7 @@ def plot_envelope(summary, title, path):
                 names.append(label(s))
                 ach.append(val(s["ratio"][a]))
                 ref.append(val(s["reference_ratio"][a]))
+                shaped.append(val((s.get("shaped") or {}).get(a)) / c)
                 lo.append(1 - tol)
                 hi.append(1 + tol)
             else:
@@ -166,6 +173,8 @@ def plot_envelope(summary, title, path):
             ax.add_patch(plt.Rectangle((i - 0.45, lo[i]), 0.9, hi[i] - lo[i], color="tab:green", alpha=0.15, lw=0))
         ax.bar(x - 0.2, ref, 0.4, color=C_REF, label="reference")
         ax.bar(x + 0.2, ach, 0.4, color=C_ACH, label="achieved")
+        if any(math.isfinite(v) for v in shaped):
+            ax.hlines(shaped, x - 0.45, x + 0.45, color=C_CMD, lw=1.2, linestyles="--", label="shaped command")
         for i in range(len(names)):
             if not math.isfinite(ach[i]):
                 ax.text(i + 0.2, 0, "fell", rotation=90, fontsize=6, ha="center", va="bottom", color="r")

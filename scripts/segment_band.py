@@ -82,6 +82,7 @@ def score(path):
     shaped_in = shaped_total = slowed = None
     if segs and all(s.get("shaped") and s["shaped"].get("vx") is not None for s in segs):
         shaped_in = shaped_total = slowed = 0
+        shaped_miss = []
         for axis, tol in VEL_ABS.items():
             for s in segs:
                 cmd = s["command"][axis]
@@ -89,10 +90,17 @@ def score(path):
                     continue
                 shaped_total += 1
                 slowed += not in_band(cmd, s["shaped"][axis], tol)
-                shaped_in += in_band(s["shaped"][axis], s["achieved"][axis], tol)
-            shaped_total += sum(1 for s in unreached if abs(s["command"][axis]) >= 1e-9)
+                if in_band(s["shaped"][axis], s["achieved"][axis], tol):
+                    shaped_in += 1
+                else:
+                    shaped_miss.append(f"{s['name']} {axis} ({s['achieved'][axis]:+.3f} of {s['shaped'][axis]:+.3f})")
+            for s in unreached:
+                if abs(s["command"][axis]) >= 1e-9:
+                    shaped_total += 1
+                    shaped_miss.append(f"{s['name']} {axis} (no seed in its window)")
         print(f"velocity segments in band of the shaper's command: {shaped_in}/{shaped_total} "
-              f"(the shaper's envelopes slowed {slowed} of them out of the command's band)")
+              f"(the shaper's envelopes slowed {slowed} of them out of the command's band); misses: "
+              f"{', '.join(shaped_miss) or 'none'}")
     # Where the velocity feedback was on (pmg_policy_sil's feedback_*_fraction), how much of each
     # missed segment's window it could not integrate: held (leg odometry rejected) or decayed (tilt).
     fb = [f"{name} held {s['feedback_held_fraction']:.0%} decayed {s['feedback_decayed_fraction']:.0%}"

@@ -43,6 +43,9 @@
 //              soles lie flat (the rotation that maps their mean normal onto z, as
 //              pmg::motion::PostureProbe measures the static clips; level when no foot is in
 //              stance; KDL, pelvis -> torso_link), height the template's GeneratorOutput::base_height
+//   shaped     the shaper's command: vx, vy, wz, pitch, roll, height after its limits, envelopes
+//              (crouched, bent, walking height floor) and slew, before the feedback: what the
+//              controller chose to attempt of the command (scripts/segment_band.py scores both)
 //   u_prime    GCO's u' (PMG eq. 19; with GCO off the template's own base state)
 //   u_feedback vx, vy, wz, pitch, roll (and height, when posture_feedback.height_ki > 0) after the
 //              velocity and posture feedback: what the generator got (the shaped command when off;
@@ -138,7 +141,7 @@ struct AxisMeans {
 
 /// One seed's samples in one segment's window (the last 60 % of the segment).
 struct SegmentSeed {
-  AxisMeans achieved, reference, u_prime, feedback, estimate;
+  AxisMeans achieved, reference, shaped, u_prime, feedback, estimate;
   long ticks = 0;         // ticks in the window
   long stance_ticks = 0;  // of which the reference had a stance foot
   long fb_held = 0, fb_decayed = 0;  // of which the velocity feedback held (odometry rejected) / decayed (tilt)
@@ -577,6 +580,9 @@ int main(int argc, char** argv) {
           }
           const pmg::gco::BaseCommand& up = controller.gcoResult().u_opt;
           const Axes u_prime = {up.v_x, up.v_y, up.yaw_rate, up.pitch, up.roll, up.height};
+          const pmg::VelocityCommand& sv = controller.commands().velocity();
+          const pmg::PostureCommand& sp = controller.commands().posture();
+          const Axes shaped = {sv.vx, sv.vy, sv.wz, sp.pitch, sp.roll, sp.height};
           Axes fb, est;
           fb.fill(kNaN);
           est.fill(kNaN);
@@ -626,6 +632,7 @@ int main(int argc, char** argv) {
                 ss.achieved.add(i, ach[static_cast<std::size_t>(i)]);
                 ss.reference.add(i, ref[static_cast<std::size_t>(i)]);
                 if (active) ss.u_prime.add(i, u_prime[static_cast<std::size_t>(i)]);
+                if (active) ss.shaped.add(i, shaped[static_cast<std::size_t>(i)]);
                 ss.feedback.add(i, fb[static_cast<std::size_t>(i)]);
                 ss.estimate.add(i, est[static_cast<std::size_t>(i)]);
               }
@@ -749,14 +756,14 @@ int main(int argc, char** argv) {
     }
     // Per segment: the mean over the seeds that ran through its window without falling.
     struct SegmentResult {
-      Axes achieved, reference, u_prime, feedback, estimate;
+      Axes achieved, reference, shaped, u_prime, feedback, estimate;
       int seeds = 0, fallen = 0;
       long ticks = 0, fb_held = 0, fb_decayed = 0;  // over the seeds that covered the window
     };
     std::vector<SegmentResult> seg_results(windows.size());
     for (std::size_t k = 0; k < windows.size(); ++k) {
       const SegmentWindow& w = windows[k];
-      AxisMeans a, r, u, fbm, em;
+      AxisMeans a, r, sh, u, fbm, em;
       SegmentResult& res = seg_results[k];
       for (const Totals& t : totals) {
         const SegmentSeed& ss = t.segments[k];
@@ -772,11 +779,12 @@ int main(int argc, char** argv) {
         res.fb_held += ss.fb_held;
         res.fb_decayed += ss.fb_decayed;
         const Axes ma = ss.achieved.mean(), mr = ss.reference.mean(), mu = ss.u_prime.mean();
-        const Axes mf = ss.feedback.mean(), me = ss.estimate.mean();
+        const Axes mf = ss.feedback.mean(), me = ss.estimate.mean(), ms = ss.shaped.mean();
         for (int i = 0; i < kAxes; ++i) {
           const auto ii = static_cast<std::size_t>(i);
           a.add(i, ma[ii]);
           r.add(i, mr[ii]);
+          sh.add(i, ms[ii]);
           u.add(i, mu[ii]);
           fbm.add(i, mf[ii]);
           em.add(i, me[ii]);
@@ -784,6 +792,7 @@ int main(int argc, char** argv) {
       }
       res.achieved = a.mean();
       res.reference = r.mean();
+      res.shaped = sh.mean();
       res.u_prime = u.mean();
       res.feedback = fbm.mean();
       res.estimate = em.mean();
@@ -847,7 +856,8 @@ int main(int argc, char** argv) {
         const SegmentSeed& ss = t.segments[k];
         js << (k ? ", " : "") << "{\"name\": " << jstr(windows[k].name) << ", \"ticks\": " << ss.ticks
            << ", \"stance_ticks\": " << ss.stance_ticks << ", \"achieved\": " << jaxes(ss.achieved.mean())
-           << ", \"reference\": " << jaxes(ss.reference.mean()) << ", \"u_prime\": " << jaxes(ss.u_prime.mean())
+           << ", \"reference\": " << jaxes(ss.reference.mean()) << ", \"shaped\": " << jaxes(ss.shaped.mean())
+           << ", \"u_prime\": " << jaxes(ss.u_prime.mean())
            << ", \"u_feedback\": " << jaxes(ss.feedback.mean()) << ", \"estimate\": " << jaxes(ss.estimate.mean()) << "}";
       }
       js << "]}";
@@ -864,7 +874,8 @@ int main(int argc, char** argv) {
       js << (k ? ",\n  " : "\n  ") << "{\"name\": " << jstr(w.name) << ", \"t_begin\": " << jnum(w.t_begin)
          << ", \"t_end\": " << jnum(w.t_end) << ", \"window\": [" << jnum(w.w_begin) << ", " << jnum(w.w_end)
          << "], \"seeds\": " << res.seeds << ", \"fallen\": " << res.fallen << ", \"command\": " << jaxes(w.command)
-         << ", \"reference\": " << jaxes(res.reference) << ", \"achieved\": " << jaxes(res.achieved)
+         << ", \"reference\": " << jaxes(res.reference) << ", \"shaped\": " << jaxes(res.shaped)
+         << ", \"achieved\": " << jaxes(res.achieved)
          << ", \"u_prime\": " << jaxes(res.u_prime) << ", \"u_feedback\": " << jaxes(res.feedback)
          << ", \"estimate\": " << jaxes(res.estimate)
          << ", \"feedback_held_fraction\": " << jnum(fb_on && res.ticks > 0 ? static_cast<double>(res.fb_held) / res.ticks : kNaN)

@@ -8,7 +8,8 @@ really walks backward (mean v_x < -0.08 m/s over the last 3 s of the backward se
 -0.3 m/s after a 0.5 m/s forward segment; measured -0.12 to -0.23 m/s) and really squats (pelvis
 below 0.70 m in the squat segment, commanded 0.66 m).
 The per-segment block of summary.json (issue 12) is checked too: one entry per script segment with
-the script's times and commands, every axis finite, each mean equal to the one recomputed here from
+the script's times and commands, every axis finite, the shaper's velocity command (`shaped`) never
+larger than the command nor of the other sign, each mean equal to the one recomputed here from
 the seed CSVs over the last 60 % of the segment, the ratios consistent, and the forward segment
 tracked within a loose band (achieved and reference v_x within 0.5 m/s +-30 %; measured on the
 shipped policy: achieved 0.47-0.49, reference 0.52). The issue's +-15 % targets are not asserted
@@ -24,7 +25,7 @@ import numpy as np
 import yaml
 
 AXES = ["vx", "vy", "wz", "pitch", "roll", "height"]
-SEGMENT_KEYS = {"name", "t_begin", "t_end", "window", "seeds", "fallen", "command", "reference", "achieved",
+SEGMENT_KEYS = {"name", "t_begin", "t_end", "window", "seeds", "fallen", "command", "reference", "shaped", "achieved",
                 "u_prime", "u_feedback", "estimate", "ratio", "reference_ratio", "feedback_held_fraction",
                 "feedback_decayed_fraction"}
 
@@ -59,7 +60,8 @@ def check_segments(out, summary, seeds):
     for s, sc in zip(segs, script["segments"]):
         name = s.get("name")
         good = set(s) == SEGMENT_KEYS and all(set(s[b]) == set(AXES) for b in
-                                              ("command", "reference", "achieved", "u_prime", "u_feedback", "estimate"))
+                                              ("command", "reference", "shaped", "achieved", "u_prime", "u_feedback",
+                                               "estimate"))
         good &= all(set(s[b]) == {"vx", "vy", "wz"} for b in ("ratio", "reference_ratio"))
         checks[f"{name}: keys"] = good
         if not good:
@@ -79,10 +81,14 @@ def check_segments(out, summary, seeds):
             checks[f"{name}: u_feedback = command, no estimate (feedback off)"] = (
                 all(abs(s["u_feedback"][a] - s["command"][a]) < 1e-6 for a in AXES[:3]) and
                 all(s["estimate"][a] is None for a in AXES))
-        vals = [s[b][a] for b in ("reference", "achieved", "u_prime") for a in AXES]
+        vals = [s[b][a] for b in ("reference", "shaped", "achieved", "u_prime") for a in AXES]
         checks[f"{name}: finite"] = all(v is not None and math.isfinite(v) for v in vals)
         if not checks[f"{name}: finite"]:
             continue
+        # The shaper only slows: its velocity command keeps the command's sign and is not larger.
+        checks[f"{name}: shaped velocity within the command"] = all(
+            s["shaped"][a] * s["command"][a] >= -1e-9 and abs(s["shaped"][a]) <= abs(s["command"][a]) + 1e-6
+            for a in AXES[:3])
         # Recompute the means from the per-tick CSVs: per seed over the window, then over seeds.
         w0, w1 = s["window"]
         worst = 0.0

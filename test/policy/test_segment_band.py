@@ -69,7 +69,8 @@ def main():
         "vy: 1/1 in band; misses: none",
         "velocity segments in band: 3/9",
         "velocity segments in band of the shaper's command: 4/9 (the shaper's envelopes slowed 2 of them out of "
-        "the command's band)",
+        "the command's band); misses: back vx (-0.400 of -0.500), back_crouched vx (-1.100 of -0.300), "
+        "fwd_fast vx (+0.700 of +0.500), crouch_walk vx (no seed in its window), turn_wrong_way wz (-0.600 of +0.500)",
         "runaways (beyond the command by more than 50% of it or 0.2 m/s / 0.3 rad/s): back_crouched vx -1.100 "
         "of -0.500 (estimated -0.600), stop_back_crouched vx -0.300 of +0.000",
         "posture misses: crouch height +0.640 of +0.620, crouch_walk height (no seed in its window)",
