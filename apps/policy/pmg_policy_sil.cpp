@@ -73,7 +73,7 @@
 // cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
-// command before the feedback, --feedback-within-envelopes on|off), <out>/frames<k>.csv and
+// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
 // supervisor's slew limit, hal_q_rate_max, held a joint's command back; --q-rate-max sets it).
 // --probe FILE writes the first seed's first episode tick by tick for training/probe_sil.py: MuJoCo's
@@ -261,7 +261,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      feedback_within_envelopes, walking_height_floor, joint_stops, braking, upset_upright;
+      feedback_within_envelopes, yaw_beyond_envelopes, walking_height_floor, joint_stops, braking, upset_upright;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -284,6 +284,9 @@ int main(int argc, char** argv) {
   onOff("--feedback-within-envelopes", &feedback_within_envelopes,
         "on: the velocity feedback's command kept inside the crouched and bent velocity envelopes "
         "(velocity_feedback.within_posture_envelopes), off: not; default: the controller config's");
+  onOff("--yaw-beyond-envelopes", &yaw_beyond_envelopes,
+        "on: with the feedback within the envelopes, its yaw-rate correction is not bound by them "
+        "(velocity_feedback.yaw_beyond_envelopes); default: the controller config's");
   onOff("--walking-height-floor", &walking_height_floor,
         "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
   onOff("--joint-stops", &joint_stops,
@@ -341,6 +344,7 @@ int main(int argc, char** argv) {
       throw pmg::ConfigError(controller_path + ": --posture-envelope on: posture_feedback.envelope_min/max are wide open there");
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (!feedback_within_envelopes.empty()) base.velocity_feedback.within_posture_envelopes = feedback_within_envelopes == "on";
+    if (!yaw_beyond_envelopes.empty()) base.velocity_feedback.yaw_beyond_envelopes = yaw_beyond_envelopes == "on";
     if (const std::string e = base.velocity_feedback.validate(); !e.empty())
       throw pmg::ConfigError(controller_path + ": velocity_feedback." + e);
     // A commands: key whose 0 means off, switched by --OPTION off|on ("on" keeps the config's value).
@@ -830,6 +834,7 @@ int main(int argc, char** argv) {
        << ", \"brake_ratio\": " << (base.velocity_feedback.enabled ? base.velocity_feedback.brake_ratio : 0.0)
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
+       << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"standing_height\": " << standing_height << ", \"walking_min_height\": " << base.commands.walking_min_height

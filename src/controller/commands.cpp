@@ -156,6 +156,24 @@ double CommandShaper::envelopeScale(const VelocityCommand& v) const noexcept {
   return std::max(crouch_scale, bent_scale);
 }
 
+double CommandShaper::envelopeScaleBesideYaw(const VelocityCommand& v) const noexcept {
+  // The edge (1), or where the shaped ω alone already lies beyond it (a transient of the slews): then
+  // v_x and v_y go to 0, continuously, as the room the turn leaves them closes.
+  const double target = std::max(1.0, envelopeScale({0.0, 0.0, velocity_.wz}));
+  const auto scale_at = [&](double s) { return envelopeScale({v.vx / s, v.vy / s, velocity_.wz}); };
+  if (scale_at(1.0) <= target) return 1.0;
+  double lo = 1.0, hi = 2.0;
+  for (int k = 0; k < 20 && scale_at(hi) > target; ++k) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int k = 0; k < 50; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (scale_at(mid) > target ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 double CommandShaper::crouchFraction() const noexcept {
   if (!(limits_.crouched_height > 0.0)) return 0.0;
   return std::clamp((limits_.standing_height - posture_.height) / (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);

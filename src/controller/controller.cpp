@@ -170,8 +170,10 @@ TickStatus Controller::tick(double now) noexcept {
     if (feedback_ && config_.velocity_feedback.brake_crouch_scaled) feedback_->setBrakeWeight(shaper_.crouchFraction());
     if (feedback_) feedback_->setCrouch(config_.commands.standing_height - shaper_.posture().height);
     const VelocityCommand* u_fb = feedback_ ? &feedback_->update(shaper_.velocity(), state_, dt_) : &shaper_.velocity();
-    if (feedback_ && config_.velocity_feedback.within_posture_envelopes)  // kept inside the crouched and bent envelopes
-      u_fb = &feedback_->scaleDown(shaper_.envelopeScale(*u_fb));
+    if (feedback_ && config_.velocity_feedback.within_posture_envelopes) {  // kept inside the crouched and bent envelopes
+      const bool keep_yaw = config_.velocity_feedback.yaw_beyond_envelopes;
+      u_fb = &feedback_->scaleDown(keep_yaw ? shaper_.envelopeScaleBesideYaw(*u_fb) : shaper_.envelopeScale(*u_fb), keep_yaw);
+    }
     const VelocityCommand& u_d = *u_fb;
     const PostureCommand& u_s =
         posture_feedback_ ? posture_feedback_->update(shaper_.posture(), shaper_.velocity(), state_, dt_,

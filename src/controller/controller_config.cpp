@@ -217,6 +217,8 @@ struct VelocityFeedbackYaml {
     a->Visit("restart_median", &f.restart_median, "restart from the median innovation of the rejected window (true) or the next sample (false, tuned on)");
     a->Visit("within_posture_envelopes", &f.within_posture_envelopes,
              "keep the corrected command inside the shaper's crouched and bent velocity envelopes (docs/controller.md)");
+    a->Visit("yaw_beyond_envelopes", &f.yaw_beyond_envelopes,
+             "with within_posture_envelopes: the yaw-rate correction is not bound by those envelopes, v_x and v_y are (true|false)");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");

@@ -459,9 +459,9 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   return u_fb_;
 }
 
-const VelocityCommand& VelocityFeedback::scaleDown(double scale) noexcept {
+const VelocityCommand& VelocityFeedback::scaleDown(double scale, bool keep_yaw) noexcept {
   if (!(scale > 1.0)) return u_fb_;
-  u_fb_ = {u_fb_.vx / scale, u_fb_.vy / scale, u_fb_.wz / scale};
+  u_fb_ = {u_fb_.vx / scale, u_fb_.vy / scale, keep_yaw ? u_fb_.wz : u_fb_.wz / scale};
   for (std::size_t i = 0; i < 3; ++i) c_[i] = u_fb_[i] - u_ff_[i];
   u_fb_prev_ = u_fb_;
   ++envelope_ticks_;

@@ -230,6 +230,91 @@ TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelo
   EXPECT_EQ(fb.scaleDown(0.5).vx, before.vx);
 }
 
+// velocity_feedback.yaw_beyond_envelopes: crouched to 0.66 m, a turn with a slow forward walk on a
+// plant that turns at half of what it is sent (the default actor crouched: 0.36 rad/s for 0.63).
+// Within the envelopes, all axes together, the turn's correction stops at the envelope's edge; with ω
+// beyond them it brings the plant to the command, while v_x with the shaped ω stays inside them, no
+// windup, continuous, no allocation. A crouched bent walk straight ahead (no turn) is the same either way.
+// (The plant's ω gain is 0.7 here so that the command it needs stays inside envelope_max.)
+struct CrouchedRun {
+  double worst_beside_yaw = 0.0, worst_all = 0.0, max_step = 0.0;
+  VelocityCommand u_fb{}, shaped{};
+  std::array<double, 3> achieved{};
+  std::vector<double> vx;  // u_fb.vx per tick
+};
+
+CrouchedRun walkCrouched(const CommandLimits& limits, const Command& command, const std::array<double, 3>& gain,
+                         bool keep_yaw, int ticks) {
+  Legs legs;
+  CommandShaper shaper(limits);
+  VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, limits.max_velocity);
+  Plant plant{gain};
+  BaseVelocityEstimate est;
+  CommandSample s;
+  s.command = command;
+  CrouchedRun r;
+  r.vx.reserve(static_cast<std::size_t>(ticks));
+  VelocityCommand prev{};
+  const double dt = 0.01;
+  const std::size_t allocations = test::allocationsDuring([&] {
+    for (int k = 0; k < ticks; ++k) {
+      s.velocity_time = s.posture_time = k * dt;
+      shaper.update(s, k * dt, dt);
+      const VelocityCommand* u_fb = &fb.correct(shaper.velocity(), est, dt);
+      u_fb = &fb.scaleDown(keep_yaw ? shaper.envelopeScaleBesideYaw(*u_fb) : shaper.envelopeScale(*u_fb), keep_yaw);
+      const double limit = std::max(1.0, shaper.envelopeScale({0.0, 0.0, shaper.velocity().wz})) + 1e-9;
+      r.worst_beside_yaw = std::max(r.worst_beside_yaw, shaper.envelopeScale({u_fb->vx, u_fb->vy, shaper.velocity().wz}) - limit);
+      r.worst_all = std::max(r.worst_all, shaper.envelopeScale(*u_fb));
+      for (std::size_t i = 0; i < 3; ++i) {
+        r.max_step = std::max(r.max_step, std::fabs((*u_fb)[i] - prev[i]));
+        EXPECT_NEAR((*u_fb)[i], fb.feedforward()[i] + fb.correction()[i], 1e-12) << "axis " << i << " tick " << k;
+      }
+      prev = *u_fb;
+      if (r.vx.size() < r.vx.capacity()) r.vx.push_back(u_fb->vx);
+      est = plant.step(*u_fb, dt);
+    }
+  });
+  EXPECT_EQ(allocations, 0u);
+  r.u_fb = fb.command();
+  r.shaped = shaper.velocity();
+  r.achieved = plant.v;
+  return r;
+}
+
+TEST(VelocityFeedback, YawBeyondEnvelopesLetsTheTurnCorrectionPastTheCrouchedEnvelopeAndKeepsVxWithin) {
+  CommandLimits limits;
+  limits.max_velocity = {1.0, 0.5, 1.0};
+  limits.max_acceleration = {1.0, 1.0, 2.0};
+  limits.standing_height = 0.78;
+  limits.crouched_height = 0.62;
+  limits.crouched_max_velocity = {0.3, 0.3, 0.6};
+  limits.bent_pitch = 0.4;
+  limits.bent_max_velocity = {0.8, 0.4, 0.8};
+  const Command turn{0.2, 0.0, 0.6, 0.0, 0.0, 0.66};
+  const std::array<double, 3> gain{0.9, 0.9, 0.7};
+  const CrouchedRun within = walkCrouched(limits, turn, gain, false, 1500);
+  const CrouchedRun beyond = walkCrouched(limits, turn, gain, true, 1500);
+  // The shaper slowed the command along its direction; within, the corrected turn stays on that edge.
+  EXPECT_LT(within.shaped.wz, 0.8 - 0.1);
+  EXPECT_LE(within.worst_all, 1.0 + 1e-9);
+  EXPECT_LT(within.achieved[2], 0.8 * within.shaped.wz) << "the plant turns at 70 % of the edge";
+  // Beyond: the turn's correction goes past the edge and the plant reaches the shaped ω; v_x with the
+  // shaped ω is never beyond the envelope.
+  EXPECT_GT(beyond.u_fb.wz, within.u_fb.wz + 0.2);
+  EXPECT_NEAR(beyond.achieved[2], beyond.shaped.wz, 0.02 * beyond.shaped.wz);
+  EXPECT_LE(beyond.worst_beside_yaw, 0.0);
+  EXPECT_GT(beyond.worst_all, 1.2) << "the bound on ω is off";
+  EXPECT_LT(beyond.max_step, 0.03) << "u_fb stays continuous";
+  EXPECT_LE(beyond.u_fb.wz, limits.max_velocity[2] + 1e-12) << "still inside max_velocity";
+  // Straight ahead, crouched and bent (the walk that ran on): ω has nothing to correct, the same u_fb.
+  const Command bent_walk{0.6, 0.0, 0.0, 0.3, 0.0, 0.66};
+  const CrouchedRun a = walkCrouched(limits, bent_walk, {0.8, 0.8, 0.8}, false, 800);
+  const CrouchedRun b = walkCrouched(limits, bent_walk, {0.8, 0.8, 0.8}, true, 800);
+  ASSERT_EQ(a.vx.size(), b.vx.size());
+  for (std::size_t k = 0; k < a.vx.size(); ++k) ASSERT_NEAR(a.vx[k], b.vx[k], 1e-9) << "tick " << k;
+  EXPECT_LE(b.worst_all, 1.0 + 1e-9);
+}
+
 TEST(VelocityFeedback, IntegratesOnceTheCommandIsSteadyAndAStickJitterIsSteady) {
   Legs legs;
   VelocityFeedback fb(enabledConfig(), legs.model, legs.idx, {1.0, 0.4, 0.8});

@@ -213,6 +213,14 @@ struct VelocityFeedbackConfig {
   /// 0.6 m/s (shaped to 0.574), the correction sent up to 0.67 m/s on a low estimate and the robot
   /// ran on after the stop (docs/controller.md "Running on after a crouched bent walk").
   bool within_posture_envelopes = false;
+  /// With within_posture_envelopes: true leaves the yaw-rate correction beyond the envelopes. v_x and
+  /// v_y are scaled so that they and the shaped command's ω lie inside them
+  /// (CommandShaper::envelopeScaleBesideYaw), and u_fb's ω is left as corrected (within
+  /// envelope_min/max and max_velocity as always). false (the default): all three scaled together.
+  /// Why: crouched to 0.66 m the actor turns 0.36 rad/s when sent the envelope's 0.63 and 0.54 when
+  /// sent 0.79, and the run-on the bound prevents is in v_x (docs/controller.md "Running on after a
+  /// crouched bent walk", "What it costs on the crouched probe").
+  bool yaw_beyond_envelopes = false;
   /// Upset guard (UpsetGuard; needs enabled: it runs on this loop's estimate). Off by default.
   UpsetGuardConfig upset_guard{};
   /// Empty when valid, else "<field>: expected ..." for the first bad field.
@@ -383,9 +391,10 @@ class VelocityFeedback {
                                  bool hold = false, bool decay = false) noexcept;
   /// Scales the last update's u_fb down by @p scale (> 1; otherwise nothing), along its direction,
   /// and the correction with it (c = u_fb − u_ff, so that it does not wind up against the bound);
-  /// counted in envelopeTicks(). Returns u_fb. For VelocityFeedbackConfig::within_posture_envelopes.
-  /// noexcept, no allocation.
-  const VelocityCommand& scaleDown(double scale) noexcept;
+  /// @p keep_yaw: only v_x and v_y are scaled (VelocityFeedbackConfig::yaw_beyond_envelopes, with
+  /// CommandShaper::envelopeScaleBesideYaw). Counted in envelopeTicks(). Returns u_fb. For
+  /// VelocityFeedbackConfig::within_posture_envelopes. noexcept, no allocation.
+  const VelocityCommand& scaleDown(double scale, bool keep_yaw = false) noexcept;
   /// Ticks on which scaleDown() acted so far.
   std::uint64_t envelopeTicks() const noexcept { return envelope_ticks_; }
   /// Ticks on which the correction was held (estimator rejecting) / decayed (tilt) so far.
