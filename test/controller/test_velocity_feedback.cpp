@@ -183,8 +183,8 @@ double walkCrouchedAndBent(bool within, CommandShaper* shaper, VelocityFeedback*
   return worst;
 }
 
-TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelopeWithoutWindup) {
-  Legs legs;
+// The shaper's limits with the crouched (0.62 m) and bent (0.4 rad) velocity envelopes on.
+CommandLimits envelopeLimits() {
   CommandLimits limits;
   limits.max_velocity = {1.0, 0.5, 1.0};
   limits.max_acceleration = {1.0, 1.0, 2.0};
@@ -193,6 +193,12 @@ TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelo
   limits.crouched_max_velocity = {0.3, 0.3, 0.6};
   limits.bent_pitch = 0.4;
   limits.bent_max_velocity = {0.8, 0.4, 0.8};
+  return limits;
+}
+
+TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelopeWithoutWindup) {
+  Legs legs;
+  const CommandLimits limits = envelopeLimits();
   // Open (the default): the integrator lifts the slowed command back beyond the envelope.
   CommandShaper open_shaper(limits);
   VelocityFeedback open_fb(enabledConfig(), legs.model, legs.idx, limits.max_velocity);
@@ -282,14 +288,7 @@ CrouchedRun walkCrouched(const CommandLimits& limits, const Command& command, co
 }
 
 TEST(VelocityFeedback, YawBeyondEnvelopesLetsTheTurnCorrectionPastTheCrouchedEnvelopeAndKeepsVxWithin) {
-  CommandLimits limits;
-  limits.max_velocity = {1.0, 0.5, 1.0};
-  limits.max_acceleration = {1.0, 1.0, 2.0};
-  limits.standing_height = 0.78;
-  limits.crouched_height = 0.62;
-  limits.crouched_max_velocity = {0.3, 0.3, 0.6};
-  limits.bent_pitch = 0.4;
-  limits.bent_max_velocity = {0.8, 0.4, 0.8};
+  const CommandLimits limits = envelopeLimits();
   const Command turn{0.2, 0.0, 0.6, 0.0, 0.0, 0.66};
   const std::array<double, 3> gain{0.9, 0.9, 0.7};
   const CrouchedRun within = walkCrouched(limits, turn, gain, false, 1500);

@@ -150,9 +150,10 @@ class CommandShaper {
   /// must be divided so that (v_x / s, v_y / s, ω of the shaped command) is inside the envelopes, on
   /// their edge (scale 1) as envelopeScale() would put it, or, while the shaped ω alone lies beyond
   /// the edge (a transient of the slews), as far as that ω does; @p v's own ω is not counted. 1 when
-  /// no division is needed. With ω = 0 it equals envelopeScale(v) (the envelopes are homogeneous). The envelope scale falls
-  /// monotonically with s, so s is found by bisection of fixed length (at most 20 doublings to
-  /// 1e6, then 50 halvings; relative error below 1e-12); noexcept, no allocation.
+  /// no division is needed. With ω = 0 it equals envelopeScale(v) (the envelopes are homogeneous).
+  /// The envelope scale falls monotonically with s, so s is found by bisection of fixed length (at
+  /// most 20 doublings, to 2^21, then 50 halvings; relative error below 1e-12); noexcept, no
+  /// allocation.
   double envelopeScaleBesideYaw(const VelocityCommand& v) const noexcept;
   /// How crouched the shaped posture of the last update is, in [0, 1]: the crouched envelope's
   /// crouch f = (standing − h) / (standing − crouched_height), clamped (the blend factor of
