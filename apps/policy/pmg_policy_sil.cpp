@@ -73,7 +73,7 @@
 // cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
-// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off), <out>/frames<k>.csv and
+// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
 // supervisor's slew limit, hal_q_rate_max, held a joint's command back; --q-rate-max sets it).
 // --probe FILE writes the first seed's first episode tick by tick for training/probe_sil.py: MuJoCo's
@@ -261,7 +261,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output directory");
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
-      feedback_within_envelopes, yaw_beyond_envelopes, walking_height_floor, joint_stops, braking, upset_upright;
+      feedback_within_envelopes, yaw_beyond_envelopes, max_velocity_headroom, walking_height_floor, joint_stops, braking,
+      upset_upright;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -287,6 +288,9 @@ int main(int argc, char** argv) {
   onOff("--yaw-beyond-envelopes", &yaw_beyond_envelopes,
         "on: with the feedback within the envelopes, its yaw-rate correction is not bound by them "
         "(velocity_feedback.yaw_beyond_envelopes); default: the controller config's");
+  onOff("--max-velocity-headroom", &max_velocity_headroom,
+        "off: the velocity feedback's command stays inside commands.max_velocity (velocity_feedback.max_velocity_headroom "
+        "0), on: the config's (not 0 there); default: the controller config's");
   onOff("--walking-height-floor", &walking_height_floor,
         "off: no walking height floor (commands.walking_min_height 0); default: the controller config's");
   onOff("--joint-stops", &joint_stops,
@@ -345,6 +349,9 @@ int main(int argc, char** argv) {
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (!feedback_within_envelopes.empty()) base.velocity_feedback.within_posture_envelopes = feedback_within_envelopes == "on";
     if (!yaw_beyond_envelopes.empty()) base.velocity_feedback.yaw_beyond_envelopes = yaw_beyond_envelopes == "on";
+    if (max_velocity_headroom == "off") base.velocity_feedback.max_velocity_headroom = {0.0, 0.0, 0.0};
+    if (max_velocity_headroom == "on" && base.velocity_feedback.max_velocity_headroom == std::array<double, 3>{0.0, 0.0, 0.0})
+      throw pmg::ConfigError(controller_path + ": --max-velocity-headroom on: velocity_feedback.max_velocity_headroom is 0 there");
     if (const std::string e = base.velocity_feedback.validate(); !e.empty())
       throw pmg::ConfigError(controller_path + ": velocity_feedback." + e);
     // A commands: key whose 0 means off, switched by --OPTION off|on ("on" keeps the config's value).
@@ -835,6 +842,9 @@ int main(int argc, char** argv) {
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
+       << ", \"max_velocity_headroom\": [" << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[0] : 0.0)
+       << ", " << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[1] : 0.0) << ", "
+       << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[2] : 0.0) << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"standing_height\": " << standing_height << ", \"walking_min_height\": " << base.commands.walking_min_height

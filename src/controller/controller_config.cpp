@@ -209,6 +209,8 @@ struct VelocityFeedbackYaml {
     a->Visit("max_ratio", &f.max_ratio, "largest correction as a share of |u|, 0..2");
     a->Visit("envelope_min", &f.envelope_min, "v_x, v_y [m/s], w [rad/s] below which no correction pushes (training range)");
     a->Visit("envelope_max", &f.envelope_max, "v_x, v_y [m/s], w [rad/s] above which no correction pushes (training range)");
+    a->Visit("max_velocity_headroom", &f.max_velocity_headroom,
+             "v_x, v_y [m/s], w [rad/s], each 0..1: how far beyond commands.max_velocity the correction may take the command");
     a->Visit("stance_band_m", &f.stance_band_m, "soles within this height of the lowest are in stance, (0, 0.1] m");
     a->Visit("odometry_time_s", &f.odometry_time_s, "time constant of the leg-odometry correction, 0..2 s");
     a->Visit("yaw_rate_gated", &f.yaw_rate_gated, "the yaw rate moves only with accepted leg samples (true, tuned on) or is the gyro's every tick");

@@ -121,6 +121,9 @@ std::string VelocityFeedbackConfig::validate() const {
   for (std::size_t i = 0; i < 3; ++i)
     if (!(envelope_min[i] <= 0.0 && envelope_max[i] >= 0.0 && envelope_max[i] - envelope_min[i] > 0.0))
       return "envelope_min/envelope_max[" + std::to_string(i) + "]: expected min <= 0 <= max, min < max";
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(std::isfinite(max_velocity_headroom[i]) && max_velocity_headroom[i] >= 0.0 && max_velocity_headroom[i] <= 1.0))
+      return std::string("max_velocity_headroom[") + std::to_string(i) + "] (" + kAxis[i] + "): expected 0..1 [m/s, rad/s]";
   if (!(stance_band_m > 0.0 && stance_band_m <= 0.1)) return "stance_band_m: expected (0, 0.1] m";
   if (!(odometry_time_s >= 0.0 && odometry_time_s <= 2.0)) return "odometry_time_s: expected 0..2 s";
   if (!(gate_mps > 0.0 && gate_mps <= 5.0)) return "gate_mps: expected (0, 5] m/s";
@@ -372,8 +375,7 @@ VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::sh
     : config_(config), estimator_(std::move(legs), leg_idx, config) {
   if (const std::string e = config_.validate(); !e.empty()) throw ConfigError("velocity_feedback: " + e);
   for (std::size_t i = 0; i < 3; ++i) {
-    lo_[i] = std::max(config_.envelope_min[i], -max_velocity[i]);
-    hi_[i] = std::min(config_.envelope_max[i], max_velocity[i]);
+    max_velocity_[i] = max_velocity[i];
   }
 }
 
@@ -410,8 +412,13 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   const std::array<double, 3> u_user{u.vx, u.vy, u.wz};
   u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user, crouch_m_) : u_user;
   for (std::size_t i = 0; i < 3; ++i) {
+    // The limits: the envelope and ±max_velocity, which opens beyond max_velocity only as far as the
+    // command comes within max_velocity_headroom of it (continuous in u; unchanged below that).
+    const double ceiling = std::max(max_velocity_[i], std::fabs(u[i]) + config_.max_velocity_headroom[i]);
+    const double lo = std::max(config_.envelope_min[i], -ceiling);
+    const double hi = std::min(config_.envelope_max[i], ceiling);
     // The feed-forward stays inside the limits (a command already beyond them is passed on).
-    u_ff_[i] = std::clamp(u_ff_[i], std::min(lo_[i], u[i]), std::max(hi_[i], u[i]));
+    u_ff_[i] = std::clamp(u_ff_[i], std::min(lo, u[i]), std::max(hi, u[i]));
     const double bound = config_.max_ratio * std::fabs(u[i]);
     double c = c_[i] * keep;
     if (std::fabs(u[i] - u_anchor_[i]) > std::max(config_.steady_band, 0.05 * std::fabs(u_anchor_[i]))) {
@@ -424,7 +431,7 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     if (est_.valid && !hold && !decay && settled) c += config_.ki[i] * (u[i] - estimate(i)) * dt;
     c = std::clamp(c, -bound, bound);
     // Anti-windup: the correction never holds more than the limits let through.
-    const double limited = std::clamp(u_ff_[i] + c, std::min(lo_[i], u_ff_[i]), std::max(hi_[i], u_ff_[i]));
+    const double limited = std::clamp(u_ff_[i] + c, std::min(lo, u_ff_[i]), std::max(hi, u_ff_[i]));
     c_[i] = limited - u_ff_[i];
   }
   const VelocityCommand previous = u_fb_prev_;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include <vector>
@@ -312,6 +313,75 @@ TEST(VelocityFeedback, YawBeyondEnvelopesLetsTheTurnCorrectionPastTheCrouchedEnv
   ASSERT_EQ(a.vx.size(), b.vx.size());
   for (std::size_t k = 0; k < a.vx.size(); ++k) ASSERT_NEAR(a.vx[k], b.vx[k], 1e-9) << "tick " << k;
   EXPECT_LE(b.worst_all, 1.0 + 1e-9);
+}
+
+// Told the shaper's largest yaw rate, a plant that turns at 85 % of its command: without headroom the
+// corrected command stops at max_velocity and the plant stays short; with it the correction goes on to
+// what the plant needs, never beyond the envelope, and the other axes keep max_velocity.
+TEST(VelocityFeedback, HeadroomLetsTheTurnCorrectionPastMaxVelocityUpToTheEnvelope) {
+  Legs legs;
+  const std::array<double, 3> max_velocity{1.0, 0.4, 0.8};
+  VelocityFeedbackConfig c = enabledConfig();
+  c.envelope_min = {-0.65, -0.5, -1.0};
+  c.envelope_max = {1.0, 0.5, 1.0};
+  struct Run {
+    VelocityCommand u_fb;
+    std::array<double, 3> achieved;
+    double max_step;
+  };
+  const auto run = [&](const std::array<double, 3>& headroom, const VelocityCommand& u, double gain = 0.85) {
+    VelocityFeedbackConfig h = c;
+    h.max_velocity_headroom = headroom;
+    VelocityFeedback fb(h, legs.model, legs.idx, max_velocity);
+    Plant plant{{gain, gain, gain}};
+    BaseVelocityEstimate est;
+    Run r{u, {}, 0.0};
+    VelocityCommand prev = u;
+    for (int k = 0; k < 2000; ++k) {
+      const VelocityCommand& out = fb.correct(u, est, 0.01);
+      for (std::size_t i = 0; i < 3; ++i) r.max_step = std::max(r.max_step, std::fabs(out[i] - prev[i]));
+      prev = out;
+      est = plant.step(out, 0.01);
+    }
+    r.u_fb = fb.command();
+    r.achieved = plant.v;
+    return r;
+  };
+  const VelocityCommand turn{0.9, 0.0, 0.8};
+  const Run none = run({0.0, 0.0, 0.0}, turn);
+  const Run yaw = run({0.0, 0.0, 0.2}, turn);
+  EXPECT_NEAR(none.u_fb.wz, 0.8, 1e-12) << "without headroom: at max_velocity";
+  EXPECT_LT(none.achieved[2], 0.7);
+  EXPECT_GT(yaw.u_fb.wz, 0.9);
+  EXPECT_LE(yaw.u_fb.wz, 1.0 + 1e-12);
+  EXPECT_NEAR(yaw.achieved[2], 0.8, 0.01) << "the plant turns as commanded";
+  EXPECT_LT(yaw.max_step, 0.03) << "u_fb stays continuous";
+  // v_x has no headroom: both stop at its max_velocity, 1.0 (the plant needs 0.9 / 0.85 = 1.06).
+  EXPECT_NEAR(none.u_fb.vx, 1.0, 1e-12);
+  EXPECT_NEAR(yaw.u_fb.vx, 1.0, 1e-12);
+  // A headroom past the envelope: the envelope (the actor's training range) still bounds it.
+  VelocityCommand fast_turn{0.0, 0.0, 0.8};
+  Run wide = run({0.0, 0.0, 1.0}, fast_turn);
+  EXPECT_GT(wide.u_fb.wz, 0.9);
+  EXPECT_LE(wide.u_fb.wz, 1.0 + 1e-12);
+  // The limit opens only as the command nears it, |u_fb| <= max(0.8, |u| + 0.2): a plant that turns at half
+  // its command gets 0.8 for 0.6 rad/s with or without headroom, 0.9 for 0.7 (continuous in u).
+  EXPECT_NEAR(run({0.0, 0.0, 0.2}, {0.0, 0.0, 0.6}, 0.5).u_fb.wz, 0.8, 1e-9);
+  EXPECT_NEAR(run({0.0, 0.0, 0.0}, {0.0, 0.0, 0.6}, 0.5).u_fb.wz, 0.8, 1e-9);
+  EXPECT_NEAR(run({0.0, 0.0, 0.2}, {0.0, 0.0, 0.7}, 0.5).u_fb.wz, 0.9, 1e-9);
+  EXPECT_NEAR(run({0.0, 0.0, 0.2}, {0.0, 0.0, 0.8}, 0.5).u_fb.wz, 1.0, 1e-9);
+  // Right turns alike.
+  Run right = run({0.0, 0.0, 0.2}, {0.0, 0.0, -0.8});
+  EXPECT_NEAR(right.achieved[2], -0.8, 0.01);
+  EXPECT_GE(right.u_fb.wz, -1.0 - 1e-12);
+  // Validation names the field and the range.
+  VelocityFeedbackConfig bad = c;
+  bad.max_velocity_headroom = {0.0, 0.0, 1.5};
+  EXPECT_NE(bad.validate().find("max_velocity_headroom[2]"), std::string::npos) << bad.validate();
+  bad.max_velocity_headroom = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
+  EXPECT_NE(bad.validate().find("max_velocity_headroom[0]"), std::string::npos) << bad.validate();
+  bad.max_velocity_headroom = {0.0, -0.1, 0.0};
+  EXPECT_NE(bad.validate().find("max_velocity_headroom[1]"), std::string::npos) << bad.validate();
 }
 
 TEST(VelocityFeedback, IntegratesOnceTheCommandIsSteadyAndAStickJitterIsSteady) {

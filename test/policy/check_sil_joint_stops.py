@@ -3,7 +3,8 @@
 the default config runs the crouched probe (training/results/fidelity/crouched/probe_heights.yaml)
 for 76 s on seed 124, off: with --joint-stops off (the MJCF's soft stops, MuJoCo's default solref
 0.02 s), on: as shipped (0.004 s); both with the braking steps off and the yaw-rate correction within
-the crouched envelope (--braking off --yaw-beyond-envelopes off: the config as the stumble was found).
+the crouched envelope and max_velocity (--braking off --yaw-beyond-envelopes off --max-velocity-headroom off:
+the config as the stumble was found).
 The hidden effect: at 0.70 m, 1.2 s into the 1.0 m/s walk, the robot stumbles and a foot lands with
 the right ankle pitch moving at 7 rad/s towards its lower stop (-0.873 rad). The soft stop lets it
 through by more than the supervisor's 0.1 rad joint position margin; the supervisor latches damping

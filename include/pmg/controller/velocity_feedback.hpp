@@ -10,7 +10,7 @@
 /// velocity command then makes the achieved velocity meet the user's command u in steady state:
 ///
 ///   e_i = u_i − v̂_i,   c_i ← clamp(c_i + k_i e_i dt, −r |u_i|, r |u_i|)   (once u_i is steady),
-///   u_fb,i = clamp(u_ff,i + c_i, envelope_i ∩ ±max_velocity_i)         (i = v_x, v_y, ω)
+///   u_fb,i = clamp(u_ff,i + c_i, envelope_i ∩ ±max(max_velocity_i, |u_i| + headroom_i))   (i = v_x, v_y, ω)
 ///
 /// with u_ff = u, or with a feed-forward (CommandResponseModel) the command that an identified
 /// model of the robot's response says achieves u.
@@ -145,6 +145,15 @@ struct VelocityFeedbackConfig {
   /// beyond it (a command already beyond it is passed on uncorrected).
   std::array<double, 3> envelope_min{-0.5, -0.4, -0.8};
   std::array<double, 3> envelope_max{1.0, 0.4, 0.8};
+  /// Headroom h per axis (v_x, v_y [m/s], ω [rad/s]), each in [0, 1]: the corrected command may go
+  /// beyond the shaper's max_velocity m as far as the command comes near it, |u_fb,i| ≤
+  /// max(m_i, |u_i| + h_i): a command at the limit may be corrected up to m + h, one h or more below
+  /// it exactly as without headroom (continuous in u). Still inside envelope_min/max; the user's own
+  /// command stays clamped to m. 0 (the default): u_fb stays inside ±m. Why: told the shaper's largest
+  /// yaw rate, 0.8 rad/s, the default actor turns 0.63–0.72, and a correction that may not leave ±0.8
+  /// cannot close that (docs/controller.md "Headroom beyond the command limit"). The controller
+  /// requires m + h inside generator.max_command and GCO's limits.
+  std::array<double, 3> max_velocity_headroom{0.0, 0.0, 0.0};
   /// Feet whose sole is within this height of the lowest sole (in H) count as in stance [m], (0, 0.1].
   double stance_band_m = 0.02;
   /// Time constant with which leg odometry corrects the IMU-propagated estimate [s], [0, 2].
@@ -376,7 +385,7 @@ class UpsetGuard {
 class VelocityFeedback {
  public:
   /// @param max_velocity |v_x|, |v_y| [m/s], |ω| [rad/s]: the shaper's limits (u_fb stays inside
-  /// them and inside config.envelope_min/max).
+  /// them, widened near them by config.max_velocity_headroom, and inside config.envelope_min/max).
   /// Setup: allocates; throws ConfigError on an invalid config.
   VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
                    const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity);
@@ -433,7 +442,7 @@ class VelocityFeedback {
   double estimate(std::size_t i) const noexcept { return i == 0 ? est_.v_x : (i == 1 ? est_.v_y : est_.yaw_rate); }
   VelocityFeedbackConfig config_;
   BaseVelocityEstimator estimator_;
-  std::array<double, 3> lo_, hi_;
+  std::array<double, 3> max_velocity_;  ///< the shaper's limits [m/s, m/s, rad/s]
   std::array<double, 3> c_{};
   std::array<double, 3> u_ff_{};
   std::array<double, 3> u_anchor_{}, steady_{};
