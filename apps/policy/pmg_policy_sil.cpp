@@ -829,6 +829,8 @@ int main(int argc, char** argv) {
     }
 
     std::ofstream js(out + "/summary.json");
+    const std::array<double, 3> headroom =
+        base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom : std::array<double, 3>{0.0, 0.0, 0.0};
     double acc[6] = {0, 0, 0, 0, 0, 0};
     int falls = 0;
     js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
@@ -842,9 +844,7 @@ int main(int argc, char** argv) {
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
-       << ", \"max_velocity_headroom\": [" << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[0] : 0.0)
-       << ", " << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[1] : 0.0) << ", "
-       << (base.velocity_feedback.enabled ? base.velocity_feedback.max_velocity_headroom[2] : 0.0) << "]"
+       << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
        << ", \"standing_height\": " << standing_height << ", \"walking_min_height\": " << base.commands.walking_min_height

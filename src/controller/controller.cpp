@@ -60,19 +60,18 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   // The velocity feedback's reach beyond max_velocity (max_velocity_headroom) must fit both as well.
   if (config_.velocity_feedback.enabled) {
     const VelocityFeedbackConfig& F = config_.velocity_feedback;
-    static const char* kReach[3] = {"max_velocity[0] + velocity_feedback.max_velocity_headroom[0]",
-                                    "max_velocity[1] + velocity_feedback.max_velocity_headroom[1]",
-                                    "max_velocity[2] + velocity_feedback.max_velocity_headroom[2]"};
     const double glo[3] = {G.v_x_min, G.v_y_min, G.yaw_rate_min}, ghi[3] = {G.v_x_max, G.v_y_max, G.yaw_rate_max};
     for (std::size_t i = 0; i < 3; ++i) {
+      const std::string axis = "[" + std::to_string(i) + "]";
       const double m = L.max_velocity[i] + F.max_velocity_headroom[i];
       const double lo = std::max(F.envelope_min[i], -m), hi = std::min(F.envelope_max[i], m);
-      if (std::max(-lo, hi) > gmax[i] + 1e-12)
-        throw ConfigError(config_.source_file + ": velocity_feedback.max_velocity_headroom[" + std::to_string(i) +
-                          "]: the corrected command may reach " + std::to_string(std::max(-lo, hi)) +
-                          ", beyond generator.max_command[" + std::to_string(i) + "] = " + std::to_string(gmax[i]) +
+      const double reach = std::max(-lo, hi);
+      if (reach > gmax[i] + 1e-12)
+        throw ConfigError(config_.source_file + ": velocity_feedback.max_velocity_headroom" + axis +
+                          ": the corrected command may reach " + std::to_string(reach) + ", beyond generator.max_command" +
+                          axis + " = " + std::to_string(gmax[i]) +
                           ": expected max_velocity + headroom (within envelope_min/max) <= it");
-      inside(kReach[i], lo, hi, glo[i], ghi[i]);
+      inside(("max_velocity" + axis + " + velocity_feedback.max_velocity_headroom" + axis).c_str(), lo, hi, glo[i], ghi[i]);
     }
   }
   dt_ = 1.0 / config_.loop_rate_hz;

@@ -372,11 +372,8 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
 
 VelocityFeedback::VelocityFeedback(const VelocityFeedbackConfig& config, std::shared_ptr<const gco::LegModel> legs,
                                    const gco::LegJointIndex& leg_idx, const std::array<double, 3>& max_velocity)
-    : config_(config), estimator_(std::move(legs), leg_idx, config) {
+    : config_(config), estimator_(std::move(legs), leg_idx, config), max_velocity_(max_velocity) {
   if (const std::string e = config_.validate(); !e.empty()) throw ConfigError("velocity_feedback: " + e);
-  for (std::size_t i = 0; i < 3; ++i) {
-    max_velocity_[i] = max_velocity[i];
-  }
 }
 
 void VelocityFeedback::reset() noexcept {

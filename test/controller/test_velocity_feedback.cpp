@@ -360,8 +360,7 @@ TEST(VelocityFeedback, HeadroomLetsTheTurnCorrectionPastMaxVelocityUpToTheEnvelo
   EXPECT_NEAR(none.u_fb.vx, 1.0, 1e-12);
   EXPECT_NEAR(yaw.u_fb.vx, 1.0, 1e-12);
   // A headroom past the envelope: the envelope (the actor's training range) still bounds it.
-  VelocityCommand fast_turn{0.0, 0.0, 0.8};
-  Run wide = run({0.0, 0.0, 1.0}, fast_turn);
+  const Run wide = run({0.0, 0.0, 1.0}, {0.0, 0.0, 0.8});
   EXPECT_GT(wide.u_fb.wz, 0.9);
   EXPECT_LE(wide.u_fb.wz, 1.0 + 1e-12);
   // The limit opens only as the command nears it, |u_fb| <= max(0.8, |u| + 0.2): a plant that turns at half
@@ -371,7 +370,7 @@ TEST(VelocityFeedback, HeadroomLetsTheTurnCorrectionPastMaxVelocityUpToTheEnvelo
   EXPECT_NEAR(run({0.0, 0.0, 0.2}, {0.0, 0.0, 0.7}, 0.5).u_fb.wz, 0.9, 1e-9);
   EXPECT_NEAR(run({0.0, 0.0, 0.2}, {0.0, 0.0, 0.8}, 0.5).u_fb.wz, 1.0, 1e-9);
   // Right turns alike.
-  Run right = run({0.0, 0.0, 0.2}, {0.0, 0.0, -0.8});
+  const Run right = run({0.0, 0.0, 0.2}, {0.0, 0.0, -0.8});
   EXPECT_NEAR(right.achieved[2], -0.8, 0.01);
   EXPECT_GE(right.u_fb.wz, -1.0 - 1e-12);
   // Validation names the field and the range.
