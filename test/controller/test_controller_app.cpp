@@ -244,7 +244,8 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
 // also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:
 // upright walking and levelled stance soles, with the actor fine-tuned on them), and
 // g1_sil_policy_walking_height.yaml (the raised walking templates and their actor), and
-// g1_sil_policy_v20b.yaml (V20b, trained from scratch, at the HAL's default slew): the actor keeps the
+// g1_sil_policy_v20b.yaml (V20b, trained from scratch, at the HAL's default slew), and
+// g1_sil_policy_n24b.yaml (N24b, trained from scratch in 17.7 min, at the same slew): the actor keeps the
 // G1 upright and walks it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
@@ -284,10 +285,13 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 // recipe break into a faster backward gait there and run on through the stop (training/README.md
 // "V20b's recipe over three seeds"): with g1_sil_policy_v20b.yaml this test measures -0.92 m/s and
 // 0.69 m/s, with V20e's config -1.19 and 2.19, and fails, so a default actor that runs away crouched
-// cannot ship unnoticed. Velocities are the pelvis's, world frame (the robot starts facing +x; the
-// heading drifts a few degrees at most).
-TEST(ControllerApp, DefaultWalksBackwardCrouchedAtItsCommandAndStops) {
-  ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+// cannot ship unnoticed. g1_sil_policy_n24b.yaml (N24b, trained from scratch at half the exploration
+// noise, with its feed-forward per crouch) is held to the same. Velocities are the pelvis's, world frame
+// (the robot starts facing +x; the heading drifts a few degrees at most).
+class CrouchedBackwardTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CrouchedBackwardTest, WalksBackwardCrouchedAtItsCommandAndStops) {
+  ControllerConfig config = silConfig(test::sourcePath(std::string("config/controller/") + GetParam()));
   ControllerApp app(config);
   CommandSample sample;
   sample.command.height = 0.74;
@@ -304,14 +308,17 @@ TEST(ControllerApp, DefaultWalksBackwardCrouchedAtItsCommandAndStops) {
     if (now >= 9.0) stop_speed = std::max(stop_speed, std::hypot(st.base_linear_velocity[0], st.base_linear_velocity[1]));
   }
   walk_vx /= walk_n;
-  std::printf("[ SIL ] crouched 0.74 m, backward 0.5 m/s: %.3f m/s; largest speed 2-3 s after the stop %.3f m/s\n",
-              walk_vx, stop_speed);
+  std::printf("[ SIL ] %s: crouched 0.74 m, backward 0.5 m/s: %.3f m/s; largest speed 2-3 s after the stop %.3f m/s\n",
+              GetParam(), walk_vx, stop_speed);
   EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
   EXPECT_GT(min_height, 0.5) << "the robot fell";
   EXPECT_LT(walk_vx, -0.35) << "walked backward at its command, not short of it";
   EXPECT_GT(walk_vx, -0.7) << "a runaway: beyond the command by 0.2 m/s";
   EXPECT_LT(stop_speed, 0.2) << "stopped";
 }
+
+INSTANTIATE_TEST_SUITE_P(ControllerApp, CrouchedBackwardTest,
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml"));
 
 // The controller refuses to start an actor on clips other than those it was trained on
 // (pmg.clips_digest, docs/policy.md "The contract"): wh6hs, trained on the raised walking
@@ -363,7 +370,7 @@ TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
                                                            "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml",
-                                                           "g1_sil_policy_v20b.yaml"));
+                                                           "g1_sil_policy_v20b.yaml", "g1_sil_policy_n24b.yaml"));
 
 }  // namespace
 }  // namespace pmg
