@@ -287,7 +287,8 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 // 0.69 m/s, with V20e's config -1.19 and 2.19, and fails, so a default actor that runs away crouched
 // cannot ship unnoticed. g1_sil_policy_n24b.yaml (N24b, trained from scratch at half the exploration
 // noise, with its feed-forward per crouch) is held to the same: here -0.452 and 0.010; with the
-// feed-forward fitted upright only, its battery walked -0.71 at 0.74 m and fell in one of two stops
+// feed-forward fitted upright only, its battery walked -0.71 at 0.74 m and one of two seeds fell in the
+// stop after the 0.70 m walk
 // (training/README.md "Half the exploration noise"). Velocities are the pelvis's, world frame
 // (the robot starts facing +x; the heading drifts a few degrees at most).
 class CrouchedBackwardTest : public ::testing::TestWithParam<const char*> {};
