@@ -614,7 +614,7 @@ int main(int argc, char** argv) {
             const pmg::PostureCommand& ps = pf ? pf->command() : controller.commands().posture();
             fb[3] = ps.pitch;
             fb[4] = ps.roll;
-            if (pf && base.posture_feedback.height_ki > 0.0) {
+            if (pf && (base.posture_feedback.height_ki > 0.0 || base.posture_feedback.walking_height_ki > 0.0)) {
               fb[5] = ps.height;
               est[5] = pf->measuredHeight();
             }

@@ -86,7 +86,8 @@ Controller::Controller(const ControllerConfig& config, std::unique_ptr<gco::Gene
   if (config_.posture_feedback.enabled)
     posture_feedback_ =
         std::make_unique<PostureFeedback>(config_.posture_feedback, robot, L.pitch_range, L.roll_range, L.height_range,
-                                          L.standing_height, pmg_->gco().legModel(), pmg_->legJointIndex());
+                                          L.standing_height, pmg_->gco().legModel(), pmg_->legJointIndex(),
+                                          L.walking_min_height);
   if (config_.upper_body.enabled) {
     // The actor's joints (the legs, and the waist if it commands it) are refused.
     std::vector<std::string> actor = policy::makePolicyRobotSpec(robot, dt_).leg_joints;

@@ -258,6 +258,8 @@ struct PostureFeedbackYaml {
     a->Visit("height_ki", &f.height_ki, "integral gain on the pelvis height, 0..20 [1/s] (0: the height is not corrected)");
     a->Visit("max_height_correction_m", &f.max_height_correction_m, "largest height correction, 0..0.1 m");
     a->Visit("height_settle_s", &f.height_settle_s, "the height integrates once its command is steady this long, 0..5 s");
+    a->Visit("walking_height_ki", &f.walking_height_ki, "integral gain on the pelvis height while walking, 0..5 [1/s] (0: decays while walking)");
+    a->Visit("walking_max_height_correction_m", &f.walking_max_height_correction_m, "largest height correction while walking, 0..0.1 m (never below commands.walking_min_height)");
   }
 };
 

@@ -502,6 +502,10 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(max_height_correction_m >= 0.0 && max_height_correction_m <= 0.1))
     return "max_height_correction_m: expected 0..0.1 m";
   if (!(height_settle_s >= 0.0 && height_settle_s <= 5.0)) return "height_settle_s: expected 0..5 s";
+  if (!(std::isfinite(walking_height_ki) && walking_height_ki >= 0.0 && walking_height_ki <= 5.0))
+    return "walking_height_ki: expected 0..5 [1/s]";
+  if (!(walking_max_height_correction_m >= 0.0 && walking_max_height_correction_m <= 0.1))
+    return "walking_max_height_correction_m: expected 0..0.1 m";
   return {};
 }
 
@@ -515,7 +519,8 @@ LimbChain torsoChain(const PostureFeedbackConfig& config, const RobotConfig& rob
 PostureFeedback::PostureFeedback(const PostureFeedbackConfig& config, const RobotConfig& robot,
                                  const std::array<double, 2>& pitch_range, const std::array<double, 2>& roll_range,
                                  const std::array<double, 2>& height_range, double standing_height,
-                                 std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx)
+                                 std::shared_ptr<const gco::LegModel> legs, const gco::LegJointIndex& leg_idx,
+                                 double walking_min_height)
     : config_(config),
       torso_(torsoChain(config, robot)),
       fk_(torso_),
@@ -524,11 +529,14 @@ PostureFeedback::PostureFeedback(const PostureFeedbackConfig& config, const Robo
       roll_range_(roll_range),
       height_range_(height_range),
       standing_height_(standing_height),
+      walking_min_height_(walking_min_height),
       leg_idx_(leg_idx) {
-  if (config_.height_ki > 0.0) {
-    if (!legs) throw ConfigError("posture_feedback.height_ki: the height feedback needs the robot's leg chains");
+  if (config_.height_ki > 0.0 || config_.walking_height_ki > 0.0) {
+    const char* key = config_.height_ki > 0.0 ? "height_ki" : "walking_height_ki";
+    if (!legs)
+      throw ConfigError(std::string("posture_feedback.") + key + ": the height feedback needs the robot's leg chains");
     if (!(height_range_[0] > 0.0 && height_range_[0] <= height_range_[1] && standing_height_ >= height_range_[0]))
-      throw ConfigError("posture_feedback.height_ki: the height feedback needs a height range containing the standing "
+      throw ConfigError(std::string("posture_feedback.") + key + ": the height feedback needs a height range containing the standing "
                         "height (got [" + std::to_string(height_range_[0]) + ", " + std::to_string(height_range_[1]) +
                         "] m, standing " + std::to_string(standing_height_) + " m)");
     legs_ = std::make_unique<gco::LegKinematics>(std::move(legs));
@@ -550,6 +558,7 @@ void PostureFeedback::reset() noexcept {
   p_steady_s_ = {0.0, 0.0};
   have_ = false;
   c_h_ = h_hat_ = 0.0;
+  c_hw_ = c_h_applied_ = h_walking_s_ = 0.0;
   have_h_ = false;
   h_settled_ = h_steady_s_ = 0.0;
 }
@@ -690,9 +699,33 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     double c = c_h_ * keep;
     if (have_h_ && h_ok && !decay && steady && u.height > 0.0) c += config_.height_ki * (u.height - h_hat_) * dt;
     c = std::clamp(c, -config_.max_height_correction_m, config_.max_height_correction_m);
+    // Walking: the second integrator, on the same low-pass (the integrator averages the gait's bob),
+    // once the robot has walked walking_settle_s at a steady height command; it decays when told
+    // to stand or tilted.
+    const bool walking_h = !still && !tilted && config_.walking_height_ki > 0.0;
+    h_walking_s_ = walking_h ? h_walking_s_ + dt : 0.0;
+    double cw = walking_h ? c_hw_ : c_hw_ * decay_keep;
+    if (walking_h && have_h_ && h_ok && steady && h_walking_s_ >= config_.walking_settle_s && u.height > 0.0)
+      cw += config_.walking_height_ki * (u.height - h_hat_) * dt;
+    cw = std::clamp(cw, -config_.walking_max_height_correction_m, config_.walking_max_height_correction_m);
     const double upper = std::max(u.height, std::min(height_range_[1], standing_height_));
-    c_h_ = u.height > 0.0 ? std::clamp(u.height + c, height_range_[0], upper) - u.height : 0.0;
-    u_fb_.height = u.height + c_h_;
+    // The walking correction never lowers the command below the walking floor (a command already
+    // below it, as the floor's hold ends, is passed on, not lowered further).
+    double lower = height_range_[0];
+    if (walking_min_height_ > 0.0 && (walking_h || cw != 0.0)) lower = std::max(lower, std::min(u.height, walking_min_height_));
+    const double want = u.height + c + cw;
+    const double got = std::clamp(want, lower, upper);
+    const bool bound = u.height > 0.0 && got != want;
+    c_h_applied_ = u.height > 0.0 ? (bound ? got - u.height : c + cw) : 0.0;
+    // Anti-windup: what the bounds cut comes off the integrator that is acting.
+    const double cut = bound ? c + cw - c_h_applied_ : 0.0;
+    // Decaying, what is cut comes off the walking correction first (as far as it reduces it).
+    const double from_walk = walking_h ? cut : (cut * cw > 0.0 ? std::copysign(std::min(std::fabs(cut), std::fabs(cw)), cw) : 0.0);
+    cw -= from_walk;
+    c -= cut - from_walk;
+    c_h_ = u.height > 0.0 ? c : 0.0;
+    c_hw_ = u.height > 0.0 ? cw : 0.0;
+    u_fb_.height = u.height + c_h_applied_;
   }
   return u_fb_;
 }

@@ -1602,6 +1602,103 @@ TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyon
   EXPECT_LT(fb.heightCorrection(), 0.0);
 }
 
+TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtTheStop) {
+  HeightFixture hf;
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.height_ki = 1.0;
+  c.max_height_correction_m = 0.005;
+  c.walking_height_ki = 1.0;
+  c.walking_max_height_correction_m = 0.04;
+  c.walking_settle_s = 1.0;
+  gco::LegKinematics kin(hf.legs);
+  Eigen::Isometry3d X_BS;
+  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
+  const double standing = -X_BS.translation().z() - 0.01;
+  const double floor = standing - 0.12;  // the shaper's walking floor
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {standing - 0.16, 0.85}, standing, hf.legs, hf.idx,
+                     floor);
+  auto angleFor = [&](double h) {
+    double lo = 0.0, hi = 1.2;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      double hm = 0.0;
+      fb.pelvisHeight(crouchState(mid), &hm);
+      (hm > h ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  };
+  // A robot that walks 75 % as deep as it is told (N24b walked −0.5 m/s at 0.70 m at 0.729), with
+  // a 2 cm bob at 2 Hz on top (the gait), and stands where it is told.
+  double a = 0.0, t = 0.0, max_step = 0.0;
+  auto run = [&](double u_h, const VelocityCommand& v, int ticks) {
+    for (int k = 0; k < ticks; ++k) {
+      const double before = fb.command().height;
+      const PostureCommand& out = fb.update({0.0, 0.0, u_h}, v, crouchState(a), 0.01);
+      if (k > 0) max_step = std::max(max_step, std::fabs(out.height - before));
+      const bool walking = v.vx != 0.0 || v.vy != 0.0 || v.wz != 0.0;
+      const double depth = (walking ? 0.75 : 1.0) * (standing - out.height);
+      const double bob = walking ? 0.01 * std::sin(2.0 * M_PI * 2.0 * t) : 0.0;
+      a += 0.01 / 0.3 * (angleFor(standing - depth + bob) - a);
+      t += 0.01;
+    }
+  };
+  const VelocityCommand walk{-0.4, 0.0, 0.0};
+  const double u1 = standing - 0.08;
+  run(u1, {}, 300);  // crouched, standing: reaches it
+  // Walking: nothing integrates while the walk is new (walking_settle_s).
+  run(u1, walk, 90);
+  EXPECT_EQ(fb.walkingHeightCorrection(), 0.0);
+  run(u1, walk, 2500);
+  EXPECT_NEAR(fb.measuredHeight(), u1, 0.006) << "the walk reaches the commanded height (within its bob)";
+  EXPECT_NEAR(fb.walkingHeightCorrection(), -0.08 * 0.25 / 0.75, 0.004);
+  EXPECT_NEAR(fb.command().height, u1 + fb.heightCorrection(), 1e-12);
+  // Walking 1 cm above the floor: the correction stops at the floor, and the integrator does not wind up.
+  const double u2 = floor + 0.01;
+  run(u2, walk, 2500);
+  EXPECT_NEAR(fb.command().height, floor, 1e-9);
+  EXPECT_NEAR(fb.walkingHeightCorrection(), -0.01, 1e-9);
+  // The stop: the walking correction decays (decay_time_s), continuously, never below the floor.
+  max_step = 0.0;
+  run(u2, {}, 10);
+  EXPECT_GE(fb.command().height, floor - 1e-12);
+  run(u2, {}, 290);
+  EXPECT_LT(std::fabs(fb.walkingHeightCorrection()), 1e-3);
+  EXPECT_LT(max_step, 0.01 * 0.04 / c.decay_time_s + 1e-6) << "no step in the height command at the stop";
+  // Tilted beyond max_tilt_rad while walking: the walking correction decays instead of integrating.
+  run(u1, walk, 1500);
+  const double before_tilt = fb.walkingHeightCorrection();
+  ASSERT_LT(before_tilt, -0.01);
+  LowState tilted = uprightState(0.8, 0.0);
+  for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, u1}, walk, tilted, 0.01);
+  EXPECT_LT(std::fabs(fb.walkingHeightCorrection()), 0.1 * std::fabs(before_tilt));
+  // Per tick walking: no allocation.
+  std::size_t n = 0;
+  const LowState crouched = crouchState(0.3);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 200; ++k) fb.update({0.0, 0.0, u1}, walk, crouched, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  // Off (walking_height_ki 0, the default): walking leaves the height command alone.
+  PostureFeedbackConfig off = c;
+  off.walking_height_ki = 0.0;
+  PostureFeedback fb_off(off, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {standing - 0.16, 0.85}, standing, hf.legs,
+                         hf.idx, floor);
+  for (int k = 0; k < 500; ++k) fb_off.update({0.0, 0.0, u1}, walk, crouchState(0.2), 0.01);
+  EXPECT_EQ(fb_off.command().height, u1);
+  // On without leg chains: a setup error naming the key.
+  PostureFeedbackConfig walk_only = c;
+  walk_only.height_ki = 0.0;
+  try {
+    PostureFeedback bad(walk_only, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {0.45, 0.85}, 0.78);
+    ADD_FAILURE() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("walking_height_ki"), std::string::npos) << e.what();
+  }
+}
+
 // Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.
 
 
