@@ -323,6 +323,43 @@ TEST_P(CrouchedBackwardTest, WalksBackwardCrouchedAtItsCommandAndStops) {
 INSTANTIATE_TEST_SUITE_P(ControllerApp, CrouchedBackwardTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml"));
 
+// The walking height feedback through the product path (docs/controller.md "Walking height
+// correction"): N24b walks crouched backward 2-3 cm above its command; with its config's
+// walking_height_ki the pelvis comes to within issue 12's 0.015 m, and with the same config but the
+// walking integrator off it does not. The stop after it is calm and nothing faults.
+TEST(ControllerApp, WalkingHeightFeedbackBringsACrouchedBackwardWalkToItsHeight) {
+  const auto walk = [](double walking_height_ki) {
+    ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy_n24b.yaml"));
+    config.posture_feedback.walking_height_ki = walking_height_ki;
+    ControllerApp app(config);
+    CommandSample sample;
+    sample.command.height = 0.70;
+    double height = 0.0, stop_speed = 0.0, min_height = 10.0;
+    int n = 0;
+    for (int k = 0; k < 1300; ++k) {  // 0-3 s crouch, 3-10 s backward 0.4 m/s, 10-13 s stop
+      const double now = k * 0.01;
+      sample.velocity_time = sample.posture_time = now;
+      sample.command.vx = now >= 3.0 && now < 10.0 ? -0.4 : 0.0;
+      app.stepLockstep(sample);
+      const auto& st = app.controller().lastState();
+      min_height = std::min(min_height, st.base_position[2]);
+      if (now >= 6.0 && now < 10.0) height += st.base_position[2], ++n;
+      if (now >= 12.0) stop_speed = std::max(stop_speed, std::hypot(st.base_linear_velocity[0], st.base_linear_velocity[1]));
+    }
+    EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+    EXPECT_GT(min_height, 0.5) << "the robot fell";
+    EXPECT_LT(stop_speed, 0.2) << "stopped";
+    return height / n;
+  };
+  const double config_ki = silConfig(test::sourcePath("config/controller/g1_sil_policy_n24b.yaml")).posture_feedback.walking_height_ki;
+  ASSERT_GT(config_ki, 0.0) << "N24b's config feeds the walking height back";
+  const double on = walk(config_ki), off = walk(0.0);
+  std::printf("[ SIL ] N24b, backward 0.4 m/s crouched to 0.70 m: pelvis at %.3f m with the walking height feedback, %.3f without\n",
+              on, off);
+  EXPECT_NEAR(on, 0.70, 0.015);
+  EXPECT_GT(off, 0.715) << "without it the actor walks high (the effect this feedback exists for)";
+}
+
 // The controller refuses to start an actor on clips other than those it was trained on
 // (pmg.clips_digest, docs/policy.md "The contract"): wh6hs, trained on the raised walking
 // templates, on the captured ones; its own config starts (PolicyConfigTest).
