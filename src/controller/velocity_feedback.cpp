@@ -713,18 +713,27 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     // below it, as the floor's hold ends, is passed on, not lowered further).
     double lower = height_range_[0];
     if (walking_min_height_ > 0.0 && (walking_h || cw != 0.0)) lower = std::max(lower, std::min(u.height, walking_min_height_));
-    const double want = u.height + c + cw;
-    const double got = std::clamp(want, lower, upper);
-    const bool bound = u.height > 0.0 && got != want;
-    c_h_applied_ = u.height > 0.0 ? (bound ? got - u.height : c + cw) : 0.0;
-    // Anti-windup: what the bounds cut comes off the integrator that is acting.
-    const double cut = bound ? c + cw - c_h_applied_ : 0.0;
-    // Decaying, what is cut comes off the walking correction first (as far as it reduces it).
-    const double from_walk = walking_h ? cut : (cut * cw > 0.0 ? std::copysign(std::min(std::fabs(cut), std::fabs(cw)), cw) : 0.0);
-    cw -= from_walk;
-    c -= cut - from_walk;
-    c_h_ = u.height > 0.0 ? c : 0.0;
-    c_hw_ = u.height > 0.0 ? cw : 0.0;
+    if (config_.walking_height_ki == 0.0) {
+      // The standing integrator alone, computed as before the walking one existed (the seed-replay
+      // SIL tests pin its trajectories to the last bit).
+      c_h_ = u.height > 0.0 ? std::clamp(u.height + c, height_range_[0], upper) - u.height : 0.0;
+      c_hw_ = 0.0;
+      c_h_applied_ = c_h_;
+    } else {
+      const double want = u.height + c + cw;
+      const double got = std::clamp(want, lower, upper);
+      const bool bound = u.height > 0.0 && got != want;
+      c_h_applied_ = u.height > 0.0 ? (bound ? got - u.height : c + cw) : 0.0;
+      // Anti-windup: what the bounds cut comes off the integrator that is acting.
+      const double cut = bound ? c + cw - c_h_applied_ : 0.0;
+      // Decaying, what is cut comes off the walking correction first (as far as it reduces it).
+      const double from_walk =
+          walking_h ? cut : (cut * cw > 0.0 ? std::copysign(std::min(std::fabs(cut), std::fabs(cw)), cw) : 0.0);
+      cw -= from_walk;
+      c -= cut - from_walk;
+      c_h_ = u.height > 0.0 ? c : 0.0;
+      c_hw_ = u.height > 0.0 ? cw : 0.0;
+    }
     u_fb_.height = u.height + c_h_applied_;
   }
   return u_fb_;

@@ -1502,6 +1502,18 @@ struct HeightFixture {
   gco::LegJointIndex idx = legs->jointIndices(robotJointNames());
 };
 
+// The crouchState angle that puts the pelvis at height @p h [m] (bisection on fb's own measure).
+double crouchAngleFor(PostureFeedback& fb, double h) {
+  double lo = 0.0, hi = 1.2;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    double hm = 0.0;
+    fb.pelvisHeight(crouchState(mid), &hm);
+    (hm > h ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 TEST(PostureFeedback, HeightIsThePelvisAboveTheLowerSoleInTheWorld) {
   HeightFixture hf;
   PostureFeedbackConfig c;
@@ -1548,17 +1560,7 @@ TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyon
   const double h0 = -X_BS.translation().z();  // straight legs
   const double standing = h0 - 0.01;
   PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {0.45, 0.85}, standing, hf.legs, hf.idx);
-  // Crouch angle that puts the pelvis at height h (bisection on the same measure).
-  auto angleFor = [&](double h) {
-    double lo = 0.0, hi = 1.2;
-    for (int i = 0; i < 60; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      double hm = 0.0;
-      fb.pelvisHeight(crouchState(mid), &hm);
-      (hm > h ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-  };
+  auto angleFor = [&](double h) { return crouchAngleFor(fb, h); };
   // A robot that crouches 85 % as deep as it is told (the actor stopped 1.6 cm short of 0.62 m).
   double a = 0.0;
   auto run = [&](double u_h, const VelocityCommand& v, int ticks) {
@@ -1618,16 +1620,7 @@ TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtT
   const double floor = standing - 0.12;  // the shaper's walking floor
   PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {standing - 0.16, 0.85}, standing, hf.legs, hf.idx,
                      floor);
-  auto angleFor = [&](double h) {
-    double lo = 0.0, hi = 1.2;
-    for (int i = 0; i < 60; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      double hm = 0.0;
-      fb.pelvisHeight(crouchState(mid), &hm);
-      (hm > h ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-  };
+  auto angleFor = [&](double h) { return crouchAngleFor(fb, h); };
   // A robot that walks 75 % as deep as it is told (N24b walked −0.5 m/s at 0.70 m at 0.729), with
   // a 2 cm bob at 2 Hz on top (the gait), and stands where it is told.
   double a = 0.0, t = 0.0, max_step = 0.0;
