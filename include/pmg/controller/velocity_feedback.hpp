@@ -541,7 +541,8 @@ struct PostureFeedbackConfig {
   /// the same low-pass ĥ (filter_time_s; the integrator averages the pelvis' bob over a step: a
   /// 1 s walking low-pass, as for pitch and roll, left too little of a 4 s walk to close the loop),
   /// integrating once the height command has been steady for height_settle_s and the robot has
-  /// walked for walking_settle_s; it decays (decay_time_s) when the robot is told to stand or tilts.
+  /// walked for walking_settle_s; it decays (decay_time_s) when the robot is told to stand, tilts
+  /// beyond max_tilt_rad or is upset (the upset guard's upright hold).
   /// The walking command is never lowered below the walking floor (the shaper's
   /// commands.walking_min_height, passed to the constructor): u_fb,h ≥ min(u_h, floor). Why: actors
   /// trained from scratch walk crouched 0.02-0.05 m above the command (N24b: −0.5 m/s at 0.70 m
@@ -579,7 +580,7 @@ class PostureFeedback {
   /// @param pitch_range, roll_range the shaper's posture limits [rad]; @param height_range the
   /// shaper's height limits [m] and @param standing_height its standing height [m]; @param legs,
   /// leg_idx the robot's leg chains and their columns in LowState::motors (needed only with
-  /// height_ki > 0). Setup: allocates; throws ConfigError on an invalid config, a robot without a
+  /// height_ki or walking_height_ki > 0). Setup: allocates; throws ConfigError on an invalid config, a robot without a
   /// torso_link chain, or height_ki or walking_height_ki > 0 without leg chains.
   /// @param walking_min_height the shaper's walking height floor [m] (commands.walking_min_height; 0:
   /// none): the walking height correction never lowers the command below it.
@@ -607,7 +608,7 @@ class PostureFeedback {
   /// Torso pitch and roll of @p state (IMU orientation, waist encoders) [rad]; false on bad input.
   bool torsoAttitude(const LowState& state, double* pitch, double* roll, double* pelvis_tilt) noexcept;
   /// Pelvis height above the lower sole [m] of @p state (IMU orientation, leg encoders); false on
-  /// bad input or when the height is not fed back (height_ki = 0).
+  /// bad input or when the height is not fed back (height_ki and walking_height_ki 0).
   bool pelvisHeight(const LowState& state, double* height) noexcept;
   /// Height correction applied [m] (the bounded sum of c_h and c_hw) and the low-passed measured
   /// height ĥ [m] of the last update (0 when off).
