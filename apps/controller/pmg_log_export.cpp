@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
     std::ofstream csv(csv_path);
     if (!csv) throw std::runtime_error(csv_path + ": cannot write");
     csv << "t,mode,phase,vx,vy,wz,pitch,roll,height,opt_vx,opt_vy,opt_wz,opt_pitch,opt_roll,opt_height,"
-           "fb_vx,fb_vy,fb_wz,est_vx,est_vy,est_wz,gco_status,"
+           "fb_vx,fb_vy,fb_wz,est_vx,est_vy,est_wz,fb_pitch,fb_roll,fb_height,gco_status,"
            "contact_l,contact_r,base_x,base_y,base_z,fault";
     for (const auto& prefix : {"q_", "q_ref_", "tau_"})
       for (const auto& j : robot.joints) csv << ',' << prefix << j.name;
@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
       for (double c : m.command_opt) csv << ',' << c;
       for (double c : m.command_feedback) csv << ',' << c;
       for (double c : m.velocity_estimate) csv << ',' << c;
+      for (double c : m.posture_feedback) csv << ',' << c;
       csv << ',' << m.gco_status;
       csv << ',' << int(m.in_contact[0]) << ',' << int(m.in_contact[1]);
       for (double p : m.base_position) csv << ',' << p;

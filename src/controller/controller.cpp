@@ -277,6 +277,8 @@ void Controller::publish(double now, const TickStatus& status, double wall_start
     const double nan = std::numeric_limits<double>::quiet_NaN();
     f.velocity_estimate = {nan, nan, nan};
   }
+  const PostureCommand& p_fb = posture_feedback_ && active ? posture_feedback_->command() : shaper_.posture();
+  f.posture_feedback = {p_fb.pitch, p_fb.roll, p_fb.height};
   const gco::GcoResult& g = pmg_->gcoResult();
   f.command_opt = {g.u_opt.v_x, g.u_opt.v_y, g.u_opt.yaw_rate, g.u_opt.pitch, g.u_opt.roll, g.u_opt.height};
   f.gco_status = status.gco;

@@ -95,6 +95,7 @@ void TelemetryPublisher::drain() {
       msg.base_position[i] = f.base_position[i];
       msg.command_feedback[i] = f.command_feedback[i];
       msg.velocity_estimate[i] = f.velocity_estimate[i];
+      msg.posture_feedback[i] = f.posture_feedback[i];
       msg.imu_gyro[i] = f.imu_gyro[i];
       msg.imu_acc[i] = f.imu_acc[i];
     }

@@ -326,11 +326,14 @@ INSTANTIATE_TEST_SUITE_P(ControllerApp, CrouchedBackwardTest,
 // The walking height feedback through the product path (docs/controller.md "Walking height
 // correction"): N24b walks crouched backward 2-3 cm above its command; with its config's
 // walking_height_ki the pelvis comes to within issue 12's 0.015 m, and with the same config but the
-// walking integrator off it does not. The stop after it is calm and nothing faults.
+// walking integrator off it does not. The stop after it is calm and nothing faults. The telemetry
+// (PMG_STATE's posture_feedback) shows the lowered height command the generator got.
 TEST(ControllerApp, WalkingHeightFeedbackBringsACrouchedBackwardWalkToItsHeight) {
-  const auto walk = [](double walking_height_ki) {
+  test::TempDir dir;
+  const auto walk = [&](double walking_height_ki, const std::string& log_file) {
     ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy_n24b.yaml"));
     config.posture_feedback.walking_height_ki = walking_height_ki;
+    config.log_file = log_file;
     ControllerApp app(config);
     CommandSample sample;
     sample.command.height = 0.70;
@@ -353,11 +356,37 @@ TEST(ControllerApp, WalkingHeightFeedbackBringsACrouchedBackwardWalkToItsHeight)
   };
   const double config_ki = silConfig(test::sourcePath("config/controller/g1_sil_policy_n24b.yaml")).posture_feedback.walking_height_ki;
   ASSERT_GT(config_ki, 0.0) << "N24b's config feeds the walking height back";
-  const double on = walk(config_ki), off = walk(0.0);
+  const std::string log = dir.file("walking_height.lcmlog");
+  const double on = walk(config_ki, log), off = walk(0.0, "");
   std::printf("[ SIL ] N24b, backward 0.4 m/s crouched to 0.70 m: pelvis at %.3f m with the walking height feedback, %.3f without\n",
               on, off);
   EXPECT_NEAR(on, 0.70, 0.015);
   EXPECT_GT(off, 0.715) << "without it the actor walks high (the effect this feedback exists for)";
+  // The log of the run with it: standing, the fed-back height is the command's (within the standing
+  // correction's 5 mm); late in the walk it is lowered, never below the walking floor (0.66 m).
+  lcm::LogFile file(log, "r");
+  ASSERT_TRUE(file.good());
+  pmg_lcm::controller_state_t m;
+  double walk_fb = 0.0, walk_cmd = 0.0, lowest = 10.0;
+  int n_walk = 0, n_stand = 0;
+  while (const lcm::LogEvent* ev = file.readNextEvent()) {
+    if (ev->channel != "PMG_STATE") continue;
+    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0);
+    if (m.mode != 2) continue;
+    const double t = 1e-6 * static_cast<double>(m.utime);
+    lowest = std::min(lowest, m.posture_feedback[2]);
+    if (t >= 2.5 && t < 3.0) {
+      EXPECT_NEAR(m.posture_feedback[2], m.command[5], 0.0051) << "standing, at " << t;
+      ++n_stand;
+    }
+    if (t >= 8.0 && t < 10.0) walk_fb += m.posture_feedback[2], walk_cmd += m.command[5], ++n_walk;
+  }
+  ASSERT_GT(n_stand, 10);
+  ASSERT_GT(n_walk, 100);
+  std::printf("[ SIL ] telemetry: height command %.3f m, after the walking height feedback %.3f m; lowest %.3f m\n",
+              walk_cmd / n_walk, walk_fb / n_walk, lowest);
+  EXPECT_LT(walk_fb / n_walk, walk_cmd / n_walk - 0.01) << "the telemetry shows the lowered command";
+  EXPECT_GE(lowest, 0.66 - 1e-9) << "never below the walking floor";
 }
 
 // The controller refuses to start an actor on clips other than those it was trained on

@@ -38,6 +38,7 @@ struct TelemetryFrame {
   std::array<double, 6> command_opt{};  ///< u' after GCO (eq. 19)
   std::array<double, 3> command_feedback{};  ///< u_fb: vx, vy, wz after the velocity feedback (= u when off)
   std::array<double, 3> velocity_estimate{};  ///< leg-odometry vx, vy [m/s], wz [rad/s] in H (NaN when off)
+  std::array<double, 3> posture_feedback{};   ///< pitch, roll [rad], height [m] after the posture feedback (= u when off)
   std::int32_t gco_status = 0;
   std::array<double, 3> base_position{};
   std::array<double, 4> base_quat{1, 0, 0, 0};
