@@ -699,27 +699,27 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     double c = c_h_ * keep;
     if (have_h_ && h_ok && !decay && steady && u.height > 0.0) c += config_.height_ki * (u.height - h_hat_) * dt;
     c = std::clamp(c, -config_.max_height_correction_m, config_.max_height_correction_m);
-    // Walking: the second integrator, on the same low-pass (the integrator averages the gait's bob),
-    // once the robot has walked walking_settle_s at a steady height command; it decays when told
-    // to stand or tilted.
-    const bool walking_h = !still && !tilted && config_.walking_height_ki > 0.0;
-    h_walking_s_ = walking_h ? h_walking_s_ + dt : 0.0;
-    double cw = walking_h ? c_hw_ : c_hw_ * decay_keep;
-    if (walking_h && have_h_ && h_ok && steady && h_walking_s_ >= config_.walking_settle_s && u.height > 0.0)
-      cw += config_.walking_height_ki * (u.height - h_hat_) * dt;
-    cw = std::clamp(cw, -config_.walking_max_height_correction_m, config_.walking_max_height_correction_m);
     const double upper = std::max(u.height, std::min(height_range_[1], standing_height_));
-    // The walking correction never lowers the command below the walking floor (a command already
-    // below it, as the floor's hold ends, is passed on, not lowered further).
-    double lower = height_range_[0];
-    if (walking_min_height_ > 0.0 && (walking_h || cw != 0.0)) lower = std::max(lower, std::min(u.height, walking_min_height_));
     if (config_.walking_height_ki == 0.0) {
       // The standing integrator alone, computed as before the walking one existed (the seed-replay
       // SIL tests pin its trajectories to the last bit).
       c_h_ = u.height > 0.0 ? std::clamp(u.height + c, height_range_[0], upper) - u.height : 0.0;
-      c_hw_ = 0.0;
       c_h_applied_ = c_h_;
     } else {
+      // Walking: the second integrator, on the same low-pass (the integrator averages the gait's
+      // bob), once the robot has walked walking_settle_s at a steady height command; it decays when
+      // told to stand or tilted.
+      const bool walking_h = !still && !tilted;
+      h_walking_s_ = walking_h ? h_walking_s_ + dt : 0.0;
+      double cw = walking_h ? c_hw_ : c_hw_ * decay_keep;
+      if (walking_h && have_h_ && h_ok && steady && h_walking_s_ >= config_.walking_settle_s && u.height > 0.0)
+        cw += config_.walking_height_ki * (u.height - h_hat_) * dt;
+      cw = std::clamp(cw, -config_.walking_max_height_correction_m, config_.walking_max_height_correction_m);
+      // The walking correction never lowers the command below the walking floor (a command already
+      // below it, as the floor's hold ends, is passed on, not lowered further).
+      double lower = height_range_[0];
+      if (walking_min_height_ > 0.0 && (walking_h || cw != 0.0))
+        lower = std::max(lower, std::min(u.height, walking_min_height_));
       const double want = u.height + c + cw;
       const double got = std::clamp(want, lower, upper);
       const bool bound = u.height > 0.0 && got != want;
