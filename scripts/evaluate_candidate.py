@@ -22,9 +22,13 @@ What a person otherwise types by hand for each candidate (training/results/fidel
    envelope grid and its mirror image (seeds 0-11), Table I (seeds 0-9, no restart), the posture walks
    (seeds 120-131), the crouched probe (seeds 36-47) and the crouched backward walks (seeds 0-1).
    --quick runs one seed of each and one sweep (a smoke of the pipeline, not a verdict).
+4b. The crouched stress sweep, where the battery is blind: training/results/fidelity/crouched/
+   crouched_sweep_0.62.yaml (87 s of walks and stops crouched to 0.62 m) on seeds 0-71, 6 runs of 12 seeds
+   (stress_0.62/), 6.5 min with --jobs 2; --skip-stress leaves it out.
 5. report.md: per battery the velocity segments in band (±15 % or 0.05 m/s / 0.08 rad/s) of the
    command and of the shaper's command (how many the shaper's envelopes slowed), posture misses (pitch/roll 0.03 rad, height 0.015 m), cross-coupling beyond 0.05 rad, runaways and falls
-   (scripts/segment_band.py's score), Table I's mean errors, and the MJX gait: what issue 12 asks.
+   (scripts/segment_band.py's score), Table I's mean errors, the stress sweep's runs with a fall and the
+   segments they fell in, and the MJX gait: what issue 12 asks.
 Each step writes its command line into its folder (command.txt) and skips work whose summary (or
 feedforward/fit.yaml) already exists, so an interrupted evaluation resumes; delete fit.yaml to refit. Units: m/s, rad/s, rad, m.
 """
@@ -53,6 +57,11 @@ BATTERY = {
     "probe_heights": ("training/results/fidelity/crouched/probe_heights.yaml", 36, 12, True),
     "crouched_backward": (CROUCHED_BACKWARD, 0, 2, True),
 }
+# The crouched stress sweep (step 4b): 87 s of walks and stops at 0.62 m, where the battery is blind. N24b falls in
+# no battery seed but in 5 of its 72 runs, N24g in 29 (training/README.md "Stops that keep the crouch, from scratch").
+# (command script, first seed, seeds, seeds per pmg_policy_sil run)
+STRESS = ("training/results/fidelity/crouched/crouched_sweep_0.62.yaml", 0, 72, 12)
+STRESS_DIR = "stress_0.62"
 # (sweep, first seed, seeds): the calibration runs of the feed-forward fit; 7 and 8 walk crouched (the
 # gains per crouch: docs/controller.md "Gains per crouch")
 SWEEPS = [(1, 0, 2), (1, 2, 2), (2, 0, 2), (3, 0, 2), (7, 0, 2), (8, 0, 2)]
@@ -178,6 +187,48 @@ def mjx_lines(out):
     return rows
 
 
+def stress_plan(quick=False):
+    """The stress sweep's pmg_policy_sil runs: (folder under STRESS_DIR, first seed, seeds) each; one seed with
+    @p quick."""
+    _, first, seeds, per_run = STRESS
+    if quick:
+        seeds = per_run = 1
+    return [(f"seeds{s}-{min(s + per_run, first + seeds) - 1}", s, min(per_run, first + seeds - s))
+            for s in range(first, first + seeds, per_run)]
+
+
+def stress_runs(out):
+    """The stress sweep's runs under @p out (STRESS_DIR/seeds*/summary.json): a list of (seed, [(fall time [s],
+    segment name)]) in seed order, the segment the one whose [t_begin, t_end) holds the fall; [] when not run."""
+    runs = []
+    for path in glob.glob(os.path.join(out, STRESS_DIR, "seeds*", "summary.json")):
+        with open(path) as f:
+            s = json.load(f)
+        segs = [(g["t_begin"], g["t_end"], g["name"]) for g in s["segments"]]
+        for r in s["runs"]:
+            falls = [(t, next((n for b, e, n in segs if b <= t < e), "after the script")) for t in r["falls_s"]]
+            runs.append((r["seed"], falls))
+    return sorted(runs)
+
+
+def stress_lines(out):
+    """Report lines of the stress sweep: runs with a fall, and the falls counted by segment."""
+    runs = stress_runs(out)
+    if not runs:
+        return []
+    fallen = [seed for seed, falls in runs if falls]
+    by_segment = {}
+    for _, falls in runs:
+        for _, name in falls:
+            by_segment[name] = by_segment.get(name, 0) + 1
+    lines = ["", f"Crouched stress sweep ({STRESS[0]}, seeds {runs[0][0]}-{runs[-1][0]}): runs with a fall "
+                 f"**{len(fallen)} of {len(runs)}**" + (f" (seeds {', '.join(map(str, fallen))})" if fallen else "")]
+    if by_segment:
+        lines.append("falls by segment: " + ", ".join(f"{n} {k}" for n, k in
+                                                      sorted(by_segment.items(), key=lambda kv: (-kv[1], kv[0]))))
+    return lines
+
+
 def report(out):
     """Step 5: report.md from the summaries under @p out; returns its text."""
     lines = ["# Candidate against issue 12's targets", "",
@@ -207,6 +258,7 @@ def report(out):
                   "|---|---|---|---|---|---|---|",
                   f"| {table1['lin_vel']:.4f} | {table1['yaw_vel']:.4f} | {table1['roll']:.4f} | {table1['pitch']:.4f} | "
                   f"{table1['height']:.4f} | {table1['foot_slip']:.3f} | {table1['falls']} |"]
+    lines += stress_lines(out)
     gait = mjx_lines(out)
     if gait:
         runs = [r for r in gait if r[3] > FLIGHT_LIMIT or r[4]]
@@ -234,6 +286,8 @@ def main(argv=None):
     ap.add_argument("--keep-feedforward", action="store_true",
                     help="skip step 2 and keep the base config's feed-forward: the battery of a shipped config, "
                          "paired with a candidate's on the same seeds")
+    ap.add_argument("--skip-stress", action="store_true",
+                    help="leave out step 4b, the crouched stress sweep (72 seeds at 0.62 m, 6.5 min with --jobs 2)")
     ap.add_argument("--report-only", action="store_true", help="only write report.md from the summaries in --out")
     args = ap.parse_args(argv)
     out = os.path.abspath(args.out)
@@ -257,9 +311,14 @@ def main(argv=None):
     else:
         controller = fit_feedforward(args, out, model, base)
     print(f"step 4: the battery ({', '.join(BATTERY)}), {args.jobs} at a time", flush=True)
+    runs = [(os.path.join(out, name), script, first, 1 if args.quick else seeds, restart)
+            for name, (script, first, seeds, restart) in BATTERY.items()]
+    if not args.skip_stress:
+        plan = stress_plan(args.quick)
+        print(f"step 4b: the crouched stress sweep ({sum(p[2] for p in plan)} seeds of {STRESS[0]})", flush=True)
+        runs += [(os.path.join(out, STRESS_DIR, folder), STRESS[0], first, seeds, True) for folder, first, seeds in plan]
     with ThreadPoolExecutor(args.jobs) as pool:
-        list(pool.map(lambda kv: sil(args, os.path.join(out, kv[0]), kv[1][0], kv[1][1], 1 if args.quick else kv[1][2],
-                                     kv[1][3], ["--controller", controller]), BATTERY.items()))
+        list(pool.map(lambda r: sil(args, r[0], r[1], r[2], r[3], r[4], ["--controller", controller]), runs))
     print(report(out))
     return 0
 

@@ -10,7 +10,10 @@ label unit):
   gives V20e's grid 28/33 in band, its Table I means from the summary, and "not run" for the
   batteries that are missing; a synthetic MJX gait file with one crouched walk in flight 0.35, one that
   fell and one after the fall (NaN means) is reported as 3 of 4 crouched walks flagged (the standing
-  walk and the stop left out).
+  walk and the stop left out);
+- the crouched stress sweep is planned as 6 runs of 12 seeds (0-71; one seed with --quick), and reported
+  from N24g's committed sweep summaries as 29 of 72 runs with a fall, each fall named by the segment it
+  happened in (seed 2: 46.57 s in stand_left_0.2, 53.96 s in stand_left_0.3; 12 in stand_left_0.3).
 Usage: test_evaluate_candidate.py
 """
 import json
@@ -28,6 +31,7 @@ import evaluate_candidate as ec  # noqa: E402
 from script_checks import Checks  # noqa: E402  (beside this file)
 
 V20E = os.path.join(ROOT, "training", "results", "fidelity", "seeds_V20b", "V20e")
+N24G_SWEEP = os.path.join(ROOT, "training", "results", "fidelity", "exploration_noise", "N24g", "sweep_0.62")
 check = Checks()
 
 
@@ -88,7 +92,19 @@ def main():
         ach[5], gait[5] = np.nan, np.nan  # after the fall: no robot in its window
         np.savez(os.path.join(ev, "mjx_crouched_backward.npz"), segment_names=np.array(names), segment_command=cmd,
                  segment_achieved=ach, segment_gait=gait, segment_falls=np.array([0, 0, 0, 0, 1, 0]))
+        plan = ec.stress_plan()
+        check([p[0] for p in plan] == [f"seeds{k}-{k + 11}" for k in range(0, 72, 12)] and
+              all(p[2] == 12 for p in plan) and ec.stress_plan(quick=True) == [("seeds0-0", 0, 1)],
+              f"stress sweep: 6 runs of 12 seeds, one seed with --quick ({plan[0]}, ..., {plan[-1]})")
+        for folder, _, _ in plan:
+            os.makedirs(os.path.join(ev, ec.STRESS_DIR, folder))
+            shutil.copy(os.path.join(N24G_SWEEP, folder, "summary.json"), os.path.join(ev, ec.STRESS_DIR, folder))
+        runs = dict(ec.stress_runs(ev))
+        check(len(runs) == 72 and runs[2] == [(46.57, "stand_left_0.2"), (53.96, "stand_left_0.3")] and runs[0] == [],
+              f"stress sweep: 72 runs read, seed 2's falls named by segment ({runs.get(2)})")
         text = ec.main(["--report-only", "--out", ev]) == 0 and open(os.path.join(ev, "report.md")).read()
+        check("runs with a fall **29 of 72** (seeds 2, 8, 9," in text and "stand_left_0.3 12, stand_left_0.2 8" in text,
+              "report: N24g's stress sweep, 29 of 72 runs with a fall, the falls by segment")
         with open(os.path.join(V20E, "t1_0-4_summary.json")) as f:
             t1 = json.load(f)["mean"]
         rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| ")}
