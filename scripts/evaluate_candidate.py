@@ -315,7 +315,8 @@ def main(argv=None):
             for name, (script, first, seeds, restart) in BATTERY.items()]
     if not args.skip_stress:
         plan = stress_plan(args.quick)
-        print(f"step 4b: the crouched stress sweep ({sum(p[2] for p in plan)} seeds of {STRESS[0]})", flush=True)
+        n = sum(p[2] for p in plan)
+        print(f"step 4b: the crouched stress sweep ({n} seed{'s' if n != 1 else ''} of {STRESS[0]})", flush=True)
         runs += [(os.path.join(out, STRESS_DIR, folder), STRESS[0], first, seeds, True) for folder, first, seeds in plan]
     with ThreadPoolExecutor(args.jobs) as pool:
         list(pool.map(lambda r: sil(args, r[0], r[1], r[2], r[3], r[4], ["--controller", controller]), runs))
