@@ -11,6 +11,9 @@ What a person otherwise types by hand for each candidate (training/results/fidel
    crouched backward walks (training/results/fidelity/seeds_V20b/crouched_backward.yaml), whose gait
    table shows a run (both feet off the floor) before any SIL time is spent. Needs .venv-training
    and the run's train_config.json beside the actor. Written to mjx_crouched_backward.{npz,txt}.
+1b. (with --mjx-floor-stops N) N randomized robots of its training distribution in MJX on the 0.62 m
+   sweep's side-step and turn stops (training/results/fidelity/crouched/floor_stops_0.62.yaml, --seed 1):
+   robots fallen, which ranks actors as step 4b does. Written to mjx_floor_stops.{npz,txt}.
 2. The command-response feed-forward fitted for this actor: pmg_policy_sil on the calibration sweeps
    config/policies/response_sweep_{1,2,3}.yaml (upright) and _{7,8}.yaml (crouched, 0.66-0.78 m) with
    the base config, this model and the feed-forward off (feedforward/calibration_*/), then
@@ -28,7 +31,7 @@ What a person otherwise types by hand for each candidate (training/results/fidel
 5. report.md: per battery the velocity segments in band (±15 % or 0.05 m/s / 0.08 rad/s) of the
    command and of the shaper's command (how many the shaper's envelopes slowed), posture misses (pitch/roll 0.03 rad, height 0.015 m), cross-coupling beyond 0.05 rad, runaways and falls
    (scripts/segment_band.py's score), Table I's mean errors, the stress sweep's runs with a fall and the
-   segments they fell in, and the MJX gait: what issue 12 asks.
+   segments they fell in, the MJX floor stops' fallen robots, and the MJX gait: what issue 12 asks.
 Each step writes its command line into its folder (command.txt) and skips work whose summary (or
 feedforward/fit.yaml) already exists, so an interrupted evaluation resumes; delete fit.yaml to refit. Units: m/s, rad/s, rad, m.
 """
@@ -48,6 +51,10 @@ sys.path.insert(0, HERE)
 import segment_band  # noqa: E402
 
 CROUCHED_BACKWARD = "training/results/fidelity/seeds_V20b/crouched_backward.yaml"
+# The 0.62 m sweep's side-step and turn stops as the product path commands them, for randomized robots in MJX
+# (--mjx-floor-stops N): it ranks actors as the SIL's stress sweep does (training/README.md "Stops that keep the
+# crouch, from scratch": wh6g 0, N24b 9, N24g 37 of 128).
+FLOOR_STOPS = "training/results/fidelity/crouched/floor_stops_0.62.yaml"
 # name -> (command script, first seed, seeds, restart after a fall)
 BATTERY = {
     "grid": ("config/policies/eval_envelope.yaml", 0, 12, True),
@@ -167,6 +174,28 @@ def mjx_gait(args, out):
              "--out", npz], out, "mjx_crouched_backward.txt")
 
 
+def mjx_floor_stops(args, out):
+    """Step 1b: eval_mjx.py --randomized N --seed 1 on FLOOR_STOPS; its table written to mjx_floor_stops.txt."""
+    npz = os.path.join(out, "mjx_floor_stops.npz")
+    if not os.path.exists(npz):
+        py = os.path.join(REPO, ".venv-training", "bin", "python")
+        run([py, "training/eval_mjx.py", os.path.abspath(args.mjx_actor), "--commands", FLOOR_STOPS,
+             "--randomized", str(args.mjx_floor_stops), "--seed", "1", "--out", npz], out, "mjx_floor_stops.txt")
+
+
+def floor_stops_lines(out):
+    """Report lines of the MJX floor stops: robots fallen of those rolled out, and per segment."""
+    npz = os.path.join(out, "mjx_floor_stops.npz")
+    if not os.path.exists(npz):
+        return []
+    import numpy as np
+    z = np.load(npz)
+    robots, falls = int(z["done"].shape[0]), [int(k) for k in z["segment_falls"]]
+    per = [f"{n} {k}" for n, k in zip(z["segment_names"], falls) if k]
+    return ["", f"MJX, the actor alone: randomized robots fallen on the floor stops ({FLOOR_STOPS}, --seed 1): "
+                f"**{sum(falls)} of {robots}**" + (f" ({', '.join(per)})" if per else "")]
+
+
 def mjx_lines(out):
     """The MJX gait of the crouched walks (height below 0.76 m): name, v_x commanded and achieved, flight
     share, and whether the robot fell in the segment or before it."""
@@ -259,6 +288,7 @@ def report(out):
                   f"| {table1['lin_vel']:.4f} | {table1['yaw_vel']:.4f} | {table1['roll']:.4f} | {table1['pitch']:.4f} | "
                   f"{table1['height']:.4f} | {table1['foot_slip']:.3f} | {table1['falls']} |"]
     lines += stress_lines(out)
+    lines += floor_stops_lines(out)
     gait = mjx_lines(out)
     if gait:
         runs = [r for r in gait if r[3] > FLIGHT_LIMIT or r[4]]
@@ -283,6 +313,9 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2, help="SIL runs at a time (default 2)")
     ap.add_argument("--quick", action="store_true", help="one seed per battery and one sweep: the pipeline, not a verdict")
     ap.add_argument("--mjx-actor", help="the run's actor.npz (train_config.json beside it): step 1 in MJX")
+    ap.add_argument("--mjx-floor-stops", type=int, default=0, metavar="N",
+                    help="with --mjx-actor: also N randomized robots on the crouched floor stops in MJX (step 1b; "
+                         "two actors of 128 took one 150 s H200 call; on a CPU keep N at 32 or less: 2.5 min for wh6g on 2 cores)")
     ap.add_argument("--keep-feedforward", action="store_true",
                     help="skip step 2 and keep the base config's feed-forward: the battery of a shipped config, "
                          "paired with a candidate's on the same seeds")
@@ -302,9 +335,14 @@ def main(argv=None):
     args.bin = os.path.abspath(args.bin)
     model = os.path.abspath(args.model)
     base = os.path.abspath(args.base_config)
+    if args.mjx_floor_stops < 0 or (args.mjx_floor_stops and not args.mjx_actor):
+        ap.error(f"--mjx-floor-stops {args.mjx_floor_stops}: expected a robot count >= 1 together with --mjx-actor")
     if args.mjx_actor:
         print("step 1: MJX gait of the crouched backward walks", flush=True)
         mjx_gait(args, out)
+        if args.mjx_floor_stops:
+            print(f"step 1b: MJX, {args.mjx_floor_stops} randomized robots on the floor stops", flush=True)
+            mjx_floor_stops(args, out)
     if args.keep_feedforward:
         controller = rewrite_config(base, os.path.join(out, "controller.yaml"), model, None)
         print(f"step 2 skipped (--keep-feedforward); step 3: {controller}", flush=True)

@@ -13,7 +13,9 @@ label unit):
   walk and the stop left out);
 - the crouched stress sweep is planned as 6 runs of 12 seeds (0-71; one seed with --quick), and reported
   from N24g's committed sweep summaries as 29 of 72 runs with a fall, each fall named by the segment it
-  happened in (seed 2: 46.57 s in stand_left_0.2, 53.96 s in stand_left_0.3; 12 in stand_left_0.3).
+  happened in (seed 2: 46.57 s in stand_left_0.2, 53.96 s in stand_left_0.3; 12 in stand_left_0.3);
+- a synthetic MJX floor-stops rollout of 5 robots, 3 fallen in two segments, is reported as 3 of 5 with
+  the segments; --mjx-floor-stops without --mjx-actor is refused.
 Usage: test_evaluate_candidate.py
 """
 import json
@@ -102,7 +104,20 @@ def main():
         runs = dict(ec.stress_runs(ev))
         check(len(runs) == 72 and runs[2] == [(46.57, "stand_left_0.2"), (53.96, "stand_left_0.3")] and runs[0] == [],
               f"stress sweep: 72 runs read, seed 2's falls named by segment ({runs.get(2)})")
+        np.savez(os.path.join(ev, "mjx_floor_stops.npz"), done=np.zeros((5, 40)),
+                 segment_names=np.array(["stand", "left0.2_0.66", "stop_left0.2_0.66", "stand_left0.2_0.62"]),
+                 segment_falls=np.array([0, 1, 0, 2]))
         text = ec.main(["--report-only", "--out", ev]) == 0 and open(os.path.join(ev, "report.md")).read()
+        check("on the floor stops (training/results/fidelity/crouched/floor_stops_0.62.yaml, --seed 1): **3 of 5** "
+              "(left0.2_0.66 1, stand_left0.2_0.62 2)" in text, "report: MJX floor stops, 3 of 5 robots fallen, by segment")
+        try:
+            ec.main(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e2"),
+                     "--mjx-floor-stops", "32"])
+            refused = False
+        except SystemExit as e:
+            refused = e.code == 2
+        check(refused and not os.path.exists(os.path.join(tmp, "e2", "grid")),
+              "--mjx-floor-stops without --mjx-actor is refused before anything runs")
         check("runs with a fall **29 of 72** (seeds 2, 8, 9," in text and "stand_left_0.3 12, stand_left_0.2 8" in text,
               "report: N24g's stress sweep, 29 of 72 runs with a fall, the falls by segment")
         with open(os.path.join(V20E, "t1_0-4_summary.json")) as f:
