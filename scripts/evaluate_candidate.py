@@ -165,22 +165,24 @@ def rewrite_config(base_path, out_path, model_path, fit_path):
     return out_path
 
 
-def mjx_gait(args, out):
-    """Step 1: eval_mjx.py on the crouched backward walks; the gait table written to mjx_crouched_backward.txt."""
-    npz = os.path.join(out, "mjx_crouched_backward.npz")
+def mjx_rollout(args, out, name, commands, extra=()):
+    """eval_mjx.py (.venv-training) of --mjx-actor on @p commands with @p extra options into out/name.npz, its
+    tables in out/name.txt, unless the .npz exists."""
+    npz = os.path.join(out, f"{name}.npz")
     if not os.path.exists(npz):
         py = os.path.join(REPO, ".venv-training", "bin", "python")
-        run([py, "training/eval_mjx.py", os.path.abspath(args.mjx_actor), "--commands", CROUCHED_BACKWARD,
-             "--out", npz], out, "mjx_crouched_backward.txt")
+        run([py, "training/eval_mjx.py", os.path.abspath(args.mjx_actor), "--commands", commands, *extra,
+             "--out", npz], out, f"{name}.txt")
+
+
+def mjx_gait(args, out):
+    """Step 1: eval_mjx.py on the crouched backward walks; the gait table written to mjx_crouched_backward.txt."""
+    mjx_rollout(args, out, "mjx_crouched_backward", CROUCHED_BACKWARD)
 
 
 def mjx_floor_stops(args, out):
     """Step 1b: eval_mjx.py --randomized N --seed 1 on FLOOR_STOPS; its table written to mjx_floor_stops.txt."""
-    npz = os.path.join(out, "mjx_floor_stops.npz")
-    if not os.path.exists(npz):
-        py = os.path.join(REPO, ".venv-training", "bin", "python")
-        run([py, "training/eval_mjx.py", os.path.abspath(args.mjx_actor), "--commands", FLOOR_STOPS,
-             "--randomized", str(args.mjx_floor_stops), "--seed", "1", "--out", npz], out, "mjx_floor_stops.txt")
+    mjx_rollout(args, out, "mjx_floor_stops", FLOOR_STOPS, ["--randomized", str(args.mjx_floor_stops), "--seed", "1"])
 
 
 def floor_stops_lines(out):
