@@ -27,6 +27,19 @@ ControllerConfig silConfig(const std::string& file = test::g1SilControllerConfig
   return c;
 }
 
+// Decodes every PMG_STATE message of the LCM log `log_file`, in order, and hands each to `visit`.
+template <class Visit>
+void forEachControllerState(const std::string& log_file, Visit&& visit) {
+  lcm::LogFile file(log_file, "r");
+  ASSERT_TRUE(file.good()) << log_file;
+  pmg_lcm::controller_state_t m;
+  while (const lcm::LogEvent* ev = file.readNextEvent()) {
+    if (ev->channel != "PMG_STATE") continue;
+    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0) << log_file;
+    visit(m);
+  }
+}
+
 CommandScript shortScript() {
   CommandScript s;
   const auto seg = [&](const char* name, double d, double vx, double wz) {
@@ -113,18 +126,13 @@ TEST(ControllerApp, LockstepRunRecordsEveryTick) {
   EXPECT_NE(s.text().find("final mode: active; fault: none"), std::string::npos) << s.text();
   std::printf("[ SIL ] RTF %.1f, loop p99 %.1f us, HAL p99 %.1f us, deadline misses %lld\n", s.run.real_time_factor,
               1e6 * s.loop.runtime_p99, 1e6 * s.hal.runtime_p99, static_cast<long long>(s.deadline_misses));
-  lcm::LogFile file(config.log_file, "r");
-  ASSERT_TRUE(file.good());
   std::int64_t expected_tick = 0;
-  pmg_lcm::controller_state_t m;
   int active = 0;
-  while (const lcm::LogEvent* ev = file.readNextEvent()) {
-    if (ev->channel != "PMG_STATE") continue;
-    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0);
+  forEachControllerState(config.log_file, [&](const pmg_lcm::controller_state_t& m) {
     EXPECT_EQ(m.tick, expected_tick++);
     EXPECT_EQ(m.num_joints, 29);
     active += m.mode == 2;
-  }
+  });
   EXPECT_EQ(expected_tick, 400);
   EXPECT_GT(active, 250) << "telemetry carries the supervisor's mode";
 }
@@ -364,15 +372,10 @@ TEST(ControllerApp, WalkingHeightFeedbackBringsACrouchedBackwardWalkToItsHeight)
   EXPECT_GT(off, 0.715) << "without it the actor walks high (the effect this feedback exists for)";
   // The log of the run with it: standing, the fed-back height is the command's (within the standing
   // correction's 5 mm); late in the walk it is lowered, never below the walking floor (0.66 m).
-  lcm::LogFile file(log, "r");
-  ASSERT_TRUE(file.good());
-  pmg_lcm::controller_state_t m;
   double walk_fb = 0.0, walk_cmd = 0.0, lowest = 10.0;
   int n_walk = 0, n_stand = 0;
-  while (const lcm::LogEvent* ev = file.readNextEvent()) {
-    if (ev->channel != "PMG_STATE") continue;
-    ASSERT_GE(m.decode(ev->data, 0, ev->datalen), 0);
-    if (m.mode != 2) continue;
+  forEachControllerState(log, [&](const pmg_lcm::controller_state_t& m) {
+    if (m.mode != 2) return;
     const double t = 1e-6 * static_cast<double>(m.utime);
     lowest = std::min(lowest, m.posture_feedback[2]);
     if (t >= 2.5 && t < 3.0) {
@@ -380,7 +383,7 @@ TEST(ControllerApp, WalkingHeightFeedbackBringsACrouchedBackwardWalkToItsHeight)
       ++n_stand;
     }
     if (t >= 8.0 && t < 10.0) walk_fb += m.posture_feedback[2], walk_cmd += m.command[5], ++n_walk;
-  }
+  });
   ASSERT_GT(n_stand, 10);
   ASSERT_GT(n_walk, 100);
   std::printf("[ SIL ] telemetry: height command %.3f m, after the walking height feedback %.3f m; lowest %.3f m\n",
