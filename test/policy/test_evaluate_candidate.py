@@ -15,7 +15,10 @@ label unit):
   from N24g's committed sweep summaries as 29 of 72 runs with a fall, each fall named by the segment it
   happened in (seed 2: 46.57 s in stand_left_0.2, 53.96 s in stand_left_0.3; 12 in stand_left_0.3);
 - a synthetic MJX floor-stops rollout of 5 robots, 3 fallen in two segments, is reported as 3 of 5 with
-  the segments; --mjx-floor-stops without --mjx-actor is refused.
+  the segments; --mjx-floor-stops without --mjx-actor is refused;
+- the screen: with that rollout in place, an evaluation with --mjx-floor-stops stops after step 1b (3 of 5 is
+  above the default 10 %), runs no SIL step, and its report says it was rejected; at a share of 0.6 the same
+  rollout passes; a share outside [0, 1] is refused.
 Usage: test_evaluate_candidate.py
 """
 import json
@@ -118,6 +121,28 @@ def main():
             refused = e.code == 2
         check(refused and not os.path.exists(os.path.join(tmp, "e2", "grid")),
               "--mjx-floor-stops without --mjx-actor is refused before anything runs")
+        e3 = os.path.join(tmp, "e3")
+        os.makedirs(e3)
+        for name in ("mjx_crouched_backward.npz", "mjx_floor_stops.npz"):  # step 1 and 1b's rollouts, already there
+            shutil.copy(os.path.join(ev, name), e3)
+        rc = ec.main(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", e3, "--bin", os.path.join(tmp, "no_bin"),
+                      "--mjx-actor", os.path.join(tmp, "unused", "actor.npz"), "--mjx-floor-stops", "5"])
+        with open(os.path.join(e3, "screen.json")) as f:
+            verdict = json.load(f)
+        rejected = open(os.path.join(e3, "report.md")).read()
+        check(rc == 0 and verdict == {"fallen": 3, "robots": 5, "max_share": 0.1, "passed": False}
+              and sorted(os.listdir(e3)) == ["mjx_crouched_backward.npz", "mjx_floor_stops.npz", "report.md", "screen.json"]
+              and "**Rejected by the MJX screen** (60 % of the robots fell, 10 % allowed" in rejected,
+              f"screen: 3 of 5 fallen is rejected at the default share, no SIL step run ({sorted(os.listdir(e3))})")
+        check(ec.screen(e3, 0.6) and "**Passed the MJX screen** (60 % of the robots fell, 60 % allowed)." in
+              ec.report(e3), "screen: the same rollout passes at a share of 0.6")
+        try:
+            ec.main(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e4"),
+                     "--screen-max-fallen", "1.5"])
+            refused = False
+        except SystemExit as e:
+            refused = e.code == 2
+        check(refused and not os.path.exists(os.path.join(tmp, "e4", "grid")), "--screen-max-fallen 1.5 is refused")
         check("runs with a fall **29 of 72** (seeds 2, 8, 9," in text and "stand_left_0.3 12, stand_left_0.2 8" in text,
               "report: N24g's stress sweep, 29 of 72 runs with a fall, the falls by segment")
         with open(os.path.join(V20E, "t1_0-4_summary.json")) as f:
