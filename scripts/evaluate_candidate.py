@@ -55,7 +55,7 @@ import segment_band  # noqa: E402
 CROUCHED_BACKWARD = "training/results/fidelity/seeds_V20b/crouched_backward.yaml"
 # The 0.62 m sweep's side-step and turn stops as the product path commands them, for randomized robots in MJX
 # (--mjx-floor-stops N): it ranks actors as the SIL's stress sweep does (training/README.md "Stops that keep the
-# crouch, from scratch": wh6g 0, N24b 9, N24h 34, N24g 37 of 128).
+# crouch, from scratch" and "The height reward doubled, from scratch": wh6g 0, N24b 9, N24h 34, N24g 37 of 128).
 FLOOR_STOPS = "training/results/fidelity/crouched/floor_stops_0.62.yaml"
 # The screen's default: the share of those robots that may fall before the SIL steps are skipped. The one actor from
 # scratch below it, N24b (9 of 128, 7 %), falls in 3-5 of 72 runs of the stress sweep; the two above it, N24h (34 of
