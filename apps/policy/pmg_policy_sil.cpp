@@ -17,6 +17,8 @@
 //   single_gait  single-gait imitation: the generator runs on the walk_forward clip alone at its
 //                nominal speed whatever the command; the actor observes u
 // Seed k > 0 perturbs the initial joint positions (uniform +-0.02 rad) and seeds the sensor noise.
+// --sliding-friction MU sets the foot-floor friction coefficient of every run (mujoco.sliding_friction,
+// in [0.1, 2]; default the MJCF's 1.0): training draws it in [0.4, 1.25], the SIL otherwise runs 1.0 only.
 //
 // Metrics (mean absolute error over the run after the first second, per seed, then mean over seeds):
 //   LinVel [m/s]  |v_cmd,xy - v_xy| with v the pelvis velocity in the heading (yaw) frame
@@ -241,6 +243,7 @@ int main(int argc, char** argv) {
   double duration = -1, frame_period = 0.1;
   std::string probe_path;
   double q_rate_max = -1;
+  double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
   app.add_option("--robot", robot_path, "robot config YAML (default: the controller config's)");
@@ -259,6 +262,10 @@ int main(int argc, char** argv) {
   app.add_option("--native", native, "allocation-free native evaluator (false: ONNX Runtime)");
   app.add_option("--duration", duration, "override the sequence duration [s]")->check(pmg::cli::finiteIn(0.0, 1e5));
   app.add_option("--out", out, "output directory");
+  app.add_option("--sliding-friction", sliding_friction,
+                 "the foot-floor sliding friction coefficient of every geom (mujoco.sliding_friction; default: the "
+                 "controller config's, 0 = the MJCF's 1.0); training draws it in [0.4, 1.25]")
+      ->check(pmg::cli::finiteIn(0.1, 2.0));
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
       feedback_within_envelopes, yaw_beyond_envelopes, max_velocity_headroom, walking_height_floor, joint_stops, braking,
@@ -363,6 +370,7 @@ int main(int argc, char** argv) {
     commandsSwitch(crouched_envelope, &base.commands.crouched_height, "--crouched-envelope", "crouched_height");
     commandsSwitch(bent_envelope, &base.commands.bent_pitch, "--bent-envelope", "bent_pitch");
     commandsSwitch(walking_height_floor, &base.commands.walking_min_height, "--walking-height-floor", "walking_min_height");
+    if (sliding_friction > 0) base.mujoco.sliding_friction = sliding_friction;
     if (joint_stops == "off") base.mujoco.joint_stops.timeconst = 0.0;
     if (joint_stops == "on" && !base.mujoco.joint_stops.enabled())
       throw pmg::ConfigError(controller_path + ": --joint-stops on: mujoco.joint_stops.timeconst is 0 (the MJCF's) there");
@@ -414,6 +422,7 @@ int main(int argc, char** argv) {
     // The standing height the controller crouches from (ControllerApp takes the squat clip's neutral
     // pelvis height): the summary records it for the feed-forward's fit (gains per crouch).
     double standing_height = base.commands.standing_height;
+    double floor_friction = 0.0;  // the floor geom's sliding friction as simulated (summary.json)
     for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
       std::mt19937 rng(static_cast<unsigned>(1000 + seed));
       std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -464,6 +473,7 @@ int main(int argc, char** argv) {
         const int feet[2] = {mj_name2id(m, mjOBJ_BODY, robot.left_foot_link.c_str()),
                              mj_name2id(m, mjOBJ_BODY, robot.right_foot_link.c_str())};
         const int floor = mj_name2id(m, mjOBJ_GEOM, "floor");
+        if (floor >= 0) floor_friction = m->geom_friction[3 * floor];
         pmg::Controller& controller = loop.controller();
         standing_height = controller.config().commands.standing_height;
         if (single_gait)  // the forward clip at its nominal speed, neutral posture, whatever the command
@@ -840,6 +850,7 @@ int main(int argc, char** argv) {
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"upset_upright\": " << (base.velocity_feedback.upset_guard.enabled && base.velocity_feedback.upset_guard.upright ? "true" : "false")
        << ", \"joint_stops_timeconst_s\": " << base.mujoco.joint_stops.timeconst
+       << ", \"floor_friction\": " << floor_friction
        << ", \"brake_ratio\": " << (base.velocity_feedback.enabled ? base.velocity_feedback.brake_ratio : 0.0)
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")

@@ -97,12 +97,14 @@ struct MujocoYaml {
   std::vector<double> encoder_offsets;
   GantryYaml gantry;
   JointStopsYaml joint_stops;
+  double sliding_friction = 0.0;
   template <class A>
   void Serialize(A* a) {
     a->Visit("timestep", &timestep, "physics step [s], <= 0.001");
     a->Visit("encoder_offsets", &encoder_offsets, "hidden zero offsets per joint [rad] (tests)");
     a->Visit("gantry", &gantry, "bring-up gantry");
     a->Visit("joint_stops", &joint_stops, "stiffness of the joints' mechanical stops (MJCF solreflimit)");
+    a->Visit("sliding_friction", &sliding_friction, "foot-floor sliding friction of every geom; 0 = the MJCF's");
   }
 };
 
@@ -422,6 +424,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.mujoco.encoder_offsets = y.mujoco.encoder_offsets;
   c.mujoco.gantry = y.mujoco.gantry.g;
   c.mujoco.joint_stops = y.mujoco.joint_stops.s;
+  c.mujoco.sliding_friction = y.mujoco.sliding_friction;
   if (const std::string e = c.mujoco.validate(); !e.empty()) fail("mujoco", e);
   c.generator = y.generator.p;
   if (!y.gco.empty()) {

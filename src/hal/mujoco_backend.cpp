@@ -43,6 +43,8 @@ std::string MujocoBackendOptions::validate() const {
     if (!std::isfinite(o) || std::fabs(o) > 0.5) return "mujoco.encoder_offsets: expected finite, |offset| <= 0.5 rad";
   if (std::string e = sole_contacts.validate(timestep); !e.empty()) return "mujoco." + e;
   if (std::string e = joint_stops.validate(timestep); !e.empty()) return "mujoco." + e;
+  if (!(sliding_friction == 0.0 || (sliding_friction >= 0.1 && sliding_friction <= 2.0)))
+    return "mujoco.sliding_friction: expected 0 (the MJCF's) or in [0.1, 2]";
   for (const auto& [body, scale] : body_mass_scale)
     if (!(std::isfinite(scale) && scale >= 0.5 && scale <= 2.0))
       return "links." + body + ".mass_scale: expected 0.5..2";
@@ -115,6 +117,8 @@ MujocoBackend::MujocoBackend(const RobotConfig& robot, MujocoBackendOptions opti
     }
     if (changed == 0) throw ConfigError(robot_.mjcf_path + ": mujoco.sole_contacts: the foot bodies have no colliding geom");
   }
+  if (options_.sliding_friction > 0.0)  // every geom: a contact's friction is the larger of its two geoms'
+    for (int g = 0; g < model_->ngeom; ++g) model_->geom_friction[3 * g] = options_.sliding_friction;
   // Model errors: body mass and rotational inertia scaled (hal/reality.hpp).
   if (!options_.body_mass_scale.empty()) {
     for (const auto& [body, scale] : options_.body_mass_scale) {

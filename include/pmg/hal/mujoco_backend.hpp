@@ -86,6 +86,11 @@ struct MujocoBackendOptions {
   std::vector<double> encoder_offsets;  ///< (n or empty) hidden zero offsets [rad]: reported = true + offset
   SoleContactOptions sole_contacts;     ///< calibration-bench floor (default off)
   JointStopOptions joint_stops;         ///< stiffer joint stops than the MJCF's (default off)
+  /// The sliding friction coefficient of every geom, feet and floor alike (MuJoCo takes the larger of a
+  /// contact's two, so this is the foot-floor friction), as the training's domain randomisation sets it
+  /// (training/pmg_train/g1_env.py `friction`, drawn in [0.4, 1.25]). 0 = the MJCF's (1.0 for the G1);
+  /// else in [0.1, 2]. Torsional and rolling friction are left as they are.
+  double sliding_friction = 0.0;
   /// Model errors (pmg_sil --reality, hal/reality.hpp): MJCF body name -> factor on its mass and
   /// rotational inertia, in [0.5, 2]. An unknown body is a ConfigError.
   std::map<std::string, double> body_mass_scale;
