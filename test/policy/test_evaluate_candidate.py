@@ -51,6 +51,15 @@ def resolved(path):
     return c
 
 
+def refused(argv):
+    """Whether ec.main(@p argv) stops with argparse's usage error (exit status 2)."""
+    try:
+        ec.main(argv)
+    except SystemExit as e:
+        return e.code == 2
+    return False
+
+
 def main():
     tmp = tempfile.mkdtemp(prefix="pmg_eval_candidate_")
     try:
@@ -113,13 +122,8 @@ def main():
         text = ec.main(["--report-only", "--out", ev]) == 0 and open(os.path.join(ev, "report.md")).read()
         check("on the floor stops (training/results/fidelity/crouched/floor_stops_0.62.yaml, --seed 1): **3 of 5** "
               "(left0.2_0.66 1, stand_left0.2_0.62 2)" in text, "report: MJX floor stops, 3 of 5 robots fallen, by segment")
-        try:
-            ec.main(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e2"),
-                     "--mjx-floor-stops", "32"])
-            refused = False
-        except SystemExit as e:
-            refused = e.code == 2
-        check(refused and not os.path.exists(os.path.join(tmp, "e2", "grid")),
+        check(refused(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e2"),
+                       "--mjx-floor-stops", "32"]) and not os.path.exists(os.path.join(tmp, "e2", "grid")),
               "--mjx-floor-stops without --mjx-actor is refused before anything runs")
         e3 = os.path.join(tmp, "e3")
         os.makedirs(e3)
@@ -136,13 +140,9 @@ def main():
               f"screen: 3 of 5 fallen is rejected at the default share, no SIL step run ({sorted(os.listdir(e3))})")
         check(ec.screen(e3, 0.6) and "**Passed the MJX screen** (60 % of the robots fell, 60 % allowed)." in
               ec.report(e3), "screen: the same rollout passes at a share of 0.6")
-        try:
-            ec.main(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e4"),
-                     "--screen-max-fallen", "1.5"])
-            refused = False
-        except SystemExit as e:
-            refused = e.code == 2
-        check(refused and not os.path.exists(os.path.join(tmp, "e4", "grid")), "--screen-max-fallen 1.5 is refused")
+        check(refused(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e4"),
+                       "--screen-max-fallen", "1.5"]) and not os.path.exists(os.path.join(tmp, "e4", "grid")),
+              "--screen-max-fallen 1.5 is refused")
         check("runs with a fall **29 of 72** (seeds 2, 8, 9," in text and "stand_left_0.3 12, stand_left_0.2 8" in text,
               "report: N24g's stress sweep, 29 of 72 runs with a fall, the falls by segment")
         with open(os.path.join(V20E, "t1_0-4_summary.json")) as f:
