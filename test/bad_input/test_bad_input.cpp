@@ -572,7 +572,7 @@ std::vector<Case> allCases() {
        ctrl("g1_sil.yaml", "timestep: 0.001", "timestep: 0.001\n  joint_stops: {timeconst: 0.004, dampratio: 20}"),
        error({"mujoco", "joint_stops.dampratio", "(0, 10]"})},
       {"ctrl_mujoco_sliding_friction_below_0_1", Kind::kControllerConfig,
-       ctrl("g1_sil.yaml", "timestep: 0.001", "timestep: 0.001\n  sliding_friction: 0.05"),
+       ctrl("g1_sil.yaml", "sliding_friction: 0 ", "sliding_friction: 0.05 "),
        error({"mujoco", "sliding_friction", "[0.1, 2]"})},
       {"ctrl_mujoco_joint_stops_typo_key", Kind::kControllerConfig,
        ctrl("g1_sil.yaml", "timestep: 0.001", "timestep: 0.001\n  joint_stops: {time_const: 0.004}"),
