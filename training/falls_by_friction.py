@@ -4,26 +4,31 @@ rollouts (docs/controller.md "Slippery floors").
 
   python3 training/falls_by_friction.py A.json [B.json ...] [--bins 0.4,0.6,0.8,1.0,1.25]
 
-A robot counts as fallen when some segment has no value for it (it was down before that segment's window).
+A robot counts as fallen when segment_robots.py marks it fallen by the end of the schedule (the last segment's
+"fallen_by_end").
 Prints, per summary, the robots and the share fallen in each friction bin [lo, hi) (the last bin closed).
 With the same --seed, eval_mjx.py draws the same robots for every actor, so the rows compare actor to actor.
 """
 import argparse
+import bisect
 import json
+import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from segment_robots import segments  # noqa: E402
 
 
 def fallen_by_bin(summary, bins):
     """(robots per bin, fallen per bin) of one segment_robots.py summary dict."""
-    friction = summary["drawn_friction"]
-    segments = [v for k, v in summary.items() if not k.startswith("drawn_")]
+    fallen_by_end = segments(summary)[-1][1]["fallen_by_end"]
     robots, fallen = [0] * (len(bins) - 1), [0] * (len(bins) - 1)
-    for i, mu in enumerate(friction):
-        k = next((j for j in range(len(bins) - 1) if bins[j] <= mu < bins[j + 1] or (j == len(bins) - 2 and mu == bins[-1])), None)
-        if k is None:
+    for i, mu in enumerate(summary["drawn_friction"]):
+        if not bins[0] <= mu <= bins[-1]:
             raise ValueError(f"robot {i}: friction {mu} outside the bins {bins}")
+        k = min(bisect.bisect_right(bins, mu), len(bins) - 1) - 1  # [lo, hi), the last bin closed
         robots[k] += 1
-        fallen[k] += any(seg["vx"][i] is None for seg in segments)
+        fallen[k] += bool(fallen_by_end[i])
     return robots, fallen
 
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Tests training/falls_by_friction.py on a synthetic segment_robots.py summary (ctest
 falls_by_friction_counts_a_known_summary, label unit). Six robots drew friction 0.45, 0.5, 0.7, 0.9, 1.0 and
-1.25; robots 0, 1 and 5 fell (no value in some segment: robot 0 in the first, 1 and 5 only in the last):
+1.25; robots 0, 1 and 5 fell (segment_robots.py's fallen_by_end: robot 0 in the first segment, 1 and 5 in the
+last):
 - the default bins give fallen / robots 2/2, 0/1, 0/1, 1/2 (1.0 opens the last bin, 1.25 closes it);
 - other edges regroup them (0.4, 0.8, 1.25: 2/3 and 1/3); a friction outside the bins and edges that do not
   increase are refused, naming them.
@@ -23,8 +24,9 @@ check = Checks()
 
 
 def main():
-    summary = {"stand": {"command_vx": 0.0, "vx": [None, 0.0, 0.0, 0.0, 0.0, 0.0]},
-               "walk": {"command_vx": 0.3, "vx": [None, None, 0.3, 0.3, 0.3, None]},
+    down = [True, True, False, False, False, True]
+    summary = {"stand": {"command_vx": 0.0, "vx": [None, 0.0, 0.0, 0.0, 0.0, 0.0], "fallen_by_end": [True] + [False] * 5},
+               "walk": {"command_vx": 0.3, "vx": [None, None, 0.3, 0.3, 0.3, None], "fallen_by_end": down},
                "drawn_friction": [0.45, 0.5, 0.7, 0.9, 1.0, 1.25], "drawn_mass": [33.0] * 6}
     robots, fallen = fbf.fallen_by_bin(summary, [0.4, 0.6, 0.8, 1.0, 1.25])
     check(robots == [2, 1, 1, 2] and fallen == [2, 0, 0, 1], f"default bins: fallen {fallen} of {robots}")
