@@ -9,40 +9,30 @@ label sil): the default config walks test/data/policy/eval_bent_walk.yaml (0.3 m
 - no fall on either floor.
 Usage: check_sil_sliding_friction.py NOMINAL_DIR SLIPPERY_DIR
 """
-import json
 import os
 import sys
 
-
-def summary(folder):
-    with open(os.path.join(folder, "summary.json")) as f:
-        return json.load(f)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sil_run import run_off_on  # noqa: E402
 
 
-def main(nominal_dir, slippery_dir):
-    a, b = summary(nominal_dir), summary(slippery_dir)
+def checks(a, _rows_a, b, _rows_b):
+    """The claims on the nominal (a) and slippery (b) summaries."""
     slip_a = {r["seed"]: r["foot_slip"] for r in a["runs"]}
     slip_b = {r["seed"]: r["foot_slip"] for r in b["runs"]}
     mean_a, mean_b = sum(slip_a.values()) / len(slip_a), sum(slip_b.values()) / len(slip_b)
     print(f"floor friction {a['floor_friction']} / {b['floor_friction']}; foot slip per seed {slip_a} / {slip_b}; "
           f"mean {mean_a:.4f} / {mean_b:.4f} m/s; falls {a['mean']['falls']} / {b['mean']['falls']}")
-    failures = []
-    if not (abs(a["floor_friction"] - 1.0) < 1e-9 and abs(b["floor_friction"] - 0.3) < 1e-9):
-        failures.append("the summaries do not record the frictions simulated (1.0 and 0.3)")
-    if sorted(slip_a) != sorted(slip_b) or len(slip_a) < 2:
-        failures.append(f"expected the same two or more seeds in both runs: {sorted(slip_a)} / {sorted(slip_b)}")
-    elif not all(slip_b[s] > slip_a[s] for s in slip_a):
-        failures.append("a seed's feet do not slide faster on the slippery floor")
-    if not mean_b > 1.15 * mean_a:
-        failures.append(f"mean foot slip {mean_b:.4f} is not 15 % above {mean_a:.4f}")
-    if a["mean"]["falls"] or b["mean"]["falls"]:
-        failures.append("a fall")
-    for f in failures:
-        print("FAIL:", f)
-    return 1 if failures else 0
+    same_seeds = sorted(slip_a) == sorted(slip_b) and len(slip_a) >= 2
+    return {
+        "the summaries record the frictions simulated (1.0 and 0.3)":
+            abs(a["floor_friction"] - 1.0) < 1e-9 and abs(b["floor_friction"] - 0.3) < 1e-9,
+        "the same two or more seeds in both runs": same_seeds,
+        "every seed's feet slide faster on the slippery floor": same_seeds and all(slip_b[k] > slip_a[k] for k in slip_a),
+        "the mean foot slip 15 % or more above the nominal floor's": mean_b > 1.15 * mean_a,
+        "no fall": not a["mean"]["falls"] and not b["mean"]["falls"],
+    }
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    sys.exit(main(sys.argv[1], sys.argv[2]))
+    sys.exit(run_off_on(checks, 0, sys.argv))
