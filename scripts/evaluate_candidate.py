@@ -3,7 +3,7 @@
 
   python3 scripts/evaluate_candidate.py --model RUN/g1_pmg_policy.onnx --out RUN/eval \\
       [--base-config config/controller/g1_sil_policy_v20b.yaml] [--bin build/bin] [--jobs 2] [--quick]
-      [--mjx-actor RUN/actor.npz]
+      [--mjx-actor RUN/actor.npz] [--sliding-friction MU]
   python3 scripts/evaluate_candidate.py --report-only --out RUN/eval      # the report from what is there
 
 What a person otherwise types by hand for each candidate (training/results/fidelity/seeds_V20b/README.md):
@@ -30,10 +30,15 @@ What a person otherwise types by hand for each candidate (training/results/fidel
 4b. The crouched stress sweep, where the battery is blind: training/results/fidelity/crouched/
    crouched_sweep_0.62.yaml (87 s of walks and stops crouched to 0.62 m) on seeds 0-71, 6 runs of 12 seeds
    (stress_0.62/), 6.5 min with --jobs 2; --skip-stress leaves it out.
+   --sliding-friction MU runs steps 4 and 4b on a floor of sliding friction MU (pmg_policy_sil
+   --sliding-friction; [0.1, 2]; the MJCF's is 1.0) and leaves the feed-forward's calibration runs (step 2)
+   on the MJCF's floor: the actor's fit is the shipped one, the floor is what changes. A run whose summary is
+   already there on another floor is refused, not reused.
 5. report.md: per battery the velocity segments in band (±15 % or 0.05 m/s / 0.08 rad/s) of the
    command and of the shaper's command (how many the shaper's envelopes slowed), posture misses (pitch/roll 0.03 rad, height 0.015 m), cross-coupling beyond 0.05 rad, runaways and falls
    (scripts/segment_band.py's score), Table I's mean errors, the stress sweep's runs with a fall and the
-   segments they fell in, the MJX floor stops' fallen robots, and the MJX gait: what issue 12 asks.
+   segments they fell in, the MJX floor stops' fallen robots, and the MJX gait: what issue 12 asks. It names
+   the floor friction the SIL runs recorded (summary.json's floor_friction).
 Each step writes its command line into its folder (command.txt) and skips work whose summary (or
 feedforward/fit.yaml) already exists, so an interrupted evaluation resumes; delete fit.yaml to refit. Units: m/s, rad/s, rad, m.
 """
@@ -80,6 +85,9 @@ STRESS_DIR = "stress_0.62"
 SWEEPS = [(1, 0, 2), (1, 2, 2), (2, 0, 2), (3, 0, 2), (7, 0, 2), (8, 0, 2)]
 PATH_KEYS = ("robot", "clips", "gco")  # top-level keys holding paths relative to the config file
 FLIGHT_LIMIT = 0.15  # share of a crouched walk's window with neither foot down that marks a run
+MJCF_FRICTION = 1.0  # the floor's sliding friction in config/robots/g1's MJCF (MuJoCo's default); summaries before
+# pmg_policy_sil recorded floor_friction ran on it
+FRICTION_RANGE = (0.1, 2.0)  # what pmg_policy_sil --sliding-friction accepts (MujocoBackendOptions::sliding_friction)
 
 
 def run(cmd, folder, log_name="log.txt", ok=(0,)):
@@ -95,10 +103,20 @@ def run(cmd, folder, log_name="log.txt", ok=(0,)):
     return rc
 
 
-def sil(args, folder, commands, first_seed, seeds, restart, extra):
-    """pmg_policy_sil into @p folder unless folder/summary.json exists; returns its path."""
+def sil(args, folder, commands, first_seed, seeds, restart, extra, friction=None):
+    """pmg_policy_sil into @p folder unless folder/summary.json exists; returns its path. @p friction: the floor's
+    sliding friction (None: the MJCF's); a summary already there from another floor raises RuntimeError."""
     summary = os.path.join(folder, "summary.json")
-    if not os.path.exists(summary):
+    if friction is not None:
+        extra = [*extra, "--sliding-friction", repr(friction)]
+    if os.path.exists(summary):
+        with open(summary) as f:
+            had = json.load(f).get("floor_friction", MJCF_FRICTION)
+        want = MJCF_FRICTION if friction is None else friction
+        if abs(had - want) > 1e-9:
+            raise RuntimeError(f"{summary}: ran on a floor of sliding friction {had}, not the {want} asked for; "
+                               f"delete that folder to run it again")
+    else:
         cmd = [os.path.join(args.bin, "pmg_policy_sil"), *extra, "--commands", commands, "--seeds", str(seeds),
                "--first-seed", str(first_seed), "--out", folder] + (["--restart-after-fall"] if restart else [])
         # Exit status 3: a run fell. That is a result (the report counts the falls), not a failed tool.
@@ -294,9 +312,30 @@ def stress_lines(out):
     return lines
 
 
+def floor_lines(out):
+    """The report's line naming the floor friction that the SIL runs of steps 4-4b recorded (summary.json's
+    floor_friction; a summary without it ran on the MJCF's floor): one value, or each value with its runs."""
+    runs = {}
+    paths = [os.path.join(out, name, "summary.json") for name in BATTERY]
+    paths += sorted(glob.glob(os.path.join(out, STRESS_DIR, "*", "summary.json")))
+    for path in filter(os.path.exists, paths):
+        with open(path) as f:
+            mu = float(json.load(f).get("floor_friction", MJCF_FRICTION))
+        runs.setdefault(mu, []).append(os.path.relpath(os.path.dirname(path), out))
+    if not runs:
+        return []
+    if len(runs) == 1:
+        mu = next(iter(runs))
+        return ["", f"Floor: sliding friction **{mu:g}** in every SIL run of the battery and the stress sweep"
+                    + (" (the MJCF's)." if mu == MJCF_FRICTION else " (`--sliding-friction`; the feed-forward was "
+                                                                     "fitted on the MJCF's 1.0).")]
+    return ["", "**Floors differ between runs:** " + "; ".join(f"sliding friction {mu:g} in {', '.join(names)}"
+                                                              for mu, names in sorted(runs.items()))]
+
+
 def report(out):
     """Step 5: report.md from the summaries under @p out; returns its text."""
-    lines = ["# Candidate against issue 12's targets", "",
+    lines = ["# Candidate against issue 12's targets", *floor_lines(out), "",
              "| battery | velocity segments in band | posture misses | coupling > 0.05 rad (largest) | runaways | falls "
              "| in band of the shaped command (slowed by the shaper) |",
              "|---|---|---|---|---|---|---|"]
@@ -360,6 +399,10 @@ def main(argv=None):
                          "paired with a candidate's on the same seeds")
     ap.add_argument("--skip-stress", action="store_true",
                     help="leave out step 4b, the crouched stress sweep (72 seeds at 0.62 m, 6.5 min with --jobs 2)")
+    ap.add_argument("--sliding-friction", type=float, default=None, metavar="MU",
+                    help=f"run the battery and the stress sweep (steps 4, 4b) on a floor of this sliding friction "
+                         f"[{FRICTION_RANGE[0]}, {FRICTION_RANGE[1]}] (default: the MJCF's {MJCF_FRICTION}); the "
+                         f"feed-forward's calibration runs stay on the MJCF's floor")
     ap.add_argument("--report-only", action="store_true", help="only write report.md from the summaries in --out")
     args = ap.parse_args(argv)
     out = os.path.abspath(args.out)
@@ -378,6 +421,9 @@ def main(argv=None):
         ap.error(f"--mjx-floor-stops {args.mjx_floor_stops}: expected a robot count >= 1 together with --mjx-actor")
     if not 0.0 <= args.screen_max_fallen <= 1.0:
         ap.error(f"--screen-max-fallen {args.screen_max_fallen}: expected a share in [0, 1]")
+    if args.sliding_friction is not None and not FRICTION_RANGE[0] <= args.sliding_friction <= FRICTION_RANGE[1]:
+        ap.error(f"--sliding-friction {args.sliding_friction}: expected a sliding friction in "
+                 f"[{FRICTION_RANGE[0]}, {FRICTION_RANGE[1]}]")
     if args.mjx_actor:
         print("step 1: MJX gait of the crouched backward walks", flush=True)
         mjx_gait(args, out)
@@ -402,7 +448,8 @@ def main(argv=None):
         print(f"step 4b: the crouched stress sweep ({n} seed{'s' if n != 1 else ''} of {STRESS[0]})", flush=True)
         runs += [(os.path.join(out, STRESS_DIR, folder), STRESS[0], first, seeds, True) for folder, first, seeds in plan]
     with ThreadPoolExecutor(args.jobs) as pool:
-        list(pool.map(lambda r: sil(args, r[0], r[1], r[2], r[3], r[4], ["--controller", controller]), runs))
+        list(pool.map(lambda r: sil(args, r[0], r[1], r[2], r[3], r[4], ["--controller", controller],
+                                    args.sliding_friction), runs))
     print(report(out))
     return 0
 

@@ -19,6 +19,11 @@ label unit):
 - the screen: with that rollout in place, an evaluation with --mjx-floor-stops stops after step 1b (3 of 5 is
   above the default 10 %), runs no SIL step, and its report says it was rejected; at a share of 0.6 the same
   rollout passes; a share outside [0, 1] is refused.
+- the floor: --sliding-friction 0.4 with a stand-in pmg_policy_sil (it writes V20e's grid summary with the
+  floor_friction its argv asked for) runs every battery with --sliding-friction 0.4 on its command line and
+  the report names the floor 0.4; run again with no friction, the same folder is refused (its summaries ran on
+  0.4), and 0.05 is refused before anything runs; the report of summaries without floor_friction names the
+  MJCF's 1.0, and one of mixed floors names each floor with its runs.
 Usage: test_evaluate_candidate.py
 """
 import json
@@ -58,6 +63,61 @@ def refused(argv):
     except SystemExit as e:
         return e.code == 2
     return False
+
+
+FAKE_SIL = """#!/usr/bin/env python3
+import json, sys
+argv = sys.argv[1:]
+out = argv[argv.index("--out") + 1]
+with open(sys.argv[0] + ".summary") as f:
+    summary = json.load(f)
+summary["floor_friction"] = float(argv[argv.index("--sliding-friction") + 1]) if "--sliding-friction" in argv else 1.0
+with open(out + "/summary.json", "w") as f:
+    json.dump(summary, f)
+"""
+
+
+def floor_checks(tmp):
+    """--sliding-friction through main() with a stand-in pmg_policy_sil, the refusal to mix floors, the report's
+    floor line."""
+    fake = os.path.join(tmp, "fake_bin")
+    os.makedirs(fake)
+    sil = os.path.join(fake, "pmg_policy_sil")
+    with open(sil, "w") as f:
+        f.write(FAKE_SIL)
+    os.chmod(sil, 0o755)
+    shutil.copy(os.path.join(V20E, "grid_0-11_summary.json"), sil + ".summary")
+    ev = os.path.join(tmp, "floor")
+    argv = ["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", ev, "--bin", fake, "--keep-feedforward",
+            "--skip-stress", "--base-config", os.path.join(ROOT, "config", "controller", "g1_sil_policy.yaml")]
+    rc = ec.main(argv + ["--sliding-friction", "0.4"])
+    lines = [open(os.path.join(ev, name, "command.txt")).read() for name in ec.BATTERY]
+    text = open(os.path.join(ev, "report.md")).read()
+    check(rc == 0 and len(lines) == len(ec.BATTERY) and all("--sliding-friction 0.4 " in c for c in lines)
+          and "Floor: sliding friction **0.4** in every SIL run" in text,
+          f"--sliding-friction 0.4: every battery run asked for it ({len(lines)} command lines) and the report names it")
+    try:
+        ec.main(argv)
+        msg = ""
+    except RuntimeError as e:
+        msg = str(e)
+    check("ran on a floor of sliding friction 0.4, not the 1.0 asked for" in msg,
+          f"summaries from another floor are refused, not reused: {msg[:90]}")
+    e5 = os.path.join(tmp, "e5")
+    check(refused(["--model", argv[1], "--out", e5, "--bin", fake, "--sliding-friction", "0.05"])
+          and not os.path.exists(os.path.join(e5, "grid")),
+          "--sliding-friction 0.05 is refused")
+    mixed = os.path.join(tmp, "mixed")
+    for name, mu in (("grid", 0.4), ("mirror", None)):
+        os.makedirs(os.path.join(mixed, name))
+        with open(os.path.join(V20E, "grid_0-11_summary.json")) as f:
+            summary = json.load(f)
+        if mu is not None:
+            summary["floor_friction"] = mu
+        with open(os.path.join(mixed, name, "summary.json"), "w") as f:
+            json.dump(summary, f)
+    check("**Floors differ between runs:** sliding friction 0.4 in grid; sliding friction 1 in mirror" in ec.report(mixed),
+          "report: runs on two floors are named, each with its runs")
 
 
 def main():
@@ -122,6 +182,8 @@ def main():
         text = ec.main(["--report-only", "--out", ev]) == 0 and open(os.path.join(ev, "report.md")).read()
         check("on the floor stops (training/results/fidelity/crouched/floor_stops_0.62.yaml, --seed 1): **3 of 5** "
               "(left0.2_0.66 1, stand_left0.2_0.62 2)" in text, "report: MJX floor stops, 3 of 5 robots fallen, by segment")
+        check("Floor: sliding friction **1** in every SIL run of the battery and the stress sweep (the MJCF's)." in text,
+              "report: summaries without floor_friction ran on the MJCF's floor")
         check(refused(["--model", os.path.join(V20E, "g1_pmg_policy.onnx"), "--out", os.path.join(tmp, "e2"),
                        "--mjx-floor-stops", "32"]) and not os.path.exists(os.path.join(tmp, "e2", "grid")),
               "--mjx-floor-stops without --mjx-actor is refused before anything runs")
@@ -160,6 +222,7 @@ def main():
               and "back0.3_0.78" not in text and "stop_0.74" not in text,
               "report: MJX gait, 3 of 4 crouched walks flagged (flight 0.35, a fall, one after the fall); standing walk "
               "and stop left out")
+        floor_checks(tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return check.exit_code()
