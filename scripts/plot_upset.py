@@ -25,10 +25,11 @@ def load(d, seed, t0, t1):
     rows = []
     with open(f"{d}/seed{seed}.csv") as f:
         for r in csv.DictReader(f):
+            if not t0 <= float(r["t"]) <= t1:
+                continue
             if r.get("mode") == "damping" and rows:
                 return rows, True
-            if t0 <= float(r["t"]) <= t1:
-                rows.append(r)
+            rows.append(r)
     return rows, False
 
 
