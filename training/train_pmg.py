@@ -196,6 +196,11 @@ def parse_args(argv=None):
     ap.add_argument("--warmup-height-sigma", type=float, default=None, metavar="S",
                     help="width of the pelvis height reward during the warm-up [m^2] (default 0.02: a 0.16 m "
                          "shortfall keeps 28 %% of the term); needs --warmup-steps")
+    ap.add_argument("--warmup-orientation-sigma", type=float, default=None, metavar="S",
+                    help="width of the torso pitch/roll reward during the warm-up [rad^2] (default: the run's own, "
+                         "--orientation-sigma): a narrow orientation reward from the first step, before the robot "
+                         "walks at all, is the likeliest reason N24i fell (training/README.md \"A narrow orientation "
+                         "reward on top, from scratch\"); needs --warmup-steps")
     ap.add_argument("--warmup-p-posture-walk", type=float, default=None, metavar="P",
                     help="EnvConfig.p_posture_walk during the warm-up (default: the run's own, --p-posture-walk): 0 "
                          "trains the warm-up's walks at the standing posture, so walking crouched, bent or leaning starts "
@@ -332,6 +337,11 @@ def parse_args(argv=None):
             ap.error(f"{name} = {value}: expected a finite width > 0")
         if value is None:
             setattr(args, flag, default)
+    if args.warmup_orientation_sigma is not None:
+        if args.warmup_steps == 0:
+            ap.error(f"--warmup-orientation-sigma = {args.warmup_orientation_sigma}: has no effect without --warmup-steps N > 0")
+        if not (math.isfinite(args.warmup_orientation_sigma) and args.warmup_orientation_sigma > 0):
+            ap.error(f"--warmup-orientation-sigma = {args.warmup_orientation_sigma}: expected a finite width > 0")
     if args.warmup_p_posture_walk is not None:
         if args.warmup_steps == 0:
             ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: has no effect without --warmup-steps N > 0")
@@ -426,11 +436,13 @@ def parse_args(argv=None):
 def warmup_config(cfg, args):
     """The warm-up stage's EnvConfig (--warmup-steps): @p cfg with the velocity-tracking widths
     (lin_vel_sigma, yaw_rate_sigma) set to --warmup-tracking-sigma, height_sigma to
-    --warmup-height-sigma and, when given, p_posture_walk to --warmup-p-posture-walk, every other field
-    as it is; None when --warmup-steps is 0."""
+    --warmup-height-sigma and, when given, orientation_sigma to --warmup-orientation-sigma and p_posture_walk
+    to --warmup-p-posture-walk, every other field as it is; None when --warmup-steps is 0."""
     if args.warmup_steps <= 0:
         return None
     posture = {} if args.warmup_p_posture_walk is None else {"p_posture_walk": args.warmup_p_posture_walk}
+    if args.warmup_orientation_sigma is not None:
+        posture["orientation_sigma"] = args.warmup_orientation_sigma
     return dataclasses.replace(cfg, lin_vel_sigma=args.warmup_tracking_sigma, yaw_rate_sigma=args.warmup_tracking_sigma,
                                height_sigma=args.warmup_height_sigma, **posture)
 
@@ -569,6 +581,7 @@ def main(argv=None):
                    "warmup": None if warmup_env is None else {
                        "steps": args.warmup_steps, "lin_vel_sigma": args.warmup_tracking_sigma,
                        "yaw_rate_sigma": args.warmup_tracking_sigma, "height_sigma": args.warmup_height_sigma,
+                       "orientation_sigma": warmup_cfg.orientation_sigma,
                        "p_posture_walk": warmup_cfg.p_posture_walk, "evals": args.warmup_evals},
                    "gains": {"mode": cfg.gains, "kp": env.kp.tolist(), "kd": env.kd.tolist(),
                              "armature": env.armature.tolist(), "robot_yaml": export_robot_yaml(cfg)},
@@ -638,7 +651,8 @@ def main(argv=None):
         if warmup_env is not None:  # stage 1: wide rewards, no evaluations; checkpoints at its start and end (--warmup-evals)
             stage["name"] = "warmup"
             log(f"warm-up: {args.warmup_steps} steps with tracking sigma {args.warmup_tracking_sigma}, "
-                f"height sigma {args.warmup_height_sigma}, p_posture_walk {warmup_cfg.p_posture_walk}")
+                f"height sigma {args.warmup_height_sigma}, orientation sigma {warmup_cfg.orientation_sigma}, "
+                f"p_posture_walk {warmup_cfg.p_posture_walk}")
             _, restore, _ = train(warmup_env, num_timesteps=args.warmup_steps, num_evals=args.warmup_evals,
                                   run_evals=False,
                                   restore_params=restore)

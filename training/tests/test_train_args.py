@@ -124,6 +124,11 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                    "--warmup-p-posture-walk"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-p-posture-walk", "nan"],
                    "--warmup-p-posture-walk"),
+                  (["--warmup-orientation-sigma", "0.05"], "--warmup-orientation-sigma"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-orientation-sigma", "0"],
+                   "--warmup-orientation-sigma"),
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-orientation-sigma", "inf"],
+                   "--warmup-orientation-sigma"),
                   (["--warmup-evals", "4"], "--warmup-evals"),
                   (["--action-noise-scale", "0"], "--action-noise-scale"),
                   (["--action-noise-scale", "-0.5"], "--action-noise-scale"),
@@ -167,6 +172,13 @@ args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup
                              "--warmup-p-posture-walk", "0"])
 if train_pmg.warmup_config(_Cfg(), args) != _Cfg(0.25, 0.25, 0.02, 0.05, 1000, 0.0):
     failures.append(f"--warmup-p-posture-walk 0: warm-up config {train_pmg.warmup_config(_Cfg(), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400",
+                             "--orientation-sigma", "0.01", "--warmup-orientation-sigma", "0.05"])
+if train_pmg.warmup_config(_Cfg(orientation_sigma=0.01), args) != _Cfg(0.25, 0.25, 0.02, 0.05, 1000):
+    failures.append(f"--warmup-orientation-sigma 0.05: warm-up config {train_pmg.warmup_config(_Cfg(orientation_sigma=0.01), args)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400", "--orientation-sigma", "0.01"])
+if train_pmg.warmup_config(_Cfg(orientation_sigma=0.01), args).orientation_sigma != 0.01:
+    failures.append("without --warmup-orientation-sigma the warm-up keeps the run's orientation width")
 args = train_pmg.parse_args(["--out", "/tmp/x", "--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "5",
                              "--keep-actors"])
 if (args.warmup_evals, args.keep_actors) != (5, True):
