@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
       feedback_within_envelopes, yaw_beyond_envelopes, max_velocity_headroom, walking_height_floor, joint_stops, braking,
-      upset_upright;
+      upset_upright, decay_feedforward;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -277,6 +277,9 @@ int main(int argc, char** argv) {
         "closed-loop velocity tracking on leg odometry (default: the controller config's velocity_feedback)");
   onOff("--feedforward", &feedforward,
         "command-response feed-forward (velocity_feedback.feedforward; default: the controller config's)");
+  onOff("--decay-feedforward", &decay_feedforward,
+        "on: while the pelvis tilts beyond velocity_feedback.max_tilt_rad the feed-forward's share decays as the correction "
+        "does (velocity_feedback.decay_feedforward), off: only the correction; default: the controller config's");
   onOff("--posture-feedback", &posture_feedback,
         "closed-loop torso pitch/roll tracking (default: the controller config's posture_feedback)");
   onOff("--crouched-envelope", &crouched_envelope,
@@ -343,6 +346,7 @@ int main(int argc, char** argv) {
       if (!base.velocity_feedback.enabled || !base.velocity_feedback.feedforward.enabled)
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
+    if (!decay_feedforward.empty()) base.velocity_feedback.decay_feedforward = decay_feedforward == "on";
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
@@ -846,6 +850,7 @@ int main(int argc, char** argv) {
     js << "{\"model\": " << jstr(model_path) << ", \"config\": " << jstr(config) << ", \"blending\": " << jstr(base.generator.blending == pmg::Blending::kPaper ? "paper" : "consistent")
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
+       << ", \"decay_feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled && base.velocity_feedback.decay_feedforward ? "true" : "false")
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"upset_upright\": " << (base.velocity_feedback.upset_guard.enabled && base.velocity_feedback.upset_guard.upright ? "true" : "false")

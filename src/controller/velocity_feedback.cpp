@@ -382,6 +382,7 @@ void VelocityFeedback::reset() noexcept {
   u_anchor_ = {0.0, 0.0, 0.0};
   steady_ = {0.0, 0.0, 0.0};
   brake_ = {0.0, 0.0};
+  ff_share_ = 1.0;
   u_fb_prev_ = VelocityCommand{};
   estimator_.reset();
   est_ = BaseVelocityEstimate{};
@@ -408,6 +409,11 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   const double keep = decay ? std::max(0.0, 1.0 - dt / config_.decay_time_s) : 1.0;
   const std::array<double, 3> u_user{u.vx, u.vy, u.wz};
   u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user, crouch_m_) : u_user;
+  if (config_.decay_feedforward) {
+    // The feed-forward's share decays while tilted and returns at the same rate (continuous).
+    ff_share_ = decay ? ff_share_ * keep : std::min(1.0, ff_share_ + dt / config_.decay_time_s);
+    for (std::size_t i = 0; i < 3; ++i) u_ff_[i] = u_user[i] + ff_share_ * (u_ff_[i] - u_user[i]);
+  }
   for (std::size_t i = 0; i < 3; ++i) {
     // The limits: the envelope and ±max_velocity, which opens beyond max_velocity only as far as the
     // command comes within max_velocity_headroom of it (continuous in u; unchanged below that).

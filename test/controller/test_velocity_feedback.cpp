@@ -837,6 +837,66 @@ TEST(VelocityFeedback, FeedforwardReachesACoupledCommandWhileTheIntegratorIsHeld
   for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(both[i], u[i], 0.005) << i;
 }
 
+// decay_feedforward: tilted beyond max_tilt_rad, the feed-forward's share decays with the
+// correction, so the robot gets the user's command; upright again it returns at the same rate,
+// without a jump. Without the key the model's command stays whole while tilted (the behaviour the
+// slippery floor's falls came with, docs/controller.md "Slippery floors").
+TEST(VelocityFeedback, DecayFeedforwardGivesATiltedRobotTheUsersCommandAndReturnsContinuously) {
+  Legs legs;
+  const CommandResponseModel model = coupledModel();
+  const VelocityCommand u{0.4, 0.25, 0.4};
+  const std::array<double, 3> inv = model.invert({u.vx, u.vy, u.wz});
+  ASSERT_GT(std::fabs(inv[1] - u.vy), 0.05) << "the model moves the command";
+  const auto make = [&](bool decay_ff) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.envelope_min = {-0.65, -0.5, -1.0};
+    c.envelope_max = {1.0, 0.5, 1.0};
+    c.feedforward = model;
+    c.feedforward.enabled = true;
+    c.decay_feedforward = decay_ff;
+    return std::make_unique<VelocityFeedback>(c, legs.model, legs.idx, std::array<double, 3>{1.0, 0.4, 0.8});
+  };
+  BaseVelocityEstimate est;  // invalid: the integrator is not fed; only the feed-forward acts
+  for (const bool decay_ff : {false, true}) {
+    auto fb = make(decay_ff);
+    for (int k = 0; k < 100; ++k) fb->correct(u, est, 0.01);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(fb->feedforward()[i], inv[i], 1e-12) << "upright: the model's command";
+    EXPECT_EQ(fb->feedforwardShare(), 1.0);
+    for (int k = 0; k < 50; ++k) fb->correct(u, est, 0.01, false, /*decay=*/true);
+    const double share = decay_ff ? std::pow(1.0 - 0.01 / 0.5, 50) : 1.0;
+    EXPECT_NEAR(fb->feedforwardShare(), share, 1e-12);
+    for (std::size_t i = 0; i < 3; ++i)
+      EXPECT_NEAR(fb->feedforward()[i], u[i] + share * (inv[i] - u[i]), 1e-12) << "axis " << i << " decay_ff " << decay_ff;
+    for (int k = 0; k < 450; ++k) fb->correct(u, est, 0.01, false, true);
+    if (!decay_ff) {
+      EXPECT_NEAR(fb->command().vy, inv[1], 1e-12) << "without the key the model's command stays whole while tilted";
+      continue;
+    }
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_LT(std::fabs(fb->command()[i] - u[i]), 1e-4) << "the user's command, axis " << i;
+    // Upright again: back to the model's command at dt / decay_time_s per tick, never a jump.
+    VelocityCommand prev = fb->command();
+    const double step = 0.01 / 0.5;
+    double prev_share = fb->feedforwardShare();
+    for (int k = 1; k <= 60; ++k) {
+      const VelocityCommand& now = fb->correct(u, est, 0.01);
+      EXPECT_NEAR(fb->feedforwardShare(), std::min(1.0, prev_share + step), 1e-12) << "linear return, tick " << k;
+      prev_share = fb->feedforwardShare();
+      for (std::size_t i = 0; i < 3; ++i)
+        EXPECT_LE(std::fabs(now[i] - prev[i]), step * std::fabs(inv[i] - u[i]) + 1e-12) << "tick " << k << " axis " << i;
+      prev = now;
+    }
+    EXPECT_EQ(fb->feedforwardShare(), 1.0) << "50 ticks of 0.02 bring it back";
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(fb->feedforward()[i], inv[i], 1e-12);
+    // reset(): whole again.
+    for (int k = 0; k < 20; ++k) fb->correct(u, est, 0.01, false, true);
+    ASSERT_LT(fb->feedforwardShare(), 1.0);
+    fb->reset();
+    EXPECT_EQ(fb->feedforwardShare(), 1.0);
+  }
+  // The key is read from the controller config.
+  EXPECT_FALSE(VelocityFeedbackConfig{}.decay_feedforward) << "off unless configured";
+}
+
 TEST(BaseVelocityEstimator, GatesOutlyingLegOdometryAndFollowsTheAccelerometer) {
   Legs legs;
   VelocityFeedbackConfig c = enabledConfig();
@@ -1000,6 +1060,7 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   c.brake_ratio = 0.8;  // the braking floor's path too
   c.feedforward = coupledModel();  // and the feed-forward's inverse, with its crouch terms
   c.feedforward.axes[0].gain_negative_per_crouch = 4.0;
+  c.decay_feedforward = true;  // and its share's decay while tilted
   VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
   fb.setCrouch(0.05);
   gco::LegVector q[2], qd[2];
@@ -1032,6 +1093,13 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   }
   EXPECT_EQ(n, 0u);
   EXPECT_EQ(fb.brakingTicks() - braked_before, 20u) << "the floor acted on every tick of the stop";
+  {  // tilted: the feed-forward's share decays (decay_feedforward)
+    test::AllocationGuard guard;
+    for (int k = 0; k < 20; ++k) fb.correct({0.5, 0.1, 0.3}, moving, 0.01, false, /*decay=*/true);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+  EXPECT_LT(fb.feedforwardShare(), 1.0);
 }
 
 int jointIndex(const std::string& name) {

@@ -181,6 +181,18 @@ struct VelocityFeedbackConfig {
   double max_tilt_rad = 0.3;
   /// Time constant of that decay [s], (0, 5].
   double decay_time_s = 0.5;
+  /// true: while tilted beyond max_tilt_rad the feed-forward's share decays too, with the same
+  /// time constant, u_ff = u + w (feedforward.invert(u) − u) with w ← w (1 − dt/decay_time_s), and
+  /// w returns to 1 at dt/decay_time_s per tick once the robot is upright again (u_ff stays
+  /// continuous: it moves by at most dt/decay_time_s × feedforward.max_correction per tick on top
+  /// of the command's own change), so that a robot catching itself gets the user's command, not the
+  /// model's. false (the default before 2026-12-02): only the integral correction decays and the
+  /// feed-forward stays whole. Why: on a slippery floor (sliding friction 0.4) the default actor fell
+  /// in 5 of 60 mirror-image runs, in the two combined segments at the envelope's edge, where the
+  /// pelvis tilts beyond 0.3 rad for 44–46 % of the segment and the feed-forward had raised the
+  /// command to about (0.48, −0.36, −0.67) for (0.5, −0.3, −0.5) (docs/controller.md "Slippery
+  /// floors").
+  bool decay_feedforward = false;
   /// An axis integrates only once its shaped command has been steady this long [s], [0, 5]: while
   /// the command ramps (and the robot lags it by design) the error is not the robot's shortfall,
   /// and integrating it winds the correction up into an overshoot. "Steady": within
@@ -406,6 +418,9 @@ class VelocityFeedback {
   const VelocityCommand& scaleDown(double scale, bool keep_yaw = false) noexcept;
   /// Ticks on which scaleDown() acted so far.
   std::uint64_t envelopeTicks() const noexcept { return envelope_ticks_; }
+  /// The feed-forward's share w ∈ [0, 1] of the last update (VelocityFeedbackConfig::decay_feedforward;
+  /// always 1 without it).
+  double feedforwardShare() const noexcept { return ff_share_; }
   /// Ticks on which the correction was held (estimator rejecting) / decayed (tilt) so far.
   std::uint64_t heldTicks() const noexcept { return held_ticks_; }
   std::uint64_t decayedTicks() const noexcept { return decayed_ticks_; }
@@ -449,6 +464,7 @@ class VelocityFeedback {
   std::array<double, 2> brake_{};
   double brake_weight_ = 1.0;
   double crouch_m_ = 0.0;
+  double ff_share_ = 1.0;  ///< w of decay_feedforward
   BaseVelocityEstimate est_;
   VelocityCommand u_fb_{}, u_fb_prev_{};
   std::uint64_t held_ticks_ = 0, decayed_ticks_ = 0, braking_ticks_ = 0, envelope_ticks_ = 0;
