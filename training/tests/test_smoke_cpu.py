@@ -844,7 +844,7 @@ def warmup_staging_checks(check, workdir):
         tc = json.load(f)
     check(stages == [("warmup", 400), ("main", 1000)] and
           tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03,
-                           "p_posture_walk": 0.0, "evals": 3} and
+                           "orientation_sigma": 0.05, "p_posture_walk": 0.0, "evals": 3} and
           tc["env"]["lin_vel_sigma"] == 0.05 and tc["env"]["p_posture_walk"] == 0.6 and ppo.acting.Evaluator is evaluator and
           ppo.ppo_losses.compute_ppo_loss is loss and tc["action_noise_scale"] == 0.5,
           f"progress.jsonl (stage, step) {stages}; train_config warmup {tc['warmup']}; Brax's Evaluator and "
