@@ -243,6 +243,7 @@ int main(int argc, char** argv) {
   double duration = -1, frame_period = 0.1;
   std::string probe_path;
   double q_rate_max = -1;
+  double feedforward_return_s = -1;  // < 0: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -325,6 +326,10 @@ int main(int argc, char** argv) {
                  "the HAL supervisor's slew limit on commanded joint positions [rad/s] (default: the controller "
                  "config's safety.q_rate_max; 20 = before 2026-11-30)")
       ->check(pmg::cli::finiteIn(1.0, 2000.0));
+  app.add_option("--feedforward-return-s", feedforward_return_s,
+                 "with the feed-forward's decay: the time its share takes to return from 0 to 1 once upright [s] "
+                 "(velocity_feedback.feedforward_return_s; 0 = decay_time_s; default: the controller config's)")
+      ->check(pmg::cli::finiteIn(0.0, 30.0));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
@@ -347,6 +352,7 @@ int main(int argc, char** argv) {
         throw pmg::ConfigError(controller_path + ": --feedforward on: velocity_feedback.feedforward is off there (or the feedback is)");
     }
     if (!decay_feedforward.empty()) base.velocity_feedback.decay_feedforward = decay_feedforward == "on";
+    if (feedforward_return_s >= 0) base.velocity_feedback.feedforward_return_s = feedforward_return_s;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
@@ -851,6 +857,7 @@ int main(int argc, char** argv) {
        << ", \"velocity_feedback\": " << (base.velocity_feedback.enabled ? "true" : "false")
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"decay_feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled && base.velocity_feedback.decay_feedforward ? "true" : "false")
+       << ", \"feedforward_return_s\": " << base.velocity_feedback.feedforward_return_s
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"upset_upright\": " << (base.velocity_feedback.upset_guard.enabled && base.velocity_feedback.upset_guard.upright ? "true" : "false")

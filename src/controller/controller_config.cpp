@@ -226,6 +226,7 @@ struct VelocityFeedbackYaml {
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("decay_feedforward", &f.decay_feedforward, "while tilted the feed-forward's share decays too, and returns once upright (true|false)");
+    a->Visit("feedforward_return_s", &f.feedforward_return_s, "with decay_feedforward: the share returns from 0 to 1 over this, (0, 30] s (0: decay_time_s)");
     a->Visit("settle_time_s", &f.settle_time_s, "an axis integrates once its command is steady this long, 0..5 s");
     a->Visit("steady_band", &f.steady_band, "steady: within max(this, 5 % of |u|) of where it settled, 0..0.5 m/s, rad/s");
     a->Visit("brake_ratio", &f.brake_ratio, "braking steps: gait floor at this share of the estimated v_x, v_y, [0, 1); 0 = off");

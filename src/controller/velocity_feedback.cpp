@@ -130,6 +130,8 @@ std::string VelocityFeedbackConfig::validate() const {
   if (!(max_rejected_s >= 0.0 && max_rejected_s <= 5.0)) return "max_rejected_s: expected 0..5 s";
   if (!(max_tilt_rad > 0.0 && max_tilt_rad <= 1.5)) return "max_tilt_rad: expected (0, 1.5] rad";
   if (!(decay_time_s > 0.0 && decay_time_s <= 5.0)) return "decay_time_s: expected (0, 5] s";
+  if (!(feedforward_return_s >= 0.0 && feedforward_return_s <= 30.0))
+    return "feedforward_return_s: expected 0 (decay_time_s) or (0, 30] s";
   if (!(settle_time_s >= 0.0 && settle_time_s <= 5.0)) return "settle_time_s: expected 0..5 s";
   if (!(steady_band >= 0.0 && steady_band <= 0.5)) return "steady_band: expected 0..0.5 (m/s, rad/s)";
   if (!(brake_ratio >= 0.0 && brake_ratio < 1.0)) return "brake_ratio: expected [0, 1)";
@@ -411,7 +413,8 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user, crouch_m_) : u_user;
   if (config_.decay_feedforward) {
     // The feed-forward's share decays while tilted and returns at the same rate (continuous).
-    ff_share_ = decay ? ff_share_ * keep : std::min(1.0, ff_share_ + dt / config_.decay_time_s);
+    const double back_s = config_.feedforward_return_s > 0.0 ? config_.feedforward_return_s : config_.decay_time_s;
+    ff_share_ = decay ? ff_share_ * keep : std::min(1.0, ff_share_ + dt / back_s);
     for (std::size_t i = 0; i < 3; ++i) u_ff_[i] = u_user[i] + ff_share_ * (u_ff_[i] - u_user[i]);
   }
   for (std::size_t i = 0; i < 3; ++i) {

@@ -893,6 +893,38 @@ TEST(VelocityFeedback, DecayFeedforwardGivesATiltedRobotTheUsersCommandAndReturn
     fb->reset();
     EXPECT_EQ(fb->feedforwardShare(), 1.0);
   }
+  // feedforward_return_s: a slower return than the decay; a tilted moment every 0.5 s keeps the share low.
+  {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.feedforward = model;
+    c.feedforward.enabled = true;
+    c.envelope_min = {-0.65, -0.5, -1.0};
+    c.envelope_max = {1.0, 0.5, 1.0};
+    c.decay_feedforward = true;
+    c.feedforward_return_s = 2.0;
+    VelocityFeedback slow(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+    for (int k = 0; k < 1000; ++k) slow.correct(u, est, 0.01, false, true);
+    ASSERT_LT(slow.feedforwardShare(), 1e-6);
+    for (int k = 0; k < 50; ++k) slow.correct(u, est, 0.01);
+    EXPECT_NEAR(slow.feedforwardShare(), 0.25, 1e-6) << "0.5 s of a 2 s return";
+    // Tilted 0.45 s in every second (diag_turn's share): with the 2 s return the share stays below a
+    // half, with decay_time_s's return (0.5 s) it is back at 1 before each tilt.
+    c.feedforward_return_s = 0.0;
+    VelocityFeedback fast(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+    double slow_max = 0.0, fast_min_before_tilt = 1.0;
+    for (int k = 0; k < 3000; ++k) {
+      const bool tilted = k % 100 < 45;
+      if (k % 100 == 0 && k > 0) fast_min_before_tilt = std::min(fast_min_before_tilt, fast.feedforwardShare());
+      slow.correct(u, est, 0.01, false, tilted);
+      fast.correct(u, est, 0.01, false, tilted);
+      if (k > 2000) slow_max = std::max(slow_max, slow.feedforwardShare());
+    }
+    EXPECT_LT(slow_max, 0.5);
+    EXPECT_GT(slow_max, 0.3) << "not gone: the share rises between the tilts";
+    EXPECT_EQ(fast_min_before_tilt, 1.0);
+    c.feedforward_return_s = 31.0;
+    EXPECT_NE(c.validate().find("feedforward_return_s"), std::string::npos);
+  }
   // The key is read from the controller config.
   EXPECT_FALSE(VelocityFeedbackConfig{}.decay_feedforward) << "off unless configured";
 }

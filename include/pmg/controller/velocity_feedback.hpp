@@ -183,9 +183,9 @@ struct VelocityFeedbackConfig {
   double decay_time_s = 0.5;
   /// true: while tilted beyond max_tilt_rad the feed-forward's share decays too, with the same
   /// time constant, u_ff = u + w (feedforward.invert(u) − u) with w ← w (1 − dt/decay_time_s), and
-  /// w returns to 1 at dt/decay_time_s per tick once the robot is upright again (u_ff stays
-  /// continuous: it moves by at most dt/decay_time_s × feedforward.max_correction per tick on top
-  /// of the command's own change), so that a robot catching itself gets the user's command, not the
+  /// w returns to 1 at dt/feedforward_return_s per tick once the robot is upright again (u_ff stays
+  /// continuous: it moves by at most dt/min(decay_time_s, feedforward_return_s) ×
+  /// feedforward.max_correction per tick on top of the command's own change), so that a robot catching itself gets the user's command, not the
   /// model's. false (the default before 2026-12-02): only the integral correction decays and the
   /// feed-forward stays whole. Why: on a slippery floor (sliding friction 0.4) the default actor fell
   /// in 5 of 60 mirror-image runs, in the two combined segments at the envelope's edge, where the
@@ -193,6 +193,12 @@ struct VelocityFeedbackConfig {
   /// command to about (0.48, −0.36, −0.67) for (0.5, −0.3, −0.5) (docs/controller.md "Slippery
   /// floors").
   bool decay_feedforward = false;
+  /// With decay_feedforward: the time over which the share returns from 0 to 1 once upright [s],
+  /// (0, 30] (w rises by dt / feedforward_return_s per tick); 0 (the default): decay_time_s. A
+  /// return slower than the decay keeps the share low through a walk that tilts beyond max_tilt_rad
+  /// again and again (the envelope's combined corners: 44–50 % of the segment), and leaves a walk
+  /// that tilts once in a while nearly whole.
+  double feedforward_return_s = 0.0;
   /// An axis integrates only once its shaped command has been steady this long [s], [0, 5]: while
   /// the command ramps (and the robot lags it by design) the error is not the robot's shortfall,
   /// and integrating it winds the correction up into an overshoot. "Steady": within
