@@ -412,7 +412,7 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
   const std::array<double, 3> u_user{u.vx, u.vy, u.wz};
   u_ff_ = config_.feedforward.enabled ? config_.feedforward.invert(u_user, crouch_m_) : u_user;
   if (config_.decay_feedforward) {
-    // The feed-forward's share decays while tilted and returns at the same rate (continuous).
+    // The feed-forward's share decays while tilted and returns over feedforward_return_s (continuous).
     const double back_s = config_.feedforward_return_s > 0.0 ? config_.feedforward_return_s : config_.decay_time_s;
     ff_share_ = decay ? ff_share_ * keep : std::min(1.0, ff_share_ + dt / back_s);
     for (std::size_t i = 0; i < 3; ++i) u_ff_[i] = u_user[i] + ff_share_ * (u_ff_[i] - u_user[i]);
