@@ -176,22 +176,22 @@ struct VelocityFeedbackConfig {
   /// docs/controller.md "A restart from the median".
   bool restart_median = false;
   /// Above this pelvis tilt (IMU roll or pitch) [rad], (0, 1.5], the correction is not integrated
-  /// and decays to zero with decay_time_s: a robot that is being shoved or catching itself gets
-  /// exactly the user's command.
+  /// and decays to zero with decay_time_s: a robot that is being shoved or catching itself gets the
+  /// user's command (with the feed-forward on, the feed-forward's command unless decay_feedforward).
   double max_tilt_rad = 0.3;
   /// Time constant of that decay [s], (0, 5].
   double decay_time_s = 0.5;
-  /// true: while tilted beyond max_tilt_rad the feed-forward's share decays too, with the same
-  /// time constant, u_ff = u + w (feedforward.invert(u) − u) with w ← w (1 − dt/decay_time_s), and
-  /// w returns to 1 at dt/feedforward_return_s per tick once the robot is upright again (u_ff stays
+  /// true: while tilted beyond max_tilt_rad the feed-forward's share w decays too, with the same
+  /// time constant: u_ff = u + w (feedforward.invert(u) − u), w ← w (1 − dt/decay_time_s). Once the
+  /// robot is upright again w returns to 1 at dt/feedforward_return_s per tick. u_ff stays
   /// continuous: it moves by at most dt/min(decay_time_s, feedforward_return_s) ×
-  /// feedforward.max_correction per tick on top of the command's own change), so that a robot catching itself gets the user's command, not the
-  /// model's. false (the default before 2026-12-02): only the integral correction decays and the
-  /// feed-forward stays whole. Why: on a slippery floor (sliding friction 0.4) the default actor fell
-  /// in 5 of 60 mirror-image runs, in the two combined segments at the envelope's edge, where the
-  /// pelvis tilts beyond 0.3 rad for 44–46 % of the segment and the feed-forward had raised the
-  /// command to about (0.48, −0.36, −0.67) for (0.5, −0.3, −0.5) (docs/controller.md "Slippery
-  /// floors").
+  /// feedforward.max_correction per tick on top of the command's own change. So a robot catching
+  /// itself gets the user's command, not the model's. false (the default): only the integral
+  /// correction decays and the feed-forward stays whole. Measured and not adopted: on a slippery
+  /// floor (sliding friction 0.4) the default actor falls in 8 of 120 mirror-image runs, in the two
+  /// 3-axis segments at the envelope's edge, where the pelvis tilts beyond 0.3 rad for 44–50 % of the
+  /// segment; with this key 4 of 120, with it and a 3 s return 6 of 120 (not significant;
+  /// docs/controller.md "Slippery floors").
   bool decay_feedforward = false;
   /// With decay_feedforward: the time over which the share returns from 0 to 1 once upright [s],
   /// (0, 30] (w rises by dt / feedforward_return_s per tick); 0 (the default): decay_time_s. A
