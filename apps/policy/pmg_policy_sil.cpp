@@ -244,6 +244,7 @@ int main(int argc, char** argv) {
   std::string probe_path;
   double q_rate_max = -1;
   double feedforward_return_s = -1;  // < 0: the controller config's
+  double combined_ff_ratio = -1;     // < 0: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -330,6 +331,10 @@ int main(int argc, char** argv) {
                  "with the feed-forward's decay: the time its share takes to return from 0 to 1 once upright [s] "
                  "(velocity_feedback.feedforward_return_s; 0 = decay_time_s; default: the controller config's)")
       ->check(pmg::cli::finiteIn(0.0, 30.0));
+  app.add_option("--combined-ff-ratio", combined_ff_ratio,
+                 "on a command moving all three axes, the feed-forward's max_correction shrinks to this share [0, 1] "
+                 "(velocity_feedback.feedforward.combined_max_correction_ratio; 1 = off; default: the controller config's)")
+      ->check(pmg::cli::finiteIn(0.0, 1.0));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
@@ -353,6 +358,7 @@ int main(int argc, char** argv) {
     }
     if (!decay_feedforward.empty()) base.velocity_feedback.decay_feedforward = decay_feedforward == "on";
     if (feedforward_return_s >= 0) base.velocity_feedback.feedforward_return_s = feedforward_return_s;
+    if (combined_ff_ratio >= 0) base.velocity_feedback.feedforward.combined_max_correction_ratio = combined_ff_ratio;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
@@ -858,6 +864,7 @@ int main(int argc, char** argv) {
        << ", \"feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled ? "true" : "false")
        << ", \"decay_feedforward\": " << (base.velocity_feedback.enabled && base.velocity_feedback.feedforward.enabled && base.velocity_feedback.decay_feedforward ? "true" : "false")
        << ", \"feedforward_return_s\": " << base.velocity_feedback.feedforward_return_s
+       << ", \"combined_ff_ratio\": " << base.velocity_feedback.feedforward.combined_max_correction_ratio
        << ", \"posture_feedback\": " << (base.posture_feedback.enabled ? "true" : "false")
        << ", \"upset_guard\": " << (base.velocity_feedback.upset_guard.enabled ? "true" : "false")
        << ", \"upset_upright\": " << (base.velocity_feedback.upset_guard.enabled && base.velocity_feedback.upset_guard.upright ? "true" : "false")

@@ -175,6 +175,10 @@ struct FeedforwardYaml {
     a->Visit("vy", &vy, "response of v_y");
     a->Visit("wz", &wz, "response of the yaw rate w");
     a->Visit("max_correction", &m.max_correction, "|u_ff - u| at most v_x, v_y [m/s], w [rad/s], each 0..1");
+    a->Visit("combined_max_correction_ratio", &m.combined_max_correction_ratio,
+             "on a command moving all three axes, max_correction shrinks to this share, 0..1 (1: off)");
+    a->Visit("combined_full", &m.combined_full,
+             "per-axis command at which an axis counts fully as combined, v_x, v_y [m/s], w [rad/s], each (0, 2]");
     a->Visit("min_gain", &m.min_gain, "the inverse divides by at least this modelled gain, 0.3..1");
     a->Visit("iterations", &m.iterations, "Gauss-Seidel sweeps of the inverse, 1..50");
   }

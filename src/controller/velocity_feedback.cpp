@@ -66,6 +66,11 @@ std::string CommandResponseModel::validate() const {
     if (!(max_correction[i] >= 0.0 && max_correction[i] <= 1.0))
       return "max_correction[" + std::to_string(i) + "]: expected 0..1 (m/s, rad/s)";
   }
+  if (!(combined_max_correction_ratio >= 0.0 && combined_max_correction_ratio <= 1.0))
+    return "combined_max_correction_ratio: expected 0..1";
+  for (std::size_t i = 0; i < 3; ++i)
+    if (!(combined_full[i] > 0.0 && combined_full[i] <= 2.0))
+      return "combined_full[" + std::to_string(i) + "]: expected (0, 2] (m/s, rad/s)";
   if (!(min_gain >= 0.3 && min_gain <= 1.0)) return "min_gain: expected 0.3..1";
   if (iterations < 1 || iterations > 50) return "iterations: expected 1..50";
   return {};
@@ -92,8 +97,21 @@ std::array<double, 3> CommandResponseModel::achieved(const std::array<double, 3>
   return v;
 }
 
+double CommandResponseModel::combination(const std::array<double, 3>& u) const noexcept {
+  double k = 1.0;
+  for (std::size_t j = 0; j < 3; ++j) {
+    const double a = std::fabs(u[j]) / combined_full[j];
+    k *= a < 1.0 ? a : 1.0;  // NaN fails the comparison: counted as a full axis
+  }
+  return k;
+}
+
 std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& u, double crouch_m) const noexcept {
   const double c = clampCrouch(crouch_m);
+  const double shrink =
+      combined_max_correction_ratio < 1.0 ? 1.0 - (1.0 - combined_max_correction_ratio) * combination(u) : 1.0;
+  std::array<double, 3> bound{};
+  for (std::size_t i = 0; i < 3; ++i) bound[i] = max_correction[i] * shrink;
   std::array<double, 3> x = u;
   for (int sweep = 0; sweep < iterations; ++sweep) {
     for (std::size_t i = 0; i < 3; ++i) {
@@ -106,7 +124,7 @@ std::array<double, 3> CommandResponseModel::invert(const std::array<double, 3>& 
         gain += a.gain_per_magnitude[j] * std::fabs(x[j]) + a.gain_per_command[j] * x[j];
       }
       gain += gainAtCrouch(a, r >= 0.0, c);
-      x[i] = std::clamp(r / std::max(min_gain, gain), u[i] - max_correction[i], u[i] + max_correction[i]);
+      x[i] = std::clamp(r / std::max(min_gain, gain), u[i] - bound[i], u[i] + bound[i]);
     }
   }
   return x;

@@ -627,6 +627,11 @@ std::vector<Case> allCases() {
       {"ctrl_velocity_feedback_decay_feedforward_not_a_bool", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  decay_feedforward: 2\n"; }),
        error({"velocity_feedback", "decay_feedforward"})},
+      {"ctrl_velocity_feedback_combined_max_correction_ratio_out_of_range", Kind::kControllerConfig,
+       text([] {
+         return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward:\n    combined_max_correction_ratio: 1.5\n";
+       }),
+       error({"velocity_feedback", "feedforward.combined_max_correction_ratio", "0..1"})},
       {"ctrl_velocity_feedback_feedforward_return_s_out_of_range", Kind::kControllerConfig,
        text([] { return controllerText("g1_sil.yaml") + "velocity_feedback:\n  feedforward_return_s: 60\n"; }),
        error({"velocity_feedback", "feedforward_return_s"})},

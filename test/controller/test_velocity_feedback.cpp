@@ -746,6 +746,55 @@ TEST(CommandResponseModel, CrouchTermsTakeTheGainsAtTheCrouchContinuously) {
   EXPECT_EQ(fb.crouch(), 0.0);
 }
 
+// combined_max_correction_ratio: on a command that moves all three axes the feed-forward's bound
+// shrinks (to nothing at ratio 0); a command with any axis at 0 keeps the full bound; the shrink grows
+// continuously with the third axis, so the feed-forward never jumps; 1 is the model as before.
+TEST(CommandResponseModel, CombinedRatioShrinksTheBoundOnThreeAxisCommandsOnlyAndContinuously) {
+  CommandResponseModel full = coupledModel();
+  CommandResponseModel cut = full;
+  cut.combined_max_correction_ratio = 0.0;
+  cut.combined_full = {0.2, 0.15, 0.25};
+  ASSERT_EQ(cut.validate(), "");
+  EXPECT_DOUBLE_EQ(CommandResponseModel{}.combined_max_correction_ratio, 1.0) << "off unless configured";
+  // The mirror image's diag_turn: every axis at least its full value, kappa 1, the command itself.
+  const std::array<double, 3> diag{0.5, -0.3, -0.5};
+  EXPECT_DOUBLE_EQ(cut.combination(diag), 1.0);
+  EXPECT_EQ(cut.invert(diag), diag) << "ratio 0: no feed-forward on a three-axis command";
+  const std::array<double, 3> x_full = full.invert(diag);
+  double moved = 0.0;
+  for (std::size_t i = 0; i < 3; ++i) moved = std::max(moved, std::fabs(x_full[i] - diag[i]));
+  EXPECT_GT(moved, 0.05) << "the full model moves this command (the test would pass vacuously otherwise)";
+  // Half the bound at ratio 0.5: each axis within half of max_correction.
+  CommandResponseModel half = cut;
+  half.combined_max_correction_ratio = 0.5;
+  const std::array<double, 3> x_half = half.invert(diag);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_LE(std::fabs(x_half[i] - diag[i]), 0.5 * half.max_correction[i] + 1e-12);
+  // Two-axis commands (a forward turn, a side-step while turning) keep the model's full inverse.
+  for (const std::array<double, 3>& u : {std::array<double, 3>{0.5, 0.0, 0.5}, std::array<double, 3>{0.0, 0.3, -0.6},
+                                         std::array<double, 3>{1.0, 0.0, 0.0}}) {
+    EXPECT_DOUBLE_EQ(cut.combination(u), 0.0);
+    EXPECT_EQ(cut.invert(u), full.invert(u));
+  }
+  // Continuous: the side-step of a forward turn grows from 0 through combined_full; the feed-forward
+  // moves by a bounded multiple of the command's step.
+  const int n = 3000;
+  std::array<double, 3> prev = cut.invert({0.5, 0.0, 0.5});
+  for (int k = 1; k <= n; ++k) {
+    const std::array<double, 3> u{0.5, 0.3 * k / n, 0.5};
+    const std::array<double, 3> x = cut.invert(u);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_LT(std::fabs(x[i] - prev[i]), 10.0 * (0.3 / n)) << "k " << k << " axis " << i;
+    prev = x;
+  }
+  EXPECT_EQ(prev, (std::array<double, 3>{0.5, 0.3, 0.5})) << "at the full side-step: the command";
+  // Validation names the field.
+  CommandResponseModel bad = cut;
+  bad.combined_max_correction_ratio = 1.5;
+  EXPECT_NE(bad.validate().find("combined_max_correction_ratio: expected 0..1"), std::string::npos) << bad.validate();
+  bad = cut;
+  bad.combined_full[2] = 0.0;
+  EXPECT_NE(bad.validate().find("combined_full[2]"), std::string::npos) << bad.validate();
+}
+
 // The model shipped in the default config (a re-fit must keep these): over the issue-12 envelope,
 // every inverse within its bound and where no bound acts exact, no modelled gain below min_gain
 // (the fit's coefficients describe the actor, not the floor), 0 -> 0, and continuous along lines
@@ -1093,6 +1142,7 @@ TEST(VelocityFeedback, UpdateDoesNotAllocate) {
   c.feedforward = coupledModel();  // and the feed-forward's inverse, with its crouch terms
   c.feedforward.axes[0].gain_negative_per_crouch = 4.0;
   c.decay_feedforward = true;  // and its share's decay while tilted
+  c.feedforward.combined_max_correction_ratio = 0.5;  // and its bound shrunk on combined commands
   VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
   fb.setCrouch(0.05);
   gco::LegVector q[2], qd[2];

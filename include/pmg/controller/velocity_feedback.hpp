@@ -80,6 +80,18 @@ struct CommandResponseModel {
   /// |u_ff,i − u_i| at most this [m/s, m/s, rad/s], each 0..1: how far the feed-forward may move
   /// a command.
   std::array<double, 3> max_correction{0.3, 0.2, 0.4};
+  /// On a combined command the bound above shrinks to max_correction_i × (1 − (1 − r) κ(u)), with
+  /// r = combined_max_correction_ratio [-], [0, 1] (1, the default: off; 0: no feed-forward on a
+  /// command that moves all three axes) and the combination κ(u) = Π_j min(1, |u_j| / combined_full_j)
+  /// [-] in [0, 1]: 0 when any axis is commanded 0, 1 when every axis is at least combined_full_j.
+  /// κ is continuous in u, so u_ff stays continuous. Why: on a slippery floor (sliding friction 0.4)
+  /// the two three-axis segments at the envelope's edge fall with the feed-forward, and rarely
+  /// without it (docs/controller.md "Slippery floors").
+  double combined_max_correction_ratio = 1.0;
+  /// The per-axis command at which an axis counts fully in κ [m/s, m/s, rad/s], each (0, 2].
+  std::array<double, 3> combined_full{0.2, 0.15, 0.25};
+  /// κ(u) above [-], in [0, 1]. noexcept.
+  double combination(const std::array<double, 3>& u) const noexcept;
   /// The inverse divides by an axis's modelled gain; it is taken as at least this [-], [0.3, 1].
   double min_gain = 0.5;
   /// Gauss–Seidel sweeps of the inverse, 1..50 (a fixed number: the cost is bounded and the result
@@ -92,7 +104,7 @@ struct CommandResponseModel {
   /// The command u_ff with v(u_ff) = u: `iterations` Gauss–Seidel sweeps from u_ff = u, each axis
   /// solved exactly for the others' values (u_ff,i = (u_i − Σ d_ij u_ff,j) / max(min_gain, g_i +
   /// Σ (m_ij |u_ff,j| + s_ij u_ff,j)), the gain g⁺ or g⁻ by the sign of the numerator) and kept within
-  /// u_i ± max_correction_i. Continuous in u and in the crouch; u = 0 gives 0 (a robot told to stand
+  /// u_i ± max_correction_i (shrunk on a combined command: combined_max_correction_ratio). Continuous in u and in the crouch; u = 0 gives 0 (a robot told to stand
   /// is not moved). g⁺, g⁻ are those at @p crouch_m [m] (clamped as in achieved()). noexcept, no
   /// allocation.
   std::array<double, 3> invert(const std::array<double, 3>& u, double crouch_m = 0.0) const noexcept;
