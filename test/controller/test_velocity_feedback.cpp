@@ -801,11 +801,15 @@ TEST(CommandResponseModel, CombinedRatioShrinksTheBoundOnThreeAxisCommandsOnlyAn
 // through the envelope's corners.
 TEST(CommandResponseModel, ShippedModelIsWellConditionedOverTheEnvelope) {
   const ControllerConfig config = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
-  const CommandResponseModel& m = config.velocity_feedback.feedforward;
+  const CommandResponseModel& shipped = config.velocity_feedback.feedforward;
   ASSERT_TRUE(config.velocity_feedback.enabled);
-  ASSERT_TRUE(m.enabled);
+  ASSERT_TRUE(shipped.enabled);
+  // The fitted model's conditioning is judged with its full bound; the shipped shrink on three-axis
+  // commands (combined_max_correction_ratio) is checked against it below.
+  CommandResponseModel m = shipped;
+  m.combined_max_correction_ratio = 1.0;
   EXPECT_EQ(m.invert({0.0, 0.0, 0.0}), (std::array<double, 3>{0.0, 0.0, 0.0}));
-  int exact = 0, total = 0;
+  int exact = 0, total = 0, shrunk = 0;
   double largest_move[3] = {0.0, 0.0, 0.0};
   for (double vx = -0.5; vx <= 1.0 + 1e-9; vx += 0.05)
     for (double vy = -0.4; vy <= 0.4 + 1e-9; vy += 0.05)
@@ -823,22 +827,34 @@ TEST(CommandResponseModel, ShippedModelIsWellConditionedOverTheEnvelope) {
           EXPECT_GT(gain, m.min_gain) << "modelled gain of axis " << i << " at u " << vx << " " << vy << " " << wz;
         }
         ++total;
+        const double k = shipped.combination(u);
+        const std::array<double, 3> xs = shipped.invert(u);
+        for (std::size_t i = 0; i < 3; ++i)
+          ASSERT_LE(std::fabs(xs[i] - u[i]), shipped.max_correction[i] * (1.0 - (1.0 - shipped.combined_max_correction_ratio) * k) + 1e-12)
+              << "the shipped bound, shrunk on a combined command: u " << vx << " " << vy << " " << wz;
+        if (k < 1e-9) {  // an axis at 0 (the grid's zeros carry rounding)
+          for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(xs[i], x[i], 1e-9) << "a command with an axis at 0 keeps the full inverse";
+        } else if (k >= 1.0) {
+          ++shrunk;
+          if (shipped.combined_max_correction_ratio == 0.0) EXPECT_EQ(xs, u) << "a full three-axis command is sent as told";
+        }
         if (bounded) continue;
         ++exact;
         const std::array<double, 3> v = m.achieved(x);
         for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(v[i], u[i], 1e-4) << vx << " " << vy << " " << wz << " axis " << i;
       }
   EXPECT_GT(exact, total / 2) << "the bound acts on most of the envelope: the model is far from the robot";
-  std::printf("shipped feed-forward: %d of %d envelope commands inverted exactly; largest move %.3f %.3f %.3f\n", exact, total,
-              largest_move[0], largest_move[1], largest_move[2]);
+  std::printf("shipped feed-forward: %d of %d envelope commands inverted exactly; largest move %.3f %.3f %.3f; "
+              "%d full three-axis commands (combined_max_correction_ratio %.2f)\n",
+              exact, total, largest_move[0], largest_move[1], largest_move[2], shrunk, shipped.combined_max_correction_ratio);
   // Continuous: along the diagonals through the envelope's corners, no jump.
   const int n = 2000;
   for (const std::array<double, 3>& dir : {std::array<double, 3>{1.0, 0.4, 0.8}, std::array<double, 3>{1.0, -0.4, 0.8},
                                            std::array<double, 3>{-0.5, 0.4, 0.8}, std::array<double, 3>{-0.5, -0.4, -0.8}}) {
-    std::array<double, 3> prev = m.invert({0.0, 0.0, 0.0});
+    std::array<double, 3> prev = shipped.invert({0.0, 0.0, 0.0});
     for (int k = 1; k <= n; ++k) {
       const double s = static_cast<double>(k) / n;
-      const std::array<double, 3> x = m.invert({dir[0] * s, dir[1] * s, dir[2] * s});
+      const std::array<double, 3> x = shipped.invert({dir[0] * s, dir[1] * s, dir[2] * s});
       for (std::size_t i = 0; i < 3; ++i) EXPECT_LT(std::fabs(x[i] - prev[i]), 4.0 * std::fabs(dir[i]) / n + 1e-9) << k;
       prev = x;
     }
