@@ -8,7 +8,9 @@ vx_fb..wz_fb: what the generator got, u_fb = u_ff + c):
   after the command is steady), u_fb is u off, and on the model's inverse of u (within 2e-3: the
   correction has integrated at most that during the ramp's steady stretches),
   computed here independently from the config's coefficients (the documented Gauss-Seidel rule,
-  include/pmg/controller/velocity_feedback.hpp) and kept inside the feedback's limits;
+  include/pmg/controller/velocity_feedback.hpp) and kept inside the feedback's limits; the arc moves all
+  three axes, so its bound is max_correction shrunk by combined_max_correction_ratio (the test runs with
+  --combined-ff-ratio 0.5, which summary.json records as combined_ff_ratio);
 - there the inverse differs from u by more than 0.02 on some axis (the test would notice a model
   that is not applied);
 - standing, before the arc and at the end of the stop, u_fb is zero on and off (a robot told to
@@ -29,8 +31,14 @@ from sil_run import rows, window  # noqa: E402
 AX = ("vx", "vy", "wz")
 
 
-def inverse(ff, u, lo, hi):
-    """CommandResponseModel::invert, written again from its documentation."""
+def inverse(ff, u, lo, hi, ratio):
+    """CommandResponseModel::invert, written again from its documentation; @p ratio is
+    combined_max_correction_ratio (the bound shrinks on a three-axis command)."""
+    full = ff.get("combined_full", [0.2, 0.15, 0.25])
+    kappa = 1.0
+    for j in range(3):
+        kappa *= min(1.0, abs(u[j]) / full[j])
+    shrink = 1.0 - (1.0 - ratio) * kappa
     x = list(u)
     for _ in range(ff.get("iterations", 8)):
         for i, a in enumerate(AX):
@@ -43,7 +51,7 @@ def inverse(ff, u, lo, hi):
                 r -= e.get("drift", [0, 0, 0])[j] * x[j]
                 gain += e.get("gain_per_magnitude", [0, 0, 0])[j] * abs(x[j]) + e.get("gain_per_command", [0, 0, 0])[j] * x[j]
             gain += e.get("gain_positive", 1.0) if r >= 0 else e.get("gain_negative", 1.0)
-            mc = ff.get("max_correction", [0.3, 0.2, 0.4])[i]
+            mc = ff.get("max_correction", [0.3, 0.2, 0.4])[i] * shrink
             x[i] = min(max(r / max(ff.get("min_gain", 0.5), gain), u[i] - mc), u[i] + mc)
     return [min(max(x[i], min(lo[i], u[i])), max(hi[i], u[i])) for i in range(3)]
 
@@ -62,6 +70,10 @@ def main():
     failures = []
     runs = {"off": rows(off_dir), "on": rows(on_dir)}
     for label, (summary, rs) in runs.items():
+        ratio = summary.get("combined_ff_ratio")
+        if ratio is None:
+            failures.append(f"{label}: summary.json does not record combined_ff_ratio")
+            ratio = ff.get("combined_max_correction_ratio", 1.0)
         if summary["runs"][0]["fell"]:
             failures.append(f"{label}: the robot fell")
         # After the 0.5 s ramp, before the correction may integrate (settle_time_s after steady).
@@ -69,17 +81,17 @@ def main():
         assert len(win) >= 5, f"{label}: {len(win)} ticks in the check window"
         for r in win:
             u = [r[f"{a}_cmd"] for a in AX]
-            want = inverse(ff, u, lo, hi) if label == "on" else u
+            want = inverse(ff, u, lo, hi, ratio) if label == "on" else u
             got = [r[f"{a}_fb"] for a in AX]
             for i in range(3):
                 if not abs(got[i] - want[i]) <= 2e-3:
                     failures.append(f"{label}: t {r['t']:.2f} {AX[i]}_fb {got[i]:.5f}, expected {want[i]:.5f} (u {u[i]:.3f})")
         if label == "on":
             u = [win[0][f"{a}_cmd"] for a in AX]
-            moved = max(abs(a - b) for a, b in zip(inverse(ff, u, lo, hi), u))
+            moved = max(abs(a - b) for a, b in zip(inverse(ff, u, lo, hi, ratio), u))
             if moved <= 0.02:
                 failures.append(f"on: the model's inverse moves u {u} by only {moved:.4f}: nothing to check")
-            print(f"arc u {u} -> u_ff {[round(x, 4) for x in inverse(ff, u, lo, hi)]}")
+            print(f"arc u {u} -> u_ff {[round(x, 4) for x in inverse(ff, u, lo, hi, ratio)]} (combined_ff_ratio {ratio})")
         for name, t0, t1 in (("stand", 0.5, 2.0), ("stop", 3.0, 4.0)):
             for r in window(rs, name, t0, t1):
                 if any(abs(r[f"{a}_fb"]) > 1e-9 for a in AX):
