@@ -16,8 +16,10 @@ the segment's commanded v_x [m/s]. Also the robots' drawn friction and total mas
 
 report: one row per rollout: robots fallen by the end of the schedule, and per walking segment (|command
 v_x| >= 0.05 m/s) the median achieved v_x of the robots standing through it, the share of them running
-away (achieved beyond --factor times the command, in its direction) and the median flight share; --plot
-draws achieved over commanded v_x per robot, one panel per walking segment.
+away (achieved beyond --factor times the command, in its direction) and the median flight share; then the
+robots that fell in each segment (those standing at the end of the previous segment's window and fallen by
+the end of this one's; every segment, walking or not). --plot draws achieved over commanded v_x per robot,
+one panel per walking segment; --plot-falls draws the falls per segment, one bar per rollout.
 """
 import argparse
 import json
@@ -86,8 +88,46 @@ def rows(summary, factor):
     return fallen, out
 
 
-def report(named, factor, plot=None):
-    """Prints the table (module docstring) of @p named [(name, summary)]; draws --plot when given."""
+def fell_in(summary):
+    """[(segment, robots that fell in it)] in schedule order: fallen by the end of this segment's window and
+    not by the end of the previous one's (segment_robots.py's fallen_by_end)."""
+    out, before = [], None
+    for name, s in segments(summary):
+        now = s["fallen_by_end"]
+        out.append((name, sum(bool(f) and not (before is not None and before[i]) for i, f in enumerate(now))))
+        before = now
+    return out
+
+
+def plot_falls(named, path):
+    """Grouped bars: per segment of the first rollout's schedule, the robots of each rollout that fell in it."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    names = [seg for seg, _ in fell_in(named[0][1])]
+    for name, summary in named:
+        if [seg for seg, _ in fell_in(summary)] != names:
+            raise ValueError(f"{name}: its segments differ from {named[0][0]}'s: not the same schedule")
+    width = 0.8 / len(named)
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(names)) + 2.2, 3.8))
+    for i, (name, summary) in enumerate(named):
+        n = len(segments(summary)[0][1]["fallen_by_end"])
+        counts = [k for _, k in fell_in(summary)]
+        ax.bar(np.arange(len(names)) + (i - (len(named) - 1) / 2) * width, counts, width,
+               label=f"{name}: {sum(counts)} of {n} fell")
+    ax.set_xticks(range(len(names)))
+    ax.set_xticklabels(names, rotation=35, ha="right", fontsize=8)
+    ax.set_ylabel("robots that fell in the segment")
+    ax.legend(fontsize=8, bbox_to_anchor=(1.01, 1.0), loc="upper left")
+    ax.set_title("eval_mjx --randomized: where the robots fall", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
+def report(named, factor, plot=None, falls_plot=None):
+    """Prints the table (module docstring) of @p named [(name, summary)]; draws --plot and --plot-falls when
+    given (ValueError when --plot-falls gets rollouts of different schedules)."""
     print(f"robots fallen by the end; per walking segment: median achieved v_x [m/s] / share beyond {factor} x "
           f"the command / median flight share (robots standing through it)")
     for name, summary in named:
@@ -96,6 +136,11 @@ def report(named, factor, plot=None):
         cells = [f"{s} no robot standing (0)" if k == 0 else f"{s} {m:+.2f} / {100 * r:.0f} % / {fl:.2f} ({k})"
                  for s, _, m, r, fl, k in segs]
         print(f"{name:6s} fallen {fallen:3d}/{n}  " + "  ".join(cells))
+    for name, summary in named:
+        where = [f"{seg} {k}" for seg, k in fell_in(summary) if k]
+        print(f"{name:6s} fell in: " + (", ".join(where) if where else "no segment"))
+    if falls_plot:
+        plot_falls(named, falls_plot)
     if plot:
         import matplotlib
         matplotlib.use("Agg")
@@ -132,6 +177,8 @@ def main(argv=None):
     r.add_argument("summaries", nargs="+", metavar="NAME=ROBOTS.json")
     r.add_argument("--factor", type=float, default=1.5, help="running away: beyond this times the command")
     r.add_argument("--plot")
+    r.add_argument("--plot-falls", metavar="FIG.png", help="the robots that fell per segment, one bar per rollout "
+                   "(the rollouts must share one schedule)")
     args = ap.parse_args(argv)
     if args.cmd == "summarize":
         try:
@@ -151,7 +198,10 @@ def main(argv=None):
                 named.append((name or os.path.basename(path), json.load(f)))
         except (OSError, ValueError) as e:
             sys.exit(f"segment_robots.py report: {path}: {e}")
-    report(named, args.factor, args.plot)
+    try:
+        report(named, args.factor, args.plot, args.plot_falls)
+    except ValueError as e:
+        sys.exit(f"segment_robots.py report: {e}")
 
 
 if __name__ == "__main__":

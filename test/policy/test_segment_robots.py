@@ -8,7 +8,10 @@ label unit). Three robots on a schedule stand 0-1 s, walk backward at -0.3 m/s 1
 - the report row: 1 of 3 fallen by the end, the walk's median -0.45 m/s and 1 of the 2 standing robots
   beyond 1.5 x the command (none beyond 2.5 x); the stand and the stop are not walking segments; a walk
   no robot stood through says so (not nan);
-- a rollout longer than the schedule is refused, naming both; --plot writes the figure.
+- the falls per segment: robot 2 in the walk, none in the stand or the stop (a robot fallen earlier is not
+  counted again);
+- a rollout longer than the schedule is refused, naming both; --plot and --plot-falls write their figures, and
+  --plot-falls refuses rollouts of different schedules, naming the rollout.
 Usage: test_segment_robots.py
 """
 import contextlib
@@ -74,13 +77,15 @@ def main():
               rows[0][3] == 0.5 and rows[0][4] == 0.25 and rows[0][5] == 2,
               f"report row: {fallen} fallen; {rows}")
         check(sr.rows(s, 2.5)[1][0][3] == 0.0, "none of them beyond 2.5 x the command")
+        check(sr.fell_in(s) == [("stand", 0), ("back", 1), ("stop", 0)],
+              f"falls per segment: {sr.fell_in(s)} (robot 2 in the walk, not again in the stop)")
         gone = copy.deepcopy(s)  # every robot fell before the walk's window: said so, not printed as nan
         gone["back"]["vx"], gone["back"]["flight"] = [None] * 3, [None] * 3
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             sr.report([("G", gone)], 1.5)
         check("back no robot standing (0)" in buf.getvalue() and "nan" not in buf.getvalue(),
-              f"a walk no robot stood through: {buf.getvalue().splitlines()[-1].strip()}")
+              f"a walk no robot stood through: {buf.getvalue().splitlines()[-2].strip()}")
         long_npz = os.path.join(d, "long.npz")
         rollout(long_npz, ticks=500)
         p = subprocess.run([sys.executable, SCRIPT, "summarize", long_npz, "--commands", sched, "--out", out],
@@ -92,6 +97,20 @@ def main():
                            text=True)
         check(p.returncode == 0 and os.path.getsize(png) > 1000 and "fallen   1/3" in p.stdout,
               f"report --plot: {p.stdout.strip().splitlines()[-2] if p.stdout else p.stderr}")
+        falls_png = os.path.join(d, "falls.png")
+        p = subprocess.run([sys.executable, SCRIPT, "report", f"A={out}", f"B={out}", "--plot-falls", falls_png],
+                           capture_output=True, text=True)
+        check(p.returncode == 0 and os.path.getsize(falls_png) > 1000 and "A      fell in: back 1" in p.stdout,
+              f"report --plot-falls: {p.stdout.strip().splitlines()[-2] if p.stdout else p.stderr}")
+        other = copy.deepcopy(s)
+        other["stop_2"] = other.pop("stop")
+        other_json = os.path.join(d, "other.json")
+        with open(other_json, "w") as f:
+            json.dump(other, f)
+        p = subprocess.run([sys.executable, SCRIPT, "report", f"A={out}", f"C={other_json}", "--plot-falls",
+                            falls_png], capture_output=True, text=True)
+        check(p.returncode != 0 and "C:" in p.stderr and "schedule" in p.stderr,
+              f"--plot-falls on two schedules refused: {p.stderr.strip()}")
     return check.exit_code()
 
 
