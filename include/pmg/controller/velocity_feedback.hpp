@@ -105,8 +105,8 @@ struct CommandResponseModel {
   /// solved exactly for the others' values (u_ff,i = (u_i − Σ d_ij u_ff,j) / max(min_gain, g_i +
   /// Σ (m_ij |u_ff,j| + s_ij u_ff,j)), the gain g⁺ or g⁻ by the sign of the numerator) and kept within
   /// u_i ± max_correction_i (shrunk on a combined command: combined_max_correction_ratio). Continuous
-  /// in u and in the crouch; u = 0 gives 0 (a robot told to stand is not moved). g⁺, g⁻ are those at @p crouch_m [m] (clamped as in achieved()). noexcept, no
-  /// allocation.
+  /// in u and in the crouch; u = 0 gives 0 (a robot told to stand is not moved). g⁺, g⁻ are those at
+  /// @p crouch_m [m] (clamped as in achieved()). noexcept, no allocation.
   std::array<double, 3> invert(const std::array<double, 3>& u, double crouch_m = 0.0) const noexcept;
   /// The crouch c [m] as achieved() and invert() use it: clamped to [0, 0.5], NaN → 0. noexcept.
   static double clampCrouch(double crouch_m) noexcept;
