@@ -99,20 +99,26 @@ def fell_in(summary):
     return out
 
 
-def plot_falls(named, path):
-    """Grouped bars: per segment of the first rollout's schedule, the robots of each rollout that fell in it."""
+def _pyplot():
+    """matplotlib.pyplot on the file-only Agg backend (the scripts run headless)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    names = [seg for seg, _ in fell_in(named[0][1])]
-    for name, summary in named:
-        if [seg for seg, _ in fell_in(summary)] != names:
+    return plt
+
+
+def plot_falls(named, path):
+    """Grouped bars: per segment of the first rollout's schedule, the robots of each rollout that fell in it."""
+    falls = [(name, fell_in(summary), len(segments(summary)[0][1]["fallen_by_end"])) for name, summary in named]
+    names = [seg for seg, _ in falls[0][1]]
+    for name, per_segment, _ in falls:
+        if [seg for seg, _ in per_segment] != names:
             raise ValueError(f"{name}: its segments differ from {named[0][0]}'s: not the same schedule")
+    plt = _pyplot()
     width = 0.8 / len(named)
     fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(names)) + 2.2, 3.8))
-    for i, (name, summary) in enumerate(named):
-        n = len(segments(summary)[0][1]["fallen_by_end"])
-        counts = [k for _, k in fell_in(summary)]
+    for i, (name, per_segment, n) in enumerate(falls):
+        counts = [k for _, k in per_segment]
         ax.bar(np.arange(len(names)) + (i - (len(named) - 1) / 2) * width, counts, width,
                label=f"{name}: {sum(counts)} of {n} fell")
     ax.set_xticks(range(len(names)))
@@ -127,7 +133,8 @@ def plot_falls(named, path):
 
 def report(named, factor, plot=None, falls_plot=None):
     """Prints the table (module docstring) of @p named [(name, summary)]; draws --plot and --plot-falls when
-    given (ValueError when --plot-falls gets rollouts of different schedules)."""
+    given (ValueError when --plot-falls gets rollouts of different schedules, or --plot a schedule without a
+    walking segment)."""
     print(f"robots fallen by the end; per walking segment: median achieved v_x [m/s] / share beyond {factor} x "
           f"the command / median flight share (robots standing through it)")
     for name, summary in named:
@@ -142,10 +149,11 @@ def report(named, factor, plot=None, falls_plot=None):
     if falls_plot:
         plot_falls(named, falls_plot)
     if plot:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
         walk = [s for s, v in segments(named[0][1]) if abs(v["command_vx"]) >= 0.05]
+        if not walk:
+            raise ValueError(f"--plot: {named[0][0]}'s schedule has no walking segment (|command v_x| >= 0.05 m/s) "
+                             f"to draw; --plot-falls draws any schedule")
         fig, axes = plt.subplots(1, len(walk), figsize=(3.2 * len(walk), 3.6), sharey=True, squeeze=False)
         for ax, seg in zip(axes[0], walk):
             for i, (name, summary) in enumerate(named):

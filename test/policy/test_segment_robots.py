@@ -11,7 +11,8 @@ label unit). Three robots on a schedule stand 0-1 s, walk backward at -0.3 m/s 1
 - the falls per segment: robot 2 in the walk, none in the stand or the stop (a robot fallen earlier is not
   counted again);
 - a rollout longer than the schedule is refused, naming both; --plot and --plot-falls write their figures, and
-  --plot-falls refuses rollouts of different schedules, naming the rollout.
+  --plot-falls refuses rollouts of different schedules, naming the rollout; --plot refuses a schedule without
+  a walk, saying so.
 Usage: test_segment_robots.py
 """
 import contextlib
@@ -111,6 +112,15 @@ def main():
                             falls_png], capture_output=True, text=True)
         check(p.returncode != 0 and "C:" in p.stderr and "schedule" in p.stderr,
               f"--plot-falls on two schedules refused: {p.stderr.strip()}")
+        still = copy.deepcopy(s)  # a schedule without a walk (the floor stops' side-steps and turns): --plot says so
+        still["back"]["command_vx"] = 0.0
+        still_json = os.path.join(d, "still.json")
+        with open(still_json, "w") as f:
+            json.dump(still, f)
+        p = subprocess.run([sys.executable, SCRIPT, "report", f"S={still_json}", "--plot", png], capture_output=True,
+                           text=True)
+        check(p.returncode != 0 and "no walking segment" in p.stderr and "Traceback" not in p.stderr,
+              f"--plot on a schedule without a walk refused: {p.stderr.strip()}")
     return check.exit_code()
 
 
