@@ -3,6 +3,7 @@
 // through the CommandPublisher; bad events of a log are skipped and counted.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -67,15 +68,25 @@ TEST(VrReplay, KeepsTheOriginalTimingScaledBySpeed) {
   EXPECT_EQ(st.published, 100u);
   EXPECT_EQ(st.loops, 1u);
   ASSERT_EQ(at.size(), 100u);
-  double worst = 0.0;
+  // The replay waits for absolute deadlines (start + scaled log time), so a message is never early and one
+  // late wake-up does not delay the next. How late a wake-up comes is the OS scheduler's: on a loaded 2-core
+  // CI machine one message came 27 ms late. So: none early, the median on time (the scaling is right), and
+  // no message so late that lateness must have accumulated.
+  std::vector<double> late;
   for (std::size_t i = 0; i < part.size(); ++i) {
     const double expected = static_cast<double>(part[i].log_utime - part[0].log_utime) * 1e-6 / 2.0;
     const double actual = std::chrono::duration<double>(at[i] - t0).count();
-    worst = std::max(worst, std::abs(actual - expected));
+    EXPECT_GE(actual, expected - 1e-4) << "message " << i << " published before its scaled log time";
+    late.push_back(actual - expected);
     EXPECT_EQ(frames[i], part[i].msg.frame);
   }
-  EXPECT_LT(worst, 0.02) << "every message within 20 ms of its scaled log time";
-  std::printf("[measure] replay at speed 2: largest deviation from the scaled log time %.2f ms\n", worst * 1e3);
+  const double worst = *std::max_element(late.begin(), late.end());
+  std::nth_element(late.begin(), late.begin() + late.size() / 2, late.end());
+  const double median = late[late.size() / 2];
+  EXPECT_LT(median, 0.005) << "the median message within 5 ms of its scaled log time";
+  EXPECT_LT(worst, 0.1) << "no message 100 ms late";
+  std::printf("[measure] replay at speed 2: lateness against the scaled log time median %.2f ms, largest %.2f ms\n",
+              median * 1e3, worst * 1e3);
 }
 
 TEST(VrReplay, LoopsWithGrowingFramesAndStops) {
