@@ -2,15 +2,29 @@
 # Poll a training/device_screen_job.sh RUN on the device: wait up to SECONDS (less when the job is done), print
 # the log's tail, the progress and the GPU, and pack the run (actor, ONNX, progress, config; not params.pkl, the kept
 # actors or the rollouts' .npz, which pass the 16 MiB a returned file may have) with the screen's text into $OUT/RUN.tgz.
+# The last four kept actors (--keep-actors, 0.8 MB each) go into $OUT/RUN_actors.tgz, for screening them later.
+# It packs once a minute while it waits, not only at the end: a call cut short by the session's device budget (the
+# run's limit_s is then below SECONDS) still returns the last minute's state, since $OUT comes back on a timeout.
 #   training/device_poll.sh RUN SECONDS
 R=${1:?usage: training/device_poll.sh RUN SECONDS}
 end=$(( $(date +%s) + ${2:?usage: training/device_poll.sh RUN SECONDS} ))
-while [ $(date +%s) -lt $end ] && [ ! -f /tmp/runs/done ]; do sleep 10; done
+pack() {
+  [ -d /tmp/runs/$R ] || return 0
+  tar czf $OUT/$R.tgz.part -C /tmp/runs --exclude=$R/actors --exclude=$R/params.pkl $R $R.log rand \
+    $(cd /tmp/runs; ls $R.trained done 2>/dev/null) && mv $OUT/$R.tgz.part $OUT/$R.tgz
+  local last
+  last=$(ls /tmp/runs/$R/actors 2>/dev/null | tail -n 4)
+  if [ -n "$last" ]; then
+    tar czf $OUT/${R}_actors.tgz.part -C /tmp/runs/$R/actors $last && mv $OUT/${R}_actors.tgz.part $OUT/${R}_actors.tgz
+  fi
+}
+next=$(( $(date +%s) + 60 ))
+while [ $(date +%s) -lt $end ] && [ ! -f /tmp/runs/done ]; do
+  sleep 10
+  if [ $(date +%s) -ge $next ]; then pack; next=$(( $(date +%s) + 60 )); fi
+done
 date; tail -n 4 /tmp/runs/$R.log; wc -l /tmp/runs/$R/progress.jsonl 2>/dev/null; echo
 nvidia-smi --query-gpu=utilization.gpu,memory.used --format=csv
 ls /tmp/runs /tmp/runs/rand
-if [ -d /tmp/runs/$R ]; then
-  tar czf $OUT/$R.tgz -C /tmp/runs --exclude=$R/actors --exclude=$R/params.pkl $R $R.log rand \
-    $(cd /tmp/runs; ls $R.trained done 2>/dev/null)
-  ls -la $OUT
-fi
+pack
+ls -la $OUT
