@@ -5,8 +5,8 @@ Usage: test_smoke_cpu.py [--part env|ppo|all] [--workdir DIR] [--steps 60] [--en
 Any python3 may start it: it re-runs itself with the training environment's interpreter,
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
-path runs) and XLA's backend optimisation off (compiling MJX takes most of the time; these few
-steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1);
+path runs), XLA's backend optimisation off and its older fusion emitters (compiling MJX takes most
+of the time; these few steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1);
 PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
@@ -133,7 +133,10 @@ def relaunch(script=__file__):
     env["JAX_PLATFORMS"] = "cpu"
     env["XLA_FLAGS"] = " ".join([env.get("XLA_FLAGS", ""), "--xla_force_host_platform_device_count=2",
                                  "--xla_backend_optimization_level=0",
-                                 "--xla_llvm_disable_expensive_passes=true"]).strip()
+                                 "--xla_llvm_disable_expensive_passes=true",
+                                 # XLA's older LLVM fusion emitters: the env's reset and step compile in about
+                                 # three quarters of the time (docs/ci_timing.md, "Where the time goes")
+                                 "--xla_cpu_use_fusion_emitters=false"]).strip()
     env.setdefault("MUJOCO_GL", "disable")
     cache = env.get("PMG_JAX_CACHE_DIR") or os.path.join(
         env.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "pmg-training-jax")
