@@ -6,8 +6,9 @@ Any python3 may start it: it re-runs itself with the training environment's inte
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
 path runs), XLA's backend optimisation off and its older fusion emitters (compiling MJX takes most
-of the time; these few steps run fast enough without). It installs nothing. A missing environment is a failure (exit 1);
-PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest SKIP_RETURN_CODE).
+of the time; these few steps run fast enough without). It installs nothing. A missing environment is
+a failure (exit 1); PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest
+SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
 ${XDG_CACHE_HOME:-~/.cache}/pmg-training-jax; ctest sets build/training_jax_cache; "off" disables
 it): a re-run with unchanged code skips most of the compile time. ctest runs the parts as three tests
