@@ -5,8 +5,9 @@ Usage: test_smoke_cpu.py [--part env|ppo|all] [--workdir DIR] [--steps 60] [--en
 Any python3 may start it: it re-runs itself with the training environment's interpreter,
 $PMG_TRAINING_PYTHON or else <repo>/.venv-training/bin/python (scripts/setup.sh makes it:
 pip install -e 'training[cpu]'), on the CPU with two XLA host devices (so Brax's multi-device
-path runs), XLA's backend optimisation off and its older fusion emitters (compiling MJX takes most
-of the time; these few steps run fast enough without). It installs nothing. A missing environment is
+path runs), XLA's backend optimisation off and its older fusion emitters, and tcmalloc preloaded
+(compile_allocator) (compiling MJX takes most of the time; these few steps run fast enough without).
+It installs nothing. A missing environment is
 a failure (exit 1); PMG_SKIP_TRAINING_TESTS=1 disables the test: a skip (exit 77, ctest
 SKIP_RETURN_CODE).
 Compiled programs go to JAX's persistent cache, $PMG_JAX_CACHE_DIR (default
@@ -118,6 +119,35 @@ CHILD = "PMG_TRAINING_SMOKE_CHILD"
 SKIP = 77
 
 
+TCMALLOC = "libtcmalloc_minimal.so.4"
+
+
+def compile_allocator(env):
+    """The allocator library the relaunched interpreter preloads (LD_PRELOAD), or None for glibc's.
+
+    XLA's CPU compiler spends about a sixth of its time in glibc's malloc and free (perf, the smoke env's
+    step); with gperftools' tcmalloc (Debian libtcmalloc-minimal4, which scripts/setup.sh installs) one
+    compile of that step took 15-20 s against 28-30 s (docs/ci_timing.md, "The allocator"). The results
+    do not depend on the allocator. PMG_TRAINING_ALLOCATOR: "tcmalloc" (the default; glibc's with a note
+    when the library is not installed), "system" (glibc's), or the path of another allocator library;
+    unknown values and missing paths are errors."""
+    want = env.get("PMG_TRAINING_ALLOCATOR", "tcmalloc")
+    if want == "system":
+        return None
+    if want == "tcmalloc":
+        import ctypes.util
+        if ctypes.util.find_library("tcmalloc_minimal") is None:
+            print(f"note: {TCMALLOC} not found (Debian: libtcmalloc-minimal4, which scripts/setup.sh installs): "
+                  f"XLA compiles with glibc's malloc, about 1.5 times slower")
+            return None
+        return TCMALLOC
+    if os.path.sep in want and os.path.isfile(want):
+        return want
+    print(f"FAIL: PMG_TRAINING_ALLOCATOR={want!r}: expected 'tcmalloc', 'system' or the path of an existing "
+          f"allocator library")
+    sys.exit(1)
+
+
 def relaunch(script=__file__):
     """Re-run @p script (default: this one) with the training environment's interpreter (never returns)."""
     if os.environ.get("PMG_SKIP_TRAINING_TESTS") == "1":
@@ -139,6 +169,11 @@ def relaunch(script=__file__):
                                  # three quarters of the time (docs/ci_timing.md, "Where the time goes")
                                  "--xla_cpu_use_fusion_emitters=false"]).strip()
     env.setdefault("MUJOCO_GL", "disable")
+    allocator = compile_allocator(env)
+    if allocator:
+        env["LD_PRELOAD"] = " ".join([allocator, env.get("LD_PRELOAD", "")]).strip()
+        # tcmalloc's report of single allocations over 1 GiB would only be noise in the test's output
+        env.setdefault("TCMALLOC_LARGE_ALLOC_REPORT_THRESHOLD", str(1 << 40))
     cache = env.get("PMG_JAX_CACHE_DIR") or os.path.join(
         env.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "pmg-training-jax")
     if cache != "off":
