@@ -4,7 +4,8 @@
 #      LCM, yaml-cpp, GoogleTest, Google Benchmark, CLI11, spdlog/fmt, pagmo (CMA-ES); GLFW, libpng,
 #      Xvfb and Mesa's software OpenGL for pmg_render_log (docs/render.md); SDL2, libsodium,
 #      Boost.Beast, OpenSSL, nlohmann-json and headless Chromium for teleoperation (docs/teleop.md);
-#      gperftools' tcmalloc, which the training tests preload (XLA compiles about 1.5x faster with it);
+#      gperftools' tcmalloc, which the training tests preload (one XLA compile of the smoke env's step ran
+#      1.5-2x faster with it, the env part 13 % faster: docs/ci_timing.md);
 #   2. Python packages for the plotting/report scripts (pip);
 #   3. the training environment .venv-training (ignored by git): a venv with training/ installed
 #      editable with its CPU extra, pinned by training/requirements-lock.txt (training/README.md);

@@ -127,7 +127,8 @@ def compile_allocator(env):
 
     XLA's CPU compiler spends about a sixth of its time in glibc's malloc and free (perf, the smoke env's
     step); with gperftools' tcmalloc (Debian libtcmalloc-minimal4, which scripts/setup.sh installs) one
-    compile of that step took 15-20 s against 28-30 s (docs/ci_timing.md, "The allocator"). The results
+    compile of that step took 15-20 s against 28-30 s, the env part 236 s against 270 s (docs/ci_timing.md,
+    "The allocator, and one serial test less"). The results
     do not depend on the allocator. PMG_TRAINING_ALLOCATOR: "tcmalloc" (the default; glibc's with a note
     when the library is not installed), "system" (glibc's), or the path of another allocator library;
     unknown values and missing paths are errors."""
@@ -138,7 +139,7 @@ def compile_allocator(env):
         import ctypes.util
         if ctypes.util.find_library("tcmalloc_minimal") is None:
             print(f"note: {TCMALLOC} not found (Debian: libtcmalloc-minimal4, which scripts/setup.sh installs): "
-                  f"XLA compiles with glibc's malloc, about 1.5 times slower")
+                  f"XLA compiles with glibc's malloc (one compile of the smoke env's step 1.5-2 times slower)")
             return None
         return TCMALLOC
     if os.path.sep in want and os.path.isfile(want):
