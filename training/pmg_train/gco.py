@@ -35,6 +35,8 @@ import json
 
 import numpy as np
 
+from . import loops
+
 NUM_FEET = 2
 LEG_DOFS = 6
 
@@ -169,16 +171,15 @@ def level_soles(chains: LegChains, opt: GcoOptions, gen_out, q_stand, lower, upp
         n_target = R_t[:, 2]
         lo = xp.maximum(-opt.level_max_correction, lower[idx[4:]] - q[4:])
         hi = xp.minimum(opt.level_max_correction, upper[idx[4:]] - q[4:])
-        delta = xp.zeros(2)
-        for _ in range(opt.level_iterations):
+        def gauss_newton(delta, f=f, q=q, n_target=n_target, lo=lo, hi=hi):
             qc = xp.concatenate([q[:4], q[4:] + delta])
             _, R, axes, _ = _chain_fk(chains, f, qc, xp)
             n = R[:, 2]
             J = xp.stack([xp.cross(axes[4], n), xp.cross(axes[5], n)], axis=1)  # (3, 2)
             H = J.T @ J + 1e-9 * xp.eye(2)
             delta = delta - xp.linalg.solve(H, J.T @ (n - n_target))
-            delta = xp.where(lo <= hi, xp.clip(delta, lo, hi), 0.0)
-        deltas.append(delta)
+            return xp.where(lo <= hi, xp.clip(delta, lo, hi), 0.0)
+        deltas.append(loops.repeat(xp, opt.level_iterations, gauss_newton, xp.zeros(2) + 0.0 * q[4:]))
         weights.append(sole_levelling_weight(gen_out["contact_mu"][f], gen_out["contact_sigma"][f], gen_out["phase"],
                                              opt.level_edge_fraction, xp))
     delta = xp.stack(deltas)
@@ -258,9 +259,7 @@ def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
         return -xp.linalg.solve(H, g)
 
     x = solve(xp.zeros(4, bool), xp.zeros(4, bool))
-    for _ in range(4):
-        u = base + x
-        x = solve(u >= hi, u <= lo)
+    x = loops.repeat(xp, 4, lambda x: solve(base + x >= hi, base + x <= lo), x)
 
     u = xp.clip(base + x, lo, hi)
     jump = xp.asarray(opt.jump)

@@ -32,6 +32,8 @@ import math
 
 import numpy as np
 
+from . import loops
+
 AXES = ("forward", "lateral", "yaw")
 BLENDINGS = ("consistent", "paper")
 KCONSISTENT_SWEEPS = 4  # pmg::kConsistentSweeps
@@ -395,10 +397,8 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
                             _table_at(xp, model.tables[2 * j], e, column))
 
         def solve(period):  # solveConsistentAmplitudes: fixed Gauss-Seidel sweeps; returns (amp, direction, sat, rho)
-            amp = [zero, zero, zero]
-            direction = list(sign)
-            sat = [xp.asarray(False)] * 3
-            for _ in range(KCONSISTENT_SWEEPS):
+            def sweep(carry):
+                amp, direction, sat = (list(c) for c in carry)
                 for i in range(3):
                     if not present[i]:
                         amp[i] = zero
@@ -415,6 +415,10 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
                     amp[i] = xp.where(neg, e_neg, e_pos)
                     sat[i] = xp.where(neg, s_neg, s_pos)
                     direction[i] = xp.where(neg, -1.0, 1.0)
+                return tuple(amp), tuple(direction), tuple(sat)
+
+            carry = ((zero, zero, zero), tuple(sign), (xp.asarray(False),) * 3)
+            amp, direction, sat = (list(c) for c in loops.repeat(xp, KCONSISTENT_SWEEPS, sweep, carry))
             rho = 1.0 + zero
             for i in range(3):
                 if not present[i]:
@@ -429,16 +433,22 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
                 rho = xp.where(use, xp.minimum(rho, share), rho)
             return amp, direction, sat, rho
 
-        amp, direction, saturated, rho = solve(period)
-        if model.max_cadence_ratio > 1.0:  # a stride at its end: step faster (generator.hpp)
-            faster = rho < 1.0
-            period_fast = period * xp.clip(rho, 1.0 / model.max_cadence_ratio, 1.0)
-            amp_f, direction_f, saturated_f, _ = solve(period_fast)
-            amp = [xp.where(faster, a, b) for a, b in zip(amp_f, amp)]
-            direction = [xp.where(faster, a, b) for a, b in zip(direction_f, direction)]
-            saturated = [xp.where(faster, a, b) for a, b in zip(saturated_f, saturated)]
-            cadence_ratio = xp.where(faster, period / period_fast, 1.0)
-            period = xp.where(faster, period_fast, period)
+        # A stride at its end steps faster (generator.hpp): a second solve at the period shortened by rho < 1.
+        # With rho = 1 that period is the first one (p x 1.0) and the second solve repeats the first bit for bit,
+        # so both passes are one loop body (compiled once under JAX) and the last pass's result is the answer.
+        def solve_pass(carry):
+            p_next = carry[0]
+            amp, direction, sat, rho = solve(p_next)
+            shorter = p_next * xp.clip(rho, 1.0 / max(model.max_cadence_ratio, 1.0), 1.0)
+            return shorter, p_next, tuple(amp), tuple(direction), tuple(sat)
+
+        passes = 2 if model.max_cadence_ratio > 1.0 else 1
+        carry = (period, period, (zero, zero, zero), tuple(sign), (xp.asarray(False),) * 3)
+        _, period_solved, amp, direction, saturated = loops.repeat(xp, passes, solve_pass, carry)
+        amp, direction, saturated = list(amp), list(direction), list(saturated)
+        if passes == 2:
+            cadence_ratio = xp.where(period_solved < period, period / period_solved, 1.0)
+            period = period_solved
         alpha = list(amp)
     else:
         amp = [weight[i] * alpha[i] for i in range(3)]
@@ -455,9 +465,11 @@ def step(model: GeneratorModel, phase, u_d, u_s, dt, xp=np):
                 q = q + amp[i] * per_clip(i, direction[i], lambda c: _interp_rows(xp, xp.asarray(c.q), phi))
         return q
 
-    q_minus = blend(phase - h)
-    q_plus = blend(phase + h)
-    q_dyn = blend(phase)
+    if xp is np:
+        q_minus, q_plus, q_dyn = blend(phase - h), blend(phase + h), blend(phase)
+    else:  # one batched blend (the same arithmetic per phase; traced and compiled once)
+        import jax
+        q_minus, q_plus, q_dyn = jax.vmap(blend)(xp.stack([phase - h, phase + h, phase + zero]))
 
     # Contacts (eqs. 8-9); kConsistent splits the walking share sum_w among the played clips by e_i.
     cw, cdir = list(weight), list(sign)

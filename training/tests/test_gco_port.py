@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Equality of the Python GCO port (training/pmg_train/gco.py) with the C++ GeneratorWithGco.
 
-Usage: test_gco_port.py VECTORS.json [--tol 1e-5]
+Usage: test_gco_port.py VECTORS.json [--tol 1e-5] [--jax]
 VECTORS.json comes from build*/bin/pmg_generator_vectors (it carries the KDL leg chains, the
 resolved GCO options and, per tick, the C++ u', Δ and contact weights). Checks (1) leg forward
 kinematics and velocities at the file's random configurations, (2) the generator port + GCO port
 stepped from the same initial phase over the whole schedule. Exit code 0 iff everything agrees to
---tol (absolute); prints the largest difference per quantity.
+--tol (absolute); prints the largest difference per quantity. --jax runs (2) as the training env does:
+each tick (generator, sole levelling, GCO) under jax.jit, in float64, in the training environment.
 """
 import argparse
 import json
@@ -37,7 +38,16 @@ def main():
     ap.add_argument("--tol", type=float, default=1e-5)
     ap.add_argument("--model-file", help="committed GCO model used by training (must equal the vectors' model)")
     ap.add_argument("--write-model", action="store_true", help="(re)write --model-file from the vectors")
+    ap.add_argument("--jax", action="store_true", help="run each tick under jax.jit (float64)")
     args = ap.parse_args()
+    xp = np
+    if args.jax:
+        from test_smoke_cpu import CHILD, relaunch
+        if os.environ.get(CHILD) != "1":
+            relaunch(__file__)  # JAX lives in the training environment (.venv-training)
+        import jax
+        jax.config.update("jax_enable_x64", True)
+        import jax.numpy as xp
     with open(args.vectors) as f:
         v = json.load(f)
     keys = ("gco_options", "leg_chains", "leg_joint_index")
@@ -63,41 +73,52 @@ def main():
         worst["fk_p"] = max(worst["fk_p"], float(np.max(np.abs(p - c["p_BS_B"]))))
         worst["fk_v"] = max(worst["fk_v"], float(np.max(np.abs(vel - c["v_BS_B"]))))
         worst["fk_w"] = max(worst["fk_w"], float(np.max(np.abs(w - c["w_BF_B"]))))
-    model = model_from_vectors(v)
+    def ticker(model, level):
+        """(phase, u_d, u_s, state) -> (generator output, q_ref before levelling, u', Δ, s, state): one tick."""
+        def tick_fn(phase, u_d, u_s, state):
+            out = step(model, phase, u_d, u_s, v["dt"], xp=xp)
+            q_gen = out["q_ref"]
+            if level:
+                js = model.js
+                out, _, _, state = gco.level_soles(chains, opt, out, js.q_stand, js.lower, js.upper, state, xp=xp)
+            u_opt, delta, s, state = gco.step(chains, opt, out, u_s, state, xp=xp)
+            return out, q_gen, u_opt, delta, s, state
+        if xp is np:
+            return tick_fn
+        import jax
+        jitted = jax.jit(tick_fn)
+        return lambda phase, u_d, u_s, state: jitted(xp.float64(phase), xp.asarray(u_d), xp.asarray(u_s), state)
+
+    tick_fn = ticker(model_from_vectors(v), level=False)
     phase = v["phase0"]
     state = gco.initial_state()
     where = {}
     statuses = set()
     for t, tick in enumerate(v["ticks"]):
-        out = step(model, phase, np.array(tick["u_d"]), np.array(tick["u_s"]), v["dt"])
-        u_opt, delta, s, state = gco.step(chains, opt, out, np.array(tick["u_s"]), state)
+        out, _, u_opt, delta, s, state = tick_fn(phase, np.array(tick["u_d"]), np.array(tick["u_s"]), state)
         statuses.add(int(tick["gco_status"]))
         for k, mine, theirs in (("u_opt", u_opt, tick["gco_u_opt"]), ("delta", delta, tick["gco_delta"]),
                                 ("s", s, tick["gco_s"])):
             d = float(np.max(np.abs(np.asarray(mine, float) - np.asarray(theirs, float))))
             if d > worst[k]:
                 worst[k], where[k] = d, t
-        phase = out["next_phase"]
+        phase = float(out["next_phase"])
     # The stance sole levelling (gco.level_soles, sole_levelling.hpp) on the "levelled" ticks.
     if "levelled" in v:
         worst.update({"lev_q": 0.0, "lev_qd": 0.0, "lev_uopt": 0.0})
-        lev_model = model_from_vectors(v, upright_walking=v["levelled"]["upright_walking"])
-        js = lev_model.js
+        tick_fn = ticker(model_from_vectors(v, upright_walking=v["levelled"]["upright_walking"]), level=True)
         phase = v["phase0"]
         state = gco.initial_state()
         largest = 0.0
         for t, tick in enumerate(v["levelled"]["ticks"]):
-            out = step(lev_model, phase, np.array(tick["u_d"]), np.array(tick["u_s"]), v["dt"])
-            q_gen = np.asarray(out["q_ref"], float)
-            out, _, _, state = gco.level_soles(chains, opt, out, js.q_stand, js.lower, js.upper, state)
-            largest = max(largest, float(np.max(np.abs(out["q_ref"] - q_gen))))
-            u_opt, _, _, state = gco.step(chains, opt, out, np.array(tick["u_s"]), state)
+            out, q_gen, u_opt, _, _, state = tick_fn(phase, np.array(tick["u_d"]), np.array(tick["u_s"]), state)
+            largest = max(largest, float(np.max(np.abs(np.asarray(out["q_ref"], float) - np.asarray(q_gen, float)))))
             for k, mine, theirs in (("lev_q", out["q_ref"], tick["q_ref"]), ("lev_qd", out["qd_ref"], tick["qd_ref"]),
                                     ("lev_uopt", u_opt, tick["gco_u_opt"])):
                 d = float(np.max(np.abs(np.asarray(mine, float) - np.asarray(theirs, float))))
                 if d > worst[k]:
                     worst[k], where[k] = d, t
-            phase = out["next_phase"]
+            phase = float(out["next_phase"])
         print(f"levelled: largest ankle offset {largest:.3f} rad")
         if largest < 1e-2:
             print("the levelling never changed the reference: the vectors do not exercise it")
@@ -108,7 +129,8 @@ def main():
         ok &= d <= args.tol
         print(f"{k:8s} max |python - c++| = {d:.3e}  (tick {where.get(k, '-')})  {flag}")
     moved = max(abs(x) for t in v["ticks"] for x in t["gco_delta"])
-    print(f"{len(v['ticks'])} ticks, C++ GCO statuses {sorted(statuses)}, largest |Δ| {moved:.3f}, tol {args.tol}")
+    print(f"{len(v['ticks'])} ticks, C++ GCO statuses {sorted(statuses)}, largest |Δ| {moved:.3f}, "
+          f"{'jax' if args.jax else 'numpy'}, tol {args.tol}")
     if moved < 1e-3:  # the schedule must make GCO act, or the comparison proves nothing
         print("GCO never changed the command: the vectors do not exercise it")
         ok = False

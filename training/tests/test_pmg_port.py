@@ -83,6 +83,9 @@ def main():
     with open(args.vectors) as f:
         v = json.load(f)
     if args.jax:
+        from test_smoke_cpu import CHILD, relaunch
+        if os.environ.get(CHILD) != "1":
+            relaunch(__file__)  # JAX lives in the training environment (.venv-training)
         import jax
         jax.config.update("jax_enable_x64", True)
         import jax.numpy as jnp

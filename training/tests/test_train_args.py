@@ -223,6 +223,20 @@ for bad, flag in ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "-
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"bench_env_step {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-print("\n".join("FAIL: " + f for f in failures) if failures else f"pmg-train and bench_env_step arguments: {n_cases} refusals as expected, "
+# bench_compile.py (imports JAX only in main()): parts parse in order; an unknown or empty list is refused.
+import bench_compile  # noqa: E402
+if bench_compile.parse_args(["--parts", "step, generator"]).parts != ["step", "generator"]:
+    failures.append("bench_compile --parts 'step, generator' not parsed in order")
+for bad in (["--parts", "generator,gco"], ["--parts", ","]):
+    n_cases += 1
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            bench_compile.parse_args(bad)
+        failures.append(f"bench_compile {bad} accepted")
+    except SystemExit as e:
+        if e.code != 2 or "--parts" not in err.getvalue().splitlines()[-1]:
+            failures.append(f"bench_compile {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
+print("\n".join("FAIL: " + f for f in failures) if failures else f"pmg-train, bench_env_step and bench_compile arguments: {n_cases} refusals as expected, "
       f"and the parsed values")
 sys.exit(1 if failures else 0)
