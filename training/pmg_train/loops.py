@@ -4,7 +4,7 @@ The generator and GCO ports (pmg_generator.py, gco.py) run on NumPy (float64, co
 code) and under jax.jit. A Python loop unrolls under jit: every pass is traced, lowered and compiled
 again. ``repeat`` keeps the Python loop on NumPy and becomes one ``lax.fori_loop`` on JAX, whose body
 XLA compiles once; the operations and their order are the same, so the results are too.
-(docs/ci_timing.md, "The ports' loops": the generator's compile 4.6 -> 0.6 s, one env step's 27 -> 17 s.)
+(docs/ci_timing.md, "The ports' loops": the generator's compile 4.0 -> 0.6 s, the env step's 18.7 -> 11.1 s.)
 """
 from __future__ import annotations
 
