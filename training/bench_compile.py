@@ -28,6 +28,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "tests"))
 
+from bench_env_step import parts_list  # noqa: E402
+
 PARTS = ("generator", "reference", "reset", "step")
 
 
@@ -36,10 +38,7 @@ def parse_args(argv=None):
     ap.add_argument("--parts", default=",".join(PARTS), help=f"comma-separated, in order: {', '.join(PARTS)}")
     ap.add_argument("--out", default=None, help="also write the numbers as JSON here")
     args = ap.parse_args(argv)
-    args.parts = [p.strip() for p in args.parts.split(",") if p.strip()]
-    bad = [p for p in args.parts if p not in PARTS]
-    if bad or not args.parts:
-        ap.error(f"--parts {bad or '(empty)'}: expected a comma-separated list of {', '.join(PARTS)}")
+    args.parts = parts_list(ap, args.parts, PARTS)
     return args
 
 

@@ -28,6 +28,15 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 PARTS = ("physics", "pmg", "pmg_gco")
 
 
+def parts_list(ap, text, known):
+    """The comma-separated --parts @p text as a list, in order; an unknown or empty list is an argparse error."""
+    parts = [p.strip() for p in text.split(",") if p.strip()]
+    bad = [p for p in parts if p not in known]
+    if bad or not parts:
+        ap.error(f"--parts {bad or '(empty)'}: expected a comma-separated list of {', '.join(known)}")
+    return parts
+
+
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--num-envs", type=int, default=16384, help="environments per batch (a training run's count)")
@@ -36,10 +45,7 @@ def parse_args(argv=None):
     ap.add_argument("--clips", default="config/clips/g1_walking_height", help="clip folder, relative to the checkout")
     ap.add_argument("--out", default=None, help="also write the numbers as JSON here")
     args = ap.parse_args(argv)
-    args.parts = [p.strip() for p in args.parts.split(",") if p.strip()]
-    bad = [p for p in args.parts if p not in PARTS]
-    if bad or not args.parts:
-        ap.error(f"--parts {bad or '(empty)'}: expected a comma-separated list of {', '.join(PARTS)}")
+    args.parts = parts_list(ap, args.parts, PARTS)
     for name in ("num_envs", "steps"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')} = {getattr(args, name)}: expected >= 1")

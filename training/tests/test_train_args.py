@@ -208,35 +208,31 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if "--action-scale-from" not in str(e.code) or bad not in str(e.code):
                 failures.append(f"--action-scale-from {name}: message {e.code!r}")
-# bench_env_step.py (imports JAX only in main()): parts parse in order; an unknown part or a count < 1 is refused.
-import bench_env_step  # noqa: E402
-if bench_env_step.parse_args(["--parts", "pmg_gco, physics", "--num-envs", "8"]).parts != ["pmg_gco", "physics"]:
-    failures.append("bench_env_step --parts 'pmg_gco, physics' not parsed in order")
-for bad, flag in ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "--parts"), (["--steps", "0"], "--steps"),
-                  (["--num-envs", "-1"], "--num-envs")):
-    n_cases += 1
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            bench_env_step.parse_args(bad)
-        failures.append(f"bench_env_step {bad} accepted")
-    except SystemExit as e:
-        if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
-            failures.append(f"bench_env_step {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
-# bench_compile.py (imports JAX only in main()): parts parse in order; an unknown or empty list is refused.
+# The benches (import JAX only in main()): parts parse in order; an unknown part, an empty list or a count < 1
+# is refused, and the message names the flag.
 import bench_compile  # noqa: E402
-if bench_compile.parse_args(["--parts", "step, generator"]).parts != ["step", "generator"]:
-    failures.append("bench_compile --parts 'step, generator' not parsed in order")
-for bad in (["--parts", "generator,gco"], ["--parts", ","]):
-    n_cases += 1
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            bench_compile.parse_args(bad)
-        failures.append(f"bench_compile {bad} accepted")
-    except SystemExit as e:
-        if e.code != 2 or "--parts" not in err.getvalue().splitlines()[-1]:
-            failures.append(f"bench_compile {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
+import bench_env_step  # noqa: E402
+BENCH_CASES = (
+    (bench_env_step, ["--parts", "pmg_gco, physics", "--num-envs", "8"], ["pmg_gco", "physics"],
+     ((["--parts", "physics,gco"], "--parts"), (["--parts", ","], "--parts"), (["--steps", "0"], "--steps"),
+      (["--num-envs", "-1"], "--num-envs"))),
+    (bench_compile, ["--parts", "step, generator"], ["step", "generator"],
+     ((["--parts", "generator,gco"], "--parts"), (["--parts", ","], "--parts"))),
+)
+for module, good, parts, refusals in BENCH_CASES:
+    name = module.__name__
+    if module.parse_args(good).parts != parts:
+        failures.append(f"{name} {good} not parsed in order")
+    for bad, flag in refusals:
+        n_cases += 1
+        err = io.StringIO()
+        try:
+            with contextlib.redirect_stderr(err):
+                module.parse_args(bad)
+            failures.append(f"{name} {bad} accepted")
+        except SystemExit as e:
+            if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
+                failures.append(f"{name} {bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
 print("\n".join("FAIL: " + f for f in failures) if failures else f"pmg-train, bench_env_step and bench_compile arguments: {n_cases} refusals as expected, "
       f"and the parsed values")
 sys.exit(1 if failures else 0)
