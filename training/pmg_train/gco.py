@@ -179,7 +179,7 @@ def level_soles(chains: LegChains, opt: GcoOptions, gen_out, q_stand, lower, upp
             H = J.T @ J + 1e-9 * xp.eye(2)
             delta = delta - xp.linalg.solve(H, J.T @ (n - n_target))
             return xp.where(lo <= hi, xp.clip(delta, lo, hi), 0.0)
-        deltas.append(loops.repeat(xp, opt.level_iterations, gauss_newton, xp.zeros(2) + 0.0 * q[4:]))
+        deltas.append(loops.repeat(xp, opt.level_iterations, gauss_newton, xp.zeros_like(q[4:])))
         weights.append(sole_levelling_weight(gen_out["contact_mu"][f], gen_out["contact_sigma"][f], gen_out["phase"],
                                              opt.level_edge_fraction, xp))
     delta = xp.stack(deltas)
