@@ -44,8 +44,8 @@ double percentile(std::vector<double> v, double p) {
   return v[i];
 }
 
-/// GeneratorWithGco (generator, stance sole levelling when the options enable it, GCO) with its
-/// two halves timed separately, and the meters of the measured ticks.
+/// GeneratorWithGco (generator, stance sole levelling and stride adaptation when the options enable
+/// them, GCO) with its two halves timed separately, and the meters of the measured ticks.
 struct Pipeline {
   Pipeline(std::shared_ptr<const pmg::GeneratorModel> model, std::shared_ptr<const LegModel> legs, const GcoOptions& o)
       : g(std::move(model), legs, o), idx(g.legJointIndex()), kin(legs) {
@@ -84,7 +84,25 @@ struct Pipeline {
       ++sole_n;
     }
   }
+  /// The stride adaptation's change of the leg joints this tick (δ_f), metered over measured ticks:
+  /// its mean |δ| and largest per-tick step (continuity of the reference) [rad].
+  void meterStride(bool first) {
+    const auto& sa = g.strideAdaptation();
+    if (!sa.enabled()) return;
+    for (std::size_t f = 0; f < pmg::kNumFeet; ++f) {
+      const LegVector& d = sa.correction(static_cast<pmg::Foot>(f));
+      stride_abs_sum += d.cwiseAbs().sum();
+      stride_abs_n += pmg::gco::kLegDofs;
+      stride_max = std::max(stride_max, d.cwiseAbs().maxCoeff());
+      stride_max_command = std::max(stride_max_command, d.cwiseAbs().maxCoeff());
+      if (!first) stride_step_max = std::max(stride_step_max, (d - stride_last[f]).cwiseAbs().maxCoeff());
+      stride_last[f] = d;
+    }
+  }
   GeneratorWithGco g;
+  double stride_abs_sum = 0.0, stride_max = 0.0, stride_step_max = 0.0, stride_max_command = 0.0;
+  long stride_abs_n = 0;
+  std::array<LegVector, pmg::kNumFeet> stride_last{LegVector::Zero(), LegVector::Zero()};
   LegJointIndex idx;
   LegKinematics kin;
   int waist_pitch = -1, waist_roll = -1;
@@ -123,6 +141,7 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
   pipe.saturated_axes = 0;
   pipe.waist_pitch_sum = pipe.waist_roll_sum = pipe.sole_pitch_sum = 0.0;
   pipe.posture_n = pipe.sole_n = 0;
+  pipe.stride_max_command = 0.0;
   for (int k = 0; k < warmup_ticks + measure_ticks; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     pipe.g.stepReference(c.u_d, c.u_s, dt);
@@ -137,6 +156,7 @@ FootSlipStats run(Pipeline& pipe, FootSlipMeter& meter, const Command& c, double
       ++pipe.u_opt_n;
       pipe.saturated_axes = std::max(pipe.saturated_axes, pipe.g.generatorOutput().amplitude_saturated);
       if (posture) pipe.meterPosture();
+      pipe.meterStride(k == warmup_ticks);
     }
   }
   return meter.stats();
@@ -199,11 +219,14 @@ int main(int argc, char** argv) {
                "the command envelope of issue 12 instead of the grid options: v_x -0.5..1.0, v_y -0.4..0.4, w -0.8..0.8 "
                "and their combinations (9 x 7 x 7 values, mostly off the consistency map's grid), posture pitch "
                "{-0.1, 0, 0.3}, roll {0, 0.15}, height {standing, 0.66, 0.62}");
-  bool upright_walking = false, sole_levelling = false;
+  bool upright_walking = false, sole_levelling = false, stride_adaptation = false;
   app.add_flag("--upright-walking", upright_walking,
                "remove the walking clips' mean waist lean (GeneratorParams::upright_walking; beyond the paper)");
   app.add_flag("--sole-levelling", sole_levelling,
                "level the reference's stance soles before GCO (GcoOptions::sole_levelling; beyond the paper)");
+  app.add_flag("--stride-adaptation", stride_adaptation,
+               "hold the reference's stance soles still under the command before GCO (GcoOptions::stride_adaptation; "
+               "beyond the paper)");
   auto* controller_opt = app.add_option(
       "--controller", controller_path,
       "evaluate the product path: this controller config's robot, clips, generator and GCO settings, and each "
@@ -211,7 +234,7 @@ int main(int argc, char** argv) {
       "the target is then checked against the shaped command, and commands the shaper slowed are counted")
       ->check(CLI::ExistingFile);
   for (const char* o : {"--robot", "--clips", "--gco-config", "--max-cadence-ratio", "--blending", "--upright-walking",
-                        "--sole-levelling"})
+                        "--sole-levelling", "--stride-adaptation"})
     controller_opt->excludes(app.get_option(o));
   CLI11_PARSE(app, argc, argv);
   if (envelope) {
@@ -266,8 +289,12 @@ int main(int argc, char** argv) {
     GcoOptions on = controller ? controller->gco : (gco_config.empty() ? GcoOptions{} : loadGcoOptionsFile(gco_config));
     on.enabled = true;
     on.dt = dt;
-    if (!controller) on.sole_levelling.enabled = sole_levelling;
-    std::printf("stance sole levelling %s\n", on.sole_levelling.enabled ? "on" : "off");
+    if (!controller) {
+      on.sole_levelling.enabled = sole_levelling;
+      on.stride_adaptation.enabled = stride_adaptation;
+    }
+    std::printf("stance sole levelling %s, stride adaptation %s\n", on.sole_levelling.enabled ? "on" : "off",
+                on.stride_adaptation.enabled ? "on" : "off");
     GcoOptions off = on;
     off.enabled = false;
     Pipeline pipe_on(gen_model, legs, on), pipe_off(gen_model, legs, off);
@@ -308,6 +335,7 @@ int main(int argc, char** argv) {
     std::vector<double> h_sum0(height.size(), 0.0), h_sumG(height.size(), 0.0);
     std::vector<int> h_n(height.size(), 0);
     std::uint64_t failures = 0, jump_limited = 0, ticks = 0;
+    std::uint64_t stride_counts[5] = {0, 0, 0, 0, 0};  // ticks, speed-, offset-limited, unreached foot-ticks, failures
     double lean_sum[3] = {0, 0, 0}, lean_max[3] = {0, 0, 0};  // waist pitch, waist roll, stance-sole pitch
     int n_lean = 0;
     for (double a : vx)
@@ -367,6 +395,17 @@ int main(int argc, char** argv) {
                               static_cast<unsigned long long>(pipe_on.g.gco().counters().solver_failures));
                 }
                 jump_limited += pipe_on.g.gco().counters().jump_limited;
+                const pmg::gco::StrideAdaptationCounters& sc = pipe_on.g.strideAdaptation().counters();
+                stride_counts[0] += sc.ticks;
+                stride_counts[1] += sc.speed_limited;
+                stride_counts[2] += sc.offset_limited;
+                stride_counts[3] += sc.unreached;
+                stride_counts[4] += sc.failures;
+                if (sc.unreached > 0 || sc.failures > 0)
+                  std::printf("  (stride adaptation for this command: %llu of %llu foot-ticks unreached, %llu failures, "
+                              "largest |δ| %.3f rad)\n",
+                              static_cast<unsigned long long>(sc.unreached), static_cast<unsigned long long>(2 * sc.ticks),
+                              static_cast<unsigned long long>(sc.failures), pipe_on.stride_max_command);
                 ticks += pipe_on.g.gco().counters().ticks;
                 std::printf("%6.2f %5.2f %5.2f %5.2f %5.2f %5.2f | %4d | %8.1f %8.2f | %8.1f %8.2f | %7.2f %7.3f | %7.3f %7.3f %7.3f %s\n",
                             a, b, w, p, r, h, sG.stances, 1e3 * s0.mean_stance_speed, 1e3 * sG.mean_stance_speed,
@@ -451,6 +490,15 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < std::min<std::size_t>(worst.size(), 12); ++i)
       std::printf("    outside: target (%.2f, %.2f, %.2f | %.2f %.2f %.2f) implied (%.3f, %.3f, %.3f)\n", worst[i].vx, worst[i].vy,
                   worst[i].wz, worst[i].pitch, worst[i].roll, worst[i].h, worst[i].ix, worst[i].iy, worst[i].iw);
+    if (on.stride_adaptation.enabled) {
+      std::printf("  stride adaptation: mean |δ| %.4f rad, largest |δ| %.3f rad, largest per-tick step of δ %.4f rad "
+                  "(measured ticks); over all %llu ticks: speed-limited %llu, offset-limited %llu, unreached %llu "
+                  "foot-ticks, failures %llu\n",
+                  pipe_on.stride_abs_sum / std::max(1L, pipe_on.stride_abs_n), pipe_on.stride_max, pipe_on.stride_step_max,
+                  static_cast<unsigned long long>(stride_counts[0]), static_cast<unsigned long long>(stride_counts[1]),
+                  static_cast<unsigned long long>(stride_counts[2]), static_cast<unsigned long long>(stride_counts[3]),
+                  static_cast<unsigned long long>(stride_counts[4]));
+    }
     std::printf("  GCO solver failures %llu, jump-limited ticks %llu of %llu\n",
                 static_cast<unsigned long long>(failures), static_cast<unsigned long long>(jump_limited),
                 static_cast<unsigned long long>(ticks));

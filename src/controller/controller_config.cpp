@@ -339,6 +339,7 @@ struct ControllerYaml {
   MujocoYaml mujoco;
   std::optional<bool> gco_enabled;
   std::optional<bool> sole_levelling;
+  std::optional<bool> stride_adaptation;
   GeneratorYaml generator;
   CommandsYaml commands;
   VelocityFeedbackYaml velocity_feedback;
@@ -360,6 +361,8 @@ struct ControllerYaml {
     a->Visit("gco", &gco, "GCO options YAML", yaml::kPath);
     a->Visit("gco_enabled", &gco_enabled, "false: PMG w/o GCO");
     a->Visit("sole_levelling", &sole_levelling, "true: level the reference's stance soles (gco.sole_levelling.enabled)");
+    a->Visit("stride_adaptation", &stride_adaptation,
+             "true: hold the reference's stance soles still under the command (gco.stride_adaptation.enabled)");
     a->Visit("generator", &generator, "PMG generator parameters");
     a->Visit("commands", &commands, "command limits");
     a->Visit("velocity_feedback", &velocity_feedback, "closed-loop velocity tracking (docs/controller.md)");
@@ -439,6 +442,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   }
   if (y.gco_enabled) c.gco.enabled = *y.gco_enabled;
   if (y.sole_levelling) c.gco.sole_levelling.enabled = *y.sole_levelling;
+  if (y.stride_adaptation) c.gco.stride_adaptation.enabled = *y.stride_adaptation;
   c.commands = y.commands.l;
   c.commands.standing_height = c.robot.standing_base_height;
   if (const std::string e = c.commands.validate(); !e.empty()) fail("commands", e);

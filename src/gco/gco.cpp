@@ -127,6 +127,7 @@ void GcoOptions::validate() const {
   requireRange(newton_polish_iterations, 0, 20, "newton_polish_iterations");
   requireRange(failure_gradient_norm, 0.0, 1e6, "failure_gradient_norm");
   sole_levelling.validate();
+  stride_adaptation.validate();
 }
 
 const char* toString(GcoStatus status) noexcept {

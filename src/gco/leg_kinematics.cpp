@@ -183,6 +183,22 @@ bool LegKinematics::orientation(Foot foot, const LegVector& q, Eigen::Matrix3d* 
   return true;
 }
 
+bool LegKinematics::jacobian(Foot foot, const LegVector& q, Eigen::Isometry3d* X_BS,
+                             Eigen::Matrix<double, 6, kLegDofs>* J_B) noexcept {
+  if (!q.allFinite() || X_BS == nullptr || J_B == nullptr) return false;
+  Impl::PerFoot& pf = *impl_->feet[LegModel::index(foot)];
+  pf.q.data = q;
+  if (pf.fk.JntToCart(pf.q, pf.frame) < 0) return false;
+  if (pf.jac_solver.JntToJac(pf.q, pf.jac) < 0) return false;
+  Eigen::Vector3d p;
+  Eigen::Matrix3d R;
+  toEigen(pf.frame, &p, &R);
+  X_BS->linear() = R;
+  X_BS->translation() = p;
+  *J_B = pf.jac.data;
+  return true;
+}
+
 double LegKinematics::inverse(Foot foot, const Eigen::Isometry3d& X_BS_target, const LegVector& q_init, LegVector* q) {
   Impl::PerFoot& pf = *impl_->feet[LegModel::index(foot)];
   KDL::Frame target;

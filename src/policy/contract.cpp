@@ -218,6 +218,8 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   c.pmg.emplace("mode", "pmg");
   // Contracts written before the sole levelling have no pmg.sole_levelling: trained without it.
   c.pmg.emplace("sole_levelling", "false");
+  // Contracts written before the stride adaptation (2026-12-04) were trained without it.
+  c.pmg.emplace("stride_adaptation", "false");
   c.pmg.emplace("upright_walking", "false");
   // Contracts written before the upper-body feed-forward in training have no pmg.upper_body_ff.
   c.pmg.emplace("upper_body_ff", "false");

@@ -11,6 +11,7 @@ PolicyStage::PolicyStage(const std::string& onnx_path, const RobotConfig& robot,
   PolicyRobotSpec spec = makePolicyRobotSpec(robot, options_.control_period);
   spec.pmg = {{"enabled", "true"}, {"gco", options_.gco ? "true" : "false"}, {"mode", options_.mode},
               {"sole_levelling", options_.sole_levelling ? "true" : "false"},
+              {"stride_adaptation", options_.stride_adaptation ? "true" : "false"},
               {"upright_walking", options_.upright_walking ? "true" : "false"},
               {"upper_body_ff", options_.upper_body_ff ? "true" : "false"}};
   if (!options_.clips_digest.empty()) spec.pmg["clips_digest"] = options_.clips_digest;

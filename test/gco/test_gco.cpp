@@ -353,6 +353,24 @@ TEST(GcoOptions, ShippedYamlAndDocsMatchTheDefaults) {
     EXPECT_DOUBLE_EQ(o.sole_levelling.edge_fraction, d.sole_levelling.edge_fraction);
     EXPECT_EQ(o.sole_levelling.iterations, d.sole_levelling.iterations);
     EXPECT_DOUBLE_EQ(o.sole_levelling.max_correction, d.sole_levelling.max_correction);
+    const StrideAdaptationOptions &sa = o.stride_adaptation, &sd = d.stride_adaptation;
+    EXPECT_EQ(sa.enabled, sd.enabled);
+    EXPECT_DOUBLE_EQ(sa.touchdown_lead, sd.touchdown_lead);
+    EXPECT_DOUBLE_EQ(sa.return_fraction, sd.return_fraction);
+    EXPECT_DOUBLE_EQ(sa.standing_time_constant, sd.standing_time_constant);
+    EXPECT_DOUBLE_EQ(sa.max_offset, sd.max_offset);
+    EXPECT_DOUBLE_EQ(sa.stepping_margin, sd.stepping_margin);
+    EXPECT_DOUBLE_EQ(sa.max_offset_height, sd.max_offset_height);
+    EXPECT_DOUBLE_EQ(sa.max_offset_yaw, sd.max_offset_yaw);
+    EXPECT_DOUBLE_EQ(sa.max_offset_speed, sd.max_offset_speed);
+    EXPECT_DOUBLE_EQ(sa.max_offset_yaw_rate, sd.max_offset_yaw_rate);
+    EXPECT_EQ(sa.iterations, sd.iterations);
+    EXPECT_DOUBLE_EQ(sa.max_correction, sd.max_correction);
+    EXPECT_DOUBLE_EQ(sa.damping, sd.damping);
+    EXPECT_DOUBLE_EQ(sa.height_weight, sd.height_weight);
+    EXPECT_DOUBLE_EQ(sa.max_correction_rate, sd.max_correction_rate);
+    EXPECT_DOUBLE_EQ(sa.sole_half_length, sd.sole_half_length);
+    EXPECT_DOUBLE_EQ(sa.rolling_slope, sd.rolling_slope);
   }
 }
 

@@ -61,15 +61,17 @@ TEST(GcoNoAlloc, SolveAndKinematicsAllocateNothingPerTick) {
   EXPECT_EQ(ok, 3 * static_cast<int>(g.ticks.size()));
 }
 
-class GcoNoAllocPipe : public ::testing::TestWithParam<bool> {};
+class GcoNoAllocPipe : public ::testing::TestWithParam<int> {};
 
-// Both with and without the stance sole levelling (sole_levelling.hpp) of the reference.
+// Plain, with the stance sole levelling (sole_levelling.hpp) of the reference, and with the stride
+// adaptation (stride_adaptation.hpp) on top of the levelling.
 TEST_P(GcoNoAllocPipe, GeneratorPlusGcoTickAllocatesNothing) {
   const RobotConfig& robot = pmg::test::g1Robot();
   const GeneratorJointSpace js = pmg::generatorJointSpace(robot);
   auto model = std::make_shared<const GeneratorModel>(loadClipLibrary(pmg::test::g1ClipDir(), robot), js);
   GcoOptions options;
-  options.sole_levelling.enabled = GetParam();
+  options.sole_levelling.enabled = GetParam() >= 1;
+  options.stride_adaptation.enabled = GetParam() >= 2;
   GeneratorWithGco pipe(model, LegModel::fromRobotConfig(robot), options);
   pipe.step({0.3, 0.0, 0.0}, {}, 0.01);  // warm-up
   std::optional<pmg::test::AllocationGuard> guard;
@@ -85,12 +87,16 @@ TEST_P(GcoNoAllocPipe, GeneratorPlusGcoTickAllocatesNothing) {
   guard.reset();
   EXPECT_EQ(allocations, 0u);
   EXPECT_TRUE(std::isfinite(sum));
-  if (GetParam()) {
+  if (GetParam() >= 1) {
     EXPECT_GT(pipe.soleLevelling().correction(Foot::kLeft).norm() + pipe.soleLevelling().correction(Foot::kRight).norm(), 0.0);
+  }
+  if (GetParam() >= 2) {
+    EXPECT_GT(pipe.strideAdaptation().correction(Foot::kLeft).norm() +
+                  pipe.strideAdaptation().correction(Foot::kRight).norm(), 0.0);
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(SoleLevelling, GcoNoAllocPipe, ::testing::Bool());
+INSTANTIATE_TEST_SUITE_P(ReferenceSettings, GcoNoAllocPipe, ::testing::Values(0, 1, 2));
 
 }  // namespace
 }  // namespace pmg::gco

@@ -123,6 +123,15 @@ TEST(Contract, ReferenceSettingsMustMatchTheController) {
   s.pmg["upright_walking"] = "true";
   EXPECT_NO_THROW(PolicyRunner(uplev, s));
   EXPECT_THROW(PolicyRunner(pmg::test::sourcePath("config/policies/g1_pmg_policy_bk_vy6.onnx"), s), ContractError);
+  // GcoOptions::stride_adaptation: no shipped actor was trained on it (2026-12-04), so a controller
+  // that adapts the strides refuses every one of them, naming the key.
+  s.pmg["stride_adaptation"] = "true";
+  try {
+    PolicyRunner runner(uplev, s);
+    FAIL() << "accepted a policy trained without the stride adaptation on a controller with it";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.stride_adaptation");
+  }
 }
 
 // pmg.upper_body_ff: an actor trained with the controller's waist feed-forward in its environment

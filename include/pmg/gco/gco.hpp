@@ -62,6 +62,7 @@
 
 #include "pmg/gco/leg_kinematics.hpp"
 #include "pmg/gco/sole_levelling.hpp"
+#include "pmg/gco/stride_adaptation.hpp"
 
 namespace pmg::gco {
 
@@ -132,6 +133,10 @@ struct GcoOptions {
   /// sole_levelling.hpp). Off by default; independent of `enabled`.
   SoleLevellingOptions sole_levelling;
 
+  /// Stride adaptation of the reference after the levelling and before GCO (GeneratorWithGco; beyond
+  /// the paper, stride_adaptation.hpp): stance soles held still under the command. Off by default.
+  StrideAdaptationOptions stride_adaptation;
+
   /// Throws std::invalid_argument naming the field and its allowed range.
   void validate() const;
 
@@ -160,6 +165,7 @@ struct GcoOptions {
     a->Visit("max_iterations", &max_iterations, "1..100");
     a->Visit("failure_gradient_norm", &failure_gradient_norm, "");
     a->Visit("sole_levelling", &sole_levelling, "stance sole levelling of the reference");
+    a->Visit("stride_adaptation", &stride_adaptation, "stance soles held still under the command");
   }
 };
 

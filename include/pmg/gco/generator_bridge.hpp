@@ -5,8 +5,9 @@
 ///
 /// Per 100 Hz tick: MotionGenerator::step(u_d, u_s, dt) -> [SoleLevelling::apply() when
 /// GcoOptions::sole_levelling.enabled: the stance soles of q_ref/qd_ref levelled, sole_levelling.hpp]
-/// -> fillFromGenerator() -> Gco::solve(). generatorOutput() is the (levelled) reference the policy
-/// and the controller use.
+/// -> [StrideAdaptation::apply() when GcoOptions::stride_adaptation.enabled: the stance soles held
+/// still under u_d, stride_adaptation.hpp] -> fillFromGenerator() -> Gco::solve().
+/// generatorOutput() is the (levelled, adapted) reference the policy and the controller use.
 /// The policy observes GcoResult::u_opt (u' of eq. 19) instead of the raw command; with
 /// GcoOptions::enabled = false (the "PMG w/o GCO" ablation) u' is the template's own base state.
 /// Setup allocates and may throw; step() is noexcept and allocation-free (test/gco/
@@ -59,6 +60,7 @@ class GeneratorWithGco {
         gco_(legs, options),
         leg_idx_(legs->jointIndices(generator_.model().jointSpace().joint_names)),
         levelling_(legs, options.sole_levelling, leg_idx_),
+        stride_(legs, options.stride_adaptation, leg_idx_),
         output_(generator_.output()) {}  // sizes the levelled copy once
 
   /// One tick: generator at the current phase, then GCO. Returns GCO's result (u' etc.).
@@ -67,14 +69,24 @@ class GeneratorWithGco {
     return solveGco();
   }
 
-  /// step()'s first half: the generator tick, the sole levelling when enabled, and gcoInput().
-  /// (Split for tools that time the two halves, apps/gco/gco_eval.cpp.)
+  /// step()'s first half: the generator tick, the sole levelling and the stride adaptation when
+  /// enabled, and gcoInput(). (Split for tools that time the two halves, apps/gco/gco_eval.cpp.)
   void stepReference(const VelocityCommand& u_d, const PostureCommand& u_s, double dt) noexcept {
     generator_.step(u_d, u_s, dt);
+    if (adapted()) output_ = generator_.output();  // same sizes: no allocation
     if (levelling_.enabled()) {
-      output_ = generator_.output();  // same sizes: no allocation
       levelling_.apply(generator_.model().jointSpace().q_stand, output_.q_posture, output_.phase, output_.contact,
                        dt, &output_.q_ref, &output_.qd_ref);
+    }
+    if (stride_.enabled()) {
+      StrideAdaptationInput sin;
+      sin.phase = output_.phase;
+      sin.contact = output_.contact;
+      sin.in_contact = output_.in_contact;
+      sin.base_height = output_.base_height;
+      sin.v_H = Eigen::Vector2d(u_d.vx, u_d.vy);
+      sin.yaw_rate = u_d.wz;
+      stride_.apply(sin, dt, &output_.q_ref, &output_.qd_ref);
     }
     fillFromGenerator(generatorOutput(), leg_idx_, u_d, u_s, &input_);
   }
@@ -90,14 +102,14 @@ class GeneratorWithGco {
     generator_.reset(phase);
     gco_.reset();
     levelling_.reset();
+    stride_.reset();
   }
 
   /// The reference of the last tick: the generator's, with the stance soles levelled when
-  /// GcoOptions::sole_levelling.enabled.
-  const GeneratorOutput& generatorOutput() const noexcept {
-    return levelling_.enabled() ? output_ : generator_.output();
-  }
+  /// GcoOptions::sole_levelling.enabled and held still when GcoOptions::stride_adaptation.enabled.
+  const GeneratorOutput& generatorOutput() const noexcept { return adapted() ? output_ : generator_.output(); }
   const SoleLevelling& soleLevelling() const noexcept { return levelling_; }
+  const StrideAdaptation& strideAdaptation() const noexcept { return stride_; }
   const GcoInput& gcoInput() const noexcept { return input_; }
   const GcoResult& gcoResult() const noexcept { return result_; }
   MotionGenerator& generator() noexcept { return generator_; }
@@ -105,10 +117,13 @@ class GeneratorWithGco {
   const LegJointIndex& legJointIndex() const noexcept { return leg_idx_; }
 
  private:
+  bool adapted() const noexcept { return levelling_.enabled() || stride_.enabled(); }
+
   MotionGenerator generator_;
   Gco gco_;
   LegJointIndex leg_idx_;
   SoleLevelling levelling_;
+  StrideAdaptation stride_;
   GeneratorOutput output_;
   GcoInput input_;
   GcoResult result_;

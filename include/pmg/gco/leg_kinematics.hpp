@@ -121,6 +121,11 @@ class LegKinematics {
   bool orientation(Foot foot, const LegVector& q, Eigen::Matrix3d* R_BF,
                    Eigen::Matrix<double, 3, kLegDofs>* J_w_B) noexcept;
 
+  /// Pose X_BS of the sole frame in B and the geometric Jacobian of S in B, rows (v_BS_B; ω_BF_B):
+  /// J (6 x kLegDofs), [m/rad] over [rad/rad], reference point S. No allocation. Used by
+  /// StrideAdaptation (stride_adaptation.hpp) for its per-tick differential inverse kinematics.
+  bool jacobian(Foot foot, const LegVector& q, Eigen::Isometry3d* X_BS, Eigen::Matrix<double, 6, kLegDofs>* J_B) noexcept;
+
   /// Setup-time inverse kinematics (KDL Levenberg-Marquardt) for a target sole pose X_BS,
   /// starting from q_init. Returns the final position error norm [m + rad]; *q receives the
   /// solution clamped to the URDF joint limits.

@@ -36,6 +36,7 @@ struct PolicyStageOptions {
   double control_period = 0.01;   ///< [s], must equal the contract's
   bool gco = false;               ///< the controller runs GCO (must match the contract)
   bool sole_levelling = false;    ///< the reference's stance soles are levelled (GcoOptions::sole_levelling; must match)
+  bool stride_adaptation = false; ///< the reference's stance soles are held still (GcoOptions::stride_adaptation; must match)
   bool upright_walking = false;   ///< the walking clips' waist lean is removed (GeneratorParams::upright_walking; must match)
   /// The controller feeds the waist joints' gravity torque forward (`upper_body: enabled`,
   /// pmg::UpperBodyCompensation). Must match the contract's pmg.upper_body_ff: an actor trained with
