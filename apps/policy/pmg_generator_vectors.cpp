@@ -11,7 +11,8 @@
 // "paper": {"blending": "paper", "ticks": [...]} the paper's eqs. 4-7 (the ablation), and
 // "levelled": {"sole_levelling": true, "upright_walking": true, "ticks": [...]} the consistent blending
 // with GeneratorParams::upright_walking and the stance soles levelled (GcoOptions::sole_levelling,
-// include/pmg/gco/sole_levelling.hpp). A file named
+// include/pmg/gco/sole_levelling.hpp), and "adapted": {"stride_adaptation": true, "ticks": [...]} the
+// consistent blending with the stride adaptation (include/pmg/gco/stride_adaptation.hpp). A file named
 // consistency_map.yaml among --clips (or in a --clips folder) is the library's consistency map.
 // The JSON holds everything the port needs: the joint space (from the robot config), the
 // generator parameters, the clips as given to GeneratorModel (missing directions are derived by
@@ -207,6 +208,18 @@ void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const 
   j.key("sole_levelling");
   std::fprintf(f, "{\"edge_fraction\":%.17g,\"iterations\":%d,\"max_correction\":%.17g},",
                o.sole_levelling.edge_fraction, o.sole_levelling.iterations, o.sole_levelling.max_correction);
+  const pmg::gco::StrideAdaptationOptions& sa = o.stride_adaptation;
+  j.key("stride_adaptation");
+  std::fprintf(f,
+               "{\"touchdown_lead\":%.17g,\"return_fraction\":%.17g,\"standing_time_constant\":%.17g,"
+               "\"stepping_margin\":%.17g,\"max_offset\":%.17g,\"max_offset_height\":%.17g,\"max_offset_yaw\":%.17g,"
+               "\"max_offset_speed\":%.17g,\"max_offset_yaw_rate\":%.17g,\"iterations\":%d,\"max_correction\":%.17g,"
+               "\"height_weight\":%.17g,\"damping\":%.17g,\"max_correction_rate\":%.17g,\"sole_half_length\":%.17g,"
+               "\"rolling_slope\":%.17g},",
+               sa.touchdown_lead, sa.return_fraction, sa.standing_time_constant, sa.stepping_margin, sa.max_offset,
+               sa.max_offset_height, sa.max_offset_yaw, sa.max_offset_speed, sa.max_offset_yaw_rate, sa.iterations,
+               sa.max_correction, sa.height_weight, sa.damping, sa.max_correction_rate, sa.sole_half_length,
+               sa.rolling_slope);
   j.key("limits_lo");
   j.list(std::vector<double>{o.limits.v_x_min, o.limits.v_y_min, o.limits.yaw_rate_min, o.limits.height_min});
   j.raw(",");
@@ -348,6 +361,9 @@ int main(int argc, char** argv) {
     upright_params.upright_walking = true;
     auto upright_model = std::make_shared<const pmg::GeneratorModel>(lib, js, upright_params);
     pmg::gco::GeneratorWithGco levelled_gen(upright_model, legs, levelled_options);
+    pmg::gco::GcoOptions adapted_options = gco_options;
+    adapted_options.stride_adaptation.enabled = true;
+    pmg::gco::GeneratorWithGco adapted_gen(model, legs, adapted_options);
 
     std::FILE* f = std::fopen(out.c_str(), "w");
     if (f == nullptr) throw std::runtime_error(out + ": cannot open for writing");
@@ -491,10 +507,17 @@ int main(int argc, char** argv) {
     j.raw("{\"sole_levelling\":true,\"upright_walking\":true,");
     j.key("ticks");
     writeTicks(levelled_gen);
+    j.raw("},");
+    // The consistent blending with the stride adaptation (stride_adaptation.hpp).
+    j.key("adapted");
+    j.raw("{\"stride_adaptation\":true,");
+    j.key("ticks");
+    writeTicks(adapted_gen);
     j.raw("}");
     j.raw("}\n");
     std::fclose(f);
-    std::printf("wrote %d ticks x 3 (consistent, paper, consistent + upright walking + levelled soles), %zu dynamic + %zu static clips%s to %s; "
+    std::printf("wrote %d ticks x 4 (consistent, paper, consistent + upright walking + levelled soles, consistent + "
+                "stride adaptation), %zu dynamic + %zu static clips%s to %s; "
                 "consistent: %d ticks with a saturated amplitude, %d playing a clip of the other sign than u_i\n",
                 ticks, lib.dynamic_clips.size(), lib.static_clips.size(),
                 lib.consistency.empty() ? "" : " + consistency map", out.c_str(), saturated_ticks, opposite_ticks);

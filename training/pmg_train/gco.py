@@ -39,6 +39,11 @@ from . import loops
 
 NUM_FEET = 2
 LEG_DOFS = 6
+# StrideAdaptationOptions{} (stride_adaptation.hpp), for model files written before it existed.
+STRIDE_DEFAULTS = {"touchdown_lead": 0.5, "return_fraction": 0.7, "standing_time_constant": 0.3, "stepping_margin": 0.02,
+                   "max_offset": 0.15, "max_offset_height": 0.03, "max_offset_yaw": 0.4, "max_offset_speed": 1.0,
+                   "max_offset_yaw_rate": 3.0, "iterations": 3, "max_correction": 0.6, "height_weight": 0.3,
+                   "damping": 1e-3, "max_correction_rate": 4.0, "sole_half_length": 0.085, "rolling_slope": 0.05}
 
 
 @dataclasses.dataclass
@@ -75,6 +80,9 @@ class GcoOptions:
     level_edge_fraction: float = 0.5
     level_iterations: int = 3
     level_max_correction: float = 0.4
+    # Stride adaptation of the reference (stride_adaptation.hpp; StrideAdaptationOptions, same names).
+    # `enabled` is the training's choice (EnvConfig.stride_adaptation), not the file's.
+    stride: dict = dataclasses.field(default_factory=lambda: dict(STRIDE_DEFAULTS))
 
     @staticmethod
     def from_doc(doc):
@@ -89,7 +97,8 @@ class GcoOptions:
                           np.array([o["max_jump_velocity"], o["max_jump_velocity"], o["max_jump_yaw_rate"],
                                     o["max_jump_height"]]),
                           *((o["sole_levelling"]["edge_fraction"], int(o["sole_levelling"]["iterations"]),
-                             o["sole_levelling"]["max_correction"]) if "sole_levelling" in o else ()))
+                             o["sole_levelling"]["max_correction"]) if "sole_levelling" in o else (0.5, 3, 0.4)),
+                          dict(STRIDE_DEFAULTS, **o.get("stride_adaptation", {})))
 
 
 def load_model(path):
@@ -203,9 +212,137 @@ def _add_np(x, idx, values):
 
 
 def initial_state(xp=np):
-    """GCO state after construction / reset(): no contact ramps, no previous solution."""
+    """GCO state after construction / reset(): no contact ramps, no previous solution; the
+    stride adaptation's offsets zero (its "sa_*" entries, StrideAdaptation's members)."""
     return {"s": xp.zeros(2), "x": xp.zeros(4), "u_prev": xp.zeros(4), "have_prev": xp.asarray(False),
-            "lev_applied": xp.zeros((2, 2))}
+            "lev_applied": xp.zeros((2, 2)),
+            "sa_started": xp.asarray(False), "sa_height": xp.asarray(0.0), "sa_contact": xp.ones(2, bool),
+            "sa_offset": xp.zeros((2, 3)), "sa_yaw": xp.zeros(2), "sa_lo_offset": xp.zeros((2, 3)),
+            "sa_lo_yaw": xp.zeros(2), "sa_p": xp.zeros((2, 3)), "sa_R": xp.stack([xp.eye(3), xp.eye(3)]),
+            "sa_applied": xp.zeros((2, 6))}
+
+
+def _leg_jacobian(chains: LegChains, foot: int, q, xp=np):
+    """Sole pose (p_BS_B, R_BF) and the geometric Jacobian of S in B, rows (v; ω), (6, 6)."""
+    p, R, axes, points = _chain_fk(chains, foot, q, xp)
+    Jv = xp.stack([xp.cross(axes[k], p - points[k]) for k in range(len(axes))], axis=1)
+    Jw = xp.stack(axes, axis=1)
+    return p, R, xp.concatenate([Jv, Jw], axis=0)
+
+
+def _rotation_vector(M, xp=np):
+    """θ·axis of the rotation matrix M (Eigen::AngleAxisd(M): angle · axis), for |θ| < π."""
+    s = 0.5 * xp.stack([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])  # sin θ · axis
+    n = xp.sqrt(xp.sum(s * s))
+    theta = xp.arctan2(n, 0.5 * (M[0, 0] + M[1, 1] + M[2, 2] - 1.0))
+    return s * xp.where(n > 1e-300, theta / xp.where(n > 1e-300, n, 1.0), 1.0)
+
+
+def _bound_norm(v, bound, xp=np):
+    n = xp.sqrt(xp.sum(v * v))
+    return xp.where(n > bound, v * (bound / xp.where(n > bound, n, 1.0)), v)
+
+
+def adapt_strides(chains: LegChains, opt: GcoOptions, gen_out, u_d, lower, upper, state, xp=np):
+    """Stride adaptation of one reference tick (pmg::gco::StrideAdaptation::apply, stride_adaptation.hpp):
+    the stance soles held still in the world under the command u_d = (v_x, v_y, ω), the swing foot
+    landing ahead by touchdown_lead times its lift-off offset, by damped inverse kinematics of each leg.
+
+    gen_out: the generator (and levelling) output (q_ref, qd_ref, phase, contact_mu, contact_sigma,
+    in_contact, base_height); lower, upper: (n) joint limits [rad]; state: the GCO state dict (its
+    "sa_*" entries). The failure paths of the C++ (non-finite input, KDL errors) are not ported.
+    Returns (gen_out with q_ref/qd_ref replaced, δ (2, 6), e (2, 3), new state)."""
+    o = opt.stride
+    dt = opt.dt
+    q_ref, qd_ref = xp.asarray(gen_out["q_ref"]), xp.asarray(gen_out["qd_ref"])
+    lower, upper = xp.asarray(lower), xp.asarray(upper)
+    first = ~xp.asarray(state["sa_started"])
+    h = gen_out["base_height"]
+    height_rate = xp.where(first, 0.0, (h - state["sa_height"]) / dt)
+    vx, vy, wz = u_d[0], u_d[1], u_d[2]
+    contact = xp.asarray(gen_out["in_contact"]).astype(bool)
+    lead = o["touchdown_lead"]
+    offsets, yaws, lo_offsets, lo_yaws, ps, Rs, deltas = [], [], [], [], [], [], []
+    for f in range(NUM_FEET):
+        idx = chains.leg_joint_index[f]
+        q = q_ref[idx]
+        p_S, R, _ = _leg_jacobian(chains, f, q, xp)
+        p_prev = xp.where(first, p_S, state["sa_p"][f])
+        R_prev = xp.where(first, R, state["sa_R"][f])
+        e, psi = state["sa_offset"][f], state["sa_yaw"][f]
+        # Stance: hold the point the foot rolls on still under the command.
+        sigma, mu, phase = gen_out["contact_sigma"][f], gen_out["contact_mu"][f], gen_out["phase"]
+        walking = xp.clip((0.5 - sigma) / o["stepping_margin"], 0.0, 1.0)
+        toe_down = -R[2, 0]
+        c_x = o["sole_half_length"] * xp.clip(toe_down / o["rolling_slope"], -1.0, 1.0)
+        c_now = p_S + R[:, 0] * c_x
+        moved = c_now - (p_prev + R_prev[:, 0] * c_x)
+        p = c_now + e
+        still = xp.stack([-vx + wz * p[1], -vy - wz * p[0], -height_rate])
+        d_yaw = xp.arctan2(R[1, 0], R[0, 0]) - xp.arctan2(R_prev[1, 0], R_prev[0, 0])
+        d_yaw = d_yaw - 2.0 * np.pi * xp.round(d_yaw / (2.0 * np.pi))
+        tau = o["standing_time_constant"]
+        rate_st = walking * (still - moved / dt) - (1.0 - walking) * e / tau
+        yaw_rate_st = walking * (-wz - d_yaw / dt) - (1.0 - walking) * psi / tau
+        # Swing: from the lift-off offset toward −lead times it (height to 0).
+        lifting = state["sa_contact"][f] | first
+        lo_e = xp.where(lifting, e, state["sa_lo_offset"][f])
+        lo_psi = xp.where(lifting, psi, state["sa_lo_yaw"][f])
+        s = phase - mu - xp.floor(phase - mu)
+        in_window = (s < sigma) | (s > 1.0 - sigma)
+        prog = xp.where((sigma < 0.5) & ~in_window,
+                        xp.clip((s - sigma) / xp.where(sigma < 0.5, 1.0 - 2.0 * sigma, 1.0), 0.0, 1.0), 0.0)
+        a = xp.clip(prog / o["return_fraction"], 0.0, 1.0)
+        a = a * a * (3.0 - 2.0 * a)
+        touchdown = xp.stack([-lead * lo_e[0], -lead * lo_e[1], 0.0 * lo_e[2]])
+        target = lo_e + a * (touchdown - lo_e)
+        target_yaw = lo_psi + a * (-lead * lo_psi - lo_psi)
+        rate_sw = (target - e) / dt
+        yaw_rate_sw = (target_yaw - psi) / dt
+        rate = xp.where(contact[f], rate_st, rate_sw)
+        yaw_rate = xp.where(contact[f], yaw_rate_st, yaw_rate_sw)
+        rate = _bound_norm(rate, o["max_offset_speed"], xp)
+        yaw_rate = xp.clip(yaw_rate, -o["max_offset_yaw_rate"], o["max_offset_yaw_rate"])
+        e = e + rate * dt
+        psi = psi + yaw_rate * dt
+        e = xp.concatenate([e[:2], xp.clip(e[2:], -o["max_offset_height"], o["max_offset_height"])])
+        e = _bound_norm(e, o["max_offset"], xp)
+        psi = xp.clip(psi, -o["max_offset_yaw"], o["max_offset_yaw"])
+        # Inverse kinematics to the target pose (p_S + e, Rz(ψ) R), from the last tick's δ.
+        c, sn = xp.cos(psi), xp.sin(psi)
+        Rz = xp.stack([xp.stack([c, -sn, 0.0 * c]), xp.stack([sn, c, 0.0 * c]), xp.stack([0.0 * c, 0.0 * c, 1.0 + 0.0 * c])])
+        p_t, R_t = p_S + e, Rz @ R
+        last = state["sa_applied"][f]
+        max_step = o["max_correction_rate"] * xp.where(first, 1e9, dt)
+        lo = xp.maximum(xp.maximum(-o["max_correction"], lower[idx] - q), last - max_step)
+        hi = xp.minimum(xp.minimum(o["max_correction"], upper[idx] - q), last + max_step)
+        wvec = xp.asarray([1.0, 1.0, o["height_weight"], 1.0, 1.0, 1.0])
+        def lm_step(delta, f=f, q=q, p_t=p_t, R_t=R_t, lo=lo, hi=hi, last=last, max_step=max_step):
+            p_c, R_c, J = _leg_jacobian(chains, f, q + delta, xp)
+            err = xp.concatenate([p_t - p_c, _rotation_vector(R_t @ R_c.T, xp)]) * wvec
+            J = J * wvec[:, None]
+            H = J.T @ J + (xp.sum(err * err) + o["damping"]) * xp.eye(LEG_DOFS)
+            delta = delta + xp.linalg.solve(H, J.T @ err)
+            return xp.where(lo <= hi, xp.clip(delta, lo, hi), xp.clip(0.0, last - max_step, last + max_step))
+        deltas.append(loops.repeat(xp, int(o["iterations"]), lm_step, last))
+        offsets.append(e)
+        yaws.append(psi)
+        lo_offsets.append(lo_e)
+        lo_yaws.append(lo_psi)
+        ps.append(p_S)
+        Rs.append(R)
+    delta = xp.stack(deltas)
+    rate_added = xp.where(first, 0.0, (delta - state["sa_applied"]) / dt)
+    idx = xp.asarray(chains.leg_joint_index)
+    q_new = q_ref.at[idx.ravel()].add(delta.ravel()) if hasattr(q_ref, "at") else _add_np(q_ref, idx, delta)
+    qd_new = qd_ref.at[idx.ravel()].add(rate_added.ravel()) if hasattr(qd_ref, "at") else _add_np(qd_ref, idx, rate_added)
+    out = dict(gen_out)
+    out["q_ref"], out["qd_ref"] = q_new, qd_new
+    new_state = dict(state)
+    new_state.update({"sa_started": xp.asarray(True), "sa_height": xp.asarray(h, float), "sa_contact": contact,
+                      "sa_offset": xp.stack(offsets), "sa_yaw": xp.stack(yaws), "sa_lo_offset": xp.stack(lo_offsets),
+                      "sa_lo_yaw": xp.stack(lo_yaws), "sa_p": xp.stack(ps), "sa_R": xp.stack(Rs), "sa_applied": delta})
+    return out, delta, new_state["sa_offset"], new_state
 
 
 def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
@@ -266,5 +403,6 @@ def step(chains: LegChains, opt: GcoOptions, gen_out, u_s, state, xp=np):
     u = xp.where(have_prev, xp.clip(u, state["u_prev"] - jump, state["u_prev"] + jump), u)
     x = u - base
     u_opt = xp.stack([u[0], u[1], u[2], xp.asarray(u_s[0], u.dtype), xp.asarray(u_s[1], u.dtype), u[3]])
-    new_state = {"s": s, "x": x, "u_prev": u, "have_prev": xp.asarray(True), "lev_applied": state["lev_applied"]}
+    new_state = dict(state)
+    new_state.update({"s": s, "x": x, "u_prev": u, "have_prev": xp.asarray(True)})
     return u_opt, x, s, new_state

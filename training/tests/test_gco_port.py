@@ -7,7 +7,8 @@ resolved GCO options and, per tick, the C++ u', Δ and contact weights). Checks 
 kinematics and velocities at the file's random configurations, (2) the generator port + GCO port
 stepped from the same initial phase over the whole schedule. Exit code 0 iff everything agrees to
 --tol (absolute); prints the largest difference per quantity. --jax runs (2) as the training env does:
-each tick (generator, sole levelling, GCO) under jax.jit, in float64, in the training environment.
+each tick (generator, sole levelling or stride adaptation, GCO) under jax.jit, in float64, in the
+training environment.
 """
 import argparse
 import json
@@ -73,14 +74,17 @@ def main():
         worst["fk_p"] = max(worst["fk_p"], float(np.max(np.abs(p - c["p_BS_B"]))))
         worst["fk_v"] = max(worst["fk_v"], float(np.max(np.abs(vel - c["v_BS_B"]))))
         worst["fk_w"] = max(worst["fk_w"], float(np.max(np.abs(w - c["w_BF_B"]))))
-    def ticker(model, level):
-        """(phase, u_d, u_s, state) -> (generator output, q_ref before levelling, u', Δ, s, state): one tick."""
+    def ticker(model, level, adapt=False):
+        """(phase, u_d, u_s, state) -> (generator output, q_ref before levelling and stride adaptation, u', Δ,
+        s, state): one tick."""
         def tick_fn(phase, u_d, u_s, state):
             out = step(model, phase, u_d, u_s, v["dt"], xp=xp)
             q_gen = out["q_ref"]
+            js = model.js
             if level:
-                js = model.js
                 out, _, _, state = gco.level_soles(chains, opt, out, js.q_stand, js.lower, js.upper, state, xp=xp)
+            if adapt:
+                out, _, _, state = gco.adapt_strides(chains, opt, out, u_d, js.lower, js.upper, state, xp=xp)
             u_opt, delta, s, state = gco.step(chains, opt, out, u_s, state, xp=xp)
             return out, q_gen, u_opt, delta, s, state
         if xp is np:
@@ -122,6 +126,26 @@ def main():
         print(f"levelled: largest ankle offset {largest:.3f} rad")
         if largest < 1e-2:
             print("the levelling never changed the reference: the vectors do not exercise it")
+            return 1
+    # The stride adaptation (gco.adapt_strides, stride_adaptation.hpp) on the "adapted" ticks.
+    if "adapted" in v:
+        worst.update({"sa_q": 0.0, "sa_qd": 0.0, "sa_uopt": 0.0})
+        tick_fn = ticker(model_from_vectors(v), level=False, adapt=True)
+        phase = v["phase0"]
+        state = gco.initial_state()
+        largest = 0.0
+        for t, tick in enumerate(v["adapted"]["ticks"]):
+            out, q_gen, u_opt, _, _, state = tick_fn(phase, np.array(tick["u_d"]), np.array(tick["u_s"]), state)
+            largest = max(largest, float(np.max(np.abs(np.asarray(out["q_ref"], float) - np.asarray(q_gen, float)))))
+            for k, mine, theirs in (("sa_q", out["q_ref"], tick["q_ref"]), ("sa_qd", out["qd_ref"], tick["qd_ref"]),
+                                    ("sa_uopt", u_opt, tick["gco_u_opt"])):
+                d = float(np.max(np.abs(np.asarray(mine, float) - np.asarray(theirs, float))))
+                if d > worst[k]:
+                    worst[k], where[k] = d, t
+            phase = float(out["next_phase"])
+        print(f"adapted: largest leg joint offset {largest:.3f} rad")
+        if largest < 1e-2:
+            print("the stride adaptation never changed the reference: the vectors do not exercise it")
             return 1
     ok = True
     for k, d in worst.items():
