@@ -88,6 +88,7 @@ def save_params(params, out, env, clip_names):
     arrays = {"obs_mean": norm.mean["state"], "obs_std": norm.std["state"], "action_scale": env.action_scale,
               "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
               "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling),
+              "stride_adaptation": np.array(env.cfg.stride_adaptation),
               "clips_digest": np.array(clips_digest(env.clip_files)), "action_offset": np.array(env.cfg.action_offset),
               "upper_body_ff": np.array(env.cfg.upper_body_ff)}
     for i in range(len(p)):
@@ -242,6 +243,9 @@ def parse_args(argv=None):
                     help="remove the walking clips' mean waist lean (GeneratorParams::upright_walking)")
     ap.add_argument("--sole-levelling", action="store_true",
                     help="level the reference's stance soles before GCO (GcoOptions::sole_levelling; pmg_gco only)")
+    ap.add_argument("--stride-adaptation", action="store_true",
+                    help="hold the reference's stance soles still under the command before GCO "
+                         "(GcoOptions::stride_adaptation; pmg_gco only)")
     ap.add_argument("--blending", default=None, choices=["consistent", "paper"],
                     help="generator blending (default: EnvConfig.blending); paper = the PMG paper's, for the ablation")
     ap.add_argument("--arms", default="teleop", choices=["teleop", "perturb"],
@@ -513,7 +517,8 @@ def main(argv=None):
         cfg = dataclasses.replace(cfg, episode_length=args.episode_length)
     if args.blending:
         cfg = dataclasses.replace(cfg, blending=args.blending)
-    cfg = dataclasses.replace(cfg, upright_walking=args.upright_walking, sole_levelling=args.sole_levelling)
+    cfg = dataclasses.replace(cfg, upright_walking=args.upright_walking, sole_levelling=args.sole_levelling,
+                              stride_adaptation=args.stride_adaptation)
     cfg = dataclasses.replace(cfg, gains=args.gains, actuators=args.actuators, action_scale_rule=args.action_scale,
                               action_offset=args.action_offset)
     if args.tracking_sigma is not None:

@@ -249,6 +249,10 @@ class EnvConfig:
     # (generator.upright_walking, sole_levelling); the ONNX contract records both.
     upright_walking: bool = False
     sole_levelling: bool = False
+    # The stride adaptation (GcoOptions::stride_adaptation, gco.adapt_strides; pmg_gco mode only, since
+    # 2026-12-04): the reference's stance soles held still under the command, after the levelling and
+    # before GCO. The controller config's `stride_adaptation` must match; the ONNX contract records it.
+    stride_adaptation: bool = False
     clips: str = "config/clips/g1"  # clip folder (clips + implied_motion tables + consistency_map.yaml)
     gco_model: str = "training/pmg_train/gco_g1.json"
     mjcf: str = "config/robots/g1/g1_29dof_rev_1_0.xml"
@@ -510,6 +514,8 @@ class G1PmgEnv(Env):
             raise ValueError(f"EnvConfig.mode = {cfg.mode!r}: expected 'pmg_gco', 'pmg' or 'single_gait'")
         if cfg.sole_levelling and cfg.mode != "pmg_gco":
             raise ValueError(f"EnvConfig.sole_levelling: needs mode 'pmg_gco' (it runs with GCO), got {cfg.mode!r}")
+        if cfg.stride_adaptation and cfg.mode != "pmg_gco":
+            raise ValueError(f"EnvConfig.stride_adaptation: needs mode 'pmg_gco' (it runs with GCO), got {cfg.mode!r}")
         if cfg.upright_walking and cfg.mode == "single_gait":
             raise ValueError("EnvConfig.upright_walking: not with mode 'single_gait' (the Table I baseline)")
         if cfg.blending not in pg.BLENDINGS:
@@ -847,6 +853,9 @@ class G1PmgEnv(Env):
         if c.sole_levelling:
             ref, _, _, gco_state = gco_port.level_soles(self.gco_chains, self.gco_opt, ref, self.js.q_stand,
                                                         self.js.lower, self.js.upper, gco_state, xp=jnp)
+        if c.stride_adaptation:
+            ref, _, _, gco_state = gco_port.adapt_strides(self.gco_chains, self.gco_opt, ref, command[:3], self.js.lower,
+                                                          self.js.upper, gco_state, xp=jnp)
         u_opt, _, _, gco_state = gco_port.step(self.gco_chains, self.gco_opt, ref, command[3:], gco_state, xp=jnp)
         return ref, u_opt.astype(jnp.float32), gco_state
 

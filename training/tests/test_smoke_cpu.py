@@ -372,11 +372,14 @@ def env_checks(check, env, n_envs, n_steps):
             if t == 0:
                 state = gco.initial_state()
             else:
-                state = {k: np.asarray(v[t - 1, i]).astype(bool if k == "have_prev" else np.float64)
+                state = {k: np.asarray(v[t - 1, i]).astype(bool if v.dtype == bool else np.float64)
                          for k, v in gco_states.items()}
             if cfg.sole_levelling:
                 ref, _, _, state = gco.level_soles(env.gco_chains, env.gco_opt, ref, env.js.q_stand, env.js.lower,
                                                    env.js.upper, state)
+            if cfg.stride_adaptation:
+                ref, _, _, state = gco.adapt_strides(env.gco_chains, env.gco_opt, ref, command[t, i, :3], env.js.lower,
+                                                     env.js.upper, state)
             q_rel = np.asarray(ref["q_ref"])[:g1_env.LEG] - q_default[:g1_env.LEG]
             worst["q_ref"] = max(worst["q_ref"], float(np.abs(priv[t, i, sl["pmg_ref_q_rel"]] - q_rel).max()))
             ph = 2 * math.pi * phase[t, i]
