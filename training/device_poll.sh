@@ -7,6 +7,9 @@
 # run's limit_s is then below SECONDS) still returns the last minute's state, since $OUT comes back on a timeout.
 #   training/device_poll.sh RUN SECONDS
 R=${1:?usage: training/device_poll.sh RUN SECONDS}
+# A machine that was handed back (30 s without a command) and started afresh has no job: say so and stop at once
+# instead of waiting out SECONDS on an empty machine (training/README.md, appendix: "A turn cut off between two calls").
+if [ ! -d /tmp/runs ]; then echo "no /tmp/runs: this is a fresh machine, the job was lost with the previous one"; exit 3; fi
 end=$(( $(date +%s) + ${2:?usage: training/device_poll.sh RUN SECONDS} ))
 pack() {
   [ -d /tmp/runs/$R ] || return 0
