@@ -247,6 +247,42 @@ TEST(ControllerApp, BriefInvalidStateIsToleratedWithoutLatching) {
   EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
 }
 
+// The stride adaptation (gco.stride_adaptation) in the product path: the gantry config walks its
+// references with it through the controller's loop (forward, then sideways and turning) without a fault,
+// and the reference it plays is the adapted one (it differs from the generator's in the legs). No shipped
+// actor was trained on it, so a policy config with it on refuses to start, naming the contract key.
+TEST(ControllerApp, StrideAdaptationRunsInTheLoopAndShippedPoliciesRefuseIt) {
+  ControllerConfig config = silConfig();
+  config.gco.stride_adaptation.enabled = true;
+  ControllerApp app(config);
+  CommandSample sample;
+  double largest_leg_change = 0.0;
+  for (int k = 0; k < 600; ++k) {
+    sample.velocity_time = k * 0.01;
+    sample.command.vx = k < 100 ? 0.0 : (k < 350 ? 0.4 : 0.1);
+    sample.command.vy = k < 350 ? 0.0 : 0.2;
+    sample.command.wz = k < 350 ? 0.0 : 0.3;
+    app.stepLockstep(sample);
+  }
+  EXPECT_EQ(app.controller().mode(), Mode::kActive);
+  EXPECT_EQ(app.controller().fault(), FaultCode::kNone);
+  const auto& sa = app.controller().referencePipeline().strideAdaptation();
+  ASSERT_TRUE(sa.enabled());
+  for (const Foot f : {Foot::kLeft, Foot::kRight})
+    largest_leg_change = std::max(largest_leg_change, sa.correction(f).cwiseAbs().maxCoeff());
+  EXPECT_GT(largest_leg_change, 1e-3);
+  EXPECT_EQ(sa.counters().failures, 0u);
+
+  ControllerConfig policy = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  policy.gco.stride_adaptation.enabled = true;
+  try {
+    ControllerApp refused(policy);
+    FAIL() << "ran a policy trained without the stride adaptation with it";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("stride_adaptation"), std::string::npos) << e.what();
+  }
+}
+
 // pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
 // the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
 // also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:

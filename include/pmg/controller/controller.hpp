@@ -82,6 +82,8 @@ class Controller {
   Mode mode() const noexcept { return state_.mode; }
   FaultCode fault() const noexcept { return state_.fault; }
   const MotionGenerator& generator() const noexcept { return pmg_->generator(); }
+  /// The whole reference pipeline: generator, sole levelling, stride adaptation, GCO (generator_bridge.hpp).
+  const gco::GeneratorWithGco& referencePipeline() const noexcept { return *pmg_; }
   const gco::GcoResult& gcoResult() const noexcept { return pmg_->gcoResult(); }
   /// The PMG reference of the last active tick after the rate limiter (n) [rad].
   const std::array<double, kMaxMotors>& reference() const noexcept { return q_ref_; }
