@@ -140,6 +140,13 @@ void toEigen(const KDL::Frame& fr, Eigen::Vector3d* p, Eigen::Matrix3d* R) {
     for (int c = 0; c < 3; ++c) (*R)(r, c) = fr.M(r, c);
   }
 }
+void toIsometry(const KDL::Frame& fr, Eigen::Isometry3d* X) {
+  Eigen::Vector3d p;
+  Eigen::Matrix3d R;
+  toEigen(fr, &p, &R);
+  X->linear() = R;
+  X->translation() = p;
+}
 }  // namespace
 
 bool LegKinematics::forward(Foot foot, const LegVector& q, Eigen::Isometry3d* X_BS) noexcept {
@@ -147,11 +154,7 @@ bool LegKinematics::forward(Foot foot, const LegVector& q, Eigen::Isometry3d* X_
   Impl::PerFoot& pf = *impl_->feet[LegModel::index(foot)];
   pf.q.data = q;
   if (pf.fk.JntToCart(pf.q, pf.frame) < 0) return false;
-  Eigen::Vector3d p;
-  Eigen::Matrix3d R;
-  toEigen(pf.frame, &p, &R);
-  X_BS->linear() = R;
-  X_BS->translation() = p;
+  toIsometry(pf.frame, X_BS);
   return true;
 }
 
@@ -190,11 +193,7 @@ bool LegKinematics::jacobian(Foot foot, const LegVector& q, Eigen::Isometry3d* X
   pf.q.data = q;
   if (pf.fk.JntToCart(pf.q, pf.frame) < 0) return false;
   if (pf.jac_solver.JntToJac(pf.q, pf.jac) < 0) return false;
-  Eigen::Vector3d p;
-  Eigen::Matrix3d R;
-  toEigen(pf.frame, &p, &R);
-  X_BS->linear() = R;
-  X_BS->translation() = p;
+  toIsometry(pf.frame, X_BS);
   *J_B = pf.jac.data;
   return true;
 }

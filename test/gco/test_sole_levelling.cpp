@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "g1_fixture.hpp"
+#include "g1_reference_fixture.hpp"
 #include "pmg/clips/clip_io.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/generator_bridge.hpp"
@@ -16,18 +17,7 @@ namespace {
 
 constexpr double kStand = 0.78;  // standing pelvis height of the G1 [m]
 
-struct Fixture {
-  Fixture()
-      : robot(pmg::test::g1Robot()),
-        model(std::make_shared<const GeneratorModel>(loadClipLibrary(pmg::test::g1ClipDir(), robot),
-                                                     pmg::generatorJointSpace(robot))),
-        legs(LegModel::fromRobotConfig(robot)),
-        idx(legs->jointIndices(model->jointSpace().joint_names)) {}
-  RobotConfig robot;
-  std::shared_ptr<const GeneratorModel> model;
-  std::shared_ptr<const LegModel> legs;
-  LegJointIndex idx;
-};
+using Fixture = test::G1Reference;
 
 LegVector legOf(const Eigen::VectorXd& q, const LegJointIndex& idx, std::size_t f) {
   LegVector v;
@@ -155,18 +145,6 @@ TEST(SoleLevelling, ContinuousThroughContactSwitchesAndCommandSteps) {
   EXPECT_LT(r.max_extra_step, 0.5 * r.max_generator_step);
   EXPECT_LT(r.max_extra_step, 0.03);  // 3 rad/s
   EXPECT_LT(r.max_qd_mismatch, 1e-9);
-}
-
-TEST(SoleLevelling, DisabledLeavesTheGeneratorOutput) {
-  const Fixture fx;
-  GeneratorWithGco pipe(fx.model, fx.legs, GcoOptions{});
-  MotionGenerator plain(fx.model);
-  for (int k = 0; k < 200; ++k) {
-    pipe.step({0.0, 0.4, 0.0}, {}, 0.01);
-    plain.step({0.0, 0.4, 0.0}, {}, 0.01);
-    ASSERT_EQ((pipe.generatorOutput().q_ref - plain.output().q_ref).cwiseAbs().maxCoeff(), 0.0);
-  }
-  EXPECT_FALSE(pipe.soleLevelling().enabled());
 }
 
 TEST(SoleLevelling, OptionsNameTheFieldAndYamlReadsTheSubMap) {

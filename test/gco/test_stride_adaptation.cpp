@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "g1_fixture.hpp"
+#include "g1_reference_fixture.hpp"
 #include "pmg/clips/clip_io.hpp"
 #include "pmg/common/robot_config.hpp"
 #include "pmg/gco/foot_slip.hpp"
@@ -17,18 +18,7 @@
 namespace pmg::gco {
 namespace {
 
-struct Fixture {
-  Fixture()
-      : robot(pmg::test::g1Robot()),
-        model(std::make_shared<const GeneratorModel>(loadClipLibrary(pmg::test::g1ClipDir(), robot),
-                                                     pmg::generatorJointSpace(robot))),
-        legs(LegModel::fromRobotConfig(robot)),
-        idx(legs->jointIndices(model->jointSpace().joint_names)) {}
-  RobotConfig robot;
-  std::shared_ptr<const GeneratorModel> model;
-  std::shared_ptr<const LegModel> legs;
-  LegJointIndex idx;
-};
+using Fixture = test::G1Reference;
 
 constexpr double kStand = 0.78;  // standing pelvis height of the G1 [m]
 
@@ -220,6 +210,7 @@ TEST(StrideAdaptation, SwingFootLandsAheadByTheLeadTimesTheLastDrift) {
   EXPECT_LT(lo_norm[1], lo_norm[0]);
 }
 
+// The defaults (sole levelling and stride adaptation off) leave the generator's output to the bit.
 TEST(StrideAdaptation, DisabledLeavesTheGeneratorOutput) {
   const Fixture fx;
   GeneratorWithGco pipe(fx.model, fx.legs, GcoOptions{});
@@ -230,6 +221,7 @@ TEST(StrideAdaptation, DisabledLeavesTheGeneratorOutput) {
     ASSERT_EQ((pipe.generatorOutput().q_ref - plain.output().q_ref).cwiseAbs().maxCoeff(), 0.0);
   }
   EXPECT_FALSE(pipe.strideAdaptation().enabled());
+  EXPECT_FALSE(pipe.soleLevelling().enabled());
 }
 
 // A non-finite command: the last tick's correction is held (no jump in the reference), the state

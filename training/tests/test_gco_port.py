@@ -107,45 +107,35 @@ def main():
             if d > worst[k]:
                 worst[k], where[k] = d, t
         phase = float(out["next_phase"])
-    # The stance sole levelling (gco.level_soles, sole_levelling.hpp) on the "levelled" ticks.
-    if "levelled" in v:
-        worst.update({"lev_q": 0.0, "lev_qd": 0.0, "lev_uopt": 0.0})
-        tick_fn = ticker(model_from_vectors(v, upright_walking=v["levelled"]["upright_walking"]), level=True)
+    def compare_variant(name, prefix, what, **kw):
+        """Steps the ports on v[name]'s ticks and compares q_ref, q̇_ref and u' with the C++; returns the largest
+        change the variant made to the generator's q_ref, or None when the file has no such ticks."""
+        if name not in v:
+            return None
+        keys = (prefix + "_q", prefix + "_qd", prefix + "_uopt")
+        worst.update({k: 0.0 for k in keys})
+        tick_fn = ticker(model_from_vectors(v, upright_walking=v[name].get("upright_walking", False)), **kw)
         phase = v["phase0"]
         state = gco.initial_state()
         largest = 0.0
-        for t, tick in enumerate(v["levelled"]["ticks"]):
+        for t, tick in enumerate(v[name]["ticks"]):
             out, q_gen, u_opt, _, _, state = tick_fn(phase, np.array(tick["u_d"]), np.array(tick["u_s"]), state)
             largest = max(largest, float(np.max(np.abs(np.asarray(out["q_ref"], float) - np.asarray(q_gen, float)))))
-            for k, mine, theirs in (("lev_q", out["q_ref"], tick["q_ref"]), ("lev_qd", out["qd_ref"], tick["qd_ref"]),
-                                    ("lev_uopt", u_opt, tick["gco_u_opt"])):
+            for k, mine, theirs in zip(keys, (out["q_ref"], out["qd_ref"], u_opt),
+                                       (tick["q_ref"], tick["qd_ref"], tick["gco_u_opt"])):
                 d = float(np.max(np.abs(np.asarray(mine, float) - np.asarray(theirs, float))))
                 if d > worst[k]:
                     worst[k], where[k] = d, t
             phase = float(out["next_phase"])
-        print(f"levelled: largest ankle offset {largest:.3f} rad")
-        if largest < 1e-2:
-            print("the levelling never changed the reference: the vectors do not exercise it")
-            return 1
-    # The stride adaptation (gco.adapt_strides, stride_adaptation.hpp) on the "adapted" ticks.
-    if "adapted" in v:
-        worst.update({"sa_q": 0.0, "sa_qd": 0.0, "sa_uopt": 0.0})
-        tick_fn = ticker(model_from_vectors(v), level=False, adapt=True)
-        phase = v["phase0"]
-        state = gco.initial_state()
-        largest = 0.0
-        for t, tick in enumerate(v["adapted"]["ticks"]):
-            out, q_gen, u_opt, _, _, state = tick_fn(phase, np.array(tick["u_d"]), np.array(tick["u_s"]), state)
-            largest = max(largest, float(np.max(np.abs(np.asarray(out["q_ref"], float) - np.asarray(q_gen, float)))))
-            for k, mine, theirs in (("sa_q", out["q_ref"], tick["q_ref"]), ("sa_qd", out["qd_ref"], tick["qd_ref"]),
-                                    ("sa_uopt", u_opt, tick["gco_u_opt"])):
-                d = float(np.max(np.abs(np.asarray(mine, float) - np.asarray(theirs, float))))
-                if d > worst[k]:
-                    worst[k], where[k] = d, t
-            phase = float(out["next_phase"])
-        print(f"adapted: largest leg joint offset {largest:.3f} rad")
-        if largest < 1e-2:
-            print("the stride adaptation never changed the reference: the vectors do not exercise it")
+        print(f"{name}: largest {what} {largest:.3f} rad")
+        return largest
+    # The stance sole levelling (gco.level_soles, sole_levelling.hpp) on the "levelled" ticks, and the stride
+    # adaptation (gco.adapt_strides, stride_adaptation.hpp) on the "adapted" ticks.
+    for name, prefix, what, kw in (("levelled", "lev", "ankle offset", {"level": True}),
+                                   ("adapted", "sa", "leg joint offset", {"level": False, "adapt": True})):
+        largest = compare_variant(name, prefix, what, **kw)
+        if largest is not None and largest < 1e-2:
+            print(f"{name}: the reference never changed: the vectors do not exercise it")
             return 1
     ok = True
     for k, d in worst.items():
