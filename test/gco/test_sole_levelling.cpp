@@ -58,11 +58,9 @@ LevelRun run(const Fixture& fx, const std::vector<std::pair<VelocityCommand, Pos
   PostureCommand us0{0.0, 0.0, kStand};
   for (const auto& [ud1, us1] : schedule) {
     for (int k = 0; k < ticks_each; ++k) {
-      // Each step is ramped over 0.5 s, as the controller's command shaper does.
-      const double a = std::min(1.0, k / 50.0);
-      const VelocityCommand ud{ud0.vx + a * (ud1.vx - ud0.vx), ud0.vy + a * (ud1.vy - ud0.vy), ud0.wz + a * (ud1.wz - ud0.wz)};
-      const PostureCommand us{us0.pitch + a * (us1.pitch - us0.pitch), us0.roll + a * (us1.roll - us0.roll),
-                              us0.height + a * (us1.height - us0.height)};
+      VelocityCommand ud;
+      PostureCommand us;
+      test::rampedCommand(ud0, us0, ud1, us1, k, &ud, &us);
       pipe.step(ud, us, o.dt);
       plain.step(ud, us, o.dt);
       const GeneratorOutput& lev = pipe.generatorOutput();

@@ -61,10 +61,9 @@ RunResult run(const Fixture& fx, const Schedule& schedule, int ticks_each, doubl
   int tick = 0;
   for (const auto& [ud1, us1] : schedule) {
     for (int k = 0; k < ticks_each; ++k, ++tick) {
-      const double a = std::min(1.0, k / 50.0);
-      const VelocityCommand ud{ud0.vx + a * (ud1.vx - ud0.vx), ud0.vy + a * (ud1.vy - ud0.vy), ud0.wz + a * (ud1.wz - ud0.wz)};
-      const PostureCommand us{us0.pitch + a * (us1.pitch - us0.pitch), us0.roll + a * (us1.roll - us0.roll),
-                              us0.height + a * (us1.height - us0.height)};
+      VelocityCommand ud;
+      PostureCommand us;
+      test::rampedCommand(ud0, us0, ud1, us1, k, &ud, &us);
       pipe.step(ud, us, o.dt);
       plain.step(ud, us, o.dt);
       const GeneratorOutput& ad = pipe.generatorOutput();
