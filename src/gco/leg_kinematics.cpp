@@ -172,20 +172,6 @@ bool LegKinematics::compute(Foot foot, const LegVector& q, const LegVector& qd, 
   return true;
 }
 
-bool LegKinematics::orientation(Foot foot, const LegVector& q, Eigen::Matrix3d* R_BF,
-                                Eigen::Matrix<double, 3, kLegDofs>* J_w_B) noexcept {
-  if (!q.allFinite() || R_BF == nullptr || J_w_B == nullptr) return false;
-  Impl::PerFoot& pf = *impl_->feet[LegModel::index(foot)];
-  pf.q.data = q;
-  if (pf.fk.JntToCart(pf.q, pf.frame) < 0) return false;
-  if (pf.jac_solver.JntToJac(pf.q, pf.jac) < 0) return false;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) (*R_BF)(r, c) = pf.frame.M(r, c);
-  }
-  *J_w_B = pf.jac.data.bottomRows<3>();
-  return true;
-}
-
 bool LegKinematics::jacobian(Foot foot, const LegVector& q, Eigen::Isometry3d* X_BS,
                              Eigen::Matrix<double, 6, kLegDofs>* J_B) noexcept {
   if (!q.allFinite() || X_BS == nullptr || J_B == nullptr) return false;
@@ -195,6 +181,17 @@ bool LegKinematics::jacobian(Foot foot, const LegVector& q, Eigen::Isometry3d* X
   if (pf.jac_solver.JntToJac(pf.q, pf.jac) < 0) return false;
   toIsometry(pf.frame, X_BS);
   *J_B = pf.jac.data;
+  return true;
+}
+
+bool LegKinematics::orientation(Foot foot, const LegVector& q, Eigen::Matrix3d* R_BF,
+                                Eigen::Matrix<double, 3, kLegDofs>* J_w_B) noexcept {
+  if (R_BF == nullptr || J_w_B == nullptr) return false;
+  Eigen::Isometry3d X;
+  Eigen::Matrix<double, 6, kLegDofs> J;
+  if (!jacobian(foot, q, &X, &J)) return false;
+  *R_BF = X.linear();
+  *J_w_B = J.bottomRows<3>();
   return true;
 }
 

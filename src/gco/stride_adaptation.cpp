@@ -103,18 +103,17 @@ bool StrideAdaptation::solveFoot(std::size_t f, const LegVector& q_ref, const Ei
   Eigen::Isometry3d X;
   Eigen::Matrix<double, 6, kLegDofs> J;
   Eigen::Matrix<double, 6, 1> err;
-  const auto poseError = [&](const LegVector& q) {
-    if (!kin_.jacobian(foot, q, &X, &J)) return false;
+  const auto poseError = [&]() {  // of the pose X
     err.head<3>() = X_target.translation() - X.translation();
     const Eigen::AngleAxisd aa(X_target.linear() * X.linear().transpose());
     err.tail<3>() = aa.angle() * aa.axis();
-    return true;
   };
   const double wz = options_.height_weight;
   const double max_step = options_.max_correction_rate * dt;
   const LegVector& last = applied_[f];
   for (int it = 0; it < options_.iterations; ++it) {
-    if (!poseError(q_ref + delta)) return false;
+    if (!kin_.jacobian(foot, q_ref + delta, &X, &J)) return false;
+    poseError();
     err(2) *= wz;  // the sole's height gives way first where the pose is out of reach
     J.row(2) *= wz;
     // Levenberg-Marquardt with the error-dependent damping of Sugihara (2011): |err|² + damping, so
@@ -128,8 +127,8 @@ bool StrideAdaptation::solveFoot(std::size_t f, const LegVector& q_ref, const Ei
       delta(j) = lo <= hi ? std::clamp(delta(j), lo, hi) : std::clamp(0.0, last(j) - max_step, last(j) + max_step);
     }
   }
-  if (!poseError(q_ref + delta)) return false;
-  if (!delta.allFinite()) return false;
+  if (!kin_.forward(foot, q_ref + delta, &X)) return false;  // the pose error left, for `unreached`
+  poseError();
   delta_[f] = delta;
   residual_[f] = Eigen::Vector2d(err.head<3>().norm(), err.tail<3>().norm());
   return true;
@@ -156,19 +155,16 @@ bool StrideAdaptation::apply(const StrideAdaptationInput& in, double dt, Eigen::
   const double height_rate = first ? 0.0 : (in.base_height - last_height_) / dt;
   const double tau = options_.standing_time_constant;
 
-  std::array<LegVector, kNumFeet> q_leg, qd_leg;
+  std::array<LegVector, kNumFeet> q_leg;
   std::array<Eigen::Isometry3d, kNumFeet> poses;
   std::array<Eigen::Isometry3d, kNumFeet> targets;
   std::array<Eigen::Vector3d, kNumFeet> offset = offset_, liftoff = liftoff_offset_;
   std::array<double, kNumFeet> yaw = yaw_offset_, liftoff_yaw = liftoff_yaw_;
   std::uint64_t speed_limited = 0, offset_limited = 0;
   for (std::size_t f = 0; f < kNumFeet; ++f) {
-    for (int j = 0; j < kLegDofs; ++j) {
-      q_leg[f](j) = (*q_ref)(leg_idx_[f][j]);
-      qd_leg[f](j) = (*qd_ref)(leg_idx_[f][j]);
-    }
+    for (int j = 0; j < kLegDofs; ++j) q_leg[f](j) = (*q_ref)(leg_idx_[f][j]);
     Eigen::Isometry3d& X = poses[f];
-    if (!qd_leg[f].allFinite() || !kin_.forward(static_cast<Foot>(f), q_leg[f], &X)) return hold();
+    if (!kin_.forward(static_cast<Foot>(f), q_leg[f], &X)) return hold();
     const Eigen::Isometry3d& X_prev = first ? X : last_pose_[f];
     Eigen::Vector3d rate;
     double yaw_rate;

@@ -266,7 +266,7 @@ def adapt_strides(chains: LegChains, opt: GcoOptions, gen_out, u_d, lower, upper
     for f in range(NUM_FEET):
         idx = chains.leg_joint_index[f]
         q = q_ref[idx]
-        p_S, R, _ = _leg_jacobian(chains, f, q, xp)
+        p_S, R, _, _ = _chain_fk(chains, f, q, xp)
         p_prev = xp.where(first, p_S, state["sa_p"][f])
         R_prev = xp.where(first, R, state["sa_R"][f])
         e, psi = state["sa_offset"][f], state["sa_yaw"][f]
