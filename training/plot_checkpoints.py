@@ -6,8 +6,9 @@ rollout per checkpoint, against the training steps.
       --segments back0.3_0.74 back0.5_0.74 back0.5_0.7 stop_back0.5_0.74 --warmup-steps 135e6 --out curve.png
 
 Each file is an eval_mjx.py npz (segment_names, segment_command, segment_achieved: the means over the last 60 % of
-each segment, NaN where the robot had fallen) whose name holds the checkpoint's step as actor_<digits>
-(--keep-actors' actors/actor_<step>.npz). One panel per segment: the achieved v_x [m/s, heading frame] of every run
+each segment, NaN where the robot had fallen), or the text eval_mjx.py printed for it (.txt: its "per segment" table,
+"fell" read as NaN; what a results folder keeps when the npz is left off), whose name holds the checkpoint's step as
+actor_<digits> (--keep-actors' actors/actor_<step>.npz). One panel per segment: the achieved v_x [m/s, heading frame] of every run
 against its steps [millions], the command, and the band issue 12 asks (±15 % or ±0.05 m/s); a fallen robot is
 drawn as a cross on the panel's floor. Prints the same numbers as a table. --axis picks another of eval_mjx's
 KEYS (vy, wz, pitch, roll, height). Errors: a file without a step in its name, a segment missing from a file.
@@ -35,6 +36,39 @@ def checkpoint_step(path):
     return int(m.group(1))
 
 
+def read_rollout(path):
+    """(segment names, commanded [n, 6], achieved [n, 6]) of one eval_mjx.py rollout, columns in KEYS' order (m/s,
+    rad/s, rad, m). An .npz is read as written; any other file as eval_mjx.py's printed output, whose table after the
+    line "per segment (means ..." has per segment its name, then commanded and achieved per axis ("fell" where the
+    robot was down: NaN), then the reward (and, for several robots, the count that fell). Raises ValueError naming the
+    file when the text has no such table."""
+    if path.endswith(".npz"):
+        d = np.load(path)
+        return [str(n) for n in d["segment_names"]], np.asarray(d["segment_command"]), np.asarray(d["segment_achieved"])
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    start = next((i for i, l in enumerate(lines) if l.startswith("per segment (means")), None)
+    if start is None or start + 1 >= len(lines) or not lines[start + 1].split()[:1] == ["segment"]:
+        raise ValueError(f"{path}: no eval_mjx.py 'per segment (means ...' table followed by its 'segment' header")
+    names, command, achieved = [], [], []
+    width = 1 + 2 * len(KEYS) + 1
+    for line in lines[start + 2:]:
+        tok = line.split()
+        if len(tok) not in (width, width + 1):
+            break
+        try:
+            pairs = [(float(tok[1 + 2 * k]), float("nan") if tok[2 + 2 * k] == "fell" else float(tok[2 + 2 * k]))
+                     for k in range(len(KEYS))]
+        except ValueError:
+            break
+        names.append(tok[0])
+        command.append([c for c, _ in pairs])
+        achieved.append([a for _, a in pairs])
+    if not names:
+        raise ValueError(f"{path}: the 'per segment' table has no rows of {width} columns")
+    return names, np.array(command), np.array(achieved)
+
+
 def load_run(pattern, segments, axis):
     """[(step, {segment: (commanded, achieved or nan)})] sorted by step, for the files matching pattern."""
     files = sorted(glob.glob(pattern))
@@ -43,14 +77,13 @@ def load_run(pattern, segments, axis):
     k = KEYS.index(axis)
     out = []
     for f in files:
-        d = np.load(f)
-        names = [str(n) for n in d["segment_names"]]
+        names, command, achieved = read_rollout(f)
         row = {}
         for s in segments:
             if s not in names:
                 raise ValueError(f"{f}: no segment {s!r} (it has {', '.join(names)})")
             i = names.index(s)
-            row[s] = (float(d["segment_command"][i][k]), float(d["segment_achieved"][i][k]))
+            row[s] = (float(command[i][k]), float(achieved[i][k]))
         out.append((checkpoint_step(f), row))
     return sorted(out, key=lambda r: r[0])
 

@@ -7,6 +7,7 @@ a backward walk (commanded -0.5 m/s) and a stop:
   says "fell" for the NaN;
 - in_band: 15 % or the axis's floor (0.05 m/s for v_x: -0.04 for 0 is in, -0.06 is not);
 - a file without actor_<step> in its name, and a segment the rollouts do not have, are refused naming them;
+- eval_mjx.py's printed table (.txt) reads as its npz does, "fell" as NaN; a text without the table is refused;
 - --out writes the figure.
 Usage: test_plot_checkpoints.py
 """
@@ -69,6 +70,25 @@ with tempfile.TemporaryDirectory() as d:
     check(code != 0 and "'back0.3'" in out and "back0.5" in out, "a missing segment is refused, naming what is there")
     code, out = run([f"R={d}/nothing_*.npz", "--segments", "back0.5"])
     check(code != 0 and "no file matches" in out, "a pattern matching nothing is refused")
+    # The printed form of a rollout (eval_mjx.py's table: name, commanded/achieved per axis, reward).
+    table = ["physics: MJX", "per segment (means over the last 60 % of each segment): commanded / achieved, and "
+             "the reward per step (the actor)", "segment   vx  vy  wz  pitch  roll  height  reward",
+             "back0.5   -0.500 -0.400 0 0.010 0 0 0 0.020 0 -0.010 0.740 0.752 6.000",
+             "stop_after_back0.5_long   0 fell 0 fell 0 fell 0 fell 0 fell 0.740 fell    fell",
+             "reward per step by term (same windows)"]
+    with open(os.path.join(d, "T_actor_00150000000.txt"), "w") as f:
+        f.write("\n".join(table) + "\n")
+    names, command, achieved = pc.read_rollout(os.path.join(d, "T_actor_00150000000.txt"))
+    check(names == ["back0.5", "stop_after_back0.5_long"] and command.shape == (2, 6), "the text table's rows")
+    check(achieved[0, 0] == -0.4 and achieved[0, 3] == 0.02 and achieved[0, 5] == 0.752 and command[0, 5] == 0.74,
+          "the text table's commanded and achieved columns in KEYS' order")
+    check(bool(np.all(np.isnan(achieved[1]))) and command[1, 5] == 0.74, "'fell' reads as NaN")
+    code, out = run([f"T={d}/T_actor_*.txt", "--segments", "back0.5"])
+    check(code == 0 and "-0.400" in out and "150.0" in out, "a run of text rollouts is tabled")
+    with open(os.path.join(d, "U_actor_00150000000.txt"), "w") as f:
+        f.write("Traceback (most recent call last):\n")
+    code, out = run([f"U={d}/U_actor_*.txt", "--segments", "back0.5"])
+    check(code != 0 and "U_actor_00150000000.txt" in out and "per segment" in out, "a text without the table is refused")
     try:
         import matplotlib  # noqa: F401
         png = os.path.join(d, "c.png")
