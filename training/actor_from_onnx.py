@@ -45,6 +45,7 @@ def actor_arrays(path):
            "upright_walking": np.array(bool(pmg.get("upright_walking", False))),
            "sole_levelling": np.array(bool(pmg.get("sole_levelling", False))),
            "stride_adaptation": np.array(bool(pmg.get("stride_adaptation", False))),
+           "stride_standing_hold": np.array(bool(pmg.get("stride_standing_hold", False))),
            "upper_body_ff": np.array(bool(pmg.get("upper_body_ff", False))),
            "action_offset": np.array("default")}
     if "clips_digest" in pmg:

@@ -42,14 +42,15 @@ def load_actor(path):
 def load_reference_settings(path, clips_dir=None):
     """The actor's reference settings beyond the paper, as contract keys: upright_walking and
     sole_levelling (False for actors saved before 2026-11-27, which were trained without both),
-    stride_adaptation (False before 2026-12-04),
+    stride_adaptation (False before 2026-12-04), stride_standing_hold (the stride adaptation keeping the feet where
+    they landed while standing; False for actors saved before it, 2026-12-04, and for those without the adaptation),
     upper_body_ff (the controller's waist feed-forward in the environment; False before 2026-11-29), and
     clips_digest, the digest of the clips it was trained on (saved with the actor since 2026-11-27;
     for an older actor, computed from @p clips_dir when given, else left out: the controller then
     does not check the clips)."""
     z = np.load(path)
     out = {k: bool(z[k]) if k in z.files else False
-           for k in ("upright_walking", "sole_levelling", "stride_adaptation", "upper_body_ff")}
+           for k in ("upright_walking", "sole_levelling", "stride_adaptation", "stride_standing_hold", "upper_body_ff")}
     saved = str(z["clips_digest"]) if "clips_digest" in z.files else None
     if clips_dir:
         files = sorted(glob.glob(os.path.join(clips_dir, "*.yaml")))

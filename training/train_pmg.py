@@ -89,6 +89,7 @@ def save_params(params, out, env, clip_names):
               "clips": np.array(clip_names), "mode": np.array(env.cfg.mode),
               "upright_walking": np.array(env.cfg.upright_walking), "sole_levelling": np.array(env.cfg.sole_levelling),
               "stride_adaptation": np.array(env.cfg.stride_adaptation),
+              "stride_standing_hold": np.array(bool(env.cfg.stride_adaptation and env.gco_opt.stride["standing_hold"])),
               "clips_digest": np.array(clips_digest(env.clip_files)), "action_offset": np.array(env.cfg.action_offset),
               "upper_body_ff": np.array(env.cfg.upper_body_ff)}
     for i in range(len(p)):

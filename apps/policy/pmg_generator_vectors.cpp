@@ -211,12 +211,13 @@ void writeGcoModel(Json& j, std::FILE* f, const pmg::gco::LegModel& legs, const 
   const pmg::gco::StrideAdaptationOptions& sa = o.stride_adaptation;
   j.key("stride_adaptation");
   std::fprintf(f,
-               "{\"touchdown_lead\":%.17g,\"return_fraction\":%.17g,\"standing_time_constant\":%.17g,"
+               "{\"touchdown_lead\":%.17g,\"return_fraction\":%.17g,\"standing_time_constant\":%.17g,\"standing_hold\":%s,"
                "\"stepping_margin\":%.17g,\"max_offset\":%.17g,\"max_offset_height\":%.17g,\"max_offset_yaw\":%.17g,"
                "\"max_offset_speed\":%.17g,\"max_offset_yaw_rate\":%.17g,\"iterations\":%d,\"max_correction\":%.17g,"
                "\"height_weight\":%.17g,\"damping\":%.17g,\"max_correction_rate\":%.17g,\"sole_half_length\":%.17g,"
                "\"rolling_slope\":%.17g},",
-               sa.touchdown_lead, sa.return_fraction, sa.standing_time_constant, sa.stepping_margin, sa.max_offset,
+               sa.touchdown_lead, sa.return_fraction, sa.standing_time_constant, sa.standing_hold ? "true" : "false",
+               sa.stepping_margin, sa.max_offset,
                sa.max_offset_height, sa.max_offset_yaw, sa.max_offset_speed, sa.max_offset_yaw_rate, sa.iterations,
                sa.max_correction, sa.height_weight, sa.damping, sa.max_correction_rate, sa.sole_half_length,
                sa.rolling_slope);

@@ -83,6 +83,7 @@ ControllerApp::ControllerApp(ControllerConfig config, ControllerAppOptions optio
     po.gco = config_.gco.enabled;
     po.sole_levelling = config_.gco.sole_levelling.enabled;
     po.stride_adaptation = config_.gco.stride_adaptation.enabled;
+    po.stride_standing_hold = config_.gco.stride_adaptation.standing_hold;
     po.upright_walking = config_.generator.upright_walking;
     po.upper_body_ff = config_.upper_body.enabled;
     po.clips_digest = clipsDigest(clips);

@@ -181,8 +181,12 @@ bool StrideAdaptation::apply(const StrideAdaptationInput& in, double dt, Eigen::
       const Eigen::Vector3d moved = X * c_S - X_prev * c_S;
       const Eigen::Vector3d still(-in.v_H.x() + in.yaw_rate * p.y(), -in.v_H.y() - in.yaw_rate * p.x(), -height_rate);
       const double d_yaw_ref = std::remainder(yawOf(X.linear()) - yawOf(X_prev.linear()), 2.0 * M_PI);
-      rate = walking * (still - moved / dt) - (1.0 - walking) * offset[f] / tau;
-      yaw_rate = walking * (-in.yaw_rate - d_yaw_ref / dt) - (1.0 - walking) * yaw[f] / tau;
+      // Standing: with standing_hold only the height part decays (the feet stay where they landed).
+      const Eigen::Vector3d standing_decay =
+          options_.standing_hold ? Eigen::Vector3d(0.0, 0.0, offset[f].z()) : offset[f];
+      const double standing_yaw_decay = options_.standing_hold ? 0.0 : yaw[f];
+      rate = walking * (still - moved / dt) - (1.0 - walking) * standing_decay / tau;
+      yaw_rate = walking * (-in.yaw_rate - d_yaw_ref / dt) - (1.0 - walking) * standing_yaw_decay / tau;
     } else {
       if (last_contact_[f] || first) {  // lift-off
         liftoff[f] = offset[f];

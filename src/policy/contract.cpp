@@ -220,6 +220,9 @@ PolicyContract parseContract(const std::string& yaml_text, const std::string& so
   c.pmg.emplace("sole_levelling", "false");
   // Contracts written before the stride adaptation (2026-12-04) were trained without it.
   c.pmg.emplace("stride_adaptation", "false");
+  // Contracts written before StrideAdaptationOptions::standing_hold (2026-12-04) were trained with every
+  // offset decaying while standing (and those without the stride adaptation have the key false too).
+  c.pmg.emplace("stride_standing_hold", "false");
   c.pmg.emplace("upright_walking", "false");
   // Contracts written before the upper-body feed-forward in training have no pmg.upper_body_ff.
   c.pmg.emplace("upper_body_ff", "false");

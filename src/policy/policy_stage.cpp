@@ -12,6 +12,7 @@ PolicyStage::PolicyStage(const std::string& onnx_path, const RobotConfig& robot,
   spec.pmg = {{"enabled", "true"}, {"gco", options_.gco ? "true" : "false"}, {"mode", options_.mode},
               {"sole_levelling", options_.sole_levelling ? "true" : "false"},
               {"stride_adaptation", options_.stride_adaptation ? "true" : "false"},
+              {"stride_standing_hold", options_.stride_adaptation && options_.stride_standing_hold ? "true" : "false"},
               {"upright_walking", options_.upright_walking ? "true" : "false"},
               {"upper_body_ff", options_.upper_body_ff ? "true" : "false"}};
   if (!options_.clips_digest.empty()) spec.pmg["clips_digest"] = options_.clips_digest;

@@ -34,15 +34,32 @@ struct RunResult {
   std::vector<std::array<Eigen::Vector3d, 2>> liftoff, touchdown;  // offsets at each foot's switches
   std::vector<std::array<int, 2>> switch_foot;
   StrideAdaptationCounters counters;   // of the whole run
+  double planted_travel = 0.0;         // adapted soles' horizontal travel in W while in contact, both feet [m]
+  double planted_max_speed = 0.0;      // its largest per-tick speed [m/s]
 };
+
+// Horizontal travel in W of the soles while in contact (both feet summed) in a FootSlipMeter trace,
+// and the largest per-tick speed: what a planted foot would have to slide.
+void plantedTravel(const std::vector<FootSlipSample>& trace, double dt, double* travel, double* max_speed) {
+  *travel = 0.0;
+  *max_speed = 0.0;
+  for (std::size_t k = 1; k < trace.size(); ++k)
+    for (std::size_t f = 0; f < 2; ++f)
+      if (trace[k].contact[f] && trace[k - 1].contact[f]) {
+        const double d = (trace[k].p_WS[f] - trace[k - 1].p_WS[f]).head<2>().norm();
+        *travel += d;
+        *max_speed = std::max(*max_speed, d / dt);
+      }
+}
 
 // The pipe with the stride adaptation next to a plain generator on the same commands (each step
 // ramped over 0.5 s, as the controller's shaper does); both references are metered by FootSlipMeter
 // with the pelvis moved by the command itself (v_x, v_y, ω, the template height).
 RunResult run(const Fixture& fx, const Schedule& schedule, int ticks_each, double lead = 0.5, int skip = 100,
-              double sole_half_length = StrideAdaptationOptions{}.sole_half_length) {
+              double sole_half_length = StrideAdaptationOptions{}.sole_half_length, bool standing_hold = true) {
   GcoOptions o;
   o.stride_adaptation.enabled = true;
+  o.stride_adaptation.standing_hold = standing_hold;
   o.stride_adaptation.touchdown_lead = lead;
   o.stride_adaptation.sole_half_length = sole_half_length;
   GeneratorWithGco pipe(fx.model, fx.legs, o);
@@ -105,6 +122,7 @@ RunResult run(const Fixture& fx, const Schedule& schedule, int ticks_each, doubl
     us0 = us1;
   }
   r.counters = pipe.strideAdaptation().counters();
+  plantedTravel(meter_adapted.trace(), o.dt, &r.planted_travel, &r.planted_max_speed);
   r.plain = meter_plain.stats();
   r.adapted = meter_adapted.stats();
   return r;
@@ -147,6 +165,29 @@ TEST(StrideAdaptation, StandingInAPostureIsLeftAsItIs) {
                      {VelocityCommand{}, PostureCommand{0.0, 0.0, 0.62}}},
                     150, 0.5, 0);
   EXPECT_LT(r.max_added, 1e-12);
+}
+
+// Stopping from a walk (backward 0.5 m/s, side-step 0.3 m/s, forward 0.5 m/s, each ramped to 0 over
+// 0.5 s): once the generator stands, both feet are planted. With standing_hold the adapted reference
+// keeps them where its last steps put them: the soles, metered from the stop command on, move less
+// than a third as far as with the offsets decaying (standing_hold false, before 2026-12-04, which
+// slid the planted feet back under the hips), and under 2 cm in total.
+TEST(StrideAdaptation, StoppingLeavesThePlantedFeetWhereTheyLanded) {
+  const Fixture fx;
+  for (const VelocityCommand u : {VelocityCommand{-0.5, 0.0, 0.0}, VelocityCommand{0.0, 0.3, 0.0}, VelocityCommand{0.5, 0.0, 0.0}}) {
+    SCOPED_TRACE("command " + std::to_string(u.vx) + " " + std::to_string(u.vy) + " " + std::to_string(u.wz));
+    const Schedule walk_then_stop{{u, PostureCommand{0.0, 0.0, kStand}}, {VelocityCommand{}, PostureCommand{0.0, 0.0, kStand}}};
+    double slide[2];
+    for (int hold = 0; hold < 2; ++hold) {
+      const RunResult r = run(fx, walk_then_stop, 400, 0.5, 400, StrideAdaptationOptions{}.sole_half_length, hold == 1);
+      slide[hold] = r.planted_travel;
+      std::printf("standing_hold %d: planted soles moved %.1f mm after the stop command (largest %.0f mm/s)\n", hold,
+                  1e3 * r.planted_travel, 1e3 * r.planted_max_speed);
+      EXPECT_EQ(r.max_non_leg_change, 0.0);
+    }
+    EXPECT_LT(slide[1], slide[0] / 3.0);
+    EXPECT_LT(slide[1], 0.02);
+  }
 }
 
 // Command steps (standing -> fast side-step -> bent backward turn -> crouched fast diagonal ->

@@ -132,6 +132,21 @@ TEST(Contract, ReferenceSettingsMustMatchTheController) {
   } catch (const ContractError& e) {
     EXPECT_EQ(e.field(), "pmg.stride_adaptation");
   }
+  // pmg.stride_standing_hold: S24b (173.7 M steps) was trained with the stride adaptation before
+  // StrideAdaptationOptions::standing_hold (no key: false, every offset decaying while standing). A
+  // controller that holds the standing feet refuses it, naming the key; one that decays runs it.
+  const std::string s24b = pmg::test::sourcePath("training/results/fidelity/stride_adaptation/S24b_173M/g1_pmg_policy.onnx");
+  s.pmg["upright_walking"] = "false";
+  s.pmg["sole_levelling"] = "false";
+  s.pmg["stride_standing_hold"] = "true";
+  try {
+    PolicyRunner runner(s24b, s);
+    FAIL() << "accepted a policy trained on decaying standing offsets on a controller that holds them";
+  } catch (const ContractError& e) {
+    EXPECT_EQ(e.field(), "pmg.stride_standing_hold");
+  }
+  s.pmg["stride_standing_hold"] = "false";
+  EXPECT_NO_THROW(PolicyRunner(s24b, s));
 }
 
 // pmg.upper_body_ff: an actor trained with the controller's waist feed-forward in its environment

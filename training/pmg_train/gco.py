@@ -40,7 +40,9 @@ from . import loops
 NUM_FEET = 2
 LEG_DOFS = 6
 # StrideAdaptationOptions{} (stride_adaptation.hpp), for model files written before it existed.
-STRIDE_DEFAULTS = {"touchdown_lead": 0.5, "return_fraction": 0.7, "standing_time_constant": 0.3, "stepping_margin": 0.02,
+# standing_hold: False for files written before it existed (2026-12-04), whose C++ decayed every offset standing.
+STRIDE_DEFAULTS = {"touchdown_lead": 0.5, "return_fraction": 0.7, "standing_time_constant": 0.3, "standing_hold": False,
+                   "stepping_margin": 0.02,
                    "max_offset": 0.15, "max_offset_height": 0.03, "max_offset_yaw": 0.4, "max_offset_speed": 1.0,
                    "max_offset_yaw_rate": 3.0, "iterations": 3, "max_correction": 0.6, "height_weight": 0.3,
                    "damping": 1e-3, "max_correction_rate": 4.0, "sole_half_length": 0.085, "rolling_slope": 0.05}
@@ -282,8 +284,11 @@ def adapt_strides(chains: LegChains, opt: GcoOptions, gen_out, u_d, lower, upper
         d_yaw = xp.arctan2(R[1, 0], R[0, 0]) - xp.arctan2(R_prev[1, 0], R_prev[0, 0])
         d_yaw = d_yaw - 2.0 * np.pi * xp.round(d_yaw / (2.0 * np.pi))
         tau = o["standing_time_constant"]
-        rate_st = walking * (still - moved / dt) - (1.0 - walking) * e / tau
-        yaw_rate_st = walking * (-wz - d_yaw / dt) - (1.0 - walking) * psi / tau
+        # Standing: with standing_hold only the height part decays (the feet stay where they landed).
+        decay_xy = 0.0 if o["standing_hold"] else 1.0
+        standing_decay = e * xp.array([decay_xy, decay_xy, 1.0])
+        rate_st = walking * (still - moved / dt) - (1.0 - walking) * standing_decay / tau
+        yaw_rate_st = walking * (-wz - d_yaw / dt) - (1.0 - walking) * decay_xy * psi / tau
         # Swing: from the lift-off offset toward −lead times it (height to 0).
         lifting = state["sa_contact"][f] | first
         lo_e = xp.where(lifting, e, state["sa_lo_offset"][f])

@@ -18,16 +18,18 @@
 ///       stance (c_f = 1): integrated so that the point the foot rolls on, c = S + r_c, is still in
 ///       the world (r_c = l k R_ref e_x, k = clamp(−(R_ref e_x)_z / rolling_slope, −1, 1), l =
 ///       sole_half_length: the heel at heel strike, S while the sole is level, the toe at toe-off):
-///         ė = s (−v_u − ω_u e_z × p_c − Δc_ref / dt) − (1 − s) e / τ_stand,   ė_z uses −ḣ − Δc_ref,z / dt,
+///         ė = s (−v_u − ω_u e_z × p_c − Δc_ref / dt) − (1 − s) e_s / τ_stand,  ė_z uses −ḣ − Δc_ref,z / dt,
 ///       p_c = p_ref + r_c + e, Δc_ref the reference's own displacement of that point (of the sole
 ///       frame's point c_S, fixed over the tick) since the last tick: positions, so the held point
 ///       does not drift by the integration of velocities;
-///         ψ̇ = s (−ω_u − Δψ_ref / dt)           − (1 − s) ψ / τ_stand   (ψ_ref: the foot's yaw in B),
+///         ψ̇ = s (−ω_u − Δψ_ref / dt)           − (1 − s) ψ_s / τ_stand (ψ_ref: the foot's yaw in B),
 ///       with u = (v_u [m/s, H], ω_u [rad/s]) the velocity command given to the generator, ḣ the
 ///       rate of the template's pelvis height, and s = clamp((0.5 − σ_f) / stepping_margin, 0, 1)
 ///       the stepping share from the foot's blended contact window (eqs. 8–9: σ_f = 0.5 while
-///       standing, so s = 0 and the offsets decay with τ_stand instead of holding the soles
-///       against a posture change; s = 1 once the window leaves room for a swing);
+///       standing, so s = 0 and the soles are not held against a posture change; s = 1 once the
+///       window leaves room for a swing); standing, e_s = (0, 0, e_z) and ψ_s = 0 with
+///       standing_hold (the feet stay where the last steps put them; the next swings return them),
+///       else e_s = e, ψ_s = ψ (all offsets decay, sliding the planted feet);
 ///       swing (c_f = 0): from its lift-off value (e_lo, ψ_lo) toward the touchdown value
 ///         e_td = (−λ e_lo,x, −λ e_lo,y, 0), ψ_td = −λ ψ_lo   (λ = touchdown_lead)
 ///       along a smoothstep over the first return_fraction of the swing (phase progress through
@@ -70,6 +72,11 @@ struct StrideAdaptationOptions {
   double touchdown_lead = 0.5;        ///< λ: share of the last lift-off offset placed ahead at touchdown, [0, 1)
   double return_fraction = 0.7;       ///< share of the swing over which the offset reaches its touchdown value, (0, 1]
   double standing_time_constant = 0.3;  ///< τ_stand: decay of the offsets while standing [s], (0, 10]
+  /// Standing (s = 0), hold the offsets' horizontal part and yaw, so the feet stay where the last steps
+  /// put them, and decay only the height part with τ_stand. false: decay all of them with τ_stand,
+  /// which slides both planted feet back under the hips after a stop (the reference's planted soles
+  /// moved 55-140 mm in total after stopping from 0.5 m/s; docs/gco.md "Stride adaptation").
+  bool standing_hold = true;
   double stepping_margin = 0.02;      ///< σ_f below 0.5 at which a stance is held fully [phase units], (0, 0.5]
   double max_offset = 0.15;           ///< bound on |e| [m], (0, 0.3]
   /// Bound on |e_z| [m], (0, 0.3]: a clip that lifts a foot well inside its contact window (by more
@@ -102,6 +109,7 @@ struct StrideAdaptationOptions {
     a->Visit("touchdown_lead", &touchdown_lead, "[0, 1)");
     a->Visit("return_fraction", &return_fraction, "(0, 1]");
     a->Visit("standing_time_constant", &standing_time_constant, "[s] (0, 10]");
+    a->Visit("standing_hold", &standing_hold, "standing, hold the horizontal offsets and yaw (the feet stay put)");
     a->Visit("stepping_margin", &stepping_margin, "[phase] (0, 0.5]");
     a->Visit("max_offset", &max_offset, "[m] (0, 0.3]");
     a->Visit("max_offset_height", &max_offset_height, "[m] (0, 0.3]");

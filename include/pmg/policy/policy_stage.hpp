@@ -37,6 +37,9 @@ struct PolicyStageOptions {
   bool gco = false;               ///< the controller runs GCO (must match the contract)
   bool sole_levelling = false;    ///< the reference's stance soles are levelled (GcoOptions::sole_levelling; must match)
   bool stride_adaptation = false; ///< the reference's stance soles are held still (GcoOptions::stride_adaptation; must match)
+  /// Standing, the stride adaptation keeps the feet where they landed (StrideAdaptationOptions::standing_hold).
+  /// The contract's pmg.stride_standing_hold must equal stride_adaptation && stride_standing_hold.
+  bool stride_standing_hold = false;
   bool upright_walking = false;   ///< the walking clips' waist lean is removed (GeneratorParams::upright_walking; must match)
   /// The controller feeds the waist joints' gravity torque forward (`upper_body: enabled`,
   /// pmg::UpperBodyCompensation). Must match the contract's pmg.upper_body_ff: an actor trained with
