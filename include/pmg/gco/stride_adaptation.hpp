@@ -75,7 +75,7 @@ struct StrideAdaptationOptions {
   /// Standing (s = 0), hold the offsets' horizontal part and yaw, so the feet stay where the last steps
   /// put them, and decay only the height part with τ_stand. false: decay all of them with τ_stand,
   /// which slides both planted feet back under the hips after a stop (the reference's planted soles
-  /// moved 55-140 mm in total after stopping from 0.5 m/s; docs/gco.md "Stride adaptation").
+  /// moved 91-127 mm in total after stops from 0.3-0.5 m/s, 14-16 mm held; docs/gco.md "Stride adaptation").
   bool standing_hold = true;
   double stepping_margin = 0.02;      ///< σ_f below 0.5 at which a stance is held fully [phase units], (0, 0.5]
   double max_offset = 0.15;           ///< bound on |e| [m], (0, 0.3]
