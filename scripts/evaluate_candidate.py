@@ -38,12 +38,16 @@ What a person otherwise types by hand for each candidate (training/results/fidel
    command and of the shaper's command (how many the shaper's envelopes slowed), posture misses (pitch/roll 0.03 rad, height 0.015 m), cross-coupling beyond 0.05 rad, runaways and falls
    (scripts/segment_band.py's score), Table I's mean errors, the stress sweep's runs with a fall and the
    segments they fell in, the MJX floor stops' fallen robots, and the MJX gait: what issue 12 asks. It names
-   the floor friction the SIL runs recorded (summary.json's floor_friction).
+   the floor friction the SIL runs recorded (summary.json's floor_friction), and the reference the robot was told to
+   stand in (scripts/standing_reference.py: the largest hip yaw and knee difference at the end of a standing
+   segment, kept in each battery's standing_reference.json).
 Each step writes its command line into its folder (command.txt) and skips work whose summary (or
 feedforward/fit.yaml) already exists, so an interrupted evaluation resumes; delete fit.yaml to refit. Units: m/s, rad/s, rad, m.
 """
 import argparse
+import contextlib
 import glob
+import io
 import json
 import os
 import re
@@ -56,6 +60,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import segment_band  # noqa: E402
+import standing_reference  # noqa: E402
 
 CROUCHED_BACKWARD = "training/results/fidelity/seeds_V20b/crouched_backward.yaml"
 # The 0.62 m sweep's side-step and turn stops as the product path commands them, for randomized robots in MJX
@@ -333,6 +338,38 @@ def floor_lines(out):
                                                               for mu, names in sorted(runs.items()))]
 
 
+def standing_lines(out):
+    """Report lines of the reference the robot is told to stand in (scripts/standing_reference.py): per battery, the
+    largest hip yaw and left-right knee difference at the end of a standing segment, over the seeds. Computed from
+    the seed CSVs where they are (and kept in the battery's standing_reference.json, since the CSVs are not kept),
+    else read from that file. The generator's standing templates give about 0 for both; the stride adaptation's
+    standing_hold keeps the last steps' toe-out and split stance (docs/gco.md "Stride adaptation")."""
+    rows = []
+    for name in BATTERY:
+        folder = os.path.join(out, name)
+        path = os.path.join(folder, "standing_reference.json")
+        if glob.glob(os.path.join(folder, "seed*.csv")):
+            with contextlib.redirect_stdout(io.StringIO()):
+                rc = standing_reference.main([folder, "--json", path])
+            if rc != 0:
+                raise SystemExit(f"evaluate_candidate: standing_reference.py failed on {folder}")
+        if not os.path.exists(path):
+            continue
+        with open(path) as f:
+            segments = json.load(f)["segments"]
+        if not segments:
+            continue
+        yaw = max(segments, key=lambda r: r["hip_yaw"]["max"])
+        knee = max(segments, key=lambda r: r["knee_difference"]["max"])
+        rows.append(f"| {name} | {yaw['hip_yaw']['max']:.3f} ({yaw['segment']}) | "
+                    f"{knee['knee_difference']['max']:.3f} ({knee['segment']}) |")
+    if not rows:
+        return []
+    return ["", "The reference at the end of each standing segment (scripts/standing_reference.py; the standing "
+                "templates give about 0):", "",
+            "| battery | largest hip yaw [rad] (segment) | largest \\|knee L−R\\| [rad] (segment) |", "|---|---|---|", *rows]
+
+
 def report(out):
     """Step 5: report.md from the summaries under @p out; returns its text."""
     lines = ["# Candidate against issue 12's targets", *floor_lines(out), "",
@@ -362,6 +399,7 @@ def report(out):
                   "|---|---|---|---|---|---|---|",
                   f"| {table1['lin_vel']:.4f} | {table1['yaw_vel']:.4f} | {table1['roll']:.4f} | {table1['pitch']:.4f} | "
                   f"{table1['height']:.4f} | {table1['foot_slip']:.3f} | {table1['falls']} |"]
+    lines += standing_lines(out)
     lines += stress_lines(out)
     lines += floor_stops_lines(out)
     gait = mjx_lines(out)

@@ -24,6 +24,10 @@ label unit):
   the report names the floor 0.4; run again with no friction, the same folder is refused (its summaries ran on
   0.4), and 0.05 is refused before anything runs; the report of summaries without floor_friction names the
   MJCF's 1.0, and one of mixed floors names each floor with its runs.
+- the standing reference: a grid folder with one seed CSV whose reference holds 0.35 rad of hip yaw in its last
+  standing segment gets the report's standing table row (0.350, that segment) and a standing_reference.json; with
+  the CSV deleted (the results' folders keep no CSVs) the report reads the same row from that file; a battery
+  with neither has no row.
 Usage: test_evaluate_candidate.py
 """
 import json
@@ -118,6 +122,29 @@ def floor_checks(tmp):
             json.dump(summary, f)
     check("**Floors differ between runs:** sliding friction 0.4 in grid; sliding friction 1 in mirror" in ec.report(mixed),
           "report: runs on two floors are named, each with its runs")
+
+
+def standing_checks(tmp):
+    """The report's standing-reference table from seed CSVs, then from the standing_reference.json they left."""
+    out = os.path.join(tmp, "standing")
+    grid = os.path.join(out, "grid")
+    os.makedirs(grid)
+    os.makedirs(os.path.join(out, "mirror"))  # neither CSVs nor the json: no row
+    header = ["t", "segment", "vx_cmd", "vy_cmd", "wz_cmd"] + [f"qref{i}" for i in range(12)]
+    stand = [-0.1, 0.0, 0.0, 0.3, -0.2, 0.0] * 2
+    held = list(stand)
+    held[8] = -0.35  # the right hip yaw the last steps left
+    with open(os.path.join(grid, "seed0.csv"), "w") as f:
+        f.write(",".join(header) + "\n")
+        for i, (seg, cmd, q) in enumerate([("stand", (0, 0, 0), stand), ("back_0.50", (-0.5, 0, 0), held),
+                                           ("stand_2", (0, 0, 0), held)]):
+            f.write(",".join(map(str, [i * 0.01, seg, *cmd, *q])) + "\n")
+    row = "| grid | 0.350 (stand_2) | 0.000 (stand) |"
+    text = ec.report(out)
+    check(row in text and os.path.exists(os.path.join(grid, "standing_reference.json")) and "| mirror | 0" not in text,
+          "report: the standing reference from the seed CSVs (hip yaw 0.350 in stand_2), kept in standing_reference.json")
+    os.remove(os.path.join(grid, "seed0.csv"))
+    check(row in ec.report(out), "report: the same row from standing_reference.json once the CSVs are gone")
 
 
 def main():
@@ -223,6 +250,7 @@ def main():
               "report: MJX gait, 3 of 4 crouched walks flagged (flight 0.35, a fall, one after the fall); standing walk "
               "and stop left out")
         floor_checks(tmp)
+        standing_checks(tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return check.exit_code()
