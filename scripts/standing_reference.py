@@ -16,12 +16,12 @@ Segments whose name starts with "restart" (--restart-after-fall's) are skipped.
 Exit status 2 (with a message naming it) when OUT_DIR has no seedN.csv or a file lacks a column.
 """
 import argparse
+import csv
 import glob
 import json
 import os
 import re
 import sys
-import csv
 
 HIP_ROLL, HIP_YAW, KNEE = 1, 2, 3  # within one leg's six joints
 LEG = 6

@@ -43,6 +43,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import evaluate_candidate as ec  # noqa: E402
 from script_checks import Checks  # noqa: E402  (beside this file)
+from test_standing_reference import write_seed  # noqa: E402  (beside this file)
 
 V20E = os.path.join(ROOT, "training", "results", "fidelity", "seeds_V20b", "V20e")
 N24G_SWEEP = os.path.join(ROOT, "training", "results", "fidelity", "exploration_noise", "N24g", "sweep_0.62")
@@ -130,15 +131,8 @@ def standing_checks(tmp):
     grid = os.path.join(out, "grid")
     os.makedirs(grid)
     os.makedirs(os.path.join(out, "mirror"))  # neither CSVs nor the json: no row
-    header = ["t", "segment", "vx_cmd", "vy_cmd", "wz_cmd"] + [f"qref{i}" for i in range(12)]
-    stand = [-0.1, 0.0, 0.0, 0.3, -0.2, 0.0] * 2
-    held = list(stand)
-    held[8] = -0.35  # the right hip yaw the last steps left
-    with open(os.path.join(grid, "seed0.csv"), "w") as f:
-        f.write(",".join(header) + "\n")
-        for i, (seg, cmd, q) in enumerate([("stand", (0, 0, 0), stand), ("back_0.50", (-0.5, 0, 0), held),
-                                           ("stand_2", (0, 0, 0), held)]):
-            f.write(",".join(map(str, [i * 0.01, seg, *cmd, *q])) + "\n")
+    # stand, a walk, then stand_2 with the right hip yawed by the 0.35 rad the last steps left (knees level)
+    write_seed(grid, 0, yaw_r=-0.35, roll_l=0.0, knee_l=0.3)
     row = "| grid | 0.350 (stand_2) | 0.000 (stand) |"
     text = ec.report(out)
     check(row in text and os.path.exists(os.path.join(grid, "standing_reference.json")) and "| mirror | 0" not in text,
