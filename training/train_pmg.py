@@ -230,6 +230,15 @@ def parse_args(argv=None):
     ap.add_argument("--devices", type=int, default=0,
                     help="use the first N local JAX devices (0: all of them)")
     ap.add_argument("--restore", default=None, help="params.pkl of an earlier run to start from")
+    ap.add_argument("--restore-actor", default=None, metavar="ACTOR_NPZ",
+                    help="fine-tune an actor whose params.pkl was not kept: its actor.npz (layers and observation "
+                         "normaliser), with the critic of --restore-critic (pmg_train/restore.py)")
+    ap.add_argument("--restore-critic", default=None, metavar="PARAMS_PKL",
+                    help="with --restore-actor: a params.pkl (same observation layout and --hidden) lending the value "
+                         "network and the privileged observations' normaliser")
+    ap.add_argument("--critic-warmup-steps", type=int, default=0, metavar="N",
+                    help="with --restore or --restore-actor: the first N steps fit the critic alone (the actor's "
+                         "gradient stopped, so it stays as restored), then PPO trains both (a second ppo.train)")
     ap.add_argument("--action-scale-from", default=None, metavar="TRAIN_CONFIG_JSON",
                     help="take the leg action scale from this run's train_config.json instead of deriving it from the "
                          "clips (fine-tuning a restored actor on changed clips keeps the actor's own scale)")
@@ -331,6 +340,17 @@ def parse_args(argv=None):
         ap.error(f"--reward-scaling = {args.reward_scaling}: expected a finite value > 0")
     if not (math.isfinite(args.mirror_loss) and args.mirror_loss >= 0):
         ap.error(f"--mirror-loss = {args.mirror_loss}: expected a finite weight >= 0")
+    if (args.restore_actor is None) != (args.restore_critic is None):
+        ap.error("--restore-actor and --restore-critic: give both (an actor.npz holds no critic) or neither")
+    if args.restore_actor is not None and args.restore is not None:
+        ap.error("--restore-actor with --restore: expected one of them")
+    if args.critic_warmup_steps < 0 or (args.critic_warmup_steps > 0 and (
+            args.critic_warmup_steps >= args.timesteps or (args.restore is None and args.restore_actor is None))):
+        ap.error(f"--critic-warmup-steps = {args.critic_warmup_steps}: expected 0 (off) or fewer than --timesteps = "
+                 f"{args.timesteps}, with --restore or --restore-actor")
+    if args.critic_warmup_steps > 0 and args.warmup_steps > 0:
+        ap.error("--critic-warmup-steps with --warmup-steps: expected one of them (a restored actor needs no reward-width "
+                 "warm-up)")
     if args.warmup_steps < 0 or (args.warmup_steps > 0 and args.warmup_steps >= args.timesteps):
         ap.error(f"--warmup-steps = {args.warmup_steps}: expected 0 (off) or fewer than --timesteps = {args.timesteps}")
     for flag, default in (("warmup_tracking_sigma", 0.25), ("warmup_height_sigma", 0.02)):
@@ -491,8 +511,9 @@ def main(argv=None):
     args = parse_args(argv)
     from pmg_train.paths import repo_root
     args.out = os.path.abspath(args.out)
-    if args.restore:
-        args.restore = os.path.abspath(args.restore)
+    for flag in ("restore", "restore_actor", "restore_critic"):
+        if getattr(args, flag):
+            setattr(args, flag, os.path.abspath(getattr(args, flag)))
     os.chdir(repo_root(args.repo))  # the environment's files are named relative to the checkout
     os.makedirs(args.out, exist_ok=True)
 
@@ -581,7 +602,9 @@ def main(argv=None):
                    policy_obs_key="state", value_obs_key="privileged_state")
     with open(os.path.join(args.out, "train_config.json"), "w") as f:
         json.dump({"ppo": ppo_cfg, "networks": net_cfg, "env": dataclasses.asdict(cfg), "clips": clip_files,
-                   "action_scale": env.action_scale.tolist(), "restore": args.restore, "argv": sys.argv,
+                   "action_scale": env.action_scale.tolist(), "restore": args.restore,
+                   "restore_actor": args.restore_actor, "restore_critic": args.restore_critic,
+                   "critic_warmup_steps": args.critic_warmup_steps, "argv": sys.argv,
                    "devices": [str(d) for d in devices], "jax": jax.__version__, "mirror_loss": args.mirror_loss,
                    "action_noise_scale": args.action_noise_scale,
                    "warmup": None if warmup_env is None else {
@@ -604,6 +627,13 @@ def main(argv=None):
         with open(args.restore, "rb") as f:
             restore = pickle.load(f)
         log("restoring", args.restore)
+    elif args.restore_actor:
+        from pmg_train.restore import describe, graft_actor
+        restore = graft_actor(args.restore_actor, args.restore_critic, args.hidden,
+                              env.observation_size["state"][0], len(env.action_scale),
+                              env.observation_size["privileged_state"][0],
+                              action_scale=env.action_scale, mode=cfg.mode)
+        log("restoring:", describe(args.restore_actor, args.restore_critic))
     t_start = time.time()
     progress = open(os.path.join(args.out, "progress.jsonl"), "a")
     stage = {"name": "main", "offset": 0, "last": 0}
@@ -654,6 +684,19 @@ def main(argv=None):
                          policy_params_fn=policy_params_fn, **run_cfg)
 
     try:
+        if args.critic_warmup_steps > 0:  # stage 1: the critic alone, the restored actor held (restore.with_frozen_policy)
+            from pmg_train.restore import with_frozen_policy
+            stage["name"] = "critic"
+            log(f"critic warm-up: {args.critic_warmup_steps} steps with the actor's gradient stopped")
+            loss_before = ppo.ppo_losses.compute_ppo_loss
+            ppo.ppo_losses.compute_ppo_loss = with_frozen_policy(loss_before)
+            try:
+                _, restore, _ = train(env, num_timesteps=args.critic_warmup_steps, num_evals=1, run_evals=False,
+                                      restore_params=restore)
+            finally:
+                ppo.ppo_losses.compute_ppo_loss = loss_before
+            stage.update(name="main", offset=stage["last"])
+            log(f"critic warm-up done after {stage['offset']} steps, {time.time() - t_start:.0f} s; actor and critic from here")
         if warmup_env is not None:  # stage 1: wide rewards, no evaluations; checkpoints at its start and end (--warmup-evals)
             stage["name"] = "warmup"
             log(f"warm-up: {args.warmup_steps} steps with tracking sigma {args.warmup_tracking_sigma}, "
@@ -665,7 +708,8 @@ def main(argv=None):
             stage.update(name="main", offset=stage["last"])
             log(f"warm-up done after {stage['offset']} steps, {time.time() - t_start:.0f} s; the run's own widths from here")
         make_inference_fn, params, _ = train(env, num_timesteps=args.timesteps - stage["offset"],
-                                             seed=args.seed + (1 if warmup_env is not None else 0),
+                                             seed=args.seed + (1 if warmup_env is not None or args.critic_warmup_steps > 0
+                                                               else 0),
                                              restore_params=restore)
     finally:
         ppo.acting.Evaluator = evaluator_cls

@@ -133,7 +133,6 @@ def loss_checks(check, obs_map, act_map, rng):
     import jax.numpy as jnp
     import numpy as np
     import optax
-    from brax.training import types as brax_types
     from brax.training.acme import running_statistics, specs
     from brax.training.agents.ppo import losses as ppo_losses
     from brax.training.agents.ppo import networks as ppo_networks
@@ -177,19 +176,8 @@ def loss_checks(check, obs_map, act_map, rng):
     check(end < 0.05 * start, f"minimised alone, the loss on fresh observations falls {start:.4f} -> {end:.5f} "
           f"(< 5 %)")
 
-    B, T = 4, 5
-    obs_bt = jax.tree_util.tree_map(lambda x: x.reshape(B, T, -1), batch(B * T))
-    nxt_bt = jax.tree_util.tree_map(lambda x: x.reshape(B, T, -1), batch(B * T))
-    raw = jnp.asarray(rng.normal(size=(B, T, n_act)), jnp.float32)
-    data = brax_types.Transition(
-        observation=obs_bt, action=jnp.tanh(raw), reward=jnp.asarray(rng.normal(size=(B, T)), jnp.float32),
-        discount=jnp.ones((B, T)), next_observation=nxt_bt,
-        extras={"state_extras": {"truncation": jnp.zeros((B, T))},
-                "policy_extras": {"raw_action": raw, "log_prob": jnp.asarray(rng.normal(size=(B, T)) - 10.0,
-                                                                              jnp.float32),
-                                  "distribution_params": net.policy_network.apply(norm, params.policy, obs_bt)}})
-    kw = dict(ppo_network=net, entropy_cost=5e-3, discounting=0.97, reward_scaling=1.0, gae_lambda=0.95,
-              clipping_epsilon=0.2, normalize_advantage=True)
+    data, kw = ppo_batch(net, norm, params, batch, n_act, rng)
+    obs_bt = data.observation
     rk = jax.random.PRNGKey(1)
     base, _ = ppo_losses.compute_ppo_loss(params, norm, data, rk, **kw)
     w = 0.7
@@ -208,6 +196,27 @@ def loss_checks(check, obs_map, act_map, rng):
         except ValueError:
             refused.append(bad)
     check(len(refused) == 2, f"weights -0.1 and nan refused ({refused})")
+
+
+def ppo_batch(net, norm, params, batch, n_act, rng, B=4, T=5):
+    """A synthetic Brax PPO batch (Transition, B x T) for @p net, and compute_ppo_loss's keyword arguments.
+    @p batch(n) returns n observations (dict of arrays)."""
+    import jax
+    import jax.numpy as jnp
+    from brax.training import types as brax_types
+    obs_bt = jax.tree_util.tree_map(lambda x: x.reshape(B, T, -1), batch(B * T))
+    nxt_bt = jax.tree_util.tree_map(lambda x: x.reshape(B, T, -1), batch(B * T))
+    raw = jnp.asarray(rng.normal(size=(B, T, n_act)), jnp.float32)
+    data = brax_types.Transition(
+        observation=obs_bt, action=jnp.tanh(raw), reward=jnp.asarray(rng.normal(size=(B, T)), jnp.float32),
+        discount=jnp.ones((B, T)), next_observation=nxt_bt,
+        extras={"state_extras": {"truncation": jnp.zeros((B, T))},
+                "policy_extras": {"raw_action": raw, "log_prob": jnp.asarray(rng.normal(size=(B, T)) - 10.0,
+                                                                              jnp.float32),
+                                  "distribution_params": net.policy_network.apply(norm, params.policy, obs_bt)}})
+    kw = dict(ppo_network=net, entropy_cost=5e-3, discounting=0.97, reward_scaling=1.0, gae_lambda=0.95,
+              clipping_epsilon=0.2, normalize_advantage=True)
+    return data, kw
 
 
 def main():
