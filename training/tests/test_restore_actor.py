@@ -25,7 +25,8 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
-from test_smoke_cpu import CHILD, Checks, relaunch  # noqa: E402
+from test_smoke_cpu import (CHILD, Checks, _MainStageReached, main_with_recorded_train, relaunch,  # noqa: E402
+                            run_stages)
 from test_symmetry import ppo_batch  # noqa: E402
 
 N_OBS, N_ACT, N_PRIV, HIDDEN = 62, 12, 90, (32, 32)
@@ -204,10 +205,6 @@ def argument_checks(check):
                   f"{err.getvalue().strip().splitlines()[-1]}")
 
 
-class _MainStageReached(Exception):
-    pass
-
-
 def staging_checks(check, tmp, rng):
     """train_pmg.main with --restore-actor and --critic-warmup-steps, Brax's ppo.train replaced by a recorder (so
     nothing compiles): the first call starts from the graft for the critic warm-up's steps with the frozen loss and
@@ -215,7 +212,6 @@ def staging_checks(check, tmp, rng):
     own loss; progress.jsonl marks the stages, train_config.json names the sources; Brax's loss is its own after."""
     import json
     import numpy as np
-    import train_pmg
     from brax.training.agents.ppo import train as ppo
     net = networks()
     a_norm, a_params = trained_run(net, rng, 4, 1.5, 0.2)
@@ -242,16 +238,7 @@ def staging_checks(check, tmp, rng):
             "--hidden", ",".join(map(str, HIDDEN)), "--seed", "7", "--mirror-loss", "0.5",
             "--action-scale-from", ref, "--restore-actor", actor, "--restore-critic", critic,
             "--critic-warmup-steps", "400"]
-    train, cwd = ppo.train, os.getcwd()
-    ppo.train = recorder
-    reached = False
-    try:
-        train_pmg.main(argv)
-    except _MainStageReached:
-        reached = True
-    finally:
-        ppo.train = train
-        os.chdir(cwd)
+    reached = main_with_recorded_train(argv, recorder)
     check(reached and len(calls) == 2, f"--critic-warmup-steps: train_pmg.main calls ppo.train twice ({len(calls)})")
     if len(calls) != 2:
         return
@@ -265,10 +252,7 @@ def staging_checks(check, tmp, rng):
           m["loss"].__module__ == "pmg_train.symmetry" and ppo.ppo_losses.compute_ppo_loss is loss,
           f"main stage: the remaining {m['num_timesteps']} steps from the critic stage's parameters, seed {m['seed']}, "
           f"the run's loss (mirror loss), Brax's own loss after")
-    with open(os.path.join(out, "progress.jsonl")) as f:
-        stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
-    with open(os.path.join(out, "train_config.json")) as f:
-        tc = json.load(f)
+    stages, tc = run_stages(out)
     check(stages == [("critic", 400), ("main", 1000)] and tc["restore_actor"] == actor and
           tc["restore_critic"] == critic and tc["critic_warmup_steps"] == 400,
           f"progress.jsonl (stage, step) {stages}; train_config.json names the actor, the critic and the steps")

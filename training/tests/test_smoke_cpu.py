@@ -812,6 +812,31 @@ class _MainStageReached(Exception):
     pass
 
 
+def run_stages(out):
+    """A run folder's (stage, step) per progress.jsonl record, and its train_config.json."""
+    with open(os.path.join(out, "progress.jsonl")) as f:
+        stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
+    with open(os.path.join(out, "train_config.json")) as f:
+        return stages, json.load(f)
+
+
+def main_with_recorded_train(argv, recorder):
+    """train_pmg.main(@p argv) with Brax's ppo.train replaced by @p recorder, which raises _MainStageReached where the
+    check has seen enough (nothing compiles). True iff it was raised; Brax's ppo.train and the cwd are restored."""
+    import train_pmg
+    from brax.training.agents.ppo import train as ppo
+    train, cwd = ppo.train, os.getcwd()
+    ppo.train = recorder
+    try:
+        train_pmg.main(argv)
+    except _MainStageReached:
+        return True
+    finally:
+        ppo.train = train
+        os.chdir(cwd)
+    return False
+
+
 def warmup_staging_checks(check, workdir):
     """2. The reward-width warm-up's staging in train_pmg.main (--warmup-steps), with Brax's ppo.train
     replaced by a recorder, so nothing compiles: the first call trains the warm-up environment (the
@@ -819,7 +844,6 @@ def warmup_staging_checks(check, workdir):
     trains the run's environment for the remaining steps from the first call's parameters with the
     next seed; progress.jsonl marks the stages and numbers the second's steps from the warm-up's end;
     Brax's Evaluator and PPO loss are Brax's own again afterwards."""
-    import train_pmg
     from brax.training.agents.ppo import train as ppo
 
     out = os.path.join(workdir, "staging")
@@ -839,19 +863,10 @@ def warmup_staging_checks(check, workdir):
             "--warmup-steps", "400", "--warmup-tracking-sigma", "0.3", "--warmup-height-sigma", "0.03",
             "--p-posture-walk", "0.6", "--warmup-p-posture-walk", "0.0", "--warmup-evals", "3",
             "--action-noise-scale", "0.5"]
-    train, evaluator, loss = ppo.train, ppo.acting.Evaluator, ppo.ppo_losses.compute_ppo_loss
+    evaluator, loss = ppo.acting.Evaluator, ppo.ppo_losses.compute_ppo_loss
     if os.path.exists(os.path.join(out, "progress.jsonl")):
         os.remove(os.path.join(out, "progress.jsonl"))
-    cwd = os.getcwd()
-    ppo.train = recorder
-    reached = False
-    try:
-        train_pmg.main(argv)
-    except _MainStageReached:
-        reached = True
-    finally:
-        ppo.train = train
-        os.chdir(cwd)
+    reached = main_with_recorded_train(argv, recorder)
     check(reached and len(calls) == 2, f"--warmup-steps: train_pmg.main calls ppo.train twice ({len(calls)} calls)")
     if len(calls) != 2:
         return
@@ -881,10 +896,7 @@ def warmup_staging_checks(check, workdir):
           nets[0].policy_network.init is not None and nets[0].parametric_action_distribution.param_size == 24,
           f"--action-noise-scale 0.5: at a zero scale logit both stages' policies draw with std {zero_std} "
           f"(Brax's own: {2 * want_std:.4f}), 12 actions from 24 outputs")
-    with open(os.path.join(out, "progress.jsonl")) as f:
-        stages = [(r["stage"], r["step"]) for r in map(json.loads, f)]
-    with open(os.path.join(out, "train_config.json")) as f:
-        tc = json.load(f)
+    stages, tc = run_stages(out)
     check(stages == [("warmup", 400), ("main", 1000)] and
           tc["warmup"] == {"steps": 400, "lin_vel_sigma": 0.3, "yaw_rate_sigma": 0.3, "height_sigma": 0.03,
                            "orientation_sigma": 0.05, "p_posture_walk": 0.0, "evals": 3} and
