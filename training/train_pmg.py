@@ -10,6 +10,8 @@ params.pkl (normaliser, policy, value: resume with --restore; written at every e
 (the actor's arrays), train_config.json, g1_pmg_policy.onnx (actor + pmg.contract, export_onnx.py).
 --warmup-steps N: the first N steps with wide tracking rewards, then the run's own widths (two ppo.train
 calls in one process; progress.jsonl names each record's "stage").
+--restore-actor RUN/actor.npz --restore-critic OTHER/params.pkl [--critic-warmup-steps N]: fine-tune a kept actor whose
+params.pkl is gone, the critic lent by another run and fitted alone for the first N steps (pmg_train/restore.py).
 --smoke: imports, env reset/step timing, JAX PMG port vs the committed C++ vectors; no training.
 """
 import argparse
