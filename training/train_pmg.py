@@ -630,12 +630,12 @@ def main(argv=None):
             restore = pickle.load(f)
         log("restoring", args.restore)
     elif args.restore_actor:
-        from pmg_train.restore import describe, graft_actor
+        from pmg_train.restore import graft_actor
         restore = graft_actor(args.restore_actor, args.restore_critic, args.hidden,
                               env.observation_size["state"][0], len(env.action_scale),
                               env.observation_size["privileged_state"][0],
                               action_scale=env.action_scale, mode=cfg.mode)
-        log("restoring:", describe(args.restore_actor, args.restore_critic))
+        log("restoring: actor from", args.restore_actor, "- critic and privileged normaliser from", args.restore_critic)
     t_start = time.time()
     progress = open(os.path.join(args.out, "progress.jsonl"), "a")
     stage = {"name": "main", "offset": 0, "last": 0}

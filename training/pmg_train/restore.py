@@ -10,8 +10,6 @@ critic's privileged observations. The lent critic was fitted to another actor's 
 Shapes: the actor's observation `state` has n_obs entries (62 for the G1 legs), its last layer 2 n_act
 outputs (mean and scale of n_act = 12 leg actions); the critic reads `privileged_state` (90 entries).
 """
-import os
-
 import numpy as np
 
 
@@ -73,10 +71,10 @@ def graft_actor(actor_npz, critic_pkl, hidden, n_obs, n_act, n_priv, action_scal
             norm, _, value = pickle.load(f)
         except (ValueError, TypeError) as e:
             raise ValueError(f"{critic_pkl}: expected a params.pkl of train_pmg.py (normaliser, policy, value): {e}")
-    for key, size in (("state", n_obs), ("privileged_state", n_priv)):
-        if key not in norm.mean or np.shape(norm.mean[key]) != (size,):
-            _fail(critic_pkl, f"normaliser mean[{key!r}]", f"shape ({size},)",
-                  np.shape(norm.mean[key]) if key in norm.mean else "missing")
+    key = "privileged_state"  # the state entry is replaced by the actor's own below
+    if key not in norm.mean or np.shape(norm.mean[key]) != (n_priv,):
+        _fail(critic_pkl, f"normaliser mean[{key!r}]", f"shape ({n_priv},)",
+              np.shape(norm.mean[key]) if key in norm.mean else "missing")
     vh = [np.shape(value["params"][f"hidden_{i}"]["kernel"]) for i in range(len(value["params"]))]
     if vh[0][0] != n_priv or [s[1] for s in vh[:-1]] != list(hidden) or vh[-1][1] != 1:
         _fail(critic_pkl, "value network layers", f"{n_priv} inputs, hidden {list(hidden)} and one output", vh)
@@ -106,7 +104,3 @@ def with_frozen_policy(compute_ppo_loss):
 
     return loss
 
-
-def describe(actor_npz, critic_pkl):
-    """One log line: where the actor and the critic come from."""
-    return f"actor from {os.path.abspath(actor_npz)}, critic and privileged normaliser from {os.path.abspath(critic_pkl)}"
