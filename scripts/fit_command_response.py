@@ -20,7 +20,10 @@ one-standard-error rule (Hastie, Tibshirani & Friedman, The Elements of Statisti
 the set with the fewest coefficients whose cross-validated mean squared error is within one standard
 error (over the folds) of the lowest one's, so that terms whose gain is within the noise stay out.
 Evaluation scripts are never read here. Writes the YAML block to paste under velocity_feedback:, a
-report of the cross-validated errors, and prints both.
+report of the cross-validated errors, and prints both. The report also splits each axis's cross-validated
+error by regime (upright or crouched, and the command's sign on that axis), for the identity, the gains
+alone (G) and the chosen set: a pooled error can hide a regime the chosen terms do not carry (crouched
+backward walks, 28 of 358 commands of finetune_n24b/F0a's fit).
 
   python3 scripts/fit_command_response.py out/response/summary.json [more summaries] --out FILE.yaml \
       [--plot FIT.png] [--check HELD_OUT_SUMMARY.json ...]
@@ -154,6 +157,28 @@ def rmse(e):
     return float(np.sqrt(np.mean(np.asarray(e) ** 2)))
 
 
+def regimes(U, i):
+    """Axis @p i's regimes, where a pooled error hides what a user feels: upright or crouched (c > 0), and
+    the command's sign on this axis (|u_i| at least MIN_WALK[i]). Returns [(label, boolean mask)]."""
+    crouched = U[:, 3] > 0.0
+    out = []
+    for posture, pm in (("upright", ~crouched), ("crouched", crouched)):
+        for sign, sm in (("+", U[:, i] >= MIN_WALK[i]), ("-", U[:, i] <= -MIN_WALK[i])):
+            out.append((f"{posture} {sign}", pm & sm))
+    return out
+
+
+def regime_line(axis, U, y, i, named_preds):
+    """The report's per-regime line of axis @p i: for each (name, cross-validated prediction) the RMSE
+    over each regime's commands (regimes()), and each regime's count; '-' for a regime without one."""
+    cells = []
+    for label, m in regimes(U, i):
+        errs = "/".join(f"{rmse(p[m] - y[m]):.4f}" if m.any() else "-" for _, p in named_preds)
+        cells.append(f"{label} {errs} ({int(m.sum())})")
+    return (f"# {axis} per regime, cross-validated RMSE " + "/".join(n for n, _ in named_preds)
+            + " (commands): " + " | ".join(cells))
+
+
 def plot(path, U, V, cv_pred, check, block):
     """Per axis: achieved against predicted, the identity (v = u) in grey, the model's
     cross-validated predictions in colour, and held-out evaluation segments (--check) as crosses. With
@@ -257,6 +282,7 @@ def main():
         coef, labels = fit(U, y, i, SETS[best])
         report.append(f"# {a}: identity {ident:.4f} | " + " | ".join(f"{SETS[k]} {scores[k]:.4f}" for k in range(len(SETS)))
                       + f"  (lowest {SETS[lowest]}; within one standard error: <= {margin:.4f})  -> {SETS[best]}")
+        report.append(regime_line(a, U, y, i, [("identity", U[:, i]), ("G", preds[0]), (f"chosen {SETS[best]}", preds[best])]))
         entry = {"gain_positive": 1.0, "gain_negative": 1.0, "gain_per_magnitude": [0.0] * 3,
                  "gain_per_command": [0.0] * 3, "drift": [0.0] * 3,
                  "gain_positive_per_crouch": 0.0, "gain_negative_per_crouch": 0.0}

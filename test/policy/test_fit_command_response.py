@@ -15,7 +15,8 @@ metre (the crouch terms, whose column is at most 0.12 x the command), choose by 
 rule exactly the term groups that carry them (v_x G+C, v_y G+M+D, w G+M; the lowest CV error alone
 takes a coupling of v_x's fitted to the noise), no coupling of v_x's beyond 0.05, report the upset and the fall as left out, and write a block that
 the controller's keys accept (its max_correction given). Without the crouched summary the crouch terms
-stay 0. The crouch is measured from the standing height the summaries record (0.78 here; the default
+stay 0. The report's per-regime line shows v_x's crouched backward walks missed by the gains alone and
+carried to the noise by the chosen G+C. The crouch is measured from the standing height the summaries record (0.78 here; the default
 for summaries without it is 0.7645, which would shift v_x's backward gain by 0.08), and summaries of
 two standing heights are refused.
 Usage: test_fit_command_response.py
@@ -135,6 +136,23 @@ def main():
             failures.append(f"{axis}: the chosen terms are not the hidden {terms}")
     if not re.search(r"# vx: .*-> G$", out_upright, re.M):
         failures.append("v_x's terms from the upright sweeps are not the gains alone")
+    # The per-regime split shows where the crouch term acts: v_x's crouched backward walks, which the gains
+    # alone (G) miss most (by the hidden overshoot) and the chosen G+C carries to the noise, as every regime.
+    m = re.search(r"# vx per regime, cross-validated RMSE identity/G/chosen G\+C \(commands\): (.*)$", out, re.M)
+    if not m:
+        failures.append("no per-regime line for v_x")
+    else:
+        cells = dict((c.group(1), (float(c.group(2)), float(c.group(3)), float(c.group(4)), int(c.group(5))))
+                     for c in re.finditer(r"(upright [+-]|crouched [+-]) ([\d.]+)/([\d.]+)/([\d.]+) \((\d+)\)", m.group(1)))
+        walking = sum(n for *_, n in cells.values())
+        if len(cells) != 4 or not 150 <= walking <= 180:
+            failures.append(f"v_x regimes {sorted(cells)} over {walking} commands (180 drawn, some below the walking floor)")
+        else:
+            _, g_cb, chosen_cb, _ = cells["crouched -"]
+            if not (g_cb > 2.0 * chosen_cb and g_cb == max(c[1] for c in cells.values())):
+                failures.append(f"v_x crouched backward: G {g_cb} against G+C {chosen_cb}; the crouch term's regime is not shown")
+            if max(c[2] for c in cells.values()) > 0.02:
+                failures.append(f"v_x regimes {cells}: the chosen G+C is beyond the noise in one of them")
     if "upset left out" not in out or "1 upsets" not in out:
         failures.append("the upset is not reported as left out")
     if "2 with a fall" not in out:
