@@ -146,7 +146,7 @@ def main():
                      for c in re.finditer(r"(upright [+-]|crouched [+-]) ([\d.]+)/([\d.]+)/([\d.]+) \((\d+)\)", m.group(1)))
         walking = sum(n for *_, n in cells.values())
         if len(cells) != 4 or not 150 <= walking <= 180:
-            failures.append(f"v_x regimes {sorted(cells)} over {walking} commands (180 drawn; one with |v_x| under 0.05 m/s is in no regime)")
+            failures.append(f"v_x regimes {sorted(cells)} over {walking} commands (180 drawn; a command with |v_x| under 0.05 m/s is in no regime)")
         else:
             _, g_cb, chosen_cb, _ = cells["crouched -"]
             if not (g_cb > 2.0 * chosen_cb and g_cb == max(c[1] for c in cells.values())):
