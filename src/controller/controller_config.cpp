@@ -267,7 +267,8 @@ struct PostureFeedbackYaml {
     a->Visit("max_height_correction_m", &f.max_height_correction_m, "largest height correction, 0..0.1 m");
     a->Visit("height_settle_s", &f.height_settle_s, "the height integrates once its command is steady this long, 0..5 s");
     a->Visit("walking_height_ki", &f.walking_height_ki, "integral gain on the pelvis height while walking, 0..5 [1/s] (0: decays while walking)");
-    a->Visit("walking_max_height_correction_m", &f.walking_max_height_correction_m, "largest height correction while walking, 0..0.1 m (never below commands.walking_min_height)");
+    a->Visit("walking_max_height_correction_m", &f.walking_max_height_correction_m, "largest height correction while walking, 0..0.1 m (never below commands.walking_min_height less walking_below_floor_m)");
+    a->Visit("walking_below_floor_m", &f.walking_below_floor_m, "how far below commands.walking_min_height the walking height correction may take the command, 0..0.05 m (0: not below)");
   }
 };
 

@@ -533,6 +533,8 @@ std::string PostureFeedbackConfig::validate() const {
     return "walking_height_ki: expected 0..5 [1/s]";
   if (!(walking_max_height_correction_m >= 0.0 && walking_max_height_correction_m <= 0.1))
     return "walking_max_height_correction_m: expected 0..0.1 m";
+  if (!(walking_below_floor_m >= 0.0 && walking_below_floor_m <= 0.05))
+    return "walking_below_floor_m: expected 0..0.05 m";
   return {};
 }
 
@@ -742,11 +744,13 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       if (walking_h && have_h_ && h_ok && steady && h_walking_s_ >= config_.walking_settle_s && u.height > 0.0)
         cw += config_.walking_height_ki * (u.height - h_hat_) * dt;
       cw = std::clamp(cw, -config_.walking_max_height_correction_m, config_.walking_max_height_correction_m);
-      // The walking correction never lowers the command below the walking floor (a command already
-      // below it, as the floor's hold ends, is passed on, not lowered further).
+      // The walking correction never lowers the command more than walking_below_floor_m (0: not at
+      // all) below the walking floor (a command already below it, as the floor's hold ends, is the
+      // reference for that margin, not lowered further). The margin holds while the correction
+      // decays too, so the stop lifts the command back at the decay's pace, not in one tick.
       double lower = height_range_[0];
       if (walking_min_height_ > 0.0 && (walking_h || cw != 0.0))
-        lower = std::max(lower, std::min(u.height, walking_min_height_));
+        lower = std::max(lower, std::min(u.height, walking_min_height_) - config_.walking_below_floor_m);
       const double want = u.height + c + cw;
       const double got = std::clamp(want, lower, upper);
       const bool bound = u.height > 0.0 && got != want;

@@ -1858,6 +1858,89 @@ TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtT
   }
 }
 
+TEST(PostureFeedback, WalkingHeightBelowTheFloorBringsAHighWalkerDownToTheFloorAndNoFurther) {
+  HeightFixture hf;
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.height_ki = 1.0;
+  c.max_height_correction_m = 0.005;
+  c.walking_height_ki = 3.0;
+  c.walking_max_height_correction_m = 0.06;
+  c.walking_settle_s = 1.0;
+  gco::LegKinematics kin(hf.legs);
+  Eigen::Isometry3d X_BS;
+  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
+  const double standing = -X_BS.translation().z() - 0.01;
+  const double floor = standing - 0.10;  // the shaper's walking floor
+  const std::array<double, 2> height_range{standing - 0.17, 0.85};
+  // A robot that walks 4 cm above the height it is told (finetune_n24b/F0a: told 0.66 m, 0.679-0.715)
+  // with a 2 cm bob at 2 Hz (the gait), and stands where it is told.
+  struct Walker {
+    PostureFeedback fb;
+    double a = 0.0, t = 0.0, max_step = 0.0, lowest = 1.0;
+  };
+  auto make = [&](double below) {
+    PostureFeedbackConfig cfg = c;
+    cfg.walking_below_floor_m = below;
+    return Walker{PostureFeedback(cfg, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, height_range, standing, hf.legs,
+                                  hf.idx, floor)};
+  };
+  auto run = [&](Walker& w, double u_h, const VelocityCommand& v, int ticks) {
+    for (int k = 0; k < ticks; ++k) {
+      const double before = w.fb.command().height;
+      const PostureCommand& out = w.fb.update({0.0, 0.0, u_h}, v, crouchState(w.a), 0.01);
+      if (k > 0) w.max_step = std::max(w.max_step, std::fabs(out.height - before));
+      w.lowest = std::min(w.lowest, out.height);
+      const bool walking = v.vx != 0.0 || v.vy != 0.0 || v.wz != 0.0;
+      const double h = walking ? out.height + 0.04 + 0.01 * std::sin(2.0 * M_PI * 2.0 * w.t) : out.height;
+      w.a += 0.01 / 0.3 * (crouchAngleFor(w.fb, h) - w.a);
+      w.t += 0.01;
+    }
+  };
+  const VelocityCommand walk{-0.4, 0.0, 0.0};
+  // Told to walk at the floor: without the margin the command stops at the floor and the pelvis 4 cm above it.
+  Walker at_floor = make(0.0);
+  run(at_floor, floor, {}, 300);
+  run(at_floor, floor, walk, 3000);
+  EXPECT_NEAR(at_floor.fb.command().height, floor, 1e-9);
+  EXPECT_NEAR(at_floor.fb.measuredHeight(), floor + 0.04, 0.006);
+  // A margin of 3 cm: the command goes 3 cm below the floor, the pelvis comes to 1 cm above it.
+  Walker part = make(0.03);
+  run(part, floor, {}, 300);
+  run(part, floor, walk, 3000);
+  EXPECT_NEAR(part.fb.command().height, floor - 0.03, 1e-9);
+  EXPECT_NEAR(part.fb.measuredHeight(), floor + 0.01, 0.006);
+  // A margin of 5 cm, more than this walker needs: the pelvis comes to the floor, and the command
+  // settles where that takes (4 cm below), not at the bound: the integrator's target is the floor.
+  Walker full = make(0.05);
+  run(full, floor, {}, 300);
+  run(full, floor, walk, 3000);
+  EXPECT_NEAR(full.fb.measuredHeight(), floor, 0.006);
+  EXPECT_NEAR(full.fb.command().height, floor - 0.04, 0.006);
+  EXPECT_GT(full.lowest, floor - 0.05 - 1e-9) << "never beyond the margin";
+  // Walking above the floor with that margin: the command goes no lower than the walker needs.
+  run(full, floor + 0.03, walk, 3000);
+  EXPECT_NEAR(full.fb.measuredHeight(), floor + 0.03, 0.006);
+  // Back at the floor, then the stop: the correction decays at decay_time_s, the command back up to
+  // the floor without a step.
+  run(full, floor, walk, 3000);
+  full.max_step = 0.0;
+  run(full, floor, {}, 10);
+  EXPECT_LT(full.fb.command().height, floor - 0.03) << "no jump back to the floor at the stop";
+  run(full, floor, {}, 400);
+  EXPECT_NEAR(full.fb.command().height, floor, 0.002);
+  EXPECT_LT(full.max_step, 0.01 * 0.06 / c.decay_time_s + 1e-6) << "no step in the height command at the stop";
+  // Per tick walking below the floor: no allocation.
+  std::size_t n = 0;
+  const LowState crouched = crouchState(0.3);
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 200; ++k) full.fb.update({0.0, 0.0, floor}, walk, crouched, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+}
+
 // Config errors (unknown keys, ranges naming the field): test/bad_input/test_bad_input.cpp ctrl_velocity_feedback_*.
 
 

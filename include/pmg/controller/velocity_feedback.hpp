@@ -578,12 +578,24 @@ struct PostureFeedbackConfig {
   /// walked for walking_settle_s; it decays (decay_time_s) when the robot is told to stand, tilts
   /// beyond max_tilt_rad or is upset (the upset guard's upright hold).
   /// The walking command is never lowered below the walking floor (the shaper's
-  /// commands.walking_min_height, passed to the constructor): u_fb,h ≥ min(u_h, floor). Why: actors
+  /// commands.walking_min_height, passed to the constructor): u_fb,h ≥ min(u_h, floor), less
+  /// walking_below_floor_m (below). Why: actors
   /// trained from scratch walk crouched 0.02-0.05 m above the command (N24b: −0.5 m/s at 0.70 m
   /// walked at 0.729), outside issue 12's 0.015 m, and the floor exists because walks at 0.62 m fell.
   double walking_height_ki = 0.0;
   /// Largest walking height correction c_hw [m], [0, 0.1].
   double walking_max_height_correction_m = 0.03;
+  /// How far below the walking floor the walking height correction may take the command [m],
+  /// [0, 0.05]; 0 (the default): never below it, as above. The floor exists because walks crouched
+  /// to 0.62 m fell: it is meant for the pelvis, not for the number sent to the actor. An actor that
+  /// walks 2-5 cm above its command (finetune_n24b/F0a: told 0.66 m, 0.679-0.715) cannot be brought
+  /// to the floor while the command may not pass it. With this margin the bound becomes
+  /// u_fb,h ≥ min(u_h, floor) − walking_below_floor_m, while walking and while the walking correction
+  /// decays after it (so the stop returns the command to the floor at decay_time_s, never by a jump).
+  /// The integrator's target stays the command itself, u_h ≥ floor: the correction goes below the
+  /// floor only as long as the measured pelvis ĥ is above the command, so the pelvis is still held at
+  /// the floor (docs/controller.md "Walking height correction").
+  double walking_below_floor_m = 0.0;
   std::string validate() const;
 };
 
