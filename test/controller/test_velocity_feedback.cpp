@@ -1666,7 +1666,27 @@ LowState crouchState(double a) {
 struct HeightFixture {
   std::shared_ptr<const gco::LegModel> legs = gco::LegModel::fromRobotConfig(test::g1Robot());
   gco::LegJointIndex idx = legs->jointIndices(robotJointNames());
+  /// The pelvis height over the sole with straight legs, less 1 cm: a standing height the legs can reach [m].
+  double standingHeight() const {
+    gco::LegKinematics kin(legs);
+    Eigen::Isometry3d X_BS;
+    EXPECT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
+    return -X_BS.translation().z() - 0.01;
+  }
 };
+
+/// The walking height tests' config: standing height feedback bounded to 5 mm, the walking one at @p ki with
+/// @p max_correction [m], walking_settle_s 1 s.
+PostureFeedbackConfig walkingHeightConfig(double ki, double max_correction) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.height_ki = 1.0;
+  c.max_height_correction_m = 0.005;
+  c.walking_height_ki = ki;
+  c.walking_max_height_correction_m = max_correction;
+  c.walking_settle_s = 1.0;
+  return c;
+}
 
 // The crouchState angle that puts the pelvis at height @p h [m] (bisection on fb's own measure).
 double crouchAngleFor(PostureFeedback& fb, double h) {
@@ -1772,17 +1792,8 @@ TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyon
 
 TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtTheStop) {
   HeightFixture hf;
-  PostureFeedbackConfig c;
-  c.enabled = true;
-  c.height_ki = 1.0;
-  c.max_height_correction_m = 0.005;
-  c.walking_height_ki = 1.0;
-  c.walking_max_height_correction_m = 0.04;
-  c.walking_settle_s = 1.0;
-  gco::LegKinematics kin(hf.legs);
-  Eigen::Isometry3d X_BS;
-  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
-  const double standing = -X_BS.translation().z() - 0.01;
+  const PostureFeedbackConfig c = walkingHeightConfig(1.0, 0.04);
+  const double standing = hf.standingHeight();
   const double floor = standing - 0.12;  // the shaper's walking floor
   PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {standing - 0.16, 0.85}, standing, hf.legs, hf.idx,
                      floor);
@@ -1860,17 +1871,8 @@ TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtT
 
 TEST(PostureFeedback, WalkingHeightBelowTheFloorBringsAHighWalkerDownToTheFloorAndNoFurther) {
   HeightFixture hf;
-  PostureFeedbackConfig c;
-  c.enabled = true;
-  c.height_ki = 1.0;
-  c.max_height_correction_m = 0.005;
-  c.walking_height_ki = 3.0;
-  c.walking_max_height_correction_m = 0.06;
-  c.walking_settle_s = 1.0;
-  gco::LegKinematics kin(hf.legs);
-  Eigen::Isometry3d X_BS;
-  ASSERT_TRUE(kin.forward(Foot::kLeft, gco::LegVector::Zero(), &X_BS));
-  const double standing = -X_BS.translation().z() - 0.01;
+  const PostureFeedbackConfig c = walkingHeightConfig(3.0, 0.06);
+  const double standing = hf.standingHeight();
   const double floor = standing - 0.10;  // the shaper's walking floor
   const std::array<double, 2> height_range{standing - 0.17, 0.85};
   // A robot that walks 4 cm above the height it is told (finetune_n24b/F0a: told 0.66 m, 0.679-0.715)
