@@ -21,13 +21,10 @@ import fit_command_response as fcr  # noqa: E402
 
 
 def groups(U, i):
+    """fit_command_response's four regimes of axis @p i, plus the commands still on it, upright and crouched."""
     crouched = U[:, 3] > 0.0
-    out = []
-    for pm in (~crouched, crouched):
-        for sm in (U[:, i] >= fcr.MIN_WALK[i], U[:, i] <= -fcr.MIN_WALK[i], np.abs(U[:, i]) < fcr.MIN_WALK[i]):
-            if (pm & sm).any():
-                out.append(pm & sm)
-    return out
+    still = np.abs(U[:, i]) < fcr.MIN_WALK[i]
+    return [m for m in [m for _, m in fcr.regimes(U, i)] + [still & ~crouched, still & crouched] if m.any()]
 
 
 def balanced_mse(p, y, masks, within=None):
