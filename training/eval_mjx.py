@@ -9,7 +9,7 @@ The environment is the run's own: EnvConfig is built from the train_config.json 
 --train-config), so its clips, gains, actuator models, command slew and reward widths are the ones it
 was trained with, and only the randomisation is switched off (--clips overrides the clip folder). Every
 tick the schedule's command (ramped as the schedule says) is the environment's command u and its drawn
-goal ("command", "command_goal"), so neither the environment's own draws nor its slew change it.
+goal ("command", "command_goal"), so neither the environment's own draws nor its slew (nor its command envelopes: off here) change it.
 
 --randomized N rolls N robots out at once in the training distribution instead: the run's domain
 randomisation (friction, masses and torso payload, armature, frictionloss, joint damping; EnvConfig's
@@ -255,7 +255,8 @@ def main(argv=None):
     mean, std, layers, action_scale, _, mode = load_actor(args.actor)
     nominal = dict(mode=mode, arm_perturb=0.0, p_teleop=0.0, p_payload=0.0, p_hand_force=0.0,
                    p_reset_reference=1.0 if args.start_reference else 0.0, command_resample=10 ** 9,
-                   episode_length=10 ** 9)
+                   episode_length=10 ** 9,
+                   command_envelopes=False)  # the schedule's command is the actor's, unshaped (module docstring)
     if args.randomized:
         nominal.update(push_vel=(0.0, 0.0))
     else:

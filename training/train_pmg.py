@@ -166,6 +166,39 @@ def action_scale_from(path):
     return np.asarray(scale, np.float32)
 
 
+# `commands:` key of a controller config -> EnvConfig field (--command-envelopes).
+ENVELOPE_KEYS = {"max_velocity": "envelope_max_velocity", "max_acceleration": "command_max_accel",
+                 "posture_rate": "command_posture_rate", "height_rate": "command_height_rate",
+                 "crouched_height": "crouched_height", "crouched_max_velocity": "crouched_max_velocity",
+                 "bent_pitch": "bent_pitch", "bent_max_velocity": "bent_max_velocity",
+                 "walking_min_height": "walking_min_height", "walking_min_height_hold_s": "walking_min_height_hold_s"}
+
+
+def command_envelopes_from(path):
+    """EnvConfig fields (command_envelopes on) from a controller config's `commands:` block. Every key of
+    ENVELOPE_KEYS must be there, finite and > 0 (the envelopes and the floor on; the controller's own
+    validation checks the rest); SystemExit naming the file and the key otherwise."""
+    import yaml
+    try:
+        with open(path) as f:
+            block = (yaml.safe_load(f) or {}).get("commands")
+    except (OSError, yaml.YAMLError) as e:
+        raise SystemExit(f"--command-envelopes {path}: cannot read: {e}")
+    if not isinstance(block, dict):
+        raise SystemExit(f"--command-envelopes {path}: no `commands:` block")
+    out = {"command_envelopes": True}
+    for key, field in ENVELOPE_KEYS.items():
+        v = block.get(key)
+        vals = v if isinstance(v, list) else [v]
+        n = 3 if field.endswith(("velocity", "accel")) else 1
+        if len(vals) != n or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                                     and x > 0 for x in vals):
+            raise SystemExit(f"--command-envelopes {path}: commands.{key} is {v!r}; expected "
+                             f"{'3 finite values' if n == 3 else 'a finite value'} > 0 (the envelopes on)")
+        out[field] = tuple(float(x) for x in vals) if n == 3 else float(vals[0])
+    return out
+
+
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(prog="pmg-train", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter, allow_abbrev=False)
@@ -319,6 +352,11 @@ def parse_args(argv=None):
                     help="shape the drawn commands as the controller does (EnvConfig.command_slew: slew limits "
                          "1.0 / 1.0 m/s^2, 2.0 rad/s^2, posture 0.5 rad/s, height 0.2 m/s, config/controller/g1_sil_policy.yaml "
                          "`commands:`); default off: a drawn command applies at once")
+    ap.add_argument("--command-envelopes", default=None, metavar="CONTROLLER_YAML",
+                    help="with --command-slew: the controller's crouched and bent velocity envelopes and walking "
+                         "height floor on the shaped command, with that config's `commands:` values "
+                         "(EnvConfig.command_envelopes; e.g. config/controller/g1_sil_policy.yaml); default off: "
+                         "crouched and bent walks the product path never commands are trained too")
     ap.add_argument("--actuators", default="",
                     help="calibrated robot config (pmg_calib_joints --out): the env applies its identified `actuator:` "
                          "blocks per joint (EnvConfig.actuators; zero offsets are not applied)")
@@ -388,6 +426,8 @@ def parse_args(argv=None):
         ap.error(f"--tracking-sigma = {args.tracking_sigma}: expected > 0")
     if args.yaw_rate_weight is not None and not args.yaw_rate_weight >= 0:
         ap.error(f"--yaw-rate-weight = {args.yaw_rate_weight}: expected >= 0")
+    if args.command_envelopes and not args.command_slew:
+        ap.error("--command-envelopes: needs --command-slew (the envelopes act on the shaped command)")
     if args.p_stop is not None and not 0.0 <= args.p_stop <= 1.0:
         ap.error(f"--p-stop = {args.p_stop}: expected in [0, 1]")
     if args.p_reset_reference is not None and not 0.0 <= args.p_reset_reference <= 1.0:
@@ -581,6 +621,9 @@ def main(argv=None):
     if args.command_slew:
         cfg = dataclasses.replace(cfg, command_slew=True)
         log("command slew:", cfg.command_max_accel, cfg.command_posture_rate, cfg.command_height_rate)
+    if args.command_envelopes:
+        cfg = dataclasses.replace(cfg, **command_envelopes_from(args.command_envelopes))
+        log("command envelopes:", {k: getattr(cfg, k) for k in ENVELOPE_KEYS.values()})
     cfg = dataclasses.replace(cfg, clips=args.clips)
     action_scale = action_scale_from(args.action_scale_from) if args.action_scale_from else None
     env = G1PmgEnv(cfg, clip_files, action_scale=action_scale)

@@ -271,6 +271,26 @@ class EnvConfig:
     command_max_accel: tuple = (1.0, 1.0, 2.0)
     command_posture_rate: float = 0.5
     command_height_rate: float = 0.2
+    # The controller's velocity envelopes and walking height floor on the shaped command (with
+    # command_slew; shape_with_envelopes, a port of CommandShaper::update in src/controller/commands.cpp,
+    # proven equal to it by training/tests/test_command_envelopes.py): the crouched envelope (at and
+    # below crouched_height [m] sum_i |u_i| / m_i <= 1, blended from the standing height), the bent
+    # envelope (at bent_pitch [rad] |u_i| <= b_i, blended from upright), and the walking height floor
+    # (walking and for walking_min_height_hold_s [s] after, the height goal is at least
+    # walking_min_height [m]), each on the shaped posture, with the squat clip's neutral as the standing
+    # height, as the controller sets it. Goals beyond envelope_max_velocity (the training ranges reach
+    # past the controller's box for the velocity feedback's headroom) are scaled as the box-clamped goal
+    # is. Off (the default, as every policy so far was trained): the actor is trained on crouched and
+    # bent commands the product path never gives it (walking at 0.59 m, 1.2 m/s crouched). The values
+    # are config/controller/g1_sil_policy.yaml's `commands:` (train_pmg.py --command-envelopes reads them).
+    command_envelopes: bool = False
+    envelope_max_velocity: tuple = (1.0, 0.4, 0.8)
+    crouched_height: float = 0.62
+    crouched_max_velocity: tuple = (0.3, 0.3, 0.6)
+    bent_pitch: float = 0.4
+    bent_max_velocity: tuple = (0.8, 0.4, 0.8)
+    walking_min_height: float = 0.66
+    walking_min_height_hold_s: float = 1.5
     # Command ranges (heading frame), uniform: the issue-12 envelope.
     vx: tuple = (-0.5, 1.0)
     vy: tuple = (-0.4, 0.4)
@@ -506,6 +526,44 @@ def _scale_vector():
     return np.asarray(out, np.float32)
 
 
+def shape_with_envelopes(xp, command, goal, since_walk, lim):
+    """One tick of the controller's command shaper (CommandShaper::update, src/controller/commands.cpp)
+    without its clamping, staleness and upset hold: the walking height floor, the crouched and bent
+    velocity envelopes on the shaped posture, then the slews.
+
+    command (6,): the shaped command of the last tick (v_x, v_y [m/s], w [rad/s], pitch, roll [rad],
+    height [m]; heading frame); goal (6,): the drawn command; since_walk: seconds since the robot was
+    last told to walk (goal or shaped velocity not zero; large at the start), counted in ticks of dt
+    (the hold ends after round(walking_min_height_hold_s / dt) ticks); lim: dict with dt [s],
+    standing_height, crouched_height, bent_pitch, walking_min_height [m or rad, 0 = off],
+    walking_min_height_hold_s [s], and (3,) arrays max_velocity, crouched_max_velocity,
+    bent_max_velocity, max_acceleration, and posture_rate [rad/s], height_rate [m/s].
+    Returns (shaped command (6,), since_walk). xp: numpy or jax.numpy."""
+    dt = lim["dt"]
+    walking = xp.logical_or(xp.any(goal[:3] != 0.0), xp.any(command[:3] != 0.0))
+    since_walk = xp.where(walking, 0.0, since_walk + dt)
+    floor = lim["walking_min_height"]
+    hold = round(lim["walking_min_height_hold_s"] / dt) * dt + 0.5 * dt  # in ticks: no rounding at the edge
+    raise_h = xp.logical_and(floor > 0.0, xp.logical_and(since_walk < hold, goal[5] < floor))
+    h_goal = xp.where(raise_h, floor, goal[5])
+    M = xp.asarray(lim["max_velocity"])
+    t = xp.abs(xp.clip(goal[:3], -M, M))
+    sh, ch = lim["standing_height"], lim["crouched_height"]
+    f_c = xp.clip((sh - command[5]) / (sh - ch), 0.0, 1.0) if ch > 0 else 0.0 * command[5]
+    m_c = M + f_c * (xp.asarray(lim["crouched_max_velocity"]) - M)
+    crouch = xp.where(f_c > 0.0, (1.0 - f_c) * xp.max(t / M) + f_c * xp.sum(t / m_c), 0.0)
+    bp = lim["bent_pitch"]
+    f_b = xp.clip(command[3] / bp, 0.0, 1.0) if bp > 0 else 0.0 * command[3]
+    m_b = M + f_b * (xp.asarray(lim["bent_max_velocity"]) - M)
+    bent = xp.where(f_b > 0.0, xp.max(t / m_b), 0.0)
+    scale = xp.maximum(crouch, bent)
+    v_goal = xp.where(scale > 1.0, goal[:3] / xp.where(scale > 1.0, scale, 1.0), goal[:3])
+    target = xp.concatenate([v_goal, goal[3:5], xp.reshape(h_goal, (1,))])
+    rate = xp.concatenate([xp.asarray(lim["max_acceleration"]), xp.asarray([lim["posture_rate"], lim["posture_rate"],
+                                                                             lim["height_rate"]])]) * dt
+    return command + xp.clip(target - command, -rate, rate), since_walk
+
+
 class G1PmgEnv(Env):
     def __init__(self, cfg: EnvConfig, clip_files=None, action_scale=None):
         """@p clip_files: a clip folder or a list of clip files (consistency_map.yaml among them or
@@ -551,6 +609,17 @@ class G1PmgEnv(Env):
             self.pmg = pg.load_library(list(clip_files), self.js, blending=cfg.blending,
                                        upright_walking=cfg.upright_walking)
         self.clip_files = list(self.pmg.clip_files)  # the clips (not the consistency map)
+        if cfg.command_envelopes:
+            if not cfg.command_slew:
+                raise ValueError("EnvConfig.command_envelopes: needs command_slew (the envelopes act on the shaped command)")
+            squat = self.pmg.static[2]
+            self.envelope_limits = dict(
+                dt=cfg.control_dt, standing_height=float(squat.neutral if squat is not None else self.js.standing_base_height),
+                max_velocity=tuple(cfg.envelope_max_velocity), crouched_height=cfg.crouched_height,
+                crouched_max_velocity=tuple(cfg.crouched_max_velocity), bent_pitch=cfg.bent_pitch,
+                bent_max_velocity=tuple(cfg.bent_max_velocity), walking_min_height=cfg.walking_min_height,
+                walking_min_height_hold_s=cfg.walking_min_height_hold_s, max_acceleration=tuple(cfg.command_max_accel),
+                posture_rate=cfg.command_posture_rate, height_rate=cfg.command_height_rate)
         self.consistency_map_file = self.pmg.map_file
         import yaml
         with open(cfg.robot_yaml) as f:
@@ -959,6 +1028,11 @@ class G1PmgEnv(Env):
             "hf": jnp.zeros((2, 3)),
         }
         info["command_goal"] = info["command"]  # the drawn command (command_slew: what "command" moves to)
+        info["since_walk"] = jnp.float32(1e3)  # [s] since last told to walk (command_envelopes)
+        if c.command_envelopes:  # the first command inside the envelopes and above the floor at once (no slew)
+            at_once = dict(self.envelope_limits, max_acceleration=(1e9,) * 3, posture_rate=1e9, height_rate=1e9)
+            first, _ = shape_with_envelopes(jnp, info["command"], info["command_goal"], jnp.float32(0.0), at_once)
+            info["command"], _ = shape_with_envelopes(jnp, first, info["command_goal"], jnp.float32(0.0), at_once)
         if c.p_hand_force > 0:
             info["hf_tgt"] = self._hand_forces(k[15], info["tp_on"])
         if self.act_idx.size:
@@ -1096,7 +1170,11 @@ class G1PmgEnv(Env):
             stopped = jnp.where(keep, stopped.at[3:].set(info["command_goal"][3:]), stopped)
             goal = jnp.where(stop, stopped, goal)
         info["command_goal"] = jnp.where(resample, goal, info["command_goal"])
-        info["command"] = self._shape_command(info["command"], info["command_goal"])
+        if c.command_envelopes:
+            info["command"], info["since_walk"] = shape_with_envelopes(jnp, info["command"], info["command_goal"],
+                                                                       info["since_walk"], self.envelope_limits)
+        else:
+            info["command"] = self._shape_command(info["command"], info["command_goal"])
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         if c.p_hand_force > 0:
             info["hf_tgt"] = jnp.where(resample, self._hand_forces(jax.random.fold_in(k_seg, 1), info["tp_on"]),

@@ -55,6 +55,10 @@ option on (make_smoke_env), compiled once; the default configuration is the PPO 
 1d. Command slew (EnvConfig.command_slew, in 1c's env): every step the command the generator, the
    observation and the rewards get moves towards the drawn goal by exactly the slew-limited step
    (max_accel [m/s^2, rad/s^2] and posture/height rates x dt), and the goals are redrawn per segment.
+   With the controller's envelopes on (EnvConfig.command_envelopes; every walking goal crouched to
+   0.59-0.62 m): the step is exactly shape_with_envelopes' (the port test_command_envelopes.py proves
+   equal to the controller's shaper), and the walking height floor or an envelope moved the command
+   away from the plain slew on some step.
 1e. Stops (EnvConfig.p_stop = 1, p_stop_keep_posture = 1, in 1c's env): every goal drawn after a
    walking goal has zero velocity and keeps the walking goal's posture (pitch, roll, height).
 1f. Residual actions (EnvConfig.action_offset = "reference", its own env, one physics substep from a
@@ -427,7 +431,9 @@ def env_checks(check, env, n_envs, n_steps):
 # 1c-1e: hand forces on both teleoperated arms, 25-step segments, command slew, stops (pushes as in
 # training: the first comes after push_interval, 4 s at least, beyond these episodes).
 HAND_FORCE_CFG = dict(p_hand_force=1.0, p_teleop=1.0, p_teleop_arm=1.0, command_resample=25, command_slew=True,
-                      p_stop=1.0, p_stop_keep_posture=1.0)
+                      p_stop=1.0, p_stop_keep_posture=1.0,
+                      # 1d's envelopes: every walking goal crouched below the walking height floor
+                      command_envelopes=True, height=(0.59, 0.62), p_posture_walk=1.0, p_posture_axis=1.0)
 CAL_KNEE = {"kp_scale": 0.8, "delay_s": 0.004, "fc_Nm": 1.0, "offset_rad": 0.02}
 CAL_KNEE_UNCERTAINTY = {"kp_scale": 0.02, "delay_s": 0.0004, "fc_Nm": 0.001}  # pmg_calib_joints-style
 CAL_HIP_FILE = {"kt_scale": 0.9, "torque_limit_Nm": 60.0, "fv_Nms_per_rad": 0.3, "armature_kgm2": 0.02,
@@ -670,6 +676,8 @@ def hand_force_checks(check, env, reset, step, n_steps=50):
     # per-axis rate x dt, exactly cmd + clip(goal - cmd, +-rate dt).
     rate = np.array([*c.command_max_accel, c.command_posture_rate, c.command_posture_rate, c.command_height_rate]) * c.control_dt
     cmd_err, cmd_moved, goals = 0.0, 0.0, set()
+    from pmg_train.g1_env import shape_with_envelopes
+    since, enveloped = float(st.info["since_walk"]), 0  # the port's own clock; steps the envelopes changed
     stops, stop_ok = 0, True  # Stops (docstring 1e): resamples after a walking goal, and whether each stood
     for _ in range(n_steps):
         tgt = np.asarray(st.info["hf_tgt"], np.float64)
@@ -677,7 +685,9 @@ def hand_force_checks(check, env, reset, step, n_steps=50):
         goal_before = np.asarray(st.info["command_goal"], np.float64)
         st, st0 = step(st, jnp.zeros(env.action_size)), step(unforced(st0), jnp.zeros(env.action_size))
         goal, cmd = np.asarray(st.info["command_goal"], np.float64), np.asarray(st.info["command"], np.float64)
-        cmd_err = max(cmd_err, float(np.abs(cmd - (cmd_before + np.clip(goal - cmd_before, -rate, rate))).max()))
+        shaped, since = shape_with_envelopes(np, cmd_before, goal, since, env.envelope_limits)
+        cmd_err = max(cmd_err, float(np.abs(cmd - shaped).max()))
+        enveloped += bool(np.abs(cmd - (cmd_before + np.clip(goal - cmd_before, -rate, rate))).max() > 1e-4)
         cmd_moved = max(cmd_moved, float(np.abs(cmd - cmd_before).max()))
         goals.add(tuple(np.round(goal, 4)))
         if int(st.info["step"]) % c.command_resample == 0 and np.any(goal_before[:3] != 0.0):
@@ -695,9 +705,10 @@ def hand_force_checks(check, env, reset, step, n_steps=50):
         largest = max(largest, float(np.abs(hf).max()))
         prev = hf
     q, q0 = np.asarray(st.pipeline_state.qpos), np.asarray(st0.pipeline_state.qpos)
-    check(cmd_err < 1e-5 and cmd_moved > 0.5 * rate.min() and len(goals) >= 2,
-          f"command slew: command = command + clip(goal - command, +-rate dt) every step (max |diff| {cmd_err:.1e}), "
-          f"largest step {cmd_moved:.4f} <= rate dt {np.round(rate, 4).tolist()}, {len(goals)} goals drawn")
+    check(cmd_err < 1e-5 and cmd_moved > 0.5 * rate.min() and len(goals) >= 2 and enveloped >= 1,
+          f"command slew with the controller's envelopes: command = shape_with_envelopes(command, goal) every step "
+          f"(max |diff| {cmd_err:.1e}), largest step {cmd_moved:.4f} <= rate dt {np.round(rate, 4).tolist()}, "
+          f"{len(goals)} goals drawn, the floor or an envelope changed {enveloped} of the steps")
     check(stops >= 1 and stop_ok,
           f"stops (p_stop = 1, p_stop_keep_posture = 1): {stops} resample(s) after a walking goal, each new goal's "
           f"velocity zero and its posture the walking goal's: {stop_ok}")

@@ -3,7 +3,8 @@
 --reward-weight NAME=W parses into a dict, a missing '=' or a non-finite W is refused, and so are
 a non-positive --tracking-sigma and a negative --yaw-rate-weight; --command-range AXIS=LO,HI parses
 into a dict, and an unknown axis, LO >= HI, a missing HI or a height below 0.3 m are refused;
---command-slew is off unless given; --joint-stop-timeconst parses and one below 2 physics steps (0.01 s) or
+--command-slew is off unless given; --command-envelopes needs it, and reads a controller config's `commands:`
+values, refusing a file with the block missing or a key missing, zero or not finite; --joint-stop-timeconst parses and one below 2 physics steps (0.01 s) or
 non-finite is refused; --p-stop, --stop-keeps-posture, --p-posture-walk and --p-reset-reference (unset by
 default) parse and a value outside
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
@@ -133,7 +134,8 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--action-noise-scale", "0"], "--action-noise-scale"),
                   (["--action-noise-scale", "-0.5"], "--action-noise-scale"),
                   (["--action-noise-scale", "inf"], "--action-noise-scale"),
-                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "0"], "--warmup-evals")):
+                  (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "0"], "--warmup-evals"),
+                  (["--command-envelopes", "config/controller/g1_sil_policy.yaml"], "--command-envelopes")):
     n_cases += 1
     err = io.StringIO()
     try:
@@ -143,6 +145,36 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
     except SystemExit as e:
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
+# --command-envelopes: the controller config's `commands:` values become EnvConfig fields; a file without the
+# block, or with a key missing, zero (an envelope off) or not finite, is refused naming the file and the key.
+import tempfile  # noqa: E402
+
+if train_pmg.parse_args(["--out", "/tmp/x", "--command-slew", "--command-envelopes", "c.yaml"]).command_envelopes != "c.yaml":
+    failures.append("--command-envelopes c.yaml not parsed")
+env_fields = train_pmg.command_envelopes_from("config/controller/g1_sil_policy.yaml")
+want = {"command_envelopes": True, "envelope_max_velocity": (1.0, 0.4, 0.8), "crouched_height": 0.62,
+        "crouched_max_velocity": (0.3, 0.3, 0.6), "walking_min_height": 0.66, "walking_min_height_hold_s": 1.5,
+        "bent_pitch": 0.4, "bent_max_velocity": (0.8, 0.4, 0.8), "command_height_rate": 0.2}
+if any(env_fields.get(k) != v for k, v in want.items()):
+    failures.append(f"--command-envelopes config/controller/g1_sil_policy.yaml read as {env_fields}")
+with open("config/controller/g1_sil_policy.yaml") as f:
+    shipped = f.read()
+with tempfile.TemporaryDirectory() as tmp:
+    for text, key in ((shipped.replace("walking_min_height: 0.66", "walking_min_height: 0.0"), "walking_min_height"),
+                      (shipped.replace("crouched_max_velocity: [0.3, 0.3, 0.6]", "crouched_max_velocity: [0.3, 0.3]"),
+                       "crouched_max_velocity"),
+                      (shipped.replace("bent_pitch: 0.4", "bent_pitch: .nan"), "bent_pitch"),
+                      (shipped.replace("\ncommands:", "\nkommands:"), "commands")):
+        n_cases += 1
+        path = os.path.join(tmp, "bad.yaml")
+        with open(path, "w") as f:
+            f.write(text)
+        try:
+            train_pmg.command_envelopes_from(path)
+            failures.append(f"--command-envelopes with a bad {key} accepted")
+        except SystemExit as e:
+            if path not in str(e) or key not in str(e):
+                failures.append(f"--command-envelopes with a bad {key}: message {e}")
 # --warmup-steps: off by default (no warm-up config); on, its config changes the three widths and nothing else.
 import dataclasses  # noqa: E402
 
