@@ -279,8 +279,8 @@ class EnvConfig:
     # (walking and for walking_min_height_hold_s [s] after, the height goal is at least
     # walking_min_height [m]), each on the shaped posture, with the squat clip's neutral as the standing
     # height, as the controller sets it. Goals beyond envelope_max_velocity (the training ranges reach
-    # past the controller's box for the velocity feedback's headroom) are scaled as the box-clamped goal
-    # is. Off (the default, as every policy so far was trained): the actor is trained on crouched and
+    # past the controller's box for the velocity feedback's headroom) keep that headroom upright, and a
+    # crouch or a bend brings them inside (envelope_scales). Off (the default, as every policy so far was trained): the actor is trained on crouched and
     # bent commands the product path never gives it (walking at 0.59 m, 1.2 m/s crouched). The values
     # are config/controller/g1_sil_policy.yaml's `commands:` (train_pmg.py --command-envelopes reads them).
     command_envelopes: bool = False
@@ -526,10 +526,34 @@ def _scale_vector():
     return np.asarray(out, np.float32)
 
 
+def envelope_scales(xp, v, pitch, height, lim):
+    """The crouched and bent velocity envelopes' scales of the velocity @p v (..., 3) [m/s, m/s, rad/s] at
+    the posture (@p pitch [rad], @p height [m], shape (...)): pmg::CommandShaper::envelopeScales
+    (src/controller/commands.cpp), v / s on the envelope's edge when s > 1, 0 where an envelope does not
+    act. The velocity is not clamped to the controller's box M = lim["max_velocity"] first: training's
+    headroom beyond it (box = max_i |v_i| / M_i > 1) passes upright (f = 0), and any crouch or bend brings
+    it inside (the scale is at least about box there: the controller's envelopes lie inside its box); inside
+    the box the scales are the controller's. Homogeneous: the scales of v / s are the scales of v over s.
+    lim: shape_with_envelopes'. Returns (crouch, bent), shape (...)."""
+    M = xp.asarray(lim["max_velocity"])
+    t = xp.abs(v)
+    box = xp.max(t / M, axis=-1)
+    sh, ch = lim["standing_height"], lim["crouched_height"]
+    f_c = xp.clip((sh - height) / (sh - ch), 0.0, 1.0) if ch > 0 else 0.0 * height
+    m_c = M + xp.expand_dims(f_c, -1) * (xp.asarray(lim["crouched_max_velocity"]) - M)
+    crouch = xp.where(f_c > 0.0, (1.0 - f_c) * box + f_c * xp.sum(t / m_c, axis=-1), 0.0)
+    bp = lim["bent_pitch"]
+    f_b = xp.clip(pitch / bp, 0.0, 1.0) if bp > 0 else 0.0 * pitch
+    m_b = M + xp.expand_dims(f_b, -1) * (xp.asarray(lim["bent_max_velocity"]) - M)
+    bent = xp.where(f_b > 0.0, xp.max(t / m_b, axis=-1), 0.0)
+    return crouch, bent
+
+
 def shape_with_envelopes(xp, command, goal, since_walk, lim):
     """One tick of the controller's command shaper (CommandShaper::update, src/controller/commands.cpp)
     without its clamping, staleness and upset hold: the walking height floor, the crouched and bent
-    velocity envelopes on the shaped posture, then the slews.
+    velocity envelopes (envelope_scales) on the shaped posture, then the slews. A goal beyond
+    max_velocity (training's headroom) is not clamped (envelope_scales).
 
     command (6,): the shaped command of the last tick (v_x, v_y [m/s], w [rad/s], pitch, roll [rad],
     height [m]; heading frame); goal (6,): the drawn command; since_walk: seconds since the robot was
@@ -546,16 +570,7 @@ def shape_with_envelopes(xp, command, goal, since_walk, lim):
     hold = round(lim["walking_min_height_hold_s"] / dt) * dt + 0.5 * dt  # in ticks: no rounding at the edge
     raise_h = xp.logical_and(floor > 0.0, xp.logical_and(since_walk < hold, goal[5] < floor))
     h_goal = xp.where(raise_h, floor, goal[5])
-    M = xp.asarray(lim["max_velocity"])
-    t = xp.abs(xp.clip(goal[:3], -M, M))
-    sh, ch = lim["standing_height"], lim["crouched_height"]
-    f_c = xp.clip((sh - command[5]) / (sh - ch), 0.0, 1.0) if ch > 0 else 0.0 * command[5]
-    m_c = M + f_c * (xp.asarray(lim["crouched_max_velocity"]) - M)
-    crouch = xp.where(f_c > 0.0, (1.0 - f_c) * xp.max(t / M) + f_c * xp.sum(t / m_c), 0.0)
-    bp = lim["bent_pitch"]
-    f_b = xp.clip(command[3] / bp, 0.0, 1.0) if bp > 0 else 0.0 * command[3]
-    m_b = M + f_b * (xp.asarray(lim["bent_max_velocity"]) - M)
-    bent = xp.where(f_b > 0.0, xp.max(t / m_b), 0.0)
+    crouch, bent = envelope_scales(xp, goal[:3], command[3], command[5], lim)
     scale = xp.maximum(crouch, bent)
     v_goal = xp.where(scale > 1.0, goal[:3] / xp.where(scale > 1.0, scale, 1.0), goal[:3])
     target = xp.concatenate([v_goal, goal[3:5], xp.reshape(h_goal, (1,))])
@@ -899,6 +914,35 @@ class G1PmgEnv(Env):
         posture = jnp.where(jnp.logical_and(commanded, axes), posture, neutral)
         return jnp.concatenate([v, posture])
 
+    def _next_command(self, goal, command, since_walk, k_cmd, resample):
+        """One control step of the user's command: at a resample a new goal is drawn (a stop after a
+        walking goal with probability p_stop), then the command is shaped towards it (command_slew, and
+        command_envelopes: shape_with_envelopes). Returns (goal, command, since_walk [s])."""
+        c = self.cfg
+        new = self._sample_command(k_cmd)
+        if c.p_stop > 0:
+            walked = jnp.any(goal[:3] != 0.0)
+            stop = jnp.logical_and(walked, jax.random.uniform(jax.random.fold_in(k_cmd, 7)) < c.p_stop)
+            keep = jax.random.uniform(jax.random.fold_in(k_cmd, 8)) < c.p_stop_keep_posture
+            stopped = new.at[:3].set(0.0)
+            stopped = jnp.where(keep, stopped.at[3:].set(goal[3:]), stopped)
+            new = jnp.where(stop, stopped, new)
+        goal = jnp.where(resample, new, goal)
+        if c.command_envelopes:
+            command, since_walk = shape_with_envelopes(jnp, command, goal, since_walk, self.envelope_limits)
+        else:
+            command = self._shape_command(command, goal)
+        return goal, command, since_walk
+
+    def _first_command(self, goal):
+        """The episode's first command for the drawn @p goal: the goal itself, or with command_envelopes
+        the goal inside the envelopes and above the walking height floor at once (no slew)."""
+        if not self.cfg.command_envelopes:
+            return goal
+        at_once = dict(self.envelope_limits, max_acceleration=(1e9,) * 3, posture_rate=1e9, height_rate=1e9)
+        first, _ = shape_with_envelopes(jnp, goal, goal, jnp.float32(0.0), at_once)
+        return shape_with_envelopes(jnp, first, goal, jnp.float32(0.0), at_once)[0]
+
     def _shape_command(self, command, goal):
         """The command after one control step towards the drawn goal (EnvConfig.command_slew: slew
         limits per axis, as the controller's command shaper; off: the goal itself)."""
@@ -1029,10 +1073,7 @@ class G1PmgEnv(Env):
         }
         info["command_goal"] = info["command"]  # the drawn command (command_slew: what "command" moves to)
         info["since_walk"] = jnp.float32(1e3)  # [s] since last told to walk (command_envelopes)
-        if c.command_envelopes:  # the first command inside the envelopes and above the floor at once (no slew)
-            at_once = dict(self.envelope_limits, max_acceleration=(1e9,) * 3, posture_rate=1e9, height_rate=1e9)
-            first, _ = shape_with_envelopes(jnp, info["command"], info["command_goal"], jnp.float32(0.0), at_once)
-            info["command"], _ = shape_with_envelopes(jnp, first, info["command_goal"], jnp.float32(0.0), at_once)
+        info["command"] = self._first_command(info["command_goal"])
         if c.p_hand_force > 0:
             info["hf_tgt"] = self._hand_forces(k[15], info["tp_on"])
         if self.act_idx.size:
@@ -1161,20 +1202,8 @@ class G1PmgEnv(Env):
         info["step"] = info["step"] + 1
         resample = (info["step"] % c.command_resample) == 0
         user_prev = info["command"]  # the user's command u when the actor chose this action
-        goal = self._sample_command(k_cmd)
-        if c.p_stop > 0:
-            walked = jnp.any(info["command_goal"][:3] != 0.0)
-            stop = jnp.logical_and(walked, jax.random.uniform(jax.random.fold_in(k_cmd, 7)) < c.p_stop)
-            keep = jax.random.uniform(jax.random.fold_in(k_cmd, 8)) < c.p_stop_keep_posture
-            stopped = goal.at[:3].set(0.0)
-            stopped = jnp.where(keep, stopped.at[3:].set(info["command_goal"][3:]), stopped)
-            goal = jnp.where(stop, stopped, goal)
-        info["command_goal"] = jnp.where(resample, goal, info["command_goal"])
-        if c.command_envelopes:
-            info["command"], info["since_walk"] = shape_with_envelopes(jnp, info["command"], info["command_goal"],
-                                                                       info["since_walk"], self.envelope_limits)
-        else:
-            info["command"] = self._shape_command(info["command"], info["command_goal"])
+        info["command_goal"], info["command"], info["since_walk"] = self._next_command(
+            info["command_goal"], info["command"], info["since_walk"], k_cmd, resample)
         info["tp_on"] = jnp.where(resample, self._teleop_flags(k_seg), info["tp_on"])
         if c.p_hand_force > 0:
             info["hf_tgt"] = jnp.where(resample, self._hand_forces(jax.random.fold_in(k_seg, 1), info["tp_on"]),
