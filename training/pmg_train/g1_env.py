@@ -280,9 +280,10 @@ class EnvConfig:
     # walking_min_height [m]), each on the shaped posture, with the squat clip's neutral as the standing
     # height, as the controller sets it. Goals beyond envelope_max_velocity (the training ranges reach
     # past the controller's box for the velocity feedback's headroom) keep that headroom upright, and a
-    # crouch or a bend brings them inside (envelope_scales). Off (the default, as every policy so far was trained): the actor is trained on crouched and
-    # bent commands the product path never gives it (walking at 0.59 m, 1.2 m/s crouched). The values
-    # are config/controller/g1_sil_policy.yaml's `commands:` (train_pmg.py --command-envelopes reads them).
+    # crouch or a bend brings them inside (envelope_scales). Off (the default, as every policy so far was
+    # trained): the actor is trained on crouched and bent commands the product path never gives it
+    # (walking at 0.59 m, 1.2 m/s crouched; training/command_gap.py counts them). The values are
+    # config/controller/g1_sil_policy.yaml's `commands:` (train_pmg.py --command-envelopes reads them).
     command_envelopes: bool = False
     envelope_max_velocity: tuple = (1.0, 0.4, 0.8)
     crouched_height: float = 0.62
