@@ -97,13 +97,10 @@ def main(argv=None):
     if args.clips:
         trained["clips"] = args.clips
     cfg = EnvConfig(**trained)
-    envelopes = command_envelopes_from(args.controller)
+    enveloped = G1PmgEnv(dataclasses.replace(cfg, command_slew=True, **command_envelopes_from(args.controller)))
+    lim = enveloped.envelope_limits
     rows = {}
-    for name, c in (("as trained", cfg), ("with the controller's envelopes",
-                                          dataclasses.replace(cfg, command_slew=True, **envelopes))):
-        env = G1PmgEnv(c)
-        if name == "as trained":
-            lim = G1PmgEnv(dataclasses.replace(cfg, command_slew=True, **envelopes)).envelope_limits
+    for name, env in (("as trained", G1PmgEnv(cfg)), ("with the controller's envelopes", enveloped)):
         u = roll(env, jax.random.PRNGKey(args.seed), args.envs, args.steps)
         rows[name] = shares(jnp, u, lim)
     print(f"{args.train_config}: {args.envs} episodes x {args.steps} steps; envelopes and floor of {args.controller} "

@@ -12,10 +12,13 @@
 // every tick (never stale). The standing height is the squat clip's neutral, as pmg::ControllerApp sets it. Output: {"dt", "limits": {the `commands:` keys the port reads, and
 // standing_height [m]}, "ticks": [{"goal": [6], "shaped": [6]}]}, (v_x, v_y, w, pitch, roll, height)
 // in SI units (m/s, rad/s, rad, m), heading frame.
+#include <array>
 #include <cstdio>
+#include <fstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "pmg/clips/clip_io.hpp"
 #include "pmg/common/data_paths.hpp"
@@ -25,7 +28,7 @@
 
 namespace {
 struct Segment {
-  double ticks;
+  int ticks;
   double vx, vy, wz, pitch, roll, height;
 };
 // (ticks, v_x [m/s], v_y [m/s], w [rad/s], pitch [rad], roll [rad], height [m])
@@ -34,12 +37,6 @@ constexpr Segment kSchedule[] = {
     {350, 0.0, 0.0, 0.0, 0.0, 0.0, 0.62},   {250, 1.0, 0.0, 0.0, 0.4, 0.0, 0.78},  {250, 0.6, 0.0, 0.5, 0.3, 0.0, 0.66},
     {250, -0.5, 0.0, 0.0, 0.0, 0.0, 0.70},  {200, 0.0, -0.4, -0.8, 0.0, -0.2, 0.64}, {250, 0.0, 0.0, 0.0, 0.0, 0.0, 0.78},
 };
-
-void writeVec(std::FILE* f, const double* v, int n) {
-  std::fputc('[', f);
-  for (int i = 0; i < n; ++i) std::fprintf(f, "%s%.17g", i ? ", " : "", v[i]);
-  std::fputc(']', f);
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -59,44 +56,39 @@ int main(int argc, char** argv) {
     const pmg::CommandLimits& l = config.commands;
     pmg::CommandShaper shaper(l);
     const double dt = 1.0 / config.loop_rate_hz;
-    std::FILE* f = std::fopen(out.c_str(), "w");
-    if (!f) {
-      std::fprintf(stderr, "pmg_shaper_vectors: cannot write %s\n", out.c_str());
-      return 1;
-    }
-    std::fprintf(f, "{\"dt\": %.17g, \"limits\": {\"standing_height\": %.17g, \"max_velocity\": ", dt, l.standing_height);
-    writeVec(f, l.max_velocity.data(), 3);
-    std::fprintf(f, ", \"max_acceleration\": ");
-    writeVec(f, l.max_acceleration.data(), 3);
-    std::fprintf(f, ", \"posture_rate\": %.17g, \"height_rate\": %.17g, \"crouched_height\": %.17g, \"crouched_max_velocity\": ",
-                 l.posture_rate, l.height_rate, l.crouched_height);
-    writeVec(f, l.crouched_max_velocity.data(), 3);
-    std::fprintf(f, ", \"bent_pitch\": %.17g, \"bent_max_velocity\": ", l.bent_pitch);
-    writeVec(f, l.bent_max_velocity.data(), 3);
-    std::fprintf(f, ", \"walking_min_height\": %.17g, \"walking_min_height_hold_s\": %.17g}, \"ticks\": [\n",
-                 l.walking_min_height, l.walking_min_height_hold_s);
+    nlohmann::ordered_json doc;
+    doc["dt"] = dt;
+    doc["limits"] = {{"standing_height", l.standing_height},
+                     {"max_velocity", l.max_velocity},
+                     {"max_acceleration", l.max_acceleration},
+                     {"posture_rate", l.posture_rate},
+                     {"height_rate", l.height_rate},
+                     {"crouched_height", l.crouched_height},
+                     {"crouched_max_velocity", l.crouched_max_velocity},
+                     {"bent_pitch", l.bent_pitch},
+                     {"bent_max_velocity", l.bent_max_velocity},
+                     {"walking_min_height", l.walking_min_height},
+                     {"walking_min_height_hold_s", l.walking_min_height_hold_s}};
+    auto& ticks = doc["ticks"] = nlohmann::ordered_json::array();
     double now = 0.0;
-    bool first = true;
     for (const Segment& s : kSchedule) {
-      for (int k = 0; k < static_cast<int>(s.ticks); ++k) {
+      for (int k = 0; k < s.ticks; ++k) {
         pmg::CommandSample sample;
         sample.command = {s.vx, s.vy, s.wz, s.pitch, s.roll, s.height};
         sample.velocity_time = now;
         sample.posture_time = now;
         shaper.update(sample, now, dt);
-        const double goal[6] = {s.vx, s.vy, s.wz, s.pitch, s.roll, s.height};
-        const auto shaped = shaper.vector();
-        std::fprintf(f, "%s{\"goal\": ", first ? "" : ",\n");
-        writeVec(f, goal, 6);
-        std::fprintf(f, ", \"shaped\": ");
-        writeVec(f, shaped.data(), 6);
-        std::fputc('}', f);
-        first = false;
+        ticks.push_back({{"goal", std::array<double, 6>{s.vx, s.vy, s.wz, s.pitch, s.roll, s.height}},
+                         {"shaped", shaper.vector()}});
         now += dt;
       }
     }
-    std::fprintf(f, "\n]}\n");
-    std::fclose(f);
+    std::ofstream f(out);
+    f << doc.dump() << "\n";
+    if (!f) {
+      std::fprintf(stderr, "pmg_shaper_vectors: cannot write %s\n", out.c_str());
+      return 1;
+    }
     std::printf("wrote %s\n", out.c_str());
     return 0;
   } catch (const std::exception& e) {

@@ -527,6 +527,14 @@ def _scale_vector():
     return np.asarray(out, np.float32)
 
 
+def slew_command(xp, command, target, max_accel, posture_rate, height_rate, dt):
+    """@p command (6,) one control step of @p dt [s] towards @p target (6,) at the controller's slew limits
+    (CommandShaper::update): max_accel (3,) [m/s^2, m/s^2, rad/s^2] on v_x, v_y, w, posture_rate [rad/s]
+    on pitch and roll, height_rate [m/s] on the height."""
+    rate = xp.asarray([*max_accel, posture_rate, posture_rate, height_rate]) * dt
+    return command + xp.clip(target - command, -rate, rate)
+
+
 def envelope_scales(xp, v, pitch, height, lim):
     """The crouched and bent velocity envelopes' scales of the velocity @p v (..., 3) [m/s, m/s, rad/s] at
     the posture (@p pitch [rad], @p height [m], shape (...)): pmg::CommandShaper::envelopeScales
@@ -575,9 +583,8 @@ def shape_with_envelopes(xp, command, goal, since_walk, lim):
     scale = xp.maximum(crouch, bent)
     v_goal = xp.where(scale > 1.0, goal[:3] / xp.where(scale > 1.0, scale, 1.0), goal[:3])
     target = xp.concatenate([v_goal, goal[3:5], xp.reshape(h_goal, (1,))])
-    rate = xp.concatenate([xp.asarray(lim["max_acceleration"]), xp.asarray([lim["posture_rate"], lim["posture_rate"],
-                                                                             lim["height_rate"]])]) * dt
-    return command + xp.clip(target - command, -rate, rate), since_walk
+    return slew_command(xp, command, target, lim["max_acceleration"], lim["posture_rate"], lim["height_rate"],
+                        dt), since_walk
 
 
 class G1PmgEnv(Env):
@@ -940,9 +947,12 @@ class G1PmgEnv(Env):
         the goal inside the envelopes and above the walking height floor at once (no slew)."""
         if not self.cfg.command_envelopes:
             return goal
-        at_once = dict(self.envelope_limits, max_acceleration=(1e9,) * 3, posture_rate=1e9, height_rate=1e9)
-        first, _ = shape_with_envelopes(jnp, goal, goal, jnp.float32(0.0), at_once)
-        return shape_with_envelopes(jnp, first, goal, jnp.float32(0.0), at_once)[0]
+        lim = self.envelope_limits
+        floor = lim["walking_min_height"]
+        walking = jnp.any(goal[:3] != 0.0)
+        height = jnp.where(jnp.logical_and(walking, goal[5] < floor), floor, goal[5]) if floor > 0 else goal[5]
+        scale = jnp.maximum(1.0, jnp.maximum(*envelope_scales(jnp, goal[:3], goal[3], height, lim)))
+        return jnp.concatenate([goal[:3] / scale, goal[3:5], jnp.reshape(height, (1,))])
 
     def _shape_command(self, command, goal):
         """The command after one control step towards the drawn goal (EnvConfig.command_slew: slew
@@ -950,9 +960,8 @@ class G1PmgEnv(Env):
         c = self.cfg
         if not c.command_slew:
             return goal
-        rate = jnp.array([*c.command_max_accel, c.command_posture_rate, c.command_posture_rate,
-                          c.command_height_rate]) * c.control_dt
-        return command + jnp.clip(goal - command, -rate, rate)
+        return slew_command(jnp, command, goal, c.command_max_accel, c.command_posture_rate, c.command_height_rate,
+                            c.control_dt)
 
     def _reference(self, phase, command, gco_state):
         """Generator (+ GCO) tick as the controller runs it. Returns (ref dict, command the actor

@@ -56,13 +56,11 @@ def main():
     def run(xp, limits, dtype):
         cmd = xp.asarray(np.r_[0.0, 0.0, 0.0, 0.0, 0.0, limits["standing_height"]], dtype)
         since = xp.asarray(1e3, dtype)
+        step = lambda c, g, t: shape_with_envelopes(xp, c, g, t, limits)  # noqa: E731
+        step = step if xp is np else jax.jit(step)
         out = []
-        step = shape_with_envelopes
-        if xp is not np:
-            step = jax.jit(lambda c, g, s: shape_with_envelopes(jnp, c, g, s, limits))
         for g in goals:
-            g = xp.asarray(g, dtype)
-            cmd, since = step(cmd, g, since) if xp is not np else step(np, cmd, g, since, limits)
+            cmd, since = step(cmd, xp.asarray(g, dtype), since)
             out.append(np.asarray(cmd, float))
         return np.array(out)
 
