@@ -343,6 +343,13 @@ def parse_args(argv=None):
     ap.add_argument("--p-combined", type=float, default=None, metavar="P",
                     help="probability that a drawn command combines velocity axes (EnvConfig.p_combined, default 0.4; "
                          "with p_single_axis 0.4 the rest stands still, so at most 0.6)")
+    ap.add_argument("--command-focus", action="append", default=[], metavar="AXIS=LO,HI",
+                    help="one axis of a focus box (EnvConfig.command_focus; axes as --command-range, each inside its "
+                         "range); repeatable; an axis not named is zero (velocity) or neutral (posture). Needs --p-focus")
+    ap.add_argument("--p-focus", type=float, default=None, metavar="P",
+                    help="probability that a drawn goal is uniform in the --command-focus box instead of the plain "
+                         "mix (EnvConfig.p_focus, default 0), e.g. --command-focus vx=-0.6,-0.3 --command-focus "
+                         "height=0.66,0.72 --p-focus 0.1 for backward walks crouched")
     ap.add_argument("--joint-stop-timeconst", type=float, default=None, metavar="S",
                     help="time constant [s] of every joint's stop (its limit constraint's solref, EnvConfig."
                          "joint_stop_timeconst; default 0 = the MJCF's, MuJoCo's 0.02 s, soft enough that a crouched "
@@ -461,21 +468,30 @@ def parse_args(argv=None):
     if args.yaw_rate_weight is not None:  # the older spelling of --reward-weight yaw_rate=W
         weights["yaw_rate"] = args.yaw_rate_weight
     args.reward_weight = weights
-    ranges = {}
-    for item in args.command_range:
-        axis, _, value = item.partition("=")
-        axis = axis.strip()
-        try:
-            lo, hi = (float(x) for x in value.split(","))
-        except ValueError:
-            lo = hi = math.nan
-        if axis not in COMMAND_AXES or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-            ap.error(f"--command-range {item!r}: expected AXIS=LO,HI with AXIS one of {', '.join(COMMAND_AXES)} "
-                     f"and finite LO < HI")
-        ranges[axis] = (lo, hi)
-    if "height" in ranges and not 0.3 <= ranges["height"][0]:
-        ap.error(f"--command-range height={ranges['height'][0]},{ranges['height'][1]}: expected LO >= 0.3 m")
-    args.command_range = ranges
+    def axis_bounds(flag, items, strict):
+        """{axis: (lo, hi)} from repeated AXIS=LO,HI items (LO < HI when strict, else LO <= HI)."""
+        out = {}
+        for item in items:
+            axis, _, value = item.partition("=")
+            axis = axis.strip()
+            try:
+                lo, hi = (float(x) for x in value.split(","))
+            except ValueError:
+                lo = hi = math.nan
+            ordered = lo < hi if strict else lo <= hi
+            if axis not in COMMAND_AXES or not (math.isfinite(lo) and math.isfinite(hi) and ordered):
+                ap.error(f"{flag} {item!r}: expected AXIS=LO,HI with AXIS one of {', '.join(COMMAND_AXES)} "
+                         f"and finite LO {'<' if strict else '<='} HI")
+            out[axis] = (lo, hi)
+        if "height" in out and not 0.3 <= out["height"][0]:
+            ap.error(f"{flag} height={out['height'][0]},{out['height'][1]}: expected LO >= 0.3 m")
+        return out
+    args.command_range = axis_bounds("--command-range", args.command_range, strict=True)
+    args.command_focus = axis_bounds("--command-focus", args.command_focus, strict=False)
+    if args.p_focus is not None and not 0.0 <= args.p_focus <= 1.0:
+        ap.error(f"--p-focus = {args.p_focus}: expected in [0, 1]")
+    if bool(args.command_focus) != bool(args.p_focus):
+        ap.error("--command-focus and --p-focus: give both (a box and a probability > 0) or neither")
     if args.hand_forces is not None and not (0.0 <= args.hand_forces <= 1.0 and args.arms == "teleop"):
         ap.error(f"--hand-forces = {args.hand_forces}: expected a probability in [0, 1], with --arms teleop")
     if args.actuator_dr is not None and not 0.0 <= args.actuator_dr < 1.0:
@@ -569,7 +585,7 @@ def main(argv=None):
     devices = select_devices(args)
     from brax.training.agents.ppo import networks as ppo_networks
     from brax.training.agents.ppo import train as ppo
-    from pmg_train.g1_env import EnvConfig, G1PmgEnv, make_randomization_fn
+    from pmg_train.g1_env import EnvConfig, G1PmgEnv, focus_box, make_randomization_fn
     from pmg_train.symmetry import env_maps, with_mirror_loss
 
     clip_files = sorted(glob.glob(os.path.join(args.clips, "*.yaml")))
@@ -594,6 +610,13 @@ def main(argv=None):
     if args.command_range:
         cfg = dataclasses.replace(cfg, **args.command_range)
         log("command ranges:", {a: getattr(cfg, a) for a in COMMAND_AXES})
+    if args.command_focus:
+        cfg = dataclasses.replace(cfg, command_focus=dict(args.command_focus), p_focus=args.p_focus)
+        try:
+            focus_box(cfg, standing_height=0.0)  # the box inside the ranges (the env resolves the neutral height)
+        except ValueError as e:
+            raise SystemExit(f"pmg-train: --command-focus: {e}")
+        log("command focus:", cfg.command_focus, "p_focus", cfg.p_focus)
     unknown = sorted(set(args.reward_weight) - set(cfg.w))
     if unknown:
         raise SystemExit(f"pmg-train: --reward-weight {unknown}: unknown reward term(s); known: {sorted(cfg.w)}")

@@ -90,7 +90,8 @@ v_x [-0.5, 1.0] m/s, v_y [-0.4, 0.4] m/s, w [-0.8, 0.8] rad/s, pitch [-0.1, 0.4]
 standing (zero velocity). A posture is commanded with probability p_posture_walk (40 %) while
 walking (walking crouched / bent / leaning) and p_posture_stand (75 %) while standing; a commanded
 posture sets each of pitch, roll, height with probability p_posture_axis (else neutral), at least
-one. Values are uniform in their ranges.
+one. Values are uniform in their ranges. A focus box (EnvConfig.p_focus, command_focus; off by
+default) replaces a draw with one uniform in a sub-box of the envelope (focus_box).
 
 Observation (actor, 62 values, order = policy contract terms):
   base_ang_vel_B (3)  projected_gravity_B (3)  command (6: vx, vy, wz, pitch, roll, height)
@@ -312,6 +313,14 @@ class EnvConfig:
     # of the stick while crouched, is rare, about 1 in 3 stops from a crouched walk.
     p_stop_keep_posture: float = 0.0
     p_posture_walk: float = 0.4    # posture commanded while walking (crouched / bent / leaning)
+    # A focus box: with probability p_focus a drawn goal is instead uniform in command_focus, a dict
+    # {axis: (lo, hi)} over COMMAND_AXES (vx, vy [m/s], wz [rad/s], pitch, roll [rad], height [m]), each
+    # inside that axis's range above; an axis not named is zero (velocity) or neutral (pitch 0, roll 0,
+    # the standing height). It weights a corner of the envelope the plain mix seldom draws, e.g. walking
+    # backward crouched (vx -0.6..-0.3 at 0.66-0.72 m: about 1 % of the plain draws). Stops (p_stop) act
+    # on it as on any goal. 0 (the default, as every policy so far): the plain mix, the same random stream.
+    p_focus: float = 0.0
+    command_focus: dict = dataclasses.field(default_factory=dict)
     p_posture_stand: float = 0.75  # posture commanded while standing
     p_posture_axis: float = 0.6    # each posture axis set in a commanded posture (at least one)
     # Reference state initialisation: with this probability an episode starts in the PMG reference's
@@ -587,6 +596,38 @@ def shape_with_envelopes(xp, command, goal, since_walk, lim):
                         dt), since_walk
 
 
+COMMAND_AXES = ("vx", "vy", "wz", "pitch", "roll", "height")  # the command's order (6,)
+
+
+def focus_box(cfg, standing_height):
+    """The focus box's bounds (lo (6,), hi (6,)) in COMMAND_AXES order, from EnvConfig.p_focus and
+    command_focus (an axis not named: 0, or @p standing_height [m] for the height). Raises ValueError
+    naming the field for an unknown axis, a bound that is not two finite numbers LO <= HI, a box
+    outside the axis's range, p_focus outside [0, 1], or p_focus > 0 without a box."""
+    if not 0.0 <= cfg.p_focus <= 1.0:
+        raise ValueError(f"EnvConfig.p_focus = {cfg.p_focus}: expected in [0, 1]")
+    if cfg.p_focus > 0 and not cfg.command_focus:
+        raise ValueError(f"EnvConfig.p_focus = {cfg.p_focus}: needs a command_focus box (at least one axis)")
+    lo = np.array([0.0, 0.0, 0.0, 0.0, 0.0, standing_height])
+    hi = lo.copy()
+    for axis, bounds in cfg.command_focus.items():
+        if axis not in COMMAND_AXES:
+            raise ValueError(f"EnvConfig.command_focus: unknown axis {axis!r}; expected one of {COMMAND_AXES}")
+        try:
+            a, b = (float(x) for x in bounds)
+        except (TypeError, ValueError):
+            a = b = math.nan
+        rlo, rhi = getattr(cfg, axis)
+        if not (math.isfinite(a) and math.isfinite(b) and a <= b):
+            raise ValueError(f"EnvConfig.command_focus[{axis!r}] = {bounds!r}: expected (LO, HI), finite, LO <= HI")
+        if a < rlo - 1e-9 or b > rhi + 1e-9:
+            raise ValueError(f"EnvConfig.command_focus[{axis!r}] = ({a}, {b}): expected inside the axis's range "
+                             f"EnvConfig.{axis} = ({rlo}, {rhi})")
+        i = COMMAND_AXES.index(axis)
+        lo[i], hi[i] = a, b
+    return lo.astype(np.float32), hi.astype(np.float32)
+
+
 class G1PmgEnv(Env):
     def __init__(self, cfg: EnvConfig, clip_files=None, action_scale=None):
         """@p clip_files: a clip folder or a list of clip files (consistency_map.yaml among them or
@@ -614,6 +655,7 @@ class G1PmgEnv(Env):
             raise ValueError(f"EnvConfig.pd_damping = {cfg.pd_damping!r}: expected 'implicit' or 'explicit'")
         self.cfg = cfg
         self.js = pg.joint_space_from_robot_yaml(cfg.robot_yaml)
+        self.focus_lo, self.focus_hi = focus_box(cfg, self.js.standing_base_height)
         if clip_files is None:
             clip_files = cfg.clips
         if isinstance(clip_files, str):
@@ -920,7 +962,11 @@ class G1PmgEnv(Env):
         p_posture = jnp.where(walking, c.p_posture_walk, c.p_posture_stand)
         commanded = jax.random.uniform(k[7]) < p_posture
         posture = jnp.where(jnp.logical_and(commanded, axes), posture, neutral)
-        return jnp.concatenate([v, posture])
+        goal = jnp.concatenate([v, posture])
+        if c.p_focus > 0:  # EnvConfig.command_focus (off: the stream and the graph as before)
+            box = jax.random.uniform(k[8], (6,), minval=self.focus_lo, maxval=self.focus_hi)
+            goal = jnp.where(jax.random.uniform(k[9]) < c.p_focus, box, goal)
+        return goal
 
     def _next_command(self, goal, command, since_walk, k_cmd, resample):
         """One control step of the user's command: at a resample a new goal is drawn (a stop after a

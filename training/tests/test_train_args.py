@@ -8,7 +8,9 @@ values, refusing a file with the block missing or a key missing, zero or not fin
 non-finite is refused; --p-stop, --stop-keeps-posture, --p-posture-walk and --p-reset-reference (unset by
 default) parse and a value outside
 [0, 1] is refused; --push-vel LO,HI parses and a reversed, negative, non-finite or one-value range is refused;
-and --p-combined parses and a value outside [0, 0.6] is refused; --action-offset (default | reference) and
+and --p-combined parses and a value outside [0, 0.6] is refused; --command-focus AXIS=LO,HI (LO <= HI) with --p-focus
+parses (off by default), and one without the other, p_focus 0 or outside [0, 1], an unknown axis, a reversed or
+non-finite bound or a height below 0.3 m is refused (the box inside the ranges: the smoke run's env); --action-offset (default | reference) and
 --action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
 --discounting (default 0.97), --reward-scaling (default 1.0) and --mirror-loss (default 0) parse, and a
 discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused;
@@ -66,6 +68,14 @@ if train_pmg.parse_args(["--out", "/tmp/x", "--mirror-loss", "0.5"]).mirror_loss
 args = train_pmg.parse_args(["--out", "/tmp/x", "--discounting", "0.99", "--reward-scaling", "0.33"])
 if (args.discounting, args.reward_scaling) != (0.99, 0.33):
     failures.append(f"--discounting 0.99 --reward-scaling 0.33 parsed as {args.discounting}, {args.reward_scaling}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--command-focus", "vx=-0.6,-0.3", "--command-focus", "height=0.7,0.7",
+                             "--p-focus", "0.1"])
+if (args.command_focus, args.p_focus) != ({"vx": (-0.6, -0.3), "height": (0.7, 0.7)}, 0.1):
+    failures.append(f"--command-focus vx=-0.6,-0.3 height=0.7,0.7 --p-focus 0.1 parsed as {args.command_focus}, "
+                    f"{args.p_focus}")
+args = train_pmg.parse_args(["--out", "/tmp/x"])
+if (args.command_focus, args.p_focus) != ({}, None):
+    failures.append(f"--command-focus / --p-focus defaults: {args.command_focus}, {args.p_focus} (expected off)")
 if train_pmg.parse_args(["--out", "/tmp/x", "--height-sigma", "0.001"]).height_sigma != 0.001:
     failures.append("--height-sigma 0.001 not parsed")
 for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
@@ -90,6 +100,15 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--command-range", "speed=-1,1"], "--command-range"),
                   (["--command-range", "vy=-0.4"], "--command-range"),
                   (["--command-range", "height=0.1,0.78"], "--command-range"),
+                  (["--command-focus", "vx=-0.6,-0.3"], "--p-focus"),
+                  (["--p-focus", "0.1"], "--p-focus"),
+                  (["--command-focus", "vx=-0.6,-0.3", "--p-focus", "0"], "--p-focus"),
+                  (["--command-focus", "vx=-0.6,-0.3", "--p-focus", "1.5"], "--p-focus"),
+                  (["--command-focus", "vx=-0.6,-0.3", "--p-focus", "nan"], "--p-focus"),
+                  (["--command-focus", "vx=-0.3,-0.6", "--p-focus", "0.1"], "--command-focus"),
+                  (["--command-focus", "speed=0,1", "--p-focus", "0.1"], "--command-focus"),
+                  (["--command-focus", "height=0.2,0.7", "--p-focus", "0.1"], "--command-focus"),
+                  (["--command-focus", "vy=inf,1", "--p-focus", "0.1"], "--command-focus"),
                   (["--reward-weight", "orientation"], "--reward-weight"),
                   (["--reward-weight", "orientation=nan"], "--reward-weight"),
                   (["--reward-weight", "height=abc"], "--reward-weight"),
