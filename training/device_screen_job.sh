@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # One or more runs and their MJX screens on a GPU machine of this workplace (training/README.md, appendix).
 #   training/device_screen_job.sh RUN [RUN...]   (on the device, from the repository root, with carry [".whl"])
+# A RUN with no .whl/argv_RUN.txt but a .whl/RUN/ holding actor.npz and train_config.json is screened without training
+# (a run whose machine was taken back before its screens; its files came back through device_poll.sh).
 # Needs in .whl/: site.tgz (training/make_device_site.sh), argv_RUN.txt for each RUN (train_pmg.py's argv, --out
 # /tmp/runs/RUN), whatever those argvs name there (e.g. vG_train_config.json), floor_stops_0.62.yaml and
 # crouched_backward_short.yaml (copies of training/results/fidelity/crouched/floor_stops_0.62.yaml and
@@ -15,6 +17,10 @@ mkdir -p /tmp/site /tmp/runs/rand && tar xzf .whl/site.tgz -C /tmp/site || { ech
 export PYTHONPATH=/tmp/site
 [ $# -gt 1 ] && export XLA_PYTHON_CLIENT_PREALLOCATE=false  # runs that share the GPU take its memory as they need it
 train() {
+  if [ ! -f .whl/argv_$1.txt ] && [ -f .whl/$1/actor.npz ]; then  # screen only: a run trained earlier (e.g. on a machine
+    mkdir -p /tmp/runs/$1 && cp .whl/$1/actor.npz .whl/$1/train_config.json /tmp/runs/$1/  #   taken back before its screens)
+    echo "screen only: .whl/$1/; train rc 0" > /tmp/runs/$1.log; touch /tmp/runs/$1.trained; return
+  fi
   JAX_COMPILATION_CACHE_DIR=/tmp/jc_$1 timeout 21m python3 $(cat .whl/argv_$1.txt) > /tmp/runs/$1.log 2>&1
   echo "train rc $?" >> /tmp/runs/$1.log
   touch /tmp/runs/$1.trained
