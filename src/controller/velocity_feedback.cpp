@@ -510,6 +510,7 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(still_velocity >= 0.0 && still_velocity <= 1.0)) return "still_velocity: expected 0..1 m/s";
   if (!(still_measured_velocity >= 0.0 && still_measured_velocity <= 2.0))
     return "still_measured_velocity: expected 0..2 m/s";
+  if (!(settle_s >= 0.0 && settle_s <= 5.0)) return "settle_s: expected 0..5 s";
   for (std::size_t i = 0; i < 2; ++i)
     if (!(std::isfinite(walking_ki[i]) && walking_ki[i] >= 0.0 && walking_ki[i] <= 5.0))
       return std::string("walking_ki[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") + "): expected 0..5 [1/s]";
@@ -684,7 +685,10 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       const double mag = std::fabs(c_stand_[i]);
       cs = std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
-    if (have_ && ok && !decay && !hold_stand) cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
+    // Standing, only once the posture command has settled (settle_s): the torso's lag behind a
+    // posture ramp is not integrated, and meanwhile the correction is held.
+    if (have_ && ok && !decay && !hold_stand && p_steady_s_[i] >= config_.settle_s)
+      cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
     cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Inside the dead band the correction decays as at a stop, so that what one gait needed is not
     // carried into the next (held, a crouched walk's correction overshot the crouched turn after it).

@@ -1598,6 +1598,53 @@ TEST(PostureFeedback, StandingCorrectionIsHeldWhileTheRobotStillMoves) {
   EXPECT_NE(c.validate().find("still_measured_velocity"), std::string::npos);
 }
 
+// settle_s: standing, the torso lags the shaper's unbend ramp (0.4 -> 0 rad at 0.5 rad/s); integrating
+// that lag winds the correction negative, and the robot then stands leaning back. With settle_s the
+// correction is held through the ramp and integrates only once the command has been steady that long.
+TEST(PostureFeedback, StandingCorrectionWaitsForThePostureCommandToSettle) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.filter_time_s = 0.0;
+  c.envelope_max = {0.6, 0.3};
+  ASSERT_EQ(c.validate(), "");
+  auto unbend = [&](double settle_s, std::vector<double>* corr) {
+    PostureFeedbackConfig cc = c;
+    cc.settle_s = settle_s;
+    PostureFeedback fb(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+    // Bent and still at 0.4 rad, the torso at 0.36: a positive correction builds.
+    for (int k = 0; k < 300; ++k) fb.update({0.4, 0.0, 0.78}, {}, uprightState(0.0, 0.36), 0.01);
+    corr->push_back(fb.correction()[0]);
+    // The ramp to 0 over 0.8 s with the torso 0.15 rad behind it, then the torso at 0.
+    for (int k = 1; k <= 80; ++k) {
+      const double cmd = 0.4 - 0.005 * k;
+      fb.update({cmd, 0.0, 0.78}, {}, uprightState(0.0, std::min(0.4, cmd + 0.15)), 0.01);
+    }
+    corr->push_back(fb.correction()[0]);
+    // The torso 0.03 rad forward of the command after it.
+    for (int k = 0; k < 20; ++k) fb.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, 0.03), 0.01);
+    corr->push_back(fb.correction()[0]);
+    for (int k = 0; k < 100; ++k) fb.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, 0.03), 0.01);
+    corr->push_back(fb.correction()[0]);
+  };
+  std::vector<double> off, on;
+  unbend(0.0, &off);
+  unbend(0.5, &on);
+  // Before the ramp both built a positive correction (on: 0.5 s less of it, the start's settling).
+  EXPECT_GT(on[0], 0.05);
+  EXPECT_NEAR(off[0] - on[0], 0.04 * 0.5, 1e-9);
+  // Off: the ramp's lag is integrated (up to 0.15 rad for 0.8 s): the correction falls by about 0.1.
+  EXPECT_LT(off[1], off[0] - 0.08);
+  // On: held through the ramp (but its first tick, inside the 0.01 rad that counts as settled), and
+  // 0.2 s after it, still held (not yet settled).
+  EXPECT_NEAR(on[1], on[0], 1e-4);
+  EXPECT_DOUBLE_EQ(on[2], on[1]);
+  // Settled: integrates again (the torso forward of the command: the correction falls).
+  EXPECT_LT(on[3], on[2]);
+  c.settle_s = 5.5;
+  EXPECT_NE(c.validate().find("settle_s"), std::string::npos);
+}
+
 TEST(PostureFeedback, UpsetUprightDecaysTheCorrectionInsteadOfIntegrating) {
   // The upset guard holds with upright: the shaper sends pitch 0, the torso leans back 0.12 rad as the
   // robot runs on. Integrating, the standing correction would push the torso forward again.

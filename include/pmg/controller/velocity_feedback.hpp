@@ -513,6 +513,13 @@ struct PostureFeedbackConfig {
   /// after the stop, its torso behind the bend, and the standing integrator bent it 0.085 rad
   /// further while it ran; it fell (posture walks, seed 21).
   double still_measured_velocity = 0.0;
+  /// Standing still, an axis integrates only once its posture command has stayed within 0.01 rad of
+  /// where it settled for this long [s], [0, 5]; meanwhile its standing correction is held (neither
+  /// integrated nor decayed). 0 (the default): always, as before. The torso lags the shaper's
+  /// posture ramp (posture_rate) by 0.1-0.2 rad; integrated, that lag wound the correction to
+  /// -0.05 rad by the end of an unbend from 0.4 rad, and the robot then stood leaning back
+  /// 0.04-0.08 rad for 2 s (posture walks; docs/controller.md "Settled before the standing integrator").
+  double settle_s = 0.0;
   /// While walking (not still), integral gains for torso pitch and roll [1/s], each 0..5; 0 (the
   /// default): the correction decays while walking, as above. A walking gait sways the torso about
   /// a mean (roll ±0.1 rad over a side-step cycle), so walking uses its own slower low-pass of the
