@@ -19,7 +19,7 @@ export PYTHONPATH=/tmp/site
 train() {
   if [ ! -f .whl/argv_$1.txt ] && [ -f .whl/$1/actor.npz ]; then  # screen only: a run trained earlier (e.g. on a machine
     mkdir -p /tmp/runs/$1 && cp .whl/$1/actor.npz .whl/$1/train_config.json /tmp/runs/$1/  #   taken back before its screens)
-    echo "screen only: .whl/$1/; train rc 0" > /tmp/runs/$1.log; touch /tmp/runs/$1.trained; return
+    echo "screen only: .whl/$1/ (trained earlier)" > /tmp/runs/$1.log; touch /tmp/runs/$1.trained; return
   fi
   JAX_COMPILATION_CACHE_DIR=/tmp/jc_$1 timeout 21m python3 $(cat .whl/argv_$1.txt) > /tmp/runs/$1.log 2>&1
   echo "train rc $?" >> /tmp/runs/$1.log
@@ -30,7 +30,7 @@ wait
 export XLA_PYTHON_CLIENT_PREALLOCATE=false
 screen() {
   local R=$1 C=/tmp/runs/$1
-  grep -q "train rc 0" /tmp/runs/$R.log || return 0
+  grep -qE "train rc 0|screen only" /tmp/runs/$R.log || return 0
   JAX_COMPILATION_CACHE_DIR=/tmp/jc_eval timeout 8m python3 training/eval_mjx.py $C/actor.npz --train-config $C/train_config.json \
     --commands .whl/floor_stops_0.62.yaml --randomized 128 --seed 1 --out /tmp/runs/floor_$R.npz > /tmp/runs/rand/mjx_floor_stops_$R.txt 2>&1 &
   JAX_COMPILATION_CACHE_DIR=/tmp/jc_eval2 timeout 8m python3 training/eval_mjx.py $C/actor.npz --train-config $C/train_config.json \
