@@ -177,7 +177,9 @@ ENVELOPE_KEYS = {"max_velocity": "envelope_max_velocity", "max_acceleration": "c
 def command_envelopes_from(path):
     """EnvConfig fields (command_envelopes on) from a controller config's `commands:` block. Every key of
     ENVELOPE_KEYS must be there, finite and > 0 (the envelopes and the floor on; the controller's own
-    validation checks the rest); SystemExit naming the file and the key otherwise."""
+    validation checks the rest), except crouched_height, which may be 0: the crouched envelope off, as in
+    the controller (CommandLimits::crouched_height), for an actor trained on crouched walks at any speed
+    of the box; SystemExit naming the file and the key otherwise."""
     import yaml
     try:
         with open(path) as f:
@@ -191,10 +193,12 @@ def command_envelopes_from(path):
         v = block.get(key)
         vals = v if isinstance(v, list) else [v]
         n = 3 if field.endswith(("velocity", "accel")) else 1
+        may_be_off = key == "crouched_height"
         if len(vals) != n or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-                                     and x > 0 for x in vals):
+                                     and (x > 0 or (may_be_off and x == 0)) for x in vals):
             raise SystemExit(f"--command-envelopes {path}: commands.{key} is {v!r}; expected "
-                             f"{'3 finite values' if n == 3 else 'a finite value'} > 0 (the envelopes on)")
+                             f"{'3 finite values' if n == 3 else 'a finite value'} > 0 (the envelopes on)"
+                             + (" or 0 (the crouched envelope off)" if may_be_off else ""))
         out[field] = tuple(float(x) for x in vals) if n == 3 else float(vals[0])
     return out
 

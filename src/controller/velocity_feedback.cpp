@@ -679,11 +679,18 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     // it walks or not), and the walking integrator adds what the gait needs on top. A commanded bend
     // is not held (held, a 0.4 rad bend walked crouched at 0.66 m fell at the stop).
     double cs = hold_stand ? c_stand_[i] : c_stand_[i] * keep;
+    const double e = cmd[i] - p_walk_hat_[i];
     if (walking && upright_crouch) {
-      // Held within the walking bound; what lies beyond it decays.
+      // Held within the walking bound; what lies beyond it decays. With walking_crouch_release, a
+      // held correction that pushes the gait-averaged torso further from the command (e of the
+      // other sign, beyond kReleaseBand) decays whole: that actor leans one way standing crouched
+      // and the other walking.
+      constexpr double kReleaseBand = 0.02;  // [rad] the gait's ordinary few hundredths are not a sign
       const double wm = config_.walking_max_correction_rad;
       const double mag = std::fabs(c_stand_[i]);
-      cs = std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
+      const bool opposed = config_.walking_crouch_release && have_ && e * std::copysign(1.0, c_stand_[i]) < -kReleaseBand;
+      cs = opposed ? c_stand_[i] * decay_keep
+                   : std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
     // Standing, only once the posture command has settled (settle_s): the torso's lag behind a
     // posture ramp is not integrated, and meanwhile the correction is held.
@@ -692,7 +699,6 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Inside the dead band the correction decays as at a stop, so that what one gait needed is not
     // carried into the next (held, a crouched walk's correction overshot the crouched turn after it).
-    const double e = cmd[i] - p_walk_hat_[i];
     const double band = commanded ? 0.0 : config_.walking_deadband_rad;
     const bool inside = !commanded && std::fabs(e) <= band;
     double cw = walking && !inside ? c_walk_[i] : c_walk_[i] * decay_keep;

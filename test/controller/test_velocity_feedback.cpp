@@ -1545,6 +1545,75 @@ TEST(PostureFeedback, CrouchedWalkFeedsBackItsLeanAndHoldsTheStillCrouchsCorrect
   EXPECT_THROW(PostureFeedback(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}), ConfigError);
 }
 
+// walking_crouch_release: an actor that leans *forward* 0.05 rad crouched still and back 0.06 rad
+// walking crouched (H3 at 0.62 / 0.68 m). Held, the still crouch's correction (about -0.06) adds to
+// the walk's backward lean and the walking integrator (bound 0.08) spends itself cancelling it; with
+// the key, the held correction decays once the gait-averaged torso is behind the command, and the
+// walking integrator brings the torso upright. An actor that leans back in both (the held
+// correction agrees with the walking error) is held as before, and nothing jumps.
+TEST(PostureFeedback, CrouchedWalkReleasesAStandingCorrectionOpposedToTheWalk) {
+  PostureFeedbackConfig c = walkingPitchConfig(1.0);
+  c.walking_crouch_m = 0.03;
+  c.walking_max_correction_rad = 0.08;
+  const std::array<double, 2> heights{0.45, 0.85};
+  const VelocityCommand walk{0.4, 0.0, 0.0};
+  struct Run {
+    double mean_torso = 0.0;       ///< gait-averaged torso pitch over the walk's last 5 s [rad]
+    double correction_start = 0.0; ///< when the walk starts [rad]
+    double largest_step = 0.0;     ///< largest change of the correction in one tick while walking [rad]
+    double correction = 0.0;       ///< at the end of the walk [rad]
+  };
+  auto run = [&](bool release, double still_lean, double walk_lean) {
+    PostureFeedbackConfig cfg = c;
+    cfg.walking_crouch_release = release;
+    EXPECT_EQ(cfg.validate(), "");
+    PostureFeedback fb(cfg, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    double torso = 0.0, t = 0.0;
+    Run r;
+    for (int k = 0; k < 2000; ++k) {  // 20 s crouched still
+      const PostureCommand& out = fb.update({0.0, 0.0, 0.68}, {}, uprightState(0.0, torso), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch + still_lean - torso);
+    }
+    r.correction_start = fb.correction()[0];
+    double prev = r.correction_start;
+    for (int k = 0; k < 2000; ++k) {  // 20 s crouched walk
+      const double sway = 0.04 * std::sin(2.0 * M_PI * 1.4 * t);
+      const PostureCommand& out = fb.update({0.0, 0.0, 0.68}, walk, uprightState(0.0, torso + sway), 0.01);
+      torso += 0.01 / 0.3 * (0.8 * out.pitch + walk_lean - torso);
+      t += 0.01;
+      r.largest_step = std::max(r.largest_step, std::fabs(fb.correction()[0] - prev));
+      prev = fb.correction()[0];
+      if (k >= 1500) r.mean_torso += torso / 500.0;
+    }
+    r.correction = fb.correction()[0];
+    return r;
+  };
+  const Run held = run(false, 0.05, -0.06);
+  const Run released = run(true, 0.05, -0.06);
+  EXPECT_NEAR(held.correction_start, -0.0625, 0.002);
+  EXPECT_NEAR(released.correction_start, -0.0625, 0.002);
+  EXPECT_LT(held.mean_torso, -0.04) << "held, the standing correction should keep the torso back (the walking bound spent)";
+  EXPECT_NEAR(released.mean_torso, 0.0, 0.01) << "released, the walking integrator should bring the torso upright";
+  EXPECT_NEAR(released.correction, 0.075, 0.005) << "the walk's 0.06 lean over the plant's gain 0.8, within the walking bound";
+  EXPECT_LT(released.largest_step, 0.002) << "the correction jumped";
+  // Leaning back in both: the held correction agrees with the walking error and is held as before.
+  const Run same_held = run(false, -0.06, -0.10);
+  const Run same_released = run(true, -0.06, -0.10);
+  EXPECT_NEAR(same_released.correction, same_held.correction, 1e-9);
+  EXPECT_NEAR(same_released.mean_torso, same_held.mean_torso, 1e-9);
+  // Allocation-free.
+  c.walking_crouch_release = true;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+  const LowState lean = uprightState(0.0, -0.1);
+  std::size_t n = 0;
+  {
+    test::AllocationGuard guard;
+    for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, 0.68}, walk, lean, 0.01);
+    n = guard.count();
+  }
+  EXPECT_EQ(n, 0u);
+}
+
 // still_measured_velocity: told to stand but still running (the estimate above the threshold), the
 // standing correction is held, neither integrated nor decayed; once the robot is seen still, or
 // without an estimate (or an invalid one), it integrates as before.

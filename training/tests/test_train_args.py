@@ -165,7 +165,8 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
         if e.code != 2 or flag not in err.getvalue().splitlines()[-1]:
             failures.append(f"{bad}: exit {e.code}, message {err.getvalue().splitlines()[-1]!r}")
 # --command-envelopes: the controller config's `commands:` values become EnvConfig fields; a file without the
-# block, or with a key missing, zero (an envelope off) or not finite, is refused naming the file and the key.
+# block, or with a key missing, zero (an envelope off; only the crouched one may be) or not finite, is refused naming the
+# file and the key.
 import tempfile  # noqa: E402
 
 if train_pmg.parse_args(["--out", "/tmp/x", "--command-slew", "--command-envelopes", "c.yaml"]).command_envelopes != "c.yaml":
@@ -183,6 +184,8 @@ with tempfile.TemporaryDirectory() as tmp:
                       (shipped.replace("crouched_max_velocity: [0.3, 0.3, 0.6]", "crouched_max_velocity: [0.3, 0.3]"),
                        "crouched_max_velocity"),
                       (shipped.replace("bent_pitch: 0.4", "bent_pitch: .nan"), "bent_pitch"),
+                      (shipped.replace("bent_pitch: 0.4", "bent_pitch: 0"), "bent_pitch"),
+                      (shipped.replace("crouched_height: 0.62", "crouched_height: -0.1"), "crouched_height"),
                       (shipped.replace("\ncommands:", "\nkommands:"), "commands")):
         n_cases += 1
         path = os.path.join(tmp, "bad.yaml")
@@ -194,6 +197,15 @@ with tempfile.TemporaryDirectory() as tmp:
         except SystemExit as e:
             if path not in str(e) or key not in str(e):
                 failures.append(f"--command-envelopes with a bad {key}: message {e}")
+# crouched_height 0: the crouched envelope off (the controller's meaning), everything else as read.
+with tempfile.TemporaryDirectory() as tmp:
+    path = os.path.join(tmp, "off.yaml")
+    with open(path, "w") as f:
+        f.write(shipped.replace("crouched_height: 0.62", "crouched_height: 0"))
+    off = train_pmg.command_envelopes_from(path)
+    if off.get("crouched_height") != 0.0 or {k: v for k, v in off.items() if k != "crouched_height"} != \
+            {k: v for k, v in env_fields.items() if k != "crouched_height"}:
+        failures.append(f"--command-envelopes with crouched_height 0 read as {off}")
 # --warmup-steps: off by default (no warm-up config); on, its config changes the three widths and nothing else.
 import dataclasses  # noqa: E402
 

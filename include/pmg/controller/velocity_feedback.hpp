@@ -556,6 +556,15 @@ struct PostureFeedbackConfig {
   /// bend is not held (held, a 0.4 rad bend walked at 0.66 m fell at the stop). Needs the standing
   /// height (the shaper's: the squat clip's neutral); the constructor throws ConfigError without it.
   double walking_crouch_m = 0.0;
+  /// With walking_crouch_m: a held standing correction that pushes the gait-averaged torso (the
+  /// walking low-pass) further from the command, the walking error u_p − p̄ beyond 0.02 rad on
+  /// its other side, is not held but decays (decay_time_s) for as long as it does; false (the default):
+  /// always held, as above. For an actor that leans one way standing crouched and the other way
+  /// walking crouched: H3 leans forward standing at 0.62 m and back walking at 0.68 m, so the
+  /// held correction (−0.02…−0.06 rad) added to the walk's backward lean and the walking
+  /// integrator spent its bound cancelling it (grid crouch_walk −0.080 rad; docs/controller.md
+  /// "Crouched walks").
+  bool walking_crouch_release = false;
   /// Bounds on the fed-back pitch and roll [rad], (pitch, roll) minimum and maximum, each finite
   /// with -1.5 ≤ envelope_min ≤ 0 ≤ envelope_max ≤ 1.5: a correction never pushes the command
   /// beyond them, u_fb,p ∈ [min(u_p, envelope_min), max(u_p, envelope_max)] (a command already
