@@ -189,6 +189,9 @@ def command_envelopes_from(path):
     if not isinstance(block, dict):
         raise SystemExit(f"--command-envelopes {path}: no `commands:` block")
     out = {"command_envelopes": True}
+    if block.get("crouched_per_axis", False) is not False:  # the environment has the L1 rule only (g1_env.envelope_scales)
+        raise SystemExit(f"--command-envelopes {path}: commands.crouched_per_axis is {block['crouched_per_axis']!r}; "
+                         "training has only the L1 rule (false); train with crouched_height 0 for a per-axis box")
     for key, field in ENVELOPE_KEYS.items():
         v = block.get(key)
         vals = v if isinstance(v, list) else [v]

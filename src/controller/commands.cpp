@@ -188,12 +188,14 @@ void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scal
   *crouch_scale = 0.0;
   *bent_scale = 0.0;
   if (const double f = crouchFraction(); f > 0.0) {  // 0 with the crouched envelope off
-    double box = 0.0, l1 = 0.0;
+    double box = 0.0, l1 = 0.0, per_axis = 0.0;
     for (std::size_t i = 0; i < 3; ++i) {
       box = std::max(box, std::fabs(t[i]) / limits_.max_velocity[i]);
-      l1 += std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
+      const double r = std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
+      l1 += r;
+      per_axis = std::max(per_axis, r);
     }
-    *crouch_scale = (1.0 - f) * box + f * l1;
+    *crouch_scale = (1.0 - f) * box + f * (limits_.crouched_per_axis ? per_axis : l1);
   }
   if (limits_.bent_pitch > 0.0) {
     const double f = std::clamp(posture_.pitch / limits_.bent_pitch, 0.0, 1.0);

@@ -139,6 +139,8 @@ struct CommandsYaml {
     a->Visit("crouched_height", &l.crouched_height,
              "0 (off) or the pelvis height [m] at which crouched_max_velocity holds fully (L1 rule)");
     a->Visit("crouched_max_velocity", &l.crouched_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at crouched_height");
+    a->Visit("crouched_per_axis", &l.crouched_per_axis,
+             "true: the crouched envelope holds each axis alone (no L1 rule; combinations do not count against each other), true|false");
     a->Visit("bent_pitch", &l.bent_pitch, "0 (off) or the torso pitch [rad] at which bent_max_velocity holds fully (per axis)");
     a->Visit("bent_max_velocity", &l.bent_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at bent_pitch");
     a->Visit("walking_min_height", &l.walking_min_height,

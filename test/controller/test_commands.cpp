@@ -1,5 +1,6 @@
 // The command vocabulary (commands.cpp): shaping (NaN, range, staleness, slew limits, the explicit
 // "no height command"), the reference rate limiter, and the one command-script format.
+#include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -184,6 +185,37 @@ TEST(CommandShaper, CrouchedEnvelopeSlowsACombinedCommandAlongItsDirection) {
   CommandShaper plain(off);
   HeldCommandRun(plain, 0.6, 0.2, 0.4)(0.0, 0.62, 4.0);
   EXPECT_NEAR(plain.velocity().vx, 0.6, 1e-12);
+
+  // Per axis (crouched_per_axis): each axis alone against its limit, so the arc (0.6, 0.2, 0.4)
+  // at 0.62 m is slowed by v_x alone (0.6 / 0.3 = 2) to (0.3, 0.1, 0.2), where the L1 rule gave a
+  // sum of 1; half crouched (0.70 m) the limits and the rule are halfway; with the crouched limits
+  // at the box (max_velocity) nothing inside the box is slowed, however crouched, while the crouch
+  // fraction (the braking weight) still follows the height.
+  CommandLimits per_axis = limits;
+  per_axis.crouched_per_axis = true;
+  CommandShaper axes(per_axis);
+  HeldCommandRun arc(axes, 0.6, 0.2, 0.4);
+  arc(0.0, 0.62, 4.0);
+  EXPECT_NEAR(axes.velocity().vx, 0.3, 1e-9);
+  EXPECT_NEAR(axes.velocity().vy, 0.1, 1e-9);
+  EXPECT_NEAR(axes.velocity().wz, 0.2, 1e-9);
+  EXPECT_GT(axes.counters().crouch_limited_ticks, 0u);
+  arc(0.0, 0.70, 3.0);
+  ASSERT_NEAR(axes.crouchFraction(), 0.5, 1e-9);
+  // s = 0.5 * max(0.6/1, 0.2/0.4, 0.4/0.8) + 0.5 * max(0.6/0.65, 0.2/0.35, 0.4/0.7) with M = (1, 0.4, 0.8)
+  const double M[3] = {limits.max_velocity[0], limits.max_velocity[1], limits.max_velocity[2]};
+  const double m[3] = {0.5 * (M[0] + 0.3), 0.5 * (M[1] + 0.3), 0.5 * (M[2] + 0.6)};
+  const double s_half = 0.5 * std::max({0.6 / M[0], 0.2 / M[1], 0.4 / M[2]}) + 0.5 * std::max({0.6 / m[0], 0.2 / m[1], 0.4 / m[2]});
+  EXPECT_NEAR(axes.velocity().vx, s_half > 1.0 ? 0.6 / s_half : 0.6, 1e-9);
+  arc.expectWithinSlew(per_axis);
+  CommandLimits open = per_axis;
+  open.crouched_max_velocity = limits.max_velocity;
+  CommandShaper box(open);
+  HeldCommandRun(box, 0.9, 0.3, 0.6)(0.0, 0.62, 4.0);
+  EXPECT_NEAR(box.velocity().vx, 0.9, 1e-12) << "inside the box: not slowed";
+  EXPECT_NEAR(box.velocity().vy, 0.3, 1e-12);
+  EXPECT_EQ(box.counters().crouch_limited_ticks, 0u);
+  EXPECT_NEAR(box.crouchFraction(), 1.0, 1e-12);
 }
 
 // The bent velocity envelope (CommandLimits::bent_pitch): upright and leaning back a fast walk

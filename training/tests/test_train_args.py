@@ -186,6 +186,8 @@ with tempfile.TemporaryDirectory() as tmp:
                       (shipped.replace("bent_pitch: 0.4", "bent_pitch: .nan"), "bent_pitch"),
                       (shipped.replace("bent_pitch: 0.4", "bent_pitch: 0"), "bent_pitch"),
                       (shipped.replace("crouched_height: 0.62", "crouched_height: -0.1"), "crouched_height"),
+                      (shipped.replace("crouched_height: 0.62", "crouched_per_axis: true\n  crouched_height: 0.62"),
+                       "crouched_per_axis"),
                       (shipped.replace("\ncommands:", "\nkommands:"), "commands")):
         n_cases += 1
         path = os.path.join(tmp, "bad.yaml")

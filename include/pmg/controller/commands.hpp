@@ -71,6 +71,13 @@ struct CommandLimits {
   double crouched_height = 0.0;
   /// |v_x|, |v_y| [m/s], |ω| [rad/s] at crouched_height; each in (0, max_velocity].
   std::array<double, 3> crouched_max_velocity{0.4, 0.3, 0.6};
+  /// The crouched envelope per axis instead of the L1 rule: s = (1 − f) max_i |u_i| / M_i +
+  /// f max_i |u_i| / m_i(f), so a combination is slowed only where one of its axes is beyond its
+  /// own limit (as the bent envelope); false (the default): the L1 rule above. For an actor trained
+  /// on crouched combinations (H5c, trained with the crouched envelope off): with
+  /// crouched_max_velocity = max_velocity nothing is slowed beyond the box, while crouchFraction()
+  /// (the braking steps' weight, VelocityFeedbackConfig::brake_crouch_scaled) still follows the crouch.
+  bool crouched_per_axis = false;
   /// Bent velocity envelope (0 = off): torso pitch [rad], in (0, pitch_range max], at and beyond
   /// which the velocity command is held inside bent_max_velocity, per axis, scaled along its
   /// direction (s = max_i |u_i| / m_i(f), u ← u / s when s > 1). The limits blend linearly with the
