@@ -1437,6 +1437,16 @@ TEST(PostureFeedback, WalkingDeadBandCorrectsOnlyALeanBeyondIt) {
   EXPECT_NE(c.validate().find("walking_deadband_rad"), std::string::npos);
 }
 
+/// Heap allocations of 300 ticks of a crouched (0.68 m) walk leaning back 0.1 rad.
+std::size_t crouchedWalkAllocations(const PostureFeedbackConfig& c, const std::array<double, 2>& heights,
+                                    const VelocityCommand& walk) {
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+  const LowState lean = uprightState(0.0, -0.1);
+  test::AllocationGuard guard;
+  for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, 0.68}, walk, lean, 0.01);
+  return guard.count();
+}
+
 // walking_crouch_m: a robot whose torso leans back 0.06 rad when crouched still and 0.10 when it
 // walks crouched (the actor's lean in issue 12's `crouch_walk`). Standing crouched, the standing
 // integrator corrects the 0.06. Walking crouched, that correction is held (within the walking
@@ -1529,15 +1539,7 @@ TEST(PostureFeedback, CrouchedWalkFeedsBackItsLeanAndHoldsTheStillCrouchsCorrect
     EXPECT_LT(std::fabs(upright.correction), 1e-3) << "height " << h;
   }
   // Allocation-free, crouched walking.
-  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
-  const LowState lean = uprightState(0.0, -0.1);
-  std::size_t n = 0;
-  {
-    test::AllocationGuard guard;
-    for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, 0.68}, walk, lean, 0.01);
-    n = guard.count();
-  }
-  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(crouchedWalkAllocations(c, heights, walk), 0u);
   // Out of range, and without a standing height: refused, naming the field.
   PostureFeedbackConfig bad = c;
   bad.walking_crouch_m = 0.3;
@@ -1603,15 +1605,7 @@ TEST(PostureFeedback, CrouchedWalkReleasesAStandingCorrectionOpposedToTheWalk) {
   EXPECT_NEAR(same_released.mean_torso, same_held.mean_torso, 1e-9);
   // Allocation-free.
   c.walking_crouch_release = true;
-  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
-  const LowState lean = uprightState(0.0, -0.1);
-  std::size_t n = 0;
-  {
-    test::AllocationGuard guard;
-    for (int k = 0; k < 300; ++k) fb.update({0.0, 0.0, 0.68}, walk, lean, 0.01);
-    n = guard.count();
-  }
-  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(crouchedWalkAllocations(c, heights, walk), 0u);
 }
 
 // still_measured_velocity: told to stand but still running (the estimate above the threshold), the
