@@ -137,7 +137,7 @@ struct CommandsYaml {
     a->Visit("height_rate", &l.height_rate, "height slew limit [m/s]");
     a->Visit("max_reference_speed", &l.max_reference_speed, "bound on every joint reference's speed [rad/s]");
     a->Visit("crouched_height", &l.crouched_height,
-             "0 (off) or the pelvis height [m] at which crouched_max_velocity holds fully (L1 rule)");
+             "0 (off) or the pelvis height [m] at which crouched_max_velocity holds fully (L1 rule, or per axis with crouched_per_axis)");
     a->Visit("crouched_max_velocity", &l.crouched_max_velocity, "|v_x| [m/s], |v_y| [m/s], |w| [rad/s] at crouched_height");
     a->Visit("crouched_per_axis", &l.crouched_per_axis,
              "true: the crouched envelope holds each axis alone (no L1 rule; combinations do not count against each other), true|false");
