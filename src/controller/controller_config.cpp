@@ -257,6 +257,7 @@ struct PostureFeedbackYaml {
     a->Visit("still_velocity", &f.still_velocity, "integrates only while |v_x|, |v_y| < this, |w| < 2x this, 0..1");
     a->Visit("still_measured_velocity", &f.still_measured_velocity, "and only while the estimated |v_x|, |v_y| < this, 0..2 m/s (0: off)");
     a->Visit("settle_s", &f.settle_s, "standing, an axis integrates once its posture command is steady this long, 0..5 s (0: always)");
+    a->Visit("stop_settle_s", &f.stop_settle_s, "standing, the integrator waits this long after the velocity command goes still, 0..5 s (0: off)");
     a->Visit("walking_ki", &f.walking_ki, "integral gains for pitch, roll while walking, 0..5 [1/s] (0: decays while walking)");
     a->Visit("walking_max_correction_rad", &f.walking_max_correction_rad, "largest correction while walking, 0..0.3 rad");
     a->Visit("walking_filter_time_s", &f.walking_filter_time_s, "low-pass time constant of the attitude while walking, 0..5 s");

@@ -511,6 +511,7 @@ std::string PostureFeedbackConfig::validate() const {
   if (!(still_measured_velocity >= 0.0 && still_measured_velocity <= 2.0))
     return "still_measured_velocity: expected 0..2 m/s";
   if (!(settle_s >= 0.0 && settle_s <= 5.0)) return "settle_s: expected 0..5 s";
+  if (!(stop_settle_s >= 0.0 && stop_settle_s <= 5.0)) return "stop_settle_s: expected 0..5 s";
   for (std::size_t i = 0; i < 2; ++i)
     if (!(std::isfinite(walking_ki[i]) && walking_ki[i] >= 0.0 && walking_ki[i] <= 5.0))
       return std::string("walking_ki[") + std::to_string(i) + "] (" + (i == 0 ? "pitch" : "roll") + "): expected 0..5 [1/s]";
@@ -586,6 +587,7 @@ void PostureFeedback::reset() noexcept {
   c_walk_ = {0.0, 0.0};
   p_settled_ = {0.0, 0.0};
   p_steady_s_ = {0.0, 0.0};
+  still_s_ = 0.0;
   have_ = false;
   c_h_ = h_hat_ = 0.0;
   c_hw_ = c_h_applied_ = h_walking_s_ = 0.0;
@@ -644,6 +646,10 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   }
   const bool still = std::fabs(v.vx) < config_.still_velocity && std::fabs(v.vy) < config_.still_velocity &&
                      std::fabs(v.wz) < 2.0 * config_.still_velocity;
+  // How long the velocity command has been still (stop_settle_s): the robot's transient after a stop
+  // is not integrated.
+  still_s_ = still ? still_s_ + dt : 0.0;
+  const bool stop_settled = still_s_ >= config_.stop_settle_s - 1e-9;
   // Told to stand but still moving (still_measured_velocity): the standing correction is held.
   const bool moving = config_.still_measured_velocity > 0.0 && v_est && v_est->valid &&
                       (std::fabs(v_est->v_x) >= config_.still_measured_velocity ||
@@ -692,9 +698,10 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       cs = opposed ? c_stand_[i] * decay_keep
                    : std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
-    // Standing, only once the posture command has settled (settle_s): the torso's lag behind a
-    // posture ramp is not integrated, and meanwhile the correction is held.
-    if (have_ && ok && !decay && !hold_stand && p_steady_s_[i] >= config_.settle_s)
+    // Standing, only once the posture command has settled (settle_s) and the velocity command has
+    // been still for stop_settle_s: neither the torso's lag behind a posture ramp nor its swing after
+    // a stop is integrated, and meanwhile the correction is held.
+    if (have_ && ok && !decay && !hold_stand && stop_settled && p_steady_s_[i] >= config_.settle_s)
       cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
     cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);
     // Inside the dead band the correction decays as at a stop, so that what one gait needed is not

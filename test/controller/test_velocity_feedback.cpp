@@ -1708,6 +1708,69 @@ TEST(PostureFeedback, StandingCorrectionWaitsForThePostureCommandToSettle) {
   EXPECT_NE(c.validate().find("settle_s"), std::string::npos);
 }
 
+// stop_settle_s: the torso's swing after a stop (H5c stopping a crouched turn: back 0.15 rad for half
+// a second, then forward past upright) is the robot's own transient, not a posture error. Integrated,
+// it winds a forward correction that the torso then follows into a run-on; with stop_settle_s the
+// standing correction is held until the velocity command has been still that long.
+TEST(PostureFeedback, StandingCorrectionWaitsForTheRobotToSettleAfterAStop) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.filter_time_s = 0.0;
+  ASSERT_EQ(c.validate(), "");
+  struct Run {
+    double at_stop = 0.0, after_swing = 0.0, largest_change_in_swing = 0.0, settled = 0.0;
+    std::size_t allocations = 0;
+  };
+  auto run = [&](double stop_settle_s) {
+    PostureFeedbackConfig cc = c;
+    cc.stop_settle_s = stop_settle_s;
+    PostureFeedback fb(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+    const PostureCommand upright{0.0, 0.0, 0.78};
+    // Standing with the torso 0.02 rad back: a small forward correction builds (3 s).
+    for (int k = 0; k < 300; ++k) fb.update(upright, {}, uprightState(0.0, -0.02), 0.01);
+    // A turn for 0.5 s (the standing correction decays), then the stop.
+    for (int k = 0; k < 50; ++k) fb.update(upright, {0.0, 0.0, 0.4}, uprightState(0.0, 0.0), 0.01);
+    Run r;
+    r.at_stop = fb.correction()[0];
+    const LowState back = uprightState(0.0, -0.15), forward = uprightState(0.0, 0.08), ahead = uprightState(0.0, 0.03);
+    test::AllocationGuard guard;
+    // The swing, inside the first second after the stop: 0.5 s back at -0.15 rad, 0.45 s forward at +0.08.
+    for (int k = 0; k < 95; ++k) {
+      fb.update(upright, {}, k < 50 ? back : forward, 0.01);
+      r.largest_change_in_swing = std::max(r.largest_change_in_swing, std::fabs(fb.correction()[0] - r.at_stop));
+    }
+    r.after_swing = fb.correction()[0];
+    // The torso 0.03 rad forward for 0.54 s more, settled from 1.0 s after the stop: 50 ticks integrate.
+    for (int k = 0; k < 54; ++k) fb.update(upright, {}, ahead, 0.01);
+    r.settled = fb.correction()[0];
+    r.allocations = guard.count();
+    return r;
+  };
+  const Run off = run(0.0);
+  const Run on = run(1.0);
+  EXPECT_GT(off.at_stop, 0.02);
+  EXPECT_GT(on.at_stop, 0.01);  // 1 s less of it: the start waits too (below)
+  // Off: the swing is integrated: 0.075 forward, 0.036 back, so the correction ends 0.039 further forward.
+  EXPECT_NEAR(off.after_swing - off.at_stop, 0.15 * 0.5 - 0.08 * 0.45, 1e-6);
+  // On: held through the whole swing, exactly.
+  EXPECT_EQ(on.largest_change_in_swing, 0.0);
+  EXPECT_DOUBLE_EQ(on.after_swing, on.at_stop);
+  // Settled: integrates again (the torso forward of the command: the correction falls by 0.015).
+  EXPECT_NEAR(on.settled - on.after_swing, -0.03 * 0.5, 1e-6);
+  EXPECT_EQ(on.allocations, 0u);
+  // The wait counts from the first still tick, so the standing integrator waits at the start too.
+  PostureFeedbackConfig cc = c;
+  cc.stop_settle_s = 1.0;
+  PostureFeedback fresh(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+  for (int k = 0; k < 99; ++k) fresh.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, -0.1), 0.01);
+  EXPECT_EQ(fresh.correction()[0], 0.0);
+  for (int k = 0; k < 10; ++k) fresh.update({0.0, 0.0, 0.78}, {}, uprightState(0.0, -0.1), 0.01);
+  EXPECT_GT(fresh.correction()[0], 0.005);
+  c.stop_settle_s = 5.5;
+  EXPECT_NE(c.validate().find("stop_settle_s"), std::string::npos);
+}
+
 TEST(PostureFeedback, UpsetUprightDecaysTheCorrectionInsteadOfIntegrating) {
   // The upset guard holds with upright: the shaper sends pitch 0, the torso leans back 0.12 rad as the
   // robot runs on. Integrating, the standing correction would push the torso forward again.

@@ -520,6 +520,15 @@ struct PostureFeedbackConfig {
   /// -0.05 rad by the end of an unbend from 0.4 rad, and the robot then stood leaning back
   /// 0.04-0.08 rad for 2 s (posture walks; docs/controller.md "Settled before the standing integrator").
   double settle_s = 0.0;
+  /// Standing still, the pitch/roll integrator integrates only once the velocity command has been
+  /// still (still_velocity) for this long [s], [0, 5]; meanwhile the standing correction is held
+  /// (neither integrated nor decayed). 0 (the default): from the first still tick, as before. The
+  /// robot's own transient after a stop is not a posture error: stopping a 0.4 rad/s turn walked at
+  /// the 0.66 m walking floor, H5c's torso swings back 0.13-0.16 rad for about 0.5 s and then
+  /// forward; integrated at ki 1 /s, that swing wound a +0.10-0.11 rad forward correction, which the
+  /// torso then followed past upright into a forward run-on and a fall (4 of 4 held-out stress falls;
+  /// docs/controller.md "Settled after a stop").
+  double stop_settle_s = 0.0;
   /// While walking (not still), integral gains for torso pitch and roll [1/s], each 0..5; 0 (the
   /// default): the correction decays while walking, as above. A walking gait sways the torso about
   /// a mean (roll ±0.1 rad over a side-step cycle), so walking uses its own slower low-pass of the
@@ -692,6 +701,7 @@ class PostureFeedback {
   std::array<double, 2> c_{}, p_hat_{}, p_walk_hat_{};
   std::array<double, 2> c_stand_{}, c_walk_{};  ///< the standing and the walking integrators (c_ = their bounded sum)
   std::array<double, 2> p_settled_{}, p_steady_s_{};  ///< where each posture command settled, and for how long
+  double still_s_ = 0.0;  ///< how long the velocity command has been still [s] (stop_settle_s)
   bool have_ = false;
   double c_h_ = 0.0, h_hat_ = 0.0;
   double c_hw_ = 0.0, c_h_applied_ = 0.0;  ///< the walking integrator, the applied sum of both
