@@ -265,6 +265,7 @@ struct PostureFeedbackYaml {
     a->Visit("walking_min_command_rad", &f.walking_min_command_rad, "walking, an axis integrates only while |its command| >= this, 0..0.5 rad");
     a->Visit("walking_deadband_rad", &f.walking_deadband_rad, "walking below walking_min_command_rad, an axis integrates only its error beyond this band, 0..0.3 rad (0: not at all)");
     a->Visit("walking_crouch_m", &f.walking_crouch_m, "walking with the height at least this far below standing, an axis integrates as if commanded, 0..0.2 m (0: off)");
+    a->Visit("overshoot_release", &f.overshoot_release, "standing, a correction that pushes the torso past the command decays too (true/false)");
     a->Visit("walking_crouch_release", &f.walking_crouch_release, "with walking_crouch_m, a held standing correction opposed to the walking error decays instead (true/false)");
     a->Visit("envelope_min", &f.envelope_min, "pitch, roll [rad], -1.5..0: a correction never pushes the command below this");
     a->Visit("envelope_max", &f.envelope_max, "pitch, roll [rad], 0..1.5: nor above this (the actor's trained range)");

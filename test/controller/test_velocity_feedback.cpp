@@ -1771,6 +1771,52 @@ TEST(PostureFeedback, StandingCorrectionWaitsForTheRobotToSettleAfterAStop) {
   EXPECT_NE(c.validate().find("stop_settle_s"), std::string::npos);
 }
 
+// overshoot_release: standing, a correction that pushes the torso further past the command (beyond
+// 0.02 rad on its other side) decays at decay_time_s on top of its integration; within the band, or
+// with the torso still short of the command, it only integrates, as without the key.
+TEST(PostureFeedback, StandingCorrectionPushingTheTorsoPastTheCommandDecays) {
+  PostureFeedbackConfig c;
+  c.enabled = true;
+  c.ki = {1.0, 1.0};
+  c.filter_time_s = 0.0;
+  c.decay_time_s = 0.5;
+  ASSERT_EQ(c.validate(), "");
+  const LowState behind = uprightState(0.0, -0.05);
+  auto run = [&](bool release, double torso, double* built, std::size_t* allocations) {
+    PostureFeedbackConfig cc = c;
+    cc.overshoot_release = release;
+    PostureFeedback fb(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3});
+    const PostureCommand upright{0.0, 0.0, 0.78};
+    // The torso 0.05 rad back for 2 s: a forward correction of about 0.1 rad builds (no release: the
+    // torso is short of the command, on the correction's side).
+    for (int k = 0; k < 200; ++k) fb.update(upright, {}, behind, 0.01);
+    *built = fb.correction()[0];
+    const LowState swung = uprightState(0.0, torso);
+    test::AllocationGuard guard;
+    for (int k = 0; k < 50; ++k) fb.update(upright, {}, swung, 0.01);
+    *allocations = guard.count();
+    return fb.correction()[0];
+  };
+  double built_off = 0.0, built_on = 0.0;
+  std::size_t n = 0;
+  // The torso swings 0.06 rad forward of the command for 0.5 s.
+  const double off = run(false, 0.06, &built_off, &n);
+  const double on = run(true, 0.06, &built_on, &n);
+  EXPECT_EQ(n, 0u);
+  EXPECT_NEAR(built_on, 0.1, 0.002);
+  EXPECT_DOUBLE_EQ(built_on, built_off);
+  // Off: it integrates back at 0.06 rad/s only.
+  EXPECT_NEAR(off, built_off - 0.06 * 0.5, 1e-9);
+  // On: c <- c (1 - dt/0.5) - 0.06 dt each tick.
+  double expected = built_on;
+  for (int k = 0; k < 50; ++k) expected = expected * (1.0 - 0.01 / 0.5) - 0.06 * 0.01;
+  EXPECT_NEAR(on, expected, 1e-9);
+  EXPECT_LT(on, off - 0.03);
+  // Within the 0.02 rad band, or short of the command: as without the key.
+  EXPECT_DOUBLE_EQ(run(true, 0.015, &built_on, &n), run(false, 0.015, &built_off, &n));
+  EXPECT_DOUBLE_EQ(run(true, -0.03, &built_on, &n), run(false, -0.03, &built_off, &n));
+}
+
 TEST(PostureFeedback, UpsetUprightDecaysTheCorrectionInsteadOfIntegrating) {
   // The upset guard holds with upright: the shaper sends pitch 0, the torso leans back 0.12 rad as the
   // robot runs on. Integrating, the standing correction would push the torso forward again.

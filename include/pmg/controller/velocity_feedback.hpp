@@ -574,6 +574,14 @@ struct PostureFeedbackConfig {
   /// integrator spent its bound cancelling it (grid crouch_walk −0.080 rad; docs/controller.md
   /// "Crouched walks").
   bool walking_crouch_release = false;
+  /// Standing still: a standing correction that pushes the torso further past the command, the
+  /// error u_p − p̂ (the fast low-pass) beyond 0.02 rad on the correction's other side, decays
+  /// (decay_time_s) for as long as it does, on top of its integration; false (the default): it only
+  /// integrates back, at ki·|error|, 0.1 rad/s for a torso 0.1 rad past the command. A crouched
+  /// actor whose torso swings back after a stop, and then forward, kept a +0.06-0.15 rad forward
+  /// correction as the torso tipped forward, and ran on into a fall (H5c, H7; docs/controller.md
+  /// "Released where the torso overshoots").
+  bool overshoot_release = false;
   /// Bounds on the fed-back pitch and roll [rad], (pitch, roll) minimum and maximum, each finite
   /// with -1.5 ≤ envelope_min ≤ 0 ≤ envelope_max ≤ 1.5: a correction never pushes the command
   /// beyond them, u_fb,p ∈ [min(u_p, envelope_min), max(u_p, envelope_max)] (a command already
