@@ -1661,14 +1661,21 @@ TEST(PostureFeedback, StandingCorrectionIsHeldWhileTheRobotStillMoves) {
   EXPECT_NE(c.validate().find("still_measured_velocity"), std::string::npos);
 }
 
-// settle_s: standing, the torso lags the shaper's unbend ramp (0.4 -> 0 rad at 0.5 rad/s); integrating
-// that lag winds the correction negative, and the robot then stands leaning back. With settle_s the
-// correction is held through the ramp and integrates only once the command has been steady that long.
-TEST(PostureFeedback, StandingCorrectionWaitsForThePostureCommandToSettle) {
+// A standing pitch/roll integrator at ki 1 /s on the unfiltered attitude: what the settling and
+// release tests below start from.
+PostureFeedbackConfig integratingConfig() {
   PostureFeedbackConfig c;
   c.enabled = true;
   c.ki = {1.0, 1.0};
   c.filter_time_s = 0.0;
+  return c;
+}
+
+// settle_s: standing, the torso lags the shaper's unbend ramp (0.4 -> 0 rad at 0.5 rad/s); integrating
+// that lag winds the correction negative, and the robot then stands leaning back. With settle_s the
+// correction is held through the ramp and integrates only once the command has been steady that long.
+TEST(PostureFeedback, StandingCorrectionWaitsForThePostureCommandToSettle) {
+  PostureFeedbackConfig c = integratingConfig();
   c.envelope_max = {0.6, 0.3};
   ASSERT_EQ(c.validate(), "");
   auto unbend = [&](double settle_s, std::vector<double>* corr) {
@@ -1713,10 +1720,7 @@ TEST(PostureFeedback, StandingCorrectionWaitsForThePostureCommandToSettle) {
 // it winds a forward correction that the torso then follows into a run-on; with stop_settle_s the
 // standing correction is held until the velocity command has been still that long.
 TEST(PostureFeedback, StandingCorrectionWaitsForTheRobotToSettleAfterAStop) {
-  PostureFeedbackConfig c;
-  c.enabled = true;
-  c.ki = {1.0, 1.0};
-  c.filter_time_s = 0.0;
+  PostureFeedbackConfig c = integratingConfig();
   ASSERT_EQ(c.validate(), "");
   struct Run {
     double at_stop = 0.0, after_swing = 0.0, largest_change_in_swing = 0.0, settled = 0.0;
@@ -1775,10 +1779,7 @@ TEST(PostureFeedback, StandingCorrectionWaitsForTheRobotToSettleAfterAStop) {
 // 0.02 rad on its other side) decays at decay_time_s on top of its integration; within the band, or
 // with the torso still short of the command, it only integrates, as without the key.
 TEST(PostureFeedback, StandingCorrectionPushingTheTorsoPastTheCommandDecays) {
-  PostureFeedbackConfig c;
-  c.enabled = true;
-  c.ki = {1.0, 1.0};
-  c.filter_time_s = 0.0;
+  PostureFeedbackConfig c = integratingConfig();
   c.decay_time_s = 0.5;
   ASSERT_EQ(c.validate(), "");
   const LowState behind = uprightState(0.0, -0.05);
