@@ -698,15 +698,15 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       cs = opposed ? c_stand_[i] * decay_keep
                    : std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
-    // Standing, only once the posture command has settled (settle_s) and the velocity command has
-    // been still for stop_settle_s: neither the torso's lag behind a posture ramp nor its swing after
-    // a stop is integrated, and meanwhile the correction is held.
     // Standing with overshoot_release: a correction that pushes the torso further past the command
     // (beyond kOvershootBand on its other side) decays as well.
     constexpr double kOvershootBand = 0.02;  // [rad] a standing torso's ordinary few hundredths
     if (config_.overshoot_release && have_ && ok && !decay &&
         (cmd[i] - p_hat_[i]) * std::copysign(1.0, cs) < -kOvershootBand)
       cs *= decay_keep;
+    // Standing, only once the posture command has settled (settle_s) and the velocity command has
+    // been still for stop_settle_s: neither the torso's lag behind a posture ramp nor its swing after
+    // a stop is integrated, and meanwhile the correction is held.
     if (have_ && ok && !decay && !hold_stand && stop_settled && p_steady_s_[i] >= config_.settle_s)
       cs += config_.ki[i] * (cmd[i] - p_hat_[i]) * dt;
     cs = std::clamp(cs, -config_.max_correction_rad, config_.max_correction_rad);

@@ -526,8 +526,9 @@ struct PostureFeedbackConfig {
   /// robot's own transient after a stop is not a posture error: stopping a 0.4 rad/s turn walked at
   /// the 0.66 m walking floor, H5c's torso swings back 0.13-0.16 rad for about 0.5 s and then
   /// forward; integrated at ki 1 /s, that swing wound a +0.10-0.11 rad forward correction, which the
-  /// torso then followed past upright into a forward run-on and a fall (4 of 4 held-out stress falls;
-  /// docs/controller.md "Settled after a stop").
+  /// torso then followed past upright into a forward run-on and a fall (4 of 4 held-out stress falls).
+  /// Not adopted: on new seeds H5c still fell as often, as the next walk started (docs/controller.md
+  /// "Settled after a stop").
   double stop_settle_s = 0.0;
   /// While walking (not still), integral gains for torso pitch and roll [1/s], each 0..5; 0 (the
   /// default): the correction decays while walking, as above. A walking gait sways the torso about
@@ -579,7 +580,8 @@ struct PostureFeedbackConfig {
   /// (decay_time_s) for as long as it does, on top of its integration; false (the default): it only
   /// integrates back, at ki·|error|, 0.1 rad/s for a torso 0.1 rad past the command. A crouched
   /// actor whose torso swings back after a stop, and then forward, kept a +0.06-0.15 rad forward
-  /// correction as the torso tipped forward, and ran on into a fall (H5c, H7; docs/controller.md
+  /// correction as the torso tipped forward, and ran on into a fall (H5c, H7). Not adopted: with
+  /// stop_settle_s, H5c fell in 4 of 72 held-out stress runs, as without either (docs/controller.md
   /// "Released where the torso overshoots").
   bool overshoot_release = false;
   /// Bounds on the fed-back pitch and roll [rad], (pitch, roll) minimum and maximum, each finite
