@@ -665,6 +665,9 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   const bool crouched = config_.walking_crouch_m > 0.0 && standing_height_ > 0.0 && u.height > 0.0 &&
                         u.height <= standing_height_ - config_.walking_crouch_m;
   const std::array<double, 2>* range[2] = {&pitch_range_, &roll_range_};
+  // [rad] the few hundredths a torso sways standing or walking are not a sign (walking_crouch_release,
+  // overshoot_release)
+  constexpr double kReleaseBand = 0.02;
   for (std::size_t i = 0; i < 2; ++i) {
     if (std::fabs(cmd[i] - p_settled_[i]) > 0.01) {
       p_settled_[i] = cmd[i];
@@ -691,7 +694,6 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       // held correction that pushes the gait-averaged torso further from the command (e of the
       // other sign, beyond kReleaseBand) decays whole: that actor leans one way standing crouched
       // and the other walking.
-      constexpr double kReleaseBand = 0.02;  // [rad] the gait's ordinary few hundredths are not a sign
       const double wm = config_.walking_max_correction_rad;
       const double mag = std::fabs(c_stand_[i]);
       const bool opposed = config_.walking_crouch_release && have_ && e * std::copysign(1.0, c_stand_[i]) < -kReleaseBand;
@@ -699,10 +701,9 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
                    : std::copysign(mag > wm ? wm + (mag - wm) * decay_keep : mag, c_stand_[i]);
     }
     // Standing with overshoot_release: a correction that pushes the torso further past the command
-    // (beyond kOvershootBand on its other side) decays as well.
-    constexpr double kOvershootBand = 0.02;  // [rad] a standing torso's ordinary few hundredths
+    // (beyond kReleaseBand on its other side) decays as well.
     if (config_.overshoot_release && have_ && ok && !decay &&
-        (cmd[i] - p_hat_[i]) * std::copysign(1.0, cs) < -kOvershootBand)
+        (cmd[i] - p_hat_[i]) * std::copysign(1.0, cs) < -kReleaseBand)
       cs *= decay_keep;
     // Standing, only once the posture command has settled (settle_s) and the velocity command has
     // been still for stop_settle_s: neither the torso's lag behind a posture ramp nor its swing after
