@@ -4,11 +4,12 @@
 # A RUN with no .whl/argv_RUN.txt but a .whl/RUN/ holding actor.npz and train_config.json is screened without training
 # (a run whose machine was taken back before its screens; its files came back through device_poll.sh).
 # Needs in .whl/: site.tgz (training/make_device_site.sh), argv_RUN.txt for each RUN (train_pmg.py's argv, --out
-# /tmp/runs/RUN), whatever those argvs name there (e.g. vG_train_config.json), floor_stops_0.62.yaml and
-# crouched_backward_short.yaml (copies of training/results/fidelity/crouched/floor_stops_0.62.yaml and
+# /tmp/runs/RUN), whatever those argvs name there (e.g. vG_train_config.json), floor_stops_0.62.yaml,
+# floor_transitions_0.62.yaml and crouched_backward_short.yaml (copies of
+# training/results/fidelity/crouched/floor_stops_0.62.yaml, .../crouched/floor_transitions_0.62.yaml and
 # .../flight_penalty/crouched_backward_short.yaml: training/results is out of the reduced tree). Several RUNs train
 # side by side on the one GPU (each under a 21-minute timeout); then each run that exited 0 rolls 128 randomized
-# robots (--seed 1, the robots of every earlier screen) over each schedule, and segment_robots.py summarizes them.
+# robots (--seed 1, the robots of every earlier screen) over each schedule (the transitions one after the other two), and segment_robots.py summarizes them.
 # Writes /tmp/runs/RUN/, /tmp/runs/RUN.log, /tmp/runs/rand/ and, at the end, /tmp/runs/done. Start it with setsid in
 # the background and poll with training/device_poll.sh "RUN [RUN...]" SECONDS.
 set -u
@@ -37,6 +38,10 @@ screen() {
     --commands .whl/crouched_backward_short.yaml --randomized 128 --seed 1 --out /tmp/runs/cb_$R.npz > /tmp/runs/rand/mjx_rand_$R.txt 2>&1
   echo "rc $?" >> /tmp/runs/rand/mjx_rand_$R.txt
   wait
+  JAX_COMPILATION_CACHE_DIR=/tmp/jc_eval3 timeout 8m python3 training/eval_mjx.py $C/actor.npz --train-config $C/train_config.json \
+    --commands .whl/floor_transitions_0.62.yaml --randomized 128 --seed 1 --out /tmp/runs/ft_$R.npz > /tmp/runs/rand/mjx_floor_transitions_$R.txt 2>&1
+  python3 training/segment_robots.py summarize /tmp/runs/ft_$R.npz --commands .whl/floor_transitions_0.62.yaml \
+    --out /tmp/runs/rand/floor_transitions_$R.json >> /tmp/runs/rand/mjx_floor_transitions_$R.txt 2>&1
   python3 training/segment_robots.py summarize /tmp/runs/cb_$R.npz --commands .whl/crouched_backward_short.yaml \
     --out /tmp/runs/rand/rand_$R.json >> /tmp/runs/rand/mjx_rand_$R.txt 2>&1
   python3 training/segment_robots.py summarize /tmp/runs/floor_$R.npz --commands .whl/floor_stops_0.62.yaml \
