@@ -30,6 +30,11 @@ velocity (EnvConfig.pd_damping), as the SIL's motor-driver emulation does, inste
 joint damping; --sim-dt sets the physics step (the SIL's: 0.001 s). Together they tell which of the
 engine, the step and the damping an actor's behaviour in the SIL belongs to.
 
+--command-log SEED.csv plays, tick by tick, the command a product-path run gave its generator and actor (a
+seed<k>.csv of `pmg_policy_sil --commands S.yaml --out DIR` on the same schedule: after the controller's shaper,
+feed-forward and feedback; command_log) instead of the schedule's, whose segments and commanded column stay: does the
+actor fall in MJX where the SIL's robot did, given what the SIL gave it (training/device_replay_job.sh)?
+
 --start-reference starts the robot in the PMG reference's pose for the schedule's first command (the
 sole on the floor, at rest) instead of standing: whether an actor holds a crouch or a bend it is put in.
 --hold-reference replaces the actor by actions that hold the reference's leg pose: what the training
@@ -81,6 +86,61 @@ def schedule(path):
         a = np.clip((t - segs[k][0]) / s["ramp"], 0, 1) if s["ramp"] > 0 else 1.0
         return prev + a * (segs[k][1] - prev)
     return at, s["duration"], spans
+
+
+LOG_COLUMNS = ["vx_fb", "vy_fb", "wz_fb", "pitch_fb", "roll_fb", "height_fb"]
+LOG_LIMITS = (np.array([-2.0, -2.0, -3.0, -1.0, -1.0, 0.3]), np.array([2.0, 2.0, 3.0, 1.0, 1.0, 1.0]))
+
+
+def command_log(path, ticks, dt, schedule_at):
+    """The command the product path gave its generator and actor, (ticks, 6) at control tick k (t = k dt [s]):
+    from `pmg_policy_sil --out DIR`'s DIR/seed<k>.csv (one row per loop tick) the command after the
+    controller's shaper, feed-forward and feedback, LOG_COLUMNS (v_x, v_y [m/s], omega [rad/s], pitch, roll [rad],
+    height [m]; heading frame), of the first episode (episode 0: until the first fall). Each tick takes the last
+    row at or before its time (t: the schedule's time); ticks before the controller is active (the columns
+    nan), and past the log's end (the run fell), take the schedule's command @p schedule_at(t).
+    Raises ValueError naming the file, the row or column and what was expected: a missing column, t not a
+    number or not increasing, or a command outside LOG_LIMITS (|v| <= 2 m/s, |omega| <= 3 rad/s, |pitch|,
+    |roll| <= 1 rad, height in [0.3, 1.0] m)."""
+    import csv
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        header = next(reader, None)
+        if header is None:
+            raise ValueError(f"{path}: empty; expected a seed<k>.csv of pmg_policy_sil --out")
+        missing = [c for c in ["t", "episode"] + LOG_COLUMNS if c not in header]
+        if missing:
+            raise ValueError(f"{path}: no column {', '.join(missing)}; expected a seed<k>.csv of pmg_policy_sil --out "
+                             f"(t, episode and {', '.join(LOG_COLUMNS)})")
+        it, ie, ic = header.index("t"), header.index("episode"), [header.index(c) for c in LOG_COLUMNS]
+        times, rows = [], []
+        lo, hi = LOG_LIMITS
+        for n, row in enumerate(reader, start=2):
+            try:
+                if int(float(row[ie])) != 0:
+                    break  # after the first fall: a restarted robot, not this run's command
+                t = float(row[it])
+                c = np.array([float(row[i]) for i in ic])
+            except (ValueError, IndexError):
+                raise ValueError(f"{path}: row {n}: t, episode or {'/'.join(LOG_COLUMNS)} is not a number") from None
+            if not math.isfinite(t) or (times and t <= times[-1]):
+                raise ValueError(f"{path}: row {n}: t = {t} s{f' after {times[-1]} s' if times else ''}; expected "
+                                 f"finite, increasing times")
+            bad = np.isfinite(c) & ((c < lo) | (c > hi))
+            if bad.any():
+                k = int(np.argmax(bad))
+                raise ValueError(f"{path}: row {n}: {LOG_COLUMNS[k]} = {c[k]:.4g}; expected in [{lo[k]:g}, {hi[k]:g}] "
+                                 f"(or nan before the controller is active)")
+            times.append(t)
+            rows.append(c)
+    out = np.stack([schedule_at(k * dt) for k in range(ticks)]).astype(float)
+    if rows:
+        k = np.searchsorted(np.asarray(times), np.arange(ticks) * dt + 1e-9, side="right") - 1
+        inside = (k >= 0) & (np.arange(ticks) * dt <= times[-1] + 1e-9)
+        logged = np.asarray(rows)[np.clip(k, 0, len(rows) - 1)]
+        use = inside[:, None] & np.all(np.isfinite(logged), axis=1, keepdims=True)
+        out = np.where(use, logged, out)
+    return out
 
 
 def policy_action(h, eps=None, noise=1.0):
@@ -197,6 +257,12 @@ def main(argv=None):
     ap.add_argument("--out", required=True)
     ap.add_argument("--commands", default=None, help="command schedule (default: config/policies/eval_commands.yaml)")
     ap.add_argument("--duration", type=float, default=None)
+    ap.add_argument("--command-log", default=None, metavar="SEED.csv",
+                    help="play the command a product-path run gave its generator and actor instead of the schedule's: "
+                         "a seed<k>.csv of `pmg_policy_sil --commands S.yaml --out DIR` on the same schedule (the "
+                         "command after the controller's shaper, feed-forward and feedback, each tick of the first "
+                         "episode: command_log). The schedule still names the segments and is the commanded column "
+                         "of the report and the metrics (the user's command u)")
     ap.add_argument("--train-config", default=None,
                     help="the run's train_config.json: the environment is built as trained, then made nominal "
                          "(default: train_config.json beside the actor if there is one, else EnvConfig's defaults)")
@@ -286,6 +352,14 @@ def main(argv=None):
     spans = [(name, t0, min(t1, duration)) for name, t0, t1 in spans if t0 < duration]  # --duration: the segments run
     ticks = int(round(duration / cfg.control_dt))
     cmds = jnp.asarray(np.stack([at(k * cfg.control_dt) for k in range(ticks)]), jnp.float32)
+    actor_cmds = cmds  # the command the environment plays (the schedule's, or --command-log's)
+    if args.command_log:
+        try:
+            actor_cmds = jnp.asarray(command_log(args.command_log, ticks, cfg.control_dt, at), jnp.float32)
+        except (OSError, ValueError) as e:
+            raise SystemExit(f"--command-log: {e}")
+        print(f"command: the product path's actor command from {args.command_log} (largest |difference| from the "
+              f"schedule's per axis: {np.round(np.abs(np.asarray(actor_cmds) - np.asarray(cmds)).max(axis=0), 3).tolist()})")
     W = [(jnp.asarray(w), jnp.asarray(b)) for w, b in layers]
 
     if W[-1][0].shape[1] != 2 * LEG:
@@ -355,7 +429,7 @@ def main(argv=None):
           f"({'the reference pose of the first command' if args.start_reference else 'standing'})"
           + (f"; {n} robots in the training distribution (seed {args.seed})" if args.randomized else ""))
     run = jax.jit(lambda p, h, z, s, c, k: jax.lax.scan(functools.partial(body, p, h, z), s, (c, k)))
-    _, rec = run(params, jnp.asarray(args.hold_reference), jnp.float32(args.stochastic * var_scale), state, cmds,
+    _, rec = run(params, jnp.asarray(args.hold_reference), jnp.float32(args.stochastic * var_scale), state, actor_cmds,
                  jax.random.split(jax.random.PRNGKey(1000 + args.seed), ticks))
     rec = {k: np.swapaxes(np.asarray(v), 0, 1) for k, v in rec.items()}  # (robots, ticks, ...)
     cm = np.asarray(cmds)

@@ -75,7 +75,9 @@
 // cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
-// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off), <out>/frames<k>.csv and
+// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off;
+// vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
+// generator and the actor were given, nan when not active: training/eval_mjx.py --command-log replays it), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
 // supervisor's slew limit, hal_q_rate_max, held a joint's command back; --q-rate-max sets it).
 // --probe FILE writes the first seed's first episode tick by tick for training/probe_sil.py: MuJoCo's
@@ -528,8 +530,11 @@ int main(int argc, char** argv) {
           // nan/0 without a stance foot), leg_rejected: 1 when the gate rejected it
           // vx_shaped, vy_shaped, wz_shaped: the shaper's command (after its limits, envelopes and slew;
           // before the feedback; nan when not active)
+          // height_fb: the height command after the posture feedback (the shaper's when it is off; nan when not
+          // active): with vx_fb..roll_fb, the command the generator and the actor were given (eval_mjx.py
+          // --command-log replays it)
           csv << ",pelvis_tilt,episode,fb_held_ticks,fb_decayed_ticks,upset_hold,vx_leg,vy_leg,leg_feet,leg_rejected"
-                 ",vx_shaped,vy_shaped,wz_shaped\n";
+                 ",vx_shaped,vy_shaped,wz_shaped,height_fb\n";
           frames << "t";
           for (int b = 1; b < m->nbody; ++b)
             frames << "," << mj_id2name(m, mjOBJ_BODY, b) << ":" << m->body_parentid[b];
@@ -704,7 +709,9 @@ int main(int argc, char** argv) {
             csv << ',' << (leg_ok ? leg->v_x : nan) << ',' << (leg_ok ? leg->v_y : nan) << ',' << (leg ? leg->stance_feet : 0)
                 << ',' << (vfb && vfb->estimator().rejecting() ? 1 : 0);
             const pmg::VelocityCommand& us = controller.commands().velocity();
-            csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan) << '\n';
+            csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan);
+            const pmg::PostureFeedback* pf = controller.postureFeedback();
+            csv << ',' << (active ? (pf ? pf->command() : controller.commands().posture()).height : nan) << '\n';
           }
           if (probing) {
             const pmg::LowState& st = controller.lastState();
