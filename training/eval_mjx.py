@@ -54,6 +54,7 @@ support, contact onsets per second per foot, the speed of a touching foot), whic
 a hop or a shuffle.
 """
 import argparse
+import csv
 import dataclasses
 import functools
 import json
@@ -102,7 +103,6 @@ def command_log(path, ticks, dt, schedule_at):
     Raises ValueError naming the file, the row or column and what was expected: a missing column, t not a
     number or not increasing, or a command outside LOG_LIMITS (|v| <= 2 m/s, |omega| <= 3 rad/s, |pitch|,
     |roll| <= 1 rad, height in [0.3, 1.0] m)."""
-    import csv
     with open(path, newline="") as f:
         reader = csv.reader(f)
         header = next(reader, None)

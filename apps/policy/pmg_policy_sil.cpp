@@ -628,6 +628,7 @@ int main(int argc, char** argv) {
           Axes fb, est;
           fb.fill(kNaN);
           est.fill(kNaN);
+          double height_fb = kNaN;  // the height after the posture feedback, whether or not it feeds the height back
           if (const pmg::VelocityFeedback* vf = controller.velocityFeedback(); vf && active) {
             const pmg::VelocityCommand& c_fb = vf->command();
             fb[0] = c_fb.vx;
@@ -645,6 +646,7 @@ int main(int argc, char** argv) {
             const pmg::PostureCommand& ps = pf ? pf->command() : controller.commands().posture();
             fb[3] = ps.pitch;
             fb[4] = ps.roll;
+            height_fb = ps.height;
             if (pf && (base.posture_feedback.height_ki > 0.0 || base.posture_feedback.walking_height_ki > 0.0)) {
               fb[5] = ps.height;
               est[5] = pf->measuredHeight();
@@ -709,9 +711,8 @@ int main(int argc, char** argv) {
             csv << ',' << (leg_ok ? leg->v_x : nan) << ',' << (leg_ok ? leg->v_y : nan) << ',' << (leg ? leg->stance_feet : 0)
                 << ',' << (vfb && vfb->estimator().rejecting() ? 1 : 0);
             const pmg::VelocityCommand& us = controller.commands().velocity();
-            csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan);
-            const pmg::PostureFeedback* pf = controller.postureFeedback();
-            csv << ',' << (active ? (pf ? pf->command() : controller.commands().posture()).height : nan) << '\n';
+            csv << ',' << (active ? us.vx : nan) << ',' << (active ? us.vy : nan) << ',' << (active ? us.wz : nan) << ','
+                << height_fb << '\n';
           }
           if (probing) {
             const pmg::LowState& st = controller.lastState();
