@@ -289,7 +289,8 @@ TEST(ControllerApp, StrideAdaptationRunsInTheLoopAndShippedPoliciesRefuseIt) {
 // upright walking and levelled stance soles, with the actor fine-tuned on them), and
 // g1_sil_policy_walking_height.yaml (the raised walking templates and their actor), and
 // g1_sil_policy_v20b.yaml (V20b, trained from scratch, at the HAL's default slew), and
-// g1_sil_policy_n24b.yaml (N24b, trained from scratch in 17.7 min, at the same slew): the actor keeps the
+// g1_sil_policy_n24b.yaml (N24b, trained from scratch in 17.7 min, at the same slew), and
+// g1_sil_policy_h10a.yaml (H10a, the crouched box's actor, crouched envelope opened): the actor keeps the
 // G1 upright and walks it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
@@ -333,7 +334,8 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 // noise, with its feed-forward per crouch) is held to the same: here -0.452 and 0.010; with the
 // feed-forward fitted upright only, its battery walked -0.71 at 0.74 m and one of two seeds fell in the
 // stop after the 0.70 m walk
-// (training/README.md "Half the exploration noise"). Velocities are the pelvis's, world frame
+// (training/README.md "Half the exploration noise"). g1_sil_policy_h10a.yaml (H10a, trained against the run-on in
+// crouched backward stops; training/results/fidelity/crouched_box/README.md "H10a, H10b, H10c") is held to the same. Velocities are the pelvis's, world frame
 // (the robot starts facing +x; the heading drifts a few degrees at most).
 class CrouchedBackwardTest : public ::testing::TestWithParam<const char*> {};
 
@@ -365,7 +367,7 @@ TEST_P(CrouchedBackwardTest, WalksBackwardCrouchedAtItsCommandAndStops) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, CrouchedBackwardTest,
-                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml"));
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml", "g1_sil_policy_h10a.yaml"));
 
 // The walking height feedback through the product path (docs/controller.md "Walking height
 // correction"): N24b walks crouched backward 2-3 cm above its command; with its config's
@@ -478,7 +480,8 @@ TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
 INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
                                                            "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml",
-                                                           "g1_sil_policy_v20b.yaml", "g1_sil_policy_n24b.yaml"));
+                                                           "g1_sil_policy_v20b.yaml", "g1_sil_policy_n24b.yaml",
+                                                           "g1_sil_policy_h10a.yaml"));
 
 }  // namespace
 }  // namespace pmg
