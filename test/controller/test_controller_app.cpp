@@ -335,7 +335,8 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
 // feed-forward fitted upright only, its battery walked -0.71 at 0.74 m and one of two seeds fell in the
 // stop after the 0.70 m walk
 // (training/README.md "Half the exploration noise"). g1_sil_policy_h10a.yaml (H10a, trained against the run-on in
-// crouched backward stops; training/results/fidelity/crouched_box/README.md "H10a, H10b, H10c") is held to the same. Velocities are the pelvis's, world frame
+// crouched backward stops; training/results/fidelity/crouched_box/README.md "H10a, H10b, H10c") is held to the same:
+// here -0.583 and 0.050 (its crouched backward battery, through the velocity feedback's estimate: 15 of 15 in band). Velocities are the pelvis's, world frame
 // (the robot starts facing +x; the heading drifts a few degrees at most).
 class CrouchedBackwardTest : public ::testing::TestWithParam<const char*> {};
 
