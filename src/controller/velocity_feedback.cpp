@@ -778,9 +778,15 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
       const double want = u.height + c + cw;
       const double got = std::clamp(want, lower, upper);
       const bool bound = u.height > 0.0 && got != want;
-      c_h_applied_ = u.height > 0.0 ? (bound ? got - u.height : c + cw) : 0.0;
+      const double target = u.height > 0.0 ? (bound ? got - u.height : c + cw) : 0.0;
       // Anti-windup: what the bounds cut comes off the integrator that is acting.
-      const double cut = bound ? c + cw - c_h_applied_ : 0.0;
+      const double cut = bound ? c + cw - target : 0.0;
+      // The applied correction moves towards its target at kWalkingHeightCorrectionRate at most: the floor's
+      // bound takes effect in one tick as a walk starts and would cancel a lowering standing correction (up to
+      // max_height_correction_m) at once, a step in the height reference (docs/controller.md "Walking height
+      // correction").
+      const double step = kWalkingHeightCorrectionRate * dt;
+      c_h_applied_ = u.height > 0.0 ? c_h_applied_ + std::clamp(target - c_h_applied_, -step, step) : 0.0;
       // Decaying, what is cut comes off the walking correction first (as far as it reduces it).
       const double from_walk =
           walking_h ? cut : (cut * cw > 0.0 ? std::copysign(std::min(std::fabs(cut), std::fabs(cw)), cw) : 0.0);

@@ -2010,6 +2010,33 @@ TEST(PostureFeedback, HeightClosesTheLoopWithinItsBoundsAndNeverStraightensBeyon
   EXPECT_LT(fb.heightCorrection(), 0.0);
 }
 
+// A walk that starts from a crouched stand below the walking floor, with the standing height integrator lowering
+// the command (the robot stands 2 cm high): as the walk starts the floor's bound (never below the command there)
+// takes effect in one tick. The applied correction follows at kWalkingHeightCorrectionRate (0.1 m/s), so the
+// height command moves by at most 1 mm per 10 ms tick; before that rate it stepped by the whole standing
+// correction, 5 mm (the SIL's height reference at 0.644 m/s: docs/controller.md "Walking height correction").
+TEST(PostureFeedback, WalkingHeightDoesNotStepTheCommandAsAWalkStartsBelowTheFloor) {
+  HeightFixture hf;
+  const PostureFeedbackConfig c = walkingHeightConfig(3.0, 0.04);
+  const double standing = hf.standingHeight();
+  const double floor = standing - 0.12;
+  PostureFeedback fb(c, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, {standing - 0.20, 0.85}, standing, hf.legs, hf.idx,
+                     floor);
+  const double u = floor - 0.04;  // told to crouch below the floor
+  const LowState high = crouchState(crouchAngleFor(fb, u + 0.02));
+  for (int k = 0; k < 400; ++k) fb.update({0.0, 0.0, u}, {}, high, 0.01);
+  ASSERT_NEAR(fb.heightCorrection(), -c.max_height_correction_m, 1e-6) << "the standing correction lowers, at its bound";
+  double max_step = 0.0, before = fb.command().height;
+  for (int k = 0; k < 50; ++k) {
+    const double h = fb.update({0.0, 0.0, u}, {0.3, 0.0, 0.0}, high, 0.01).height;
+    max_step = std::max(max_step, std::fabs(h - before));
+    before = h;
+  }
+  EXPECT_GE(fb.command().height, u - 1e-9) << "the floor's bound holds, once the correction has moved: not below the command";
+  EXPECT_LE(max_step, PostureFeedback::kWalkingHeightCorrectionRate * 0.01 + 1e-12) << "no step in the height command";
+  EXPECT_GT(max_step, 0.5 * PostureFeedback::kWalkingHeightCorrectionRate * 0.01) << "the correction was released";
+}
+
 TEST(PostureFeedback, WalkingHeightClosesTheLoopAboveTheWalkingFloorAndLetsGoAtTheStop) {
   HeightFixture hf;
   const PostureFeedbackConfig c = walkingHeightConfig(1.0, 0.04);

@@ -658,6 +658,10 @@ struct PostureFeedbackConfig {
 /// while walking or while c_hw decays. noexcept and allocation-free per tick (tested).
 class PostureFeedback {
  public:
+  /// With walking_height_ki > 0, the applied height correction (both integrators, after the bounds) moves at
+  /// most this fast [m/s]: half the shipped configs' commands.height_rate (0.2 m/s), so a bound that takes
+  /// effect at once (the walking floor as a walk starts) cannot step the height reference.
+  static constexpr double kWalkingHeightCorrectionRate = 0.1;
   /// @param pitch_range, roll_range the shaper's posture limits [rad]; @param height_range the
   /// shaper's height limits [m] and @param standing_height its standing height [m]; @param legs,
   /// leg_idx the robot's leg chains and their columns in LowState::motors (needed only with
