@@ -33,7 +33,7 @@ import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from segment_band import RUNAWAY_ABS, RUNAWAY_REL  # noqa: E402
+from segment_band import is_runaway  # noqa: E402
 
 WINDOW = 0.6  # the last 60 % of a segment's ticks, as pmg_policy_sil's summary.json
 AXES = ("vx", "vy", "wz")
@@ -75,16 +75,6 @@ def seed_segments(path):
     return out, fell
 
 
-def runaway_axes(means):
-    """The axes of one segment's window means that run away (segment_band's rule)."""
-    hits = []
-    for a, (cmd, ach) in means.items():
-        wrong_way = abs(cmd) > 1e-9 and ach * cmd < 0.0
-        if not wrong_way and abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), RUNAWAY_ABS[a]):
-            hits.append((a, cmd, ach))
-    return hits
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("dirs", nargs="+", help="pmg_policy_sil --out folders holding seed<N>.csv")
@@ -115,7 +105,7 @@ def main(argv=None):
         for name, means in segs:
             if not fnmatch.fnmatch(name, args.segments):
                 continue
-            for axis, cmd, ach in runaway_axes(means):
+            for axis, cmd, ach in [(a, c, v) for a, (c, v) in means.items() if is_runaway(a, c, v)]:
                 result["segments"].setdefault(name, []).append(
                     {"seed": seed, "axis": axis, "command": round(cmd, 4), "achieved": round(ach, 4)})
                 if seed not in result["runaway_seeds"]:

@@ -37,6 +37,14 @@ from plot_segments import COUPLING_ABS, POSTURE_ABS, VEL_ABS, VEL_REL, neutral_h
 RUNAWAY_REL, RUNAWAY_ABS = 0.5, {"vx": 0.2, "vy": 0.2, "wz": 0.3}
 
 
+def is_runaway(axis, cmd, ach):
+    """Whether an achieved velocity @p ach runs away from its command @p cmd on @p axis ("vx", "vy", "wz"):
+    beyond |cmd| by more than RUNAWAY_REL |cmd| and RUNAWAY_ABS[axis], and not against a nonzero command
+    (a miss, not a runaway)."""
+    wrong_way = abs(cmd) > 1e-9 and ach * cmd < 0.0
+    return not wrong_way and abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), RUNAWAY_ABS[axis])
+
+
 def in_band(cmd, ach, tol):
     return abs(ach - cmd) <= max(VEL_REL * abs(cmd), tol)
 
@@ -138,10 +146,9 @@ def score(path):
     # does not see is one the velocity feedback cannot correct.
     runaways = []
     for s in segs:
-        for axis, floor in RUNAWAY_ABS.items():
+        for axis in RUNAWAY_ABS:
             cmd, ach = s["command"][axis], s["achieved"][axis]
-            wrong_way = abs(cmd) > 1e-9 and ach * cmd < 0.0  # a miss, not a runaway
-            if not wrong_way and abs(ach) - abs(cmd) > max(RUNAWAY_REL * abs(cmd), floor):
+            if is_runaway(axis, cmd, ach):
                 est = (s.get("estimate") or {}).get(axis)
                 runaways.append(f"{s['name']} {axis} {ach:+.3f} of {cmd:+.3f}" +
                                 (f" (estimated {est:+.3f})" if est is not None else ""))
