@@ -262,6 +262,7 @@ struct PostureFeedbackYaml {
     a->Visit("walking_max_correction_rad", &f.walking_max_correction_rad, "largest correction while walking, 0..0.3 rad");
     a->Visit("walking_filter_time_s", &f.walking_filter_time_s, "low-pass time constant of the attitude while walking, 0..5 s");
     a->Visit("walking_settle_s", &f.walking_settle_s, "walking, an axis integrates once its posture command is steady this long, 0..5 s");
+    a->Visit("walking_velocity_settle_s", &f.walking_velocity_settle_s, "walking, pitch and roll integrate once the shaped velocity command is steady (within 0.05) this long, 0..5 s (0: off)");
     a->Visit("walking_min_command_rad", &f.walking_min_command_rad, "walking, an axis integrates only while |its command| >= this, 0..0.5 rad");
     a->Visit("walking_deadband_rad", &f.walking_deadband_rad, "walking below walking_min_command_rad, an axis integrates only its error beyond this band, 0..0.3 rad (0: not at all)");
     a->Visit("walking_crouch_m", &f.walking_crouch_m, "walking with the height at least this far below standing, an axis integrates as if commanded, 0..0.2 m (0: off)");

@@ -519,6 +519,8 @@ std::string PostureFeedbackConfig::validate() const {
     return "walking_max_correction_rad: expected 0..0.3 rad";
   if (!(walking_filter_time_s >= 0.0 && walking_filter_time_s <= 5.0)) return "walking_filter_time_s: expected 0..5 s";
   if (!(walking_settle_s >= 0.0 && walking_settle_s <= 5.0)) return "walking_settle_s: expected 0..5 s";
+  if (!(walking_velocity_settle_s >= 0.0 && walking_velocity_settle_s <= 5.0))
+    return "walking_velocity_settle_s: expected 0..5 s";
   if (!(walking_min_command_rad >= 0.0 && walking_min_command_rad <= 0.5)) return "walking_min_command_rad: expected 0..0.5 rad";
   if (!(walking_deadband_rad >= 0.0 && walking_deadband_rad <= 0.3)) return "walking_deadband_rad: expected 0..0.3 rad";
   if (!(walking_crouch_m >= 0.0 && walking_crouch_m <= 0.2)) return "walking_crouch_m: expected 0..0.2 m";
@@ -588,6 +590,8 @@ void PostureFeedback::reset() noexcept {
   p_settled_ = {0.0, 0.0};
   p_steady_s_ = {0.0, 0.0};
   still_s_ = 0.0;
+  v_settled_ = {0.0, 0.0, 0.0};
+  v_steady_s_ = 0.0;
   have_ = false;
   c_h_ = h_hat_ = 0.0;
   c_hw_ = c_h_applied_ = h_walking_s_ = 0.0;
@@ -650,6 +654,19 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
   // is not integrated.
   still_s_ = still ? still_s_ + dt : 0.0;
   const bool stop_settled = still_s_ >= config_.stop_settle_s - 1e-9;
+  // How long the shaped velocity command has stayed where it settled (walking_velocity_settle_s): the
+  // torso's swing as a walk starts or its command changes is not integrated by the walking integrators.
+  constexpr double kVelocitySettleBand = 0.05;  // [m/s], [rad/s]
+  const double v_now[3] = {v.vx, v.vy, v.wz};
+  bool v_moved = false;
+  for (std::size_t k = 0; k < 3; ++k) v_moved = v_moved || std::fabs(v_now[k] - v_settled_[k]) > kVelocitySettleBand;
+  if (v_moved) {
+    for (std::size_t k = 0; k < 3; ++k) v_settled_[k] = v_now[k];
+    v_steady_s_ = 0.0;
+  } else {
+    v_steady_s_ += dt;
+  }
+  const bool walk_settled = v_steady_s_ >= config_.walking_velocity_settle_s - 1e-9;
   // Told to stand but still moving (still_measured_velocity): the standing correction is held.
   const bool moving = config_.still_measured_velocity > 0.0 && v_est && v_est->valid &&
                       (std::fabs(v_est->v_x) >= config_.still_measured_velocity ||
@@ -716,7 +733,7 @@ const PostureCommand& PostureFeedback::update(const PostureCommand& u, const Vel
     const double band = commanded ? 0.0 : config_.walking_deadband_rad;
     const bool inside = !commanded && std::fabs(e) <= band;
     double cw = walking && !inside ? c_walk_[i] : c_walk_[i] * decay_keep;
-    if (walking && !inside && have_ && ok && p_steady_s_[i] >= config_.walking_settle_s)
+    if (walking && !inside && have_ && ok && p_steady_s_[i] >= config_.walking_settle_s && walk_settled)
       cw = std::clamp(cw + config_.walking_ki[i] * (e - std::copysign(band, e)) * dt, -config_.walking_max_correction_rad,
                       config_.walking_max_correction_rad);
     const double c = std::clamp(cs + cw, -config_.max_correction_rad, config_.max_correction_rad);

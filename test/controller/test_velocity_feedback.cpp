@@ -1775,6 +1775,94 @@ TEST(PostureFeedback, StandingCorrectionWaitsForTheRobotToSettleAfterAStop) {
   EXPECT_NE(c.validate().find("stop_settle_s"), std::string::npos);
 }
 
+// walking_velocity_settle_s: as a crouched walk starts from a stand, the torso swings forward (H10a
+// side-stepping at 0.66 m: +0.2 rad for about 0.4 s) and then leans back for as long as it walks
+// (-0.06 rad here). Integrated from the first tick, the swing winds a backward correction, the wrong
+// way for the walk; with the key the walking integrator holds until the shaped velocity command has
+// stayed within 0.05 of where it settled that long, counted again through a ramp, and then feeds back
+// the walk's lean. Off (0, the default) it integrates from the first tick, as before.
+TEST(PostureFeedback, WalkingCorrectionWaitsForTheWalkToSettle) {
+  PostureFeedbackConfig c = walkingPitchConfig(1.0);
+  c.walking_ki = {2.0, 0.0};
+  c.walking_max_correction_rad = 0.15;
+  c.max_correction_rad = 0.2;
+  c.walking_filter_time_s = 0.0;  // the attitude as measured, so that the integrals below are exact
+  c.walking_crouch_m = 0.02;
+  ASSERT_EQ(c.validate(), "");
+  const std::array<double, 2> heights{0.45, 0.85};
+  const PostureCommand crouched{0.0, 0.0, 0.66};
+  struct Run {
+    double after_ramp = 0.0, after_swing = 0.0, before_settled = 0.0, settled = 0.0, end = 0.0;
+    std::size_t allocations = 0;
+  };
+  auto run = [&](double settle_s) {
+    PostureFeedbackConfig cc = c;
+    cc.walking_velocity_settle_s = settle_s;
+    EXPECT_EQ(cc.validate(), "");
+    PostureFeedback fb(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    const LowState upright = uprightState(0.0, 0.0), swing = uprightState(0.0, 0.2), back = uprightState(0.0, -0.06);
+    // Crouched and still, upright: no correction.
+    for (int k = 0; k < 200; ++k) fb.update(crouched, {}, upright, 0.01);
+    Run r;
+    test::AllocationGuard guard;
+    // The shaper's ramp to 0.4 m/s over 0.5 s with the torso still upright, then the swing (0.4 s
+    // forward), then the walk's lean back.
+    for (int k = 1; k <= 50; ++k) fb.update(crouched, {0.008 * k, 0.0, 0.0}, upright, 0.01);
+    r.after_ramp = fb.correction()[0];
+    const VelocityCommand walk{0.4, 0.0, 0.0};
+    for (int k = 0; k < 40; ++k) fb.update(crouched, walk, swing, 0.01);
+    r.after_swing = fb.correction()[0];
+    // The ramp's last step beyond 0.05 of where it settled is its 49th tick: 0.99 s after it.
+    for (int k = 0; k < 58; ++k) fb.update(crouched, walk, back, 0.01);
+    r.before_settled = fb.correction()[0];
+    for (int k = 0; k < 50; ++k) fb.update(crouched, walk, back, 0.01);  // 50 ticks from 1.0 s on
+    r.settled = fb.correction()[0];
+    for (int k = 0; k < 200; ++k) fb.update(crouched, walk, back, 0.01);
+    r.end = fb.correction()[0];
+    r.allocations = guard.count();
+    return r;
+  };
+  const Run off = run(0.0);
+  const Run on = run(1.0);
+  // Off: the swing winds a backward correction (2 /s x 0.2 rad x 0.4 s = 0.16, bounded at 0.15)...
+  EXPECT_NEAR(off.after_swing, -0.15, 1e-9);
+  // ...that the walk's lean back (0.12 rad/s at 2 /s) takes more than a second to unwind.
+  EXPECT_LT(off.before_settled, -0.02) << "off: still pushing the leaning-back walk further back";
+  // On: held through the ramp and the swing, exactly (nothing integrated, nothing decayed)...
+  EXPECT_EQ(on.after_ramp, 0.0);
+  EXPECT_EQ(on.after_swing, 0.0);
+  EXPECT_EQ(on.before_settled, 0.0) << "integrated before the walk had settled for 1.0 s";
+  // ...then it feeds back the walk's lean: 50 ticks x 2 /s x 0.06 rad x 0.01 s = +0.06.
+  EXPECT_NEAR(on.settled, 0.06, 1e-6);
+  EXPECT_NEAR(on.end, 0.15, 1e-9) << "the walk's lean fed back to the walking bound";
+  EXPECT_GT(on.settled, off.settled) << "on: ahead of the wound-up integrator";
+  EXPECT_EQ(on.allocations, 0u);
+  EXPECT_EQ(off.allocations, 0u);
+  // A change of the walk's command by more than 0.05 restarts the wait (a turn added to the walk).
+  {
+    PostureFeedbackConfig cc = c;
+    cc.walking_velocity_settle_s = 1.0;
+    PostureFeedback fb(cc, test::g1Robot(), {-0.3, 0.6}, {-0.3, 0.3}, heights, 0.78);
+    const LowState back = uprightState(0.0, -0.06);
+    for (int k = 0; k < 150; ++k) fb.update(crouched, {0.4, 0.0, 0.0}, back, 0.01);
+    const double walking = fb.correction()[0];
+    EXPECT_GT(walking, 0.0);
+    for (int k = 0; k < 90; ++k) fb.update(crouched, {0.4, 0.0, 0.3}, back, 0.01);
+    EXPECT_EQ(fb.correction()[0], walking) << "integrated within 1.0 s of the turn being added";
+    for (int k = 0; k < 20; ++k) fb.update(crouched, {0.4, 0.0, 0.3}, back, 0.01);
+    EXPECT_GT(fb.correction()[0], walking);
+    // Within 0.05 of where it settled (the feedback's own trims): the wait is not restarted.
+    const double trimmed = fb.correction()[0];
+    fb.update(crouched, {0.44, 0.0, 0.27}, back, 0.01);
+    EXPECT_GT(fb.correction()[0], trimmed);
+  }
+  PostureFeedbackConfig bad = c;
+  bad.walking_velocity_settle_s = 5.5;
+  EXPECT_NE(bad.validate().find("walking_velocity_settle_s"), std::string::npos);
+  bad.walking_velocity_settle_s = -0.1;
+  EXPECT_NE(bad.validate().find("walking_velocity_settle_s"), std::string::npos);
+}
+
 // overshoot_release: standing, a correction that pushes the torso further past the command (beyond
 // 0.02 rad on its other side) decays at decay_time_s on top of its integration; within the band, or
 // with the torso still short of the command, it only integrates, as without the key.

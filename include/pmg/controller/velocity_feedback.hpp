@@ -543,6 +543,15 @@ struct PostureFeedbackConfig {
   /// where it settled for this long [s], [0, 5]: the torso lags a posture ramp (the shaper's
   /// posture_rate) and the walking low-pass lags more, and integrating that lag overshoots.
   double walking_settle_s = 1.0;
+  /// While walking, the pitch and roll walking integrators integrate only once the shaped velocity
+  /// command has stayed within 0.05 m/s (v_x, v_y) and 0.05 rad/s (ω) of where it settled for this
+  /// long [s], [0, 5]; meanwhile each holds its correction. 0 (the default): off, as before. The
+  /// start of a walk, and every change of its command, swings the torso: as a crouched side-step
+  /// starts from a stand, H10a's torso pitches 0.2 rad forward for about 0.4 s and then leans back
+  /// 0.05 rad for as long as it walks; integrated from the first tick, that swing wound a backward
+  /// correction (−0.12 rad) that took the rest of a 4 s walk to unwind, so the walk's lean back was
+  /// fed back the wrong way (docs/controller.md "Fed back once the walk has settled").
+  double walking_velocity_settle_s = 0.0;
   /// While walking, an axis integrates only while |its posture command| is at least this [rad],
   /// [0, 0.5]; 0: always. Walking with the torso upright, the gait's own pitch is left alone (fed
   /// back on bk_vy6, the median stop from 1 m/s grew from 0.50 to 0.62 m; docs/controller.md).
@@ -716,6 +725,8 @@ class PostureFeedback {
   std::array<double, 2> c_stand_{}, c_walk_{};  ///< the standing and the walking integrators (c_ = their bounded sum)
   std::array<double, 2> p_settled_{}, p_steady_s_{};  ///< where each posture command settled, and for how long
   double still_s_ = 0.0;  ///< how long the velocity command has been still [s] (stop_settle_s)
+  std::array<double, 3> v_settled_{};  ///< where the shaped velocity command settled (walking_velocity_settle_s)
+  double v_steady_s_ = 0.0;  ///< and for how long [s]
   bool have_ = false;
   double c_h_ = 0.0, h_hat_ = 0.0;
   double c_hw_ = 0.0, c_h_applied_ = 0.0;  ///< the walking integrator, the applied sum of both
