@@ -547,10 +547,11 @@ struct PostureFeedbackConfig {
   /// command has stayed within 0.05 m/s (v_x, v_y) and 0.05 rad/s (ω) of where it settled for this
   /// long [s], [0, 5]; meanwhile each holds its correction. 0 (the default): off, as before. The
   /// start of a walk, and every change of its command, swings the torso: as a crouched side-step
-  /// starts from a stand, H10a's torso pitches 0.2 rad forward for about 0.4 s and then leans back
-  /// 0.05 rad for as long as it walks; integrated from the first tick, that swing wound a backward
-  /// correction (−0.12 rad) that took the rest of a 4 s walk to unwind, so the walk's lean back was
-  /// fed back the wrong way (docs/controller.md "Fed back once the walk has settled").
+  /// starts from a stand, H10a's torso pitches 0.2-0.28 rad forward for about 0.4 s and then leans
+  /// back 0.05 rad for as long as it walks; integrated from the first tick at 2 /s, that swing wound a
+  /// backward correction (−0.12 rad) that took the rest of a 4 s walk to unwind, the wrong way for the
+  /// walk. Its measured share on H10a's battery is within the seeds' spread: the walking gain and bound
+  /// carry the crouched walks upright (docs/controller.md "Fed back once the walk has settled").
   double walking_velocity_settle_s = 0.0;
   /// While walking, an axis integrates only while |its posture command| is at least this [rad],
   /// [0, 0.5]; 0: always. Walking with the torso upright, the gait's own pitch is left alone (fed
