@@ -651,7 +651,8 @@ struct PostureFeedbackConfig {
 ///   u_fb,p = clamp(u_p + c_p, the command's pitch/roll range ∩ [min(u_p, envelope_min), max(u_p, envelope_max)]);
 /// only while the velocity command is still (PostureFeedbackConfig::still_velocity), else c_p decays;
 /// with walking_ki > 0 a second integrator c_w acts while walking, once the posture command has been
-/// steady for walking_settle_s (and the shaped velocity command for walking_velocity_settle_s): c_w ← clamp(c_w + k_w (u_p − p̄) dt, ±walking_max_correction_rad) on
+/// steady for walking_settle_s (and the shaped velocity command for walking_velocity_settle_s):
+/// c_w ← clamp(c_w + k_w (u_p − p̄) dt, ±walking_max_correction_rad) on
 /// the slower low-pass p̄ (walking_filter_time_s), and decays while standing; the correction is
 /// clamp(c_p + c_w, ±max_correction_rad). With walking_crouch_m, an upright-command walk crouched
 /// that far below standing counts as commanded, and c_p is held (within the walking bound) while it
