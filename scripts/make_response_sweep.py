@@ -19,7 +19,8 @@ slew (commands.height_rate).
       --feedforward off --out out/response_1
   python3 scripts/fit_command_response.py out/response_*/summary.json --out out/feedforward.yaml
   python3 scripts/make_response_sweep.py --segments 72 --seed 7 --height-range 0.66 0.78 \\
-      --out config/policies/response_sweep_7.yaml   # a crouched sweep (7 and 8 shipped)
+      --controller config/controller/g1_sil_policy_wh6g.yaml \\
+      --out config/policies/response_sweep_7.yaml   # a crouched sweep (7 and 8 shipped, wh6g's L1 envelope)
 
 The shipped model's data: response_sweep_1.yaml (seeds 0-3), _2 and _3 (seeds 0-1), as
 docs/controller.md "Command-response feed-forward" lists.
@@ -42,12 +43,13 @@ MIN_ABS = (0.1, 0.08, 0.15)  # smaller commands are inside the shaper's and the 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # CommandLimits' defaults (include/pmg/controller/commands.hpp) for keys a config leaves out.
 COMMAND_DEFAULTS = {"max_velocity": [1.0, 0.5, 1.0], "height_rate": 0.2, "standing_height": 0.78, "crouched_height": 0.0,
-                    "crouched_max_velocity": [0.4, 0.3, 0.6], "walking_min_height": 0.0}
+                    "crouched_max_velocity": [0.4, 0.3, 0.6], "crouched_per_axis": False, "walking_min_height": 0.0}
 
 
 def crouch_scale(u, height, limits):
     """The crouched envelope's scale of command u at pelvis height h (CommandShaper::envelopeScales, the
-    crouch part; pitch 0): > 1 means the shaper slows the command along its direction."""
+    crouch part; pitch 0; the L1 rule, or max_i with commands.crouched_per_axis): > 1 means the shaper slows
+    the command along its direction."""
     standing, crouched = limits["standing_height"], limits.get("crouched_height", 0.0)
     if not crouched > 0.0:
         return 0.0
@@ -56,8 +58,8 @@ def crouch_scale(u, height, limits):
         return 0.0
     m, mc = limits["max_velocity"], limits["crouched_max_velocity"]
     box = max(abs(u[i]) / m[i] for i in range(3))
-    l1 = sum(abs(u[i]) / (m[i] + f * (mc[i] - m[i])) for i in range(3))
-    return (1.0 - f) * box + f * l1
+    r = [abs(u[i]) / (m[i] + f * (mc[i] - m[i])) for i in range(3)]
+    return (1.0 - f) * box + f * (max(r) if limits.get("crouched_per_axis", False) else sum(r))
 
 
 def draw(rng, max_load, height=None, limits=None):

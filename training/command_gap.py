@@ -5,7 +5,7 @@ stops and slew), rolled for --envs episodes of --steps control steps, once as th
 train_config.json) and once with the controller's velocity envelopes and walking height floor
 (EnvConfig.command_envelopes, the values of --controller's `commands:`). No physics, no actor.
 
-  python3 training/command_gap.py RUN/train_config.json [--controller config/controller/g1_sil_policy.yaml]
+  python3 training/command_gap.py RUN/train_config.json [--controller config/controller/g1_sil_policy_wh6g.yaml]
       [--clips DIR] [--envs 4096] [--steps 1000] [--seed 0] [--json OUT.json]
 
 Per process, over the walking steps (|v_x|, |v_y| or |w| of u above 0.01): the share below the walking
@@ -29,7 +29,7 @@ sys.path.insert(0, HERE)
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("train_config", help="a run's train_config.json (its 'env' entry)")
-    ap.add_argument("--controller", default="config/controller/g1_sil_policy.yaml",
+    ap.add_argument("--controller", default="config/controller/g1_sil_policy_wh6g.yaml",
                     help="controller config whose `commands:` envelopes and floor the second process applies")
     ap.add_argument("--clips", default=None,
                     help="clip folder instead of the run's (a run trained on a folder since renamed); its squat "

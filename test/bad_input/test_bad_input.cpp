@@ -683,8 +683,8 @@ std::vector<Case> allCases() {
        error({"posture_feedback", "max_correction_rad", "0..0.3"})},
       {"ctrl_commands_crouched_velocity_above_max", Kind::kControllerConfig,
        text([] {
-         return sub(controllerText("g1_sil_policy.yaml"), "crouched_max_velocity: [0.3, 0.3, 0.6]",
-                    "crouched_max_velocity: [2.0, 0.3, 0.6]");
+         return sub(controllerText("g1_sil_policy.yaml"), "crouched_max_velocity: [1.0, 0.4, 0.8]",
+                    "crouched_max_velocity: [2.0, 0.4, 0.8]");
        }),
        error({"commands", "crouched_max_velocity", "(0, max_velocity]"})},
       {"ctrl_commands_bent_pitch_beyond_pitch_range", Kind::kControllerConfig,
@@ -694,7 +694,7 @@ std::vector<Case> allCases() {
        error({"commands", "bent_pitch", "pitch_range max"})},
       {"ctrl_posture_feedback_envelope_max_negative", Kind::kControllerConfig,
        text([] {
-         return sub(controllerText("g1_sil_policy.yaml"), "envelope_max: [0.4, 0.2]", "envelope_max: [-0.1, 0.2]");
+         return sub(controllerText("g1_sil_policy.yaml"), "envelope_max: [0.5, 0.2]", "envelope_max: [-0.1, 0.2]");
        }),
        error({"posture_feedback", "envelope_min/envelope_max[0] (pitch)", "-1.5 <= min <= 0 <= max <= 1.5"})},
       {"ctrl_posture_feedback_envelope_min_not_a_pair", Kind::kControllerConfig,

@@ -484,12 +484,13 @@ namespace {
 
 // The crouched calibration sweeps of the command-response feed-forward (config/policies/response_sweep_7
 // and _8, written by scripts/make_response_sweep.py --height-range) draw each walk inside the crouched
-// velocity envelope of the product config at its own height: played through that config's shaper, no
-// tick is slowed by the envelope (the fit would otherwise read the shaper's scaling as the robot's
-// response), every walk reaches its height before the window the summary averages over (the last 60 %),
-// and the sweeps do crouch (heights 0.66-0.78 m) and walk backward.
+// velocity envelope of the product config they were drawn for (wh6g's, the default until 2026-12-06, whose
+// L1 envelope slows crouched walks; the default's per-axis box slows none) at its own height: played through
+// that config's shaper, no tick is slowed by the envelope (the fit would otherwise read the shaper's scaling
+// as the robot's response), every walk reaches its height before the window the summary averages over (the
+// last 60 %), and the sweeps do crouch (heights 0.66-0.78 m) and walk backward.
 TEST(CommandShaper, CrouchedResponseSweepsStayInsideTheProductConfigsCrouchedEnvelope) {
-  const ControllerConfig config = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
+  const ControllerConfig config = loadControllerConfig(test::sourcePath("config/controller/g1_sil_policy_wh6g.yaml"));
   ASSERT_GT(config.commands.crouched_height, 0.0);
   for (const char* file : {"config/policies/response_sweep_7.yaml", "config/policies/response_sweep_8.yaml"}) {
     const CommandScript script = loadCommandScript(test::sourcePath(file));

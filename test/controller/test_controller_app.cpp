@@ -284,14 +284,15 @@ TEST(ControllerApp, StrideAdaptationRunsInTheLoopAndShippedPoliciesRefuseIt) {
 }
 
 // pmg_controller with a shipped walking policy and no gantry (config/controller/g1_sil_policy.yaml,
-// the default, and g1_sil_table2_baseline.yaml, the leg-contact actor it was fine-tuned from, which
+// the default: H10a, the crouched box's actor, crouched envelope opened per axis; and
+// g1_sil_table2_baseline.yaml, the leg-contact actor the earlier defaults were fine-tuned from, which
 // also drives teleoperation), and g1_sil_policy_uplev.yaml (the reference settings beyond the paper:
 // upright walking and levelled stance soles, with the actor fine-tuned on them), and
 // g1_sil_policy_walking_height.yaml (the raised walking templates and their actor), and
 // g1_sil_policy_v20b.yaml (V20b, trained from scratch, at the HAL's default slew), and
 // g1_sil_policy_n24b.yaml (N24b, trained from scratch in 17.7 min, at the same slew), and
-// g1_sil_policy_h10a.yaml (H10a, the crouched box's actor, crouched envelope opened): the actor keeps the
-// G1 upright and walks it forward on command; the tick allocates nothing.
+// g1_sil_policy_wh6g.yaml (wh6g, the default until 2026-12-06): the actor keeps the G1 upright and walks
+// it forward on command; the tick allocates nothing.
 class PolicyConfigTest : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
@@ -325,18 +326,19 @@ TEST_P(PolicyConfigTest, PolicyWalksTheG1WithoutGantry) {
               app.controller().lastState().base_position[0], min_height);
 }
 
-// Crouched to 0.74 m and told to walk backward 0.5 m/s, then to stop: the default actor walks at its
-// command and stops (here -0.46 m/s, and 0.07 m/s at most 2-3 s after the stop). The actors of V20b's
+// Crouched to 0.74 m and told to walk backward 0.5 m/s, then to stop: wh6g (the default until
+// 2026-12-06, g1_sil_policy_wh6g.yaml) walks at its command and stops (here -0.46 m/s, and 0.07 m/s at
+// most 2-3 s after the stop). The actors of V20b's
 // recipe break into a faster backward gait there and run on through the stop (training/README.md
 // "V20b's recipe over three seeds"): with g1_sil_policy_v20b.yaml this test measures -0.92 m/s and
 // 0.69 m/s, with V20e's config -1.19 and 2.19, and fails, so a default actor that runs away crouched
 // cannot ship unnoticed. g1_sil_policy_n24b.yaml (N24b, trained from scratch at half the exploration
-// noise, with its feed-forward per crouch) is held to the same: here -0.452 and 0.010; with the
+// noise, with its feed-forward per crouch) is held to the same: here -0.476 and 0.008; with the
 // feed-forward fitted upright only, its battery walked -0.71 at 0.74 m and one of two seeds fell in the
 // stop after the 0.70 m walk
-// (training/README.md "Half the exploration noise"). g1_sil_policy_h10a.yaml (H10a, trained against the run-on in
-// crouched backward stops; training/results/fidelity/crouched_box/README.md "H10a, H10b, H10c") is held to the same:
-// here -0.583 and 0.050 (its crouched backward battery, through the velocity feedback's estimate: 15 of 15 in band). Velocities are the pelvis's, world frame
+// (training/README.md "Half the exploration noise"). The default, H10a (g1_sil_policy.yaml, trained against the run-on
+// in crouched backward stops; training/results/fidelity/crouched_box/README.md "H10a, H10b, H10c"), is held to the same:
+// here -0.587 and 0.052 (its crouched backward battery, through the velocity feedback's estimate: 15 of 15 in band). Velocities are the pelvis's, world frame
 // (the robot starts facing +x; the heading drifts a few degrees at most).
 class CrouchedBackwardTest : public ::testing::TestWithParam<const char*> {};
 
@@ -368,7 +370,7 @@ TEST_P(CrouchedBackwardTest, WalksBackwardCrouchedAtItsCommandAndStops) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ControllerApp, CrouchedBackwardTest,
-                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml", "g1_sil_policy_h10a.yaml"));
+                         ::testing::Values("g1_sil_policy.yaml", "g1_sil_policy_n24b.yaml", "g1_sil_policy_wh6g.yaml"));
 
 // The walking height feedback through the product path (docs/controller.md "Walking height
 // correction"): N24b walks crouched backward 2-3 cm above its command; with its config's
@@ -446,14 +448,18 @@ TEST(ControllerApp, RefusesAPolicyOnClipsItWasNotTrainedOn) {
 }
 
 // The supervisor's slew limit on commanded positions comes from the config (safety.q_rate_max) and
-// every joint-cycle it acts in is counted. The shipped actor steps its leg targets every tick, as in
-// training: at 20 rad/s (its config's, the value its settings were tuned with) the HAL holds them back
-// in most cycles of a walk (the SIL walks 20-40 % slower than the actor's own environment,
-// training/README.md "The HAL's slew limit"); at the HAL's default, 600 rad/s, it lets them through.
+// every joint-cycle it acts in is counted. wh6g (the default until 2026-12-06) steps its leg targets every
+// tick, as in training: at 20 rad/s (its config's, the value its settings were tuned with) the HAL holds
+// them back in most cycles of a walk (the SIL walks 20-40 % slower than the actor's own environment,
+// training/README.md "The HAL's slew limit"); at the HAL's default, 600 rad/s, it lets them through. The
+// default config (H10a) runs at the HAL's default.
 TEST(ControllerApp, HalSlewLimitIsConfiguredAndCounted) {
+  EXPECT_DOUBLE_EQ(silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml")).q_rate_max,
+                   HalStackConfig{}.q_rate_max)
+      << "the default config runs at the HAL's default slew limit";
   const auto walk = [](double q_rate_max) {
-    ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy.yaml"));
-    EXPECT_DOUBLE_EQ(config.q_rate_max, 20.0) << "the shipped config pins the value it was tuned with";
+    ControllerConfig config = silConfig(test::sourcePath("config/controller/g1_sil_policy_wh6g.yaml"));
+    EXPECT_DOUBLE_EQ(config.q_rate_max, 20.0) << "wh6g's config pins the value it was tuned with";
     config.q_rate_max = q_rate_max;
     ControllerApp app(config);
     EXPECT_DOUBLE_EQ(app.safety().supervisor().options().envelope.q_rate_max, config.q_rate_max);
@@ -482,7 +488,7 @@ INSTANTIATE_TEST_SUITE_P(ControllerApp, PolicyConfigTest,
                          ::testing::Values("g1_sil_policy.yaml", "g1_sil_table2_baseline.yaml",
                                                            "g1_sil_policy_uplev.yaml", "g1_sil_policy_walking_height.yaml",
                                                            "g1_sil_policy_v20b.yaml", "g1_sil_policy_n24b.yaml",
-                                                           "g1_sil_policy_h10a.yaml"));
+                                                           "g1_sil_policy_wh6g.yaml"));
 
 }  // namespace
 }  // namespace pmg

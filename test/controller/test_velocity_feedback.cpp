@@ -1261,7 +1261,7 @@ TEST(PostureFeedback, MeasuresTheTorsoFromTheImuAndTheWaistAndClosesTheLoop) {
   EXPECT_EQ(n, 0u);
 }
 
-/// The walking pitch feedback of g1_sil_policy.yaml: pitch gain 0.5, bound 0.08 rad, 1 s low-pass
+/// The walking pitch feedback of g1_sil_policy_wh6g.yaml: pitch gain 0.5, bound 0.08 rad, 1 s low-pass
 /// and settling, upright walks (|u| < 0.05 rad) gated out; standing gains @p ki.
 PostureFeedbackConfig walkingPitchConfig(double ki) {
   PostureFeedbackConfig c;

@@ -3,7 +3,7 @@
 controller config's `commands:` limits before the generator sees it, and the reference target is
 checked against the shaped command. Usage: check_gco_eval_product_path.py PMG_GCO_EVAL CONTROLLER OUT_DIR
 
-On a 2 x 2 grid (v_x 0 / 0.8 m/s, standing / crouched to 0.62 m) with g1_sil_policy.yaml (crouched
+On a 2 x 2 grid (v_x 0 / 0.8 m/s, standing / crouched to 0.62 m) with g1_sil_policy_wh6g.yaml (crouched
 velocity envelope [0.3, 0.3, 0.6] at 0.62 m, walking height floor 0.66 m):
 - the crouched 0.8 m/s command is walked at the floor's height and shaped to what the envelope allows
   there (the CommandLimits rule, computed here from the config and the squat clip's standing height:

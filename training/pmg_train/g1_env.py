@@ -263,7 +263,7 @@ class EnvConfig:
     episode_length: int = 1000     # control steps (10 s)
     command_resample: int = 400    # control steps between command changes
     # Command shaping as the controller's `commands:` block does it (include/pmg/controller/commands.hpp,
-    # config/controller/g1_sil_policy.yaml): with command_slew the drawn command is a goal the command
+    # config/controller/g1_sil_policy_wh6g.yaml): with command_slew the drawn command is a goal the command
     # (what the generator, the observation and the task rewards get) moves towards at most
     # command_max_accel [m/s^2, m/s^2, rad/s^2] on v_x, v_y, w, command_posture_rate [rad/s] on pitch
     # and roll and command_height_rate [m/s] on the height, per control step. Off (the default, as
@@ -284,7 +284,8 @@ class EnvConfig:
     # crouch or a bend brings them inside (envelope_scales). Off (the default, as every policy so far was
     # trained): the actor is trained on crouched and bent commands the product path never gives it
     # (walking at 0.59 m, 1.2 m/s crouched; training/command_gap.py counts them). The values are
-    # config/controller/g1_sil_policy.yaml's `commands:` (train_pmg.py --command-envelopes reads them).
+    # config/controller/g1_sil_policy_wh6g.yaml's `commands:` (train_pmg.py --command-envelopes reads them; the
+    # default config's per-axis crouched box is trained as the crouched envelope off, crouched_height 0).
     command_envelopes: bool = False
     envelope_max_velocity: tuple = (1.0, 0.4, 0.8)
     crouched_height: float = 0.62

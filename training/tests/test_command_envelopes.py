@@ -11,7 +11,7 @@ Checks, in float64 NumPy: every tick's shaped command equals the C++ one within 
 the floor acted in the schedule (the test can fail: with them off the port leaves the C++ by more than
 0.1 m/s and 0.03 m); the floor holds for the configured time after the stop, then the height descends.
 Then the same under jax.jit in float32 (the training environment's precision), within 1e-4, and
-EnvConfig's defaults equal the JSON's limits (the defaults are the shipped config's `commands:`). Last,
+EnvConfig's defaults equal the JSON's limits (the defaults are wh6g's config's `commands:`, the L1 rule). Last,
 the environment's own command process (training/command_gap.py, 256 episodes x 400 steps, heights down to
 0.59 m): with the envelopes the share of walking below the floor or beyond the envelopes falls below 2 %
 (above 10 % without), and more than twice as much walking happens at the floor. It

@@ -100,7 +100,7 @@ def main():
     rest = ~inside(focused)
     check(np.array_equal(focused[rest], plain[rest]), f"the other {int(rest.sum())} goals are the plain mix's draws")
 
-    shaped = dict(command_slew=True, p_posture_walk=0.6, **command_envelopes_from("config/controller/g1_sil_policy.yaml"))
+    shaped = dict(command_slew=True, p_posture_walk=0.6, **command_envelopes_from("config/controller/g1_sil_policy_wh6g.yaml"))
     corner = {}
     for name, focus in (("plain", {}), ("focused", {"command_focus": BOX, "p_focus": 0.25})):
         u = np.asarray(roll(G1PmgEnv(dataclasses.replace(base, **shaped, **focus)), jax.random.PRNGKey(0), 256, 400))

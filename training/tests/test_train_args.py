@@ -154,7 +154,7 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--action-noise-scale", "-0.5"], "--action-noise-scale"),
                   (["--action-noise-scale", "inf"], "--action-noise-scale"),
                   (["--timesteps", "1000", "--warmup-steps", "400", "--warmup-evals", "0"], "--warmup-evals"),
-                  (["--command-envelopes", "config/controller/g1_sil_policy.yaml"], "--command-envelopes")):
+                  (["--command-envelopes", "config/controller/g1_sil_policy_wh6g.yaml"], "--command-envelopes")):
     n_cases += 1
     err = io.StringIO()
     try:
@@ -171,13 +171,13 @@ import tempfile  # noqa: E402
 
 if train_pmg.parse_args(["--out", "/tmp/x", "--command-slew", "--command-envelopes", "c.yaml"]).command_envelopes != "c.yaml":
     failures.append("--command-envelopes c.yaml not parsed")
-env_fields = train_pmg.command_envelopes_from("config/controller/g1_sil_policy.yaml")
+env_fields = train_pmg.command_envelopes_from("config/controller/g1_sil_policy_wh6g.yaml")
 want = {"command_envelopes": True, "envelope_max_velocity": (1.0, 0.4, 0.8), "crouched_height": 0.62,
         "crouched_max_velocity": (0.3, 0.3, 0.6), "walking_min_height": 0.66, "walking_min_height_hold_s": 1.5,
         "bent_pitch": 0.4, "bent_max_velocity": (0.8, 0.4, 0.8), "command_height_rate": 0.2}
 if any(env_fields.get(k) != v for k, v in want.items()):
-    failures.append(f"--command-envelopes config/controller/g1_sil_policy.yaml read as {env_fields}")
-with open("config/controller/g1_sil_policy.yaml") as f:
+    failures.append(f"--command-envelopes config/controller/g1_sil_policy_wh6g.yaml read as {env_fields}")
+with open("config/controller/g1_sil_policy_wh6g.yaml") as f:
     shipped = f.read()
 with tempfile.TemporaryDirectory() as tmp:
     for text, key in ((shipped.replace("walking_min_height: 0.66", "walking_min_height: 0.0"), "walking_min_height"),
