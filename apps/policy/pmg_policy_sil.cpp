@@ -75,7 +75,8 @@
 // cumulative ticks without integration because leg odometry was rejected / the pelvis tilted;
 // upset_hold: 1 while the upset guard holds the velocity command at zero, --upset-guard on|off;
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
-// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off;
+// command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off,
+// --stance-foot-nearest on|off (the velocity estimate's foot choice; summary.json stance_foot_nearest);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
 // generator and the actor were given, nan when not active: training/eval_mjx.py --command-log replays it), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
@@ -273,7 +274,7 @@ int main(int argc, char** argv) {
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
       feedback_within_envelopes, yaw_beyond_envelopes, max_velocity_headroom, walking_height_floor, joint_stops, braking,
-      upset_upright, decay_feedforward;
+      upset_upright, decay_feedforward, stance_foot_nearest;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -299,6 +300,9 @@ int main(int argc, char** argv) {
   onOff("--feedback-within-envelopes", &feedback_within_envelopes,
         "on: the velocity feedback's command kept inside the crouched and bent velocity envelopes "
         "(velocity_feedback.within_posture_envelopes), off: not; default: the controller config's");
+  onOff("--stance-foot-nearest", &stance_foot_nearest,
+        "on: with both soles in the stance band, the velocity estimate takes the foot nearer its prediction "
+        "(velocity_feedback.stance_foot_nearest), off: their mean; default: the controller config's");
   onOff("--yaw-beyond-envelopes", &yaw_beyond_envelopes,
         "on: with the feedback within the envelopes, its yaw-rate correction is not bound by them "
         "(velocity_feedback.yaw_beyond_envelopes); default: the controller config's");
@@ -374,6 +378,7 @@ int main(int argc, char** argv) {
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (!feedback_within_envelopes.empty()) base.velocity_feedback.within_posture_envelopes = feedback_within_envelopes == "on";
     if (!yaw_beyond_envelopes.empty()) base.velocity_feedback.yaw_beyond_envelopes = yaw_beyond_envelopes == "on";
+    if (!stance_foot_nearest.empty()) base.velocity_feedback.stance_foot_nearest = stance_foot_nearest == "on";
     if (max_velocity_headroom == "off") base.velocity_feedback.max_velocity_headroom = {0.0, 0.0, 0.0};
     if (max_velocity_headroom == "on" && base.velocity_feedback.max_velocity_headroom == std::array<double, 3>{0.0, 0.0, 0.0})
       throw pmg::ConfigError(controller_path + ": --max-velocity-headroom on: velocity_feedback.max_velocity_headroom is 0 there");
@@ -882,6 +887,7 @@ int main(int argc, char** argv) {
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
+       << ", \"stance_foot_nearest\": " << (base.velocity_feedback.enabled && base.velocity_feedback.stance_foot_nearest ? "true" : "false")
        << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"

@@ -220,6 +220,7 @@ struct VelocityFeedbackYaml {
     a->Visit("max_velocity_headroom", &f.max_velocity_headroom,
              "v_x, v_y [m/s], w [rad/s], each 0..1: how far beyond commands.max_velocity the correction may take the command");
     a->Visit("stance_band_m", &f.stance_band_m, "soles within this height of the lowest are in stance, (0, 0.1] m");
+    a->Visit("stance_foot_nearest", &f.stance_foot_nearest, "both soles in the band: the foot nearer the prediction is the sample (true) or their mean (false, wh6g's tuning)");
     a->Visit("odometry_time_s", &f.odometry_time_s, "time constant of the leg-odometry correction, 0..2 s");
     a->Visit("yaw_rate_gated", &f.yaw_rate_gated, "the yaw rate moves only with accepted leg samples (true, tuned on) or is the gyro's every tick");
     a->Visit("gate_mps", &f.gate_mps, "leg-odometry samples further than this from the IMU prediction are rejected, (0, 5] m/s");

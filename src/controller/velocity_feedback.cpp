@@ -283,7 +283,10 @@ BaseVelocityEstimate LegOdometry::estimate(const LowState& state, const Eigen::M
   const double z_low = std::min(z_f[0], z_f[1]);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (std::size_t f = 0; f < kNumFeet; ++f) {
+    out.foot_v_x[f] = v_f[f].x();
+    out.foot_v_y[f] = v_f[f].y();
     if (z_f[f] - z_low > band_) continue;
+    out.foot_in_stance[f] = true;
     sum += v_f[f];
     ++out.stance_feet;
   }
@@ -323,7 +326,7 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
   Eigen::Matrix3d R_WB;
   const bool imu_ok = imuRotation(state.imu, &R_WB);  // once per tick, for the legs and the prediction
   last_leg_ = imu_ok ? odometry_.estimate(state, R_WB) : BaseVelocityEstimate{};
-  const BaseVelocityEstimate& leg = last_leg_;
+  BaseVelocityEstimate& leg = last_leg_;
   // Prediction from the IMU: the specific force rotated into W plus gravity is the acceleration of
   // the IMU; in the turning heading frame H, dv_H/dt = R_HW a_W - w_z e_z x v_H.
   const double a = config_.odometry_time_s > 0.0 ? std::min(1.0, dt / config_.odometry_time_s) : 1.0;
@@ -340,6 +343,19 @@ BaseVelocityEstimate BaseVelocityEstimator::update(const LowState& state, double
     }
     // Ungated (yaw_rate_gated false): the gyro's yaw rate low-passed on every tick.
     if (!config_.yaw_rate_gated && std::isfinite(wz)) v_[2] += a * (wz - v_[2]);
+  }
+  // With stance_foot_nearest and both soles in the band, the foot whose sample lies nearer the
+  // prediction is the measurement (a swing foot skimming the floor is not averaged in).
+  if (config_.stance_foot_nearest && initialized_ && leg.valid && leg.stance_feet == 2) {
+    const double d0 = std::hypot(leg.foot_v_x[0] - v_[0], leg.foot_v_y[0] - v_[1]);
+    const double d1 = std::hypot(leg.foot_v_x[1] - v_[0], leg.foot_v_y[1] - v_[1]);
+    const std::size_t f = d1 < d0 ? 1 : 0;
+    if (std::isfinite(leg.foot_v_x[f]) && std::isfinite(leg.foot_v_y[f])) {
+      leg.v_x = leg.foot_v_x[f];
+      leg.v_y = leg.foot_v_y[f];
+      leg.stance_feet = 1;
+      leg.foot_in_stance[1 - f] = false;
+    }
   }
   // Correction by leg odometry, gated: a measurement further than gate_mps from the prediction
   // (a swing foot taken for a stance foot at touchdown or lift-off, a slipping foot, a flight

@@ -836,7 +836,9 @@ TEST(CommandResponseModel, ShippedModelIsWellConditionedOverTheEnvelope) {
           for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(xs[i], x[i], 1e-9) << "a command with an axis at 0 keeps the full inverse";
         } else if (k >= 1.0) {
           ++shrunk;
-          if (shipped.combined_max_correction_ratio == 0.0) EXPECT_EQ(xs, u) << "a full three-axis command is sent as told";
+          if (shipped.combined_max_correction_ratio == 0.0) {
+            EXPECT_EQ(xs, u) << "a full three-axis command is sent as told";
+          }
         }
         if (bounded) continue;
         ++exact;
@@ -1115,6 +1117,85 @@ TEST(BaseVelocityEstimator, UngatedYawRateFollowsTheGyroWhileTheLegsAreRejected)
   }
   EXPECT_NEAR(yaw[0], 0.5, 0.01) << "ungated: the gyro's 0.5 rad/s after 5 time constants";
   EXPECT_NEAR(yaw[1], 0.0, 1e-9) << "gated (the default): held at the last accepted value";
+}
+
+// stance_foot_nearest: both soles level (inside the stance band), the left foot in stance carrying the
+// robot forward at v, the right a swing foot skimming the floor whose sample reads -1.4 v (H10a's
+// shuffle: docs/controller.md "A swing foot inside the stance band"). The robot speeds up at 2.5 m/s^2
+// to 0.5 m/s (the accelerometer says so) and walks on for 1 s. With the key the estimator takes the left
+// foot's sample (nearer its prediction) and follows the robot; with the mean of the two feet (the
+// default) the gate rejects the samples, the restarts take the mean, and the estimate is far off. With
+// one foot in the band the key changes nothing. Allocation-free either way.
+TEST(BaseVelocityEstimator, StanceFootNearestIgnoresASwingFootInsideTheStanceBand) {
+  Legs legs;
+  gco::LegVector q[2], qd[2];
+  q[0] << -0.3, 0.05, 0.02, 0.6, -0.3, -0.03;
+  q[1] = q[0];  // mirrored: both soles at the same height
+  q[1][1] = -q[0][1];
+  q[1][2] = -q[0][2];
+  q[1][5] = -q[0][5];
+  gco::LegVector pattern[2];
+  pattern[0] << 3.0, 0.0, 0.0, -4.0, 1.0, 0.0;  // hip pitch, knee, ankle pitch: a sagittal motion
+  pattern[1] = pattern[0];
+  LegOdometry odo(legs.model, legs.idx, enabledConfig().stance_band_m);
+  auto state = [&](double v_left, double v_right, double acc_x) {
+    qd[0] = pattern[0] * v_left;
+    qd[1] = pattern[1] * v_right;
+    LowState s = makeState(legs, q, qd, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+    s.imu.acc = {acc_x, 0.0, 9.81};
+    return s;
+  };
+  const BaseVelocityEstimate unit = odo.estimate(state(1.0, 0.0, 0.0));
+  ASSERT_EQ(unit.stance_feet, 2) << "both soles are in the band";
+  ASSERT_GT(std::fabs(unit.foot_v_x[0]), 0.1);
+  ASSERT_NEAR(unit.foot_v_x[0], odo.estimate(state(0.0, 1.0, 0.0)).foot_v_x[1], 1e-9) << "mirrored legs";
+  const double k = 1.0 / unit.foot_v_x[0];  // joint speed scale per m/s of the sample
+  auto run = [&](bool nearest, std::size_t* allocations, double* final_error, std::uint64_t* rejected) {
+    VelocityFeedbackConfig c = enabledConfig();
+    c.stance_foot_nearest = nearest;
+    BaseVelocityEstimator est(legs.model, legs.idx, c);
+    for (int i = 0; i < 20; ++i) est.update(state(0.0, 0.0, 0.0), 0.01);
+    test::AllocationGuard alloc;
+    double v = 0.0;
+    BaseVelocityEstimate e;
+    for (int i = 0; i < 120; ++i) {
+      const double acc = i < 20 ? 2.5 : 0.0;
+      v += acc * 0.01;
+      e = est.update(state(k * v, -1.4 * k * v, acc), 0.01);
+    }
+    *allocations = alloc.count();
+    *final_error = e.v_x - v;
+    *rejected = est.rejected();
+    return est.lastLegOdometry();
+  };
+  std::size_t n_on = 0, n_off = 0;
+  double err_on = 0.0, err_off = 0.0;
+  std::uint64_t rej_on = 0, rej_off = 0;
+  const BaseVelocityEstimate leg_on = run(true, &n_on, &err_on, &rej_on);
+  run(false, &n_off, &err_off, &rej_off);
+  std::printf("estimate - truth at 0.5 m/s: nearest foot %.4f (rejected %llu), mean of the feet %.4f (rejected %llu)\n",
+              err_on, static_cast<unsigned long long>(rej_on), err_off, static_cast<unsigned long long>(rej_off));
+  EXPECT_NEAR(err_on, 0.0, 1e-3) << "the nearest foot is the stance foot";
+  EXPECT_EQ(rej_on, 0u);
+  EXPECT_EQ(leg_on.stance_feet, 1);
+  EXPECT_TRUE(leg_on.foot_in_stance[0]);
+  EXPECT_FALSE(leg_on.foot_in_stance[1]);
+  EXPECT_NEAR(leg_on.v_x, 0.5, 1e-6);
+  EXPECT_GT(std::fabs(err_off), 0.3) << "the mean of a stance and a swing foot is far from the robot";
+  EXPECT_GT(rej_off, 10u);
+  EXPECT_EQ(n_on, 0u);
+  EXPECT_EQ(n_off, 0u);
+
+  // One sole in the band (the right foot lifted): the key changes nothing.
+  q[1] << -0.9, -0.05, 0.0, 1.6, -0.5, 0.02;
+  double e1 = 0.0, e0 = 0.0;
+  std::uint64_t r1 = 0, r0 = 0;
+  const BaseVelocityEstimate l1 = run(true, &n_on, &e1, &r1);
+  const BaseVelocityEstimate l0 = run(false, &n_off, &e0, &r0);
+  EXPECT_EQ(l1.stance_feet, 1);
+  EXPECT_DOUBLE_EQ(e1, e0);
+  EXPECT_EQ(r1, r0);
+  EXPECT_DOUBLE_EQ(l1.v_x, l0.v_x);
 }
 
 TEST(UpsetGuard, OwnEstimateJudgesTheRobotStateWithoutAllocating) {
