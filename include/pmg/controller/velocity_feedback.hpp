@@ -175,7 +175,7 @@ struct VelocityFeedbackConfig {
   /// swing foot less than 2 cm; walking 0.75 m/s forward both soles were in the band 90 % of the ticks,
   /// the mean read 0.1 m/s, the gate rejected most samples and the estimate lagged the robot by 0.26
   /// m/s, so the integral loop pushed it to 0.88 m/s (docs/controller.md "A swing foot inside the
-  /// stance band").
+  /// stance band"). The upset guard's own estimate follows this key too.
   bool stance_foot_nearest = false;
   /// Time constant with which leg odometry corrects the IMU-propagated estimate [s], [0, 2].
   double odometry_time_s = 0.1;
