@@ -77,6 +77,7 @@
 // runs[k].upsets_s lists the script times it latched; vx_shaped, vy_shaped, wz_shaped: the shaper's
 // command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off,
 // --stance-foot-nearest on|off (the velocity estimate's foot choice; summary.json stance_foot_nearest);
+// --max-tilt-rad X (the pelvis tilt beyond which the velocity feedback's correction decays; summary.json max_tilt_rad);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
 // generator and the actor were given, nan when not active: training/eval_mjx.py --command-log replays it), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
@@ -248,6 +249,7 @@ int main(int argc, char** argv) {
   double q_rate_max = -1;
   double feedforward_return_s = -1;  // < 0: the controller config's
   double combined_ff_ratio = -1;     // < 0: the controller config's
+  double max_tilt_rad = -1;          // < 0: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -341,6 +343,10 @@ int main(int argc, char** argv) {
                  "on a command moving all three axes, the feed-forward's max_correction shrinks to this share [0, 1] "
                  "(velocity_feedback.feedforward.combined_max_correction_ratio; 1 = off; default: the controller config's)")
       ->check(pmg::cli::finiteIn(0.0, 1.0));
+  app.add_option("--max-tilt-rad", max_tilt_rad,
+                 "beyond this pelvis tilt the velocity feedback's correction decays instead of integrating [rad] "
+                 "(velocity_feedback.max_tilt_rad; default: the controller config's)")
+      ->check(pmg::cli::finiteIn(0.01, 1.5));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
@@ -365,6 +371,7 @@ int main(int argc, char** argv) {
     if (!decay_feedforward.empty()) base.velocity_feedback.decay_feedforward = decay_feedforward == "on";
     if (feedforward_return_s >= 0) base.velocity_feedback.feedforward_return_s = feedforward_return_s;
     if (combined_ff_ratio >= 0) base.velocity_feedback.feedforward.combined_max_correction_ratio = combined_ff_ratio;
+    if (max_tilt_rad > 0) base.velocity_feedback.max_tilt_rad = max_tilt_rad;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
@@ -888,6 +895,7 @@ int main(int argc, char** argv) {
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
        << ", \"stance_foot_nearest\": " << (base.velocity_feedback.enabled && base.velocity_feedback.stance_foot_nearest ? "true" : "false")
+       << ", \"max_tilt_rad\": " << base.velocity_feedback.max_tilt_rad
        << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
