@@ -199,6 +199,9 @@ struct VelocityFeedbackConfig {
   /// Above this pelvis tilt (IMU roll or pitch) [rad], (0, 1.5], the correction is not integrated
   /// and decays to zero with decay_time_s: a robot that is being shoved or catching itself gets the
   /// user's command (with the feed-forward on, the feed-forward's command unless decay_feedforward).
+  /// 0.3 was chosen on earlier actors; the default config (H10a) has 0.6, since H10a walks crouched
+  /// side-steps and turns with its pelvis 0.3-0.43 rad from vertical and at 0.3 the correction decayed
+  /// through them (docs/controller.md "The tilt gate and H10a's gait").
   double max_tilt_rad = 0.3;
   /// Time constant of that decay [s], (0, 5].
   double decay_time_s = 0.5;
