@@ -78,6 +78,7 @@
 // command before the feedback, --feedback-within-envelopes on|off, --yaw-beyond-envelopes on|off, --max-velocity-headroom on|off,
 // --stance-foot-nearest on|off (the velocity estimate's foot choice; summary.json stance_foot_nearest);
 // --max-tilt-rad X (the pelvis tilt beyond which the velocity feedback's correction decays; summary.json max_tilt_rad);
+// --walking-ki P R (the walking posture feedback's gains on pitch and roll; summary.json walking_ki);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
 // generator and the actor were given, nan when not active: training/eval_mjx.py --command-log replays it), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
@@ -250,6 +251,7 @@ int main(int argc, char** argv) {
   double feedforward_return_s = -1;  // < 0: the controller config's
   double combined_ff_ratio = -1;     // < 0: the controller config's
   double max_tilt_rad = -1;          // < 0: the controller config's
+  std::vector<double> walking_ki;    // empty: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -331,22 +333,31 @@ int main(int argc, char** argv) {
                  "the tick read its state), the state the tick read, the actor's observation and action, and the "
                  "motor commands it wrote (q, qd, kp, kd, tau_ff of every motor); for sim-to-sim comparisons "
                  "(training/probe_sil.py)");
-  app.add_option("--q-rate-max", q_rate_max,
-                 "the HAL supervisor's slew limit on commanded joint positions [rad/s] (default: the controller "
-                 "config's safety.q_rate_max; 20 = before 2026-11-30)")
-      ->check(pmg::cli::finiteIn(1.0, 2000.0));
-  app.add_option("--feedforward-return-s", feedforward_return_s,
-                 "with the feed-forward's decay: the time its share takes to return from 0 to 1 once upright [s] "
-                 "(velocity_feedback.feedforward_return_s; 0 = decay_time_s; default: the controller config's)")
-      ->check(pmg::cli::finiteIn(0.0, 30.0));
-  app.add_option("--combined-ff-ratio", combined_ff_ratio,
-                 "on a command moving all three axes, the feed-forward's max_correction shrinks to this share [0, 1] "
-                 "(velocity_feedback.feedforward.combined_max_correction_ratio; 1 = off; default: the controller config's)")
-      ->check(pmg::cli::finiteIn(0.0, 1.0));
-  app.add_option("--max-tilt-rad", max_tilt_rad,
-                 "beyond this pelvis tilt the velocity feedback's correction decays instead of integrating [rad] "
-                 "(velocity_feedback.max_tilt_rad; default: the controller config's)")
-      ->check(pmg::cli::finiteIn(0.01, 1.5));
+  // A number that overrides one config key, range-checked: empty (< 0 here) keeps the config's.
+  const auto override_option = [&app](const char* name, double* value, const char* help, double lo, double hi) {
+    app.add_option(name, *value, help)->check(pmg::cli::finiteIn(lo, hi));
+  };
+  override_option("--q-rate-max", &q_rate_max,
+                  "the HAL supervisor's slew limit on commanded joint positions [rad/s] (default: the controller "
+                  "config's safety.q_rate_max; 20 = before 2026-11-30)",
+                  1.0, 2000.0);
+  override_option("--feedforward-return-s", &feedforward_return_s,
+                  "with the feed-forward's decay: the time its share takes to return from 0 to 1 once upright [s] "
+                  "(velocity_feedback.feedforward_return_s; 0 = decay_time_s; default: the controller config's)",
+                  0.0, 30.0);
+  override_option("--combined-ff-ratio", &combined_ff_ratio,
+                  "on a command moving all three axes, the feed-forward's max_correction shrinks to this share [0, 1] "
+                  "(velocity_feedback.feedforward.combined_max_correction_ratio; 1 = off; default: the controller config's)",
+                  0.0, 1.0);
+  override_option("--max-tilt-rad", &max_tilt_rad,
+                  "beyond this pelvis tilt the velocity feedback's correction decays instead of integrating [rad] "
+                  "(velocity_feedback.max_tilt_rad; default: the controller config's)",
+                  0.01, 1.5);
+  app.add_option("--walking-ki", walking_ki,
+                 "the walking posture feedback's integral gains on torso pitch and roll [1/s], two values in [0, 5] "
+                 "(posture_feedback.walking_ki; 0 = not fed back while walking; default: the controller config's)")
+      ->expected(2)
+      ->check(pmg::cli::finiteIn(0.0, 5.0));
   CLI11_PARSE(app, argc, argv);
   try {
     pmg::ControllerConfig base = pmg::loadSilEvalConfig(controller_path);  // lockstep, offline, no gantry
@@ -373,6 +384,7 @@ int main(int argc, char** argv) {
     if (combined_ff_ratio >= 0) base.velocity_feedback.feedforward.combined_max_correction_ratio = combined_ff_ratio;
     if (max_tilt_rad > 0) base.velocity_feedback.max_tilt_rad = max_tilt_rad;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
+    if (walking_ki.size() == 2) base.posture_feedback.walking_ki = {walking_ki[0], walking_ki[1]};
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
                               base.posture_feedback.envelope_max == open_posture.envelope_max;
@@ -896,6 +908,7 @@ int main(int argc, char** argv) {
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
        << ", \"stance_foot_nearest\": " << (base.velocity_feedback.enabled && base.velocity_feedback.stance_foot_nearest ? "true" : "false")
        << ", \"max_tilt_rad\": " << base.velocity_feedback.max_tilt_rad
+       << ", \"walking_ki\": [" << base.posture_feedback.walking_ki[0] << ", " << base.posture_feedback.walking_ki[1] << "]"
        << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
