@@ -13,6 +13,7 @@ gate, ON: the higher), with issue 12's band (+-15 %) shaded. docs/controller.md 
 import argparse
 import csv
 import json
+import os
 import statistics
 
 import matplotlib
@@ -80,7 +81,7 @@ def main():
     for g, style, label in ((gates[0], "--", "off"), (gates[1], "-", "on")):
         ax1.axhline(g, color="tab:red", ls=style, label=f"max_tilt_rad {g:g} ({label})")
     ax1.set_ylabel("pelvis tilt from vertical [rad]")
-    ax1.set_title(f"{a.csv_dir}/seed{a.seed}.csv: walking segments, last 60 %")
+    ax1.set_title(f"{os.path.basename(os.path.normpath(a.csv_dir))}, seed {a.seed}: walking segments, last 60 %")
     ax1.legend(loc="upper left", fontsize=8)
     ax1.grid(alpha=0.3)
     ax2.axhspan(0.85, 1.15, color="tab:green", alpha=0.15, label="issue 12's band (+-15 %)")
