@@ -22,7 +22,7 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import run_off_on, seg, stop_speed, window  # noqa: E402
+from sil_run import last60, run_off_on, seg, stop_speed  # noqa: E402
 
 SEED = 0
 SIDE, TURN = "fwd_side_0.66", "fwd_turn_0.66"
@@ -33,9 +33,7 @@ def in_band(achieved, command, rel=0.15, floor=0.05):
 
 
 def checks(s_off, r_off, s_on, r_on):
-    side_rows = [r for r in r_off if r["segment"] == SIDE]
-    length = side_rows[-1]["t"] - side_rows[0]["t"]
-    tilt_off = statistics.median(r["pelvis_tilt"] for r in window(r_off, SIDE, 0.4 * length, length + 1.0))
+    tilt_off = statistics.median(r["pelvis_tilt"] for r in last60(r_off, SIDE))
     dec = {(tag, n): seg(s, n)["feedback_decayed_fraction"] for tag, s in (("off", s_off), ("on", s_on)) for n in (SIDE, TURN)}
     vy = {tag: seg(s, SIDE)["achieved"]["vy"] for tag, s in (("off", s_off), ("on", s_on))}
     vy_fb = {tag: seg(s, SIDE)["u_feedback"]["vy"] for tag, s in (("off", s_off), ("on", s_on))}

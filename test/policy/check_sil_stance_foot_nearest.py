@@ -20,17 +20,10 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import run_off_on, seg, stop_speed, window  # noqa: E402
+from sil_run import last60, run_off_on, seg, stop_speed  # noqa: E402
 
 SEED = 0
 WALKS = {"fwd_0.5": 0.5, "fwd_0.75": 0.75}
-
-
-def last60(rs, name):
-    """Rows of segment NAME in the last 60 % of it (the summary's window)."""
-    seg_rows = [r for r in rs if r["segment"] == name]
-    length = seg_rows[-1]["t"] - seg_rows[0]["t"]
-    return window(rs, name, 0.4 * length, length + 1.0)
 
 
 def mean(rs, key):

@@ -18,7 +18,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sil_run import run_off_on, seg, window  # noqa: E402
+from sil_run import last60, run_off_on, seg, window  # noqa: E402
 
 SEED = 0
 WALK, STOP = "side_turn_0.7", "stop_side_turn_0.7"
@@ -29,11 +29,7 @@ def mean(rs, key):
 
 
 def checks(s_off, r_off, s_on, r_on):
-    walk = {}
-    for tag, rs in (("off", r_off), ("on", r_on)):
-        seg_rows = [r for r in rs if r["segment"] == WALK]
-        length = seg_rows[-1]["t"] - seg_rows[0]["t"]
-        walk[tag] = window(rs, WALK, 0.4 * length, length + 1.0)
+    walk = {"off": last60(r_off, WALK), "on": last60(r_on, WALK)}
     a = {tag: seg(s, WALK)["achieved"] for tag, s in (("off", s_off), ("on", s_on))}
     roll_fb = {tag: mean(walk[tag], "roll_fb") for tag in walk}
     stop = window(r_on, STOP, 1.0, 3.0)

@@ -18,6 +18,13 @@ def window(rs, name, t0, t1):
     return [r for r in seg if t0 <= r["t"] - start < t1]
 
 
+def last60(rs, name):
+    """Rows of segment NAME in the last 60 % of it (the window of the summary's segment means)."""
+    seg_rows = [r for r in rs if r["segment"] == name]
+    length = seg_rows[-1]["t"] - seg_rows[0]["t"]
+    return window(rs, name, 0.4 * length, length + 1.0)
+
+
 def stop_speed(rs, name, t0=1.0, t1=3.0):
     """Mean v_x [m/s] over [t0, t1) s into segment NAME (1-3 s into a stop: did the robot stop when told?)."""
     w = window(rs, name, t0, t1)
