@@ -79,6 +79,8 @@
 // --stance-foot-nearest on|off (the velocity estimate's foot choice; summary.json stance_foot_nearest);
 // --max-tilt-rad X (the pelvis tilt beyond which the velocity feedback's correction decays; summary.json max_tilt_rad);
 // --walking-ki P R (the walking posture feedback's gains on pitch and roll; summary.json walking_ki);
+// --imu-acc-lowpass-s X (the HAL's low-pass of the accelerometer before the loop; summary.json imu_acc_lowpass_s),
+// --headroom-in-envelopes on|off (summary.json headroom_in_envelopes);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
 // generator and the actor were given, nan when not active: training/eval_mjx.py --command-log replays it), <out>/frames<k>.csv and
 // <out>/summary.json (runs[k].hal_slew_clamped_joint_cycles of runs[k].hal_joint_cycles: the
@@ -251,6 +253,7 @@ int main(int argc, char** argv) {
   double feedforward_return_s = -1;  // < 0: the controller config's
   double combined_ff_ratio = -1;     // < 0: the controller config's
   double max_tilt_rad = -1;          // < 0: the controller config's
+  double imu_acc_lowpass_s = -1;     // < 0: the controller config's
   std::vector<double> walking_ki;    // empty: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
@@ -278,7 +281,7 @@ int main(int argc, char** argv) {
   // The on|off switches; empty: the controller config's setting.
   std::string velocity_feedback, feedforward, posture_feedback, crouched_envelope, bent_envelope, posture_envelope, upset_guard,
       feedback_within_envelopes, yaw_beyond_envelopes, max_velocity_headroom, walking_height_floor, joint_stops, braking,
-      upset_upright, decay_feedforward, stance_foot_nearest;
+      upset_upright, decay_feedforward, stance_foot_nearest, headroom_in_envelopes;
   const auto onOff = [&app](const char* name, std::string* choice, const char* help) {
     app.add_option(name, *choice, help)->check(CLI::IsMember({"on", "off"}));
   };
@@ -310,6 +313,9 @@ int main(int argc, char** argv) {
   onOff("--yaw-beyond-envelopes", &yaw_beyond_envelopes,
         "on: with the feedback within the envelopes, its yaw-rate correction is not bound by them "
         "(velocity_feedback.yaw_beyond_envelopes); default: the controller config's");
+  onOff("--headroom-in-envelopes", &headroom_in_envelopes,
+        "on: velocity_feedback.max_velocity_headroom applies at the crouched and bent envelopes' edges too "
+        "(velocity_feedback.headroom_in_envelopes, with --feedback-within-envelopes); default: the controller config's");
   onOff("--max-velocity-headroom", &max_velocity_headroom,
         "off: the velocity feedback's command stays inside commands.max_velocity (velocity_feedback.max_velocity_headroom "
         "0), on: the config's (not 0 there); default: the controller config's");
@@ -353,6 +359,10 @@ int main(int argc, char** argv) {
                   "beyond this pelvis tilt the velocity feedback's correction decays instead of integrating [rad] "
                   "(velocity_feedback.max_tilt_rad; default: the controller config's)",
                   0.01, 1.5);
+  override_option("--imu-acc-lowpass-s", &imu_acc_lowpass_s,
+                  "time constant of the HAL's low-pass on the IMU's specific force before the loop samples it [s] "
+                  "(timing.imu_acc_lowpass_s; 0 = raw samples; default: the controller config's)",
+                  0.0, 0.1);
   app.add_option("--walking-ki", walking_ki,
                  "the walking posture feedback's integral gains on torso pitch and roll [1/s], two values in [0, 5] "
                  "(posture_feedback.walking_ki; 0 = not fed back while walking; default: the controller config's)")
@@ -383,6 +393,7 @@ int main(int argc, char** argv) {
     if (feedforward_return_s >= 0) base.velocity_feedback.feedforward_return_s = feedforward_return_s;
     if (combined_ff_ratio >= 0) base.velocity_feedback.feedforward.combined_max_correction_ratio = combined_ff_ratio;
     if (max_tilt_rad > 0) base.velocity_feedback.max_tilt_rad = max_tilt_rad;
+    if (imu_acc_lowpass_s >= 0) base.imu_acc_lowpass_s = imu_acc_lowpass_s;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     if (walking_ki.size() == 2) base.posture_feedback.walking_ki = {walking_ki[0], walking_ki[1]};
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
@@ -397,6 +408,7 @@ int main(int argc, char** argv) {
     if (!upset_guard.empty()) base.velocity_feedback.upset_guard.enabled = upset_guard == "on";
     if (!feedback_within_envelopes.empty()) base.velocity_feedback.within_posture_envelopes = feedback_within_envelopes == "on";
     if (!yaw_beyond_envelopes.empty()) base.velocity_feedback.yaw_beyond_envelopes = yaw_beyond_envelopes == "on";
+    if (!headroom_in_envelopes.empty()) base.velocity_feedback.headroom_in_envelopes = headroom_in_envelopes == "on";
     if (!stance_foot_nearest.empty()) base.velocity_feedback.stance_foot_nearest = stance_foot_nearest == "on";
     if (max_velocity_headroom == "off") base.velocity_feedback.max_velocity_headroom = {0.0, 0.0, 0.0};
     if (max_velocity_headroom == "on" && base.velocity_feedback.max_velocity_headroom == std::array<double, 3>{0.0, 0.0, 0.0})
@@ -906,8 +918,10 @@ int main(int argc, char** argv) {
        << ", \"brake_crouch_scaled\": " << (base.velocity_feedback.brake_crouch_scaled ? "true" : "false")
        << ", \"feedback_within_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes ? "true" : "false")
        << ", \"yaw_beyond_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.yaw_beyond_envelopes ? "true" : "false")
+       << ", \"headroom_in_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.headroom_in_envelopes ? "true" : "false")
        << ", \"stance_foot_nearest\": " << (base.velocity_feedback.enabled && base.velocity_feedback.stance_foot_nearest ? "true" : "false")
        << ", \"max_tilt_rad\": " << base.velocity_feedback.max_tilt_rad
+       << ", \"imu_acc_lowpass_s\": " << base.imu_acc_lowpass_s
        << ", \"walking_ki\": [" << base.posture_feedback.walking_ki[0] << ", " << base.posture_feedback.walking_ki[1] << "]"
        << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]

@@ -127,7 +127,7 @@ void CommandShaper::update(const CommandSample& s, double now, double dt, bool h
   // on the shaped height and pitch: the larger scale wins, applied along the command's direction.
   VelocityCommand goal = target_;
   double crouch_scale = 0.0, bent_scale = 0.0;
-  envelopeScales(target_, &crouch_scale, &bent_scale);
+  envelopeScales(target_, {0.0, 0.0, 0.0}, &crouch_scale, &bent_scale);
   const double scale = std::max(crouch_scale, bent_scale);
   if (scale > 1.0) {
     goal = {target_.vx / scale, target_.vy / scale, target_.wz / scale};
@@ -150,17 +150,17 @@ void CommandShaper::update(const CommandSample& s, double now, double dt, bool h
   posture_.height = slew(posture_.height, height_goal, limits_.height_rate * dt);
 }
 
-double CommandShaper::envelopeScale(const VelocityCommand& v) const noexcept {
+double CommandShaper::envelopeScale(const VelocityCommand& v, const std::array<double, 3>& min_limit) const noexcept {
   double crouch_scale = 0.0, bent_scale = 0.0;
-  envelopeScales(v, &crouch_scale, &bent_scale);
+  envelopeScales(v, min_limit, &crouch_scale, &bent_scale);
   return std::max(crouch_scale, bent_scale);
 }
 
-double CommandShaper::envelopeScaleBesideYaw(const VelocityCommand& v) const noexcept {
+double CommandShaper::envelopeScaleBesideYaw(const VelocityCommand& v, const std::array<double, 3>& min_limit) const noexcept {
   // The edge (1), or where the shaped ω alone already lies beyond it (a transient of the slews): then
   // v_x and v_y go to 0, continuously, as the room the turn leaves them closes.
-  const double target = std::max(1.0, envelopeScale({0.0, 0.0, velocity_.wz}));
-  const auto scale_at = [&](double s) { return envelopeScale({v.vx / s, v.vy / s, velocity_.wz}); };
+  const double target = std::max(1.0, envelopeScale({0.0, 0.0, velocity_.wz}, min_limit));
+  const auto scale_at = [&](double s) { return envelopeScale({v.vx / s, v.vy / s, velocity_.wz}, min_limit); };
   if (scale_at(1.0) <= target) return 1.0;
   double lo = 1.0, hi = 2.0;
   for (int k = 0; k < 20 && scale_at(hi) > target; ++k) {
@@ -179,18 +179,19 @@ double CommandShaper::crouchFraction() const noexcept {
   return std::clamp((limits_.standing_height - posture_.height) / (limits_.standing_height - limits_.crouched_height), 0.0, 1.0);
 }
 
-void CommandShaper::envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept {
+void CommandShaper::envelopeScales(const VelocityCommand& v, const std::array<double, 3>& min_limit, double* crouch_scale,
+                                   double* bent_scale) const noexcept {
   const double t[3] = {v.vx, v.vy, v.wz};
-  // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1).
-  const auto blended = [this](std::size_t i, double f, const std::array<double, 3>& at_full) {
-    return limits_.max_velocity[i] + f * (at_full[i] - limits_.max_velocity[i]);
+  // Axis i's limit blended from max_velocity (f = 0) to an envelope's own (f = 1), never below min_limit.
+  const auto blended = [this, &min_limit](std::size_t i, double f, const std::array<double, 3>& at_full) {
+    return std::max(min_limit[i], limits_.max_velocity[i] + f * (at_full[i] - limits_.max_velocity[i]));
   };
   *crouch_scale = 0.0;
   *bent_scale = 0.0;
   if (const double f = crouchFraction(); f > 0.0) {  // 0 with the crouched envelope off
     double box = 0.0, l1 = 0.0, per_axis = 0.0;
     for (std::size_t i = 0; i < 3; ++i) {
-      box = std::max(box, std::fabs(t[i]) / limits_.max_velocity[i]);
+      box = std::max(box, std::fabs(t[i]) / std::max(min_limit[i], limits_.max_velocity[i]));
       const double r = std::fabs(t[i]) / blended(i, f, limits_.crouched_max_velocity);
       l1 += r;
       per_axis = std::max(per_axis, r);

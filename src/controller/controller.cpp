@@ -191,7 +191,12 @@ TickStatus Controller::tick(double now) noexcept {
     const VelocityCommand* u_fb = feedback_ ? &feedback_->update(shaper_.velocity(), state_, dt_) : &shaper_.velocity();
     if (feedback_ && config_.velocity_feedback.within_posture_envelopes) {  // kept inside the crouched and bent envelopes
       const bool keep_yaw = config_.velocity_feedback.yaw_beyond_envelopes;
-      u_fb = &feedback_->scaleDown(keep_yaw ? shaper_.envelopeScaleBesideYaw(*u_fb) : shaper_.envelopeScale(*u_fb), keep_yaw);
+      std::array<double, 3> min_limit{0.0, 0.0, 0.0};  // headroom_in_envelopes: |u_i| + h_i
+      if (config_.velocity_feedback.headroom_in_envelopes)
+        for (std::size_t i = 0; i < 3; ++i)
+          min_limit[i] = std::fabs(shaper_.velocity()[i]) + config_.velocity_feedback.max_velocity_headroom[i];
+      u_fb = &feedback_->scaleDown(
+          keep_yaw ? shaper_.envelopeScaleBesideYaw(*u_fb, min_limit) : shaper_.envelopeScale(*u_fb, min_limit), keep_yaw);
     }
     const VelocityCommand& u_d = *u_fb;
     const PostureCommand& u_s =

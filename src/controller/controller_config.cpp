@@ -48,6 +48,7 @@ struct TimingYaml {
   double loop_rate_hz = 100.0, hal_rate_hz = 500.0;
   int loop_fifo_priority = 0, hal_fifo_priority = 0, hal_cpu = -1;
   bool lock_memory = false;
+  double imu_acc_lowpass_s = 0.0;
   template <class A>
   void Serialize(A* a) {
     a->Visit("mode", &mode, "lockstep | realtime");
@@ -57,6 +58,9 @@ struct TimingYaml {
     a->Visit("hal_fifo_priority", &hal_fifo_priority, "SCHED_FIFO 1..99, 0 = normal");
     a->Visit("hal_cpu", &hal_cpu, "CPU of the HAL thread, -1 = any");
     a->Visit("lock_memory", &lock_memory, "mlockall before real-time operation");
+    a->Visit("imu_acc_lowpass_s", &imu_acc_lowpass_s,
+             "low-pass time constant of the IMU's specific force in the HAL before the loop samples it, 0 (off) or "
+             "[1 / hal_rate_hz, 0.1] s (docs/controller.md)");
   }
   std::string validate() const {
     if (!(loop_rate_hz >= 10 && loop_rate_hz <= 1000)) return "loop_rate_hz: expected 10..1000 Hz";
@@ -66,6 +70,8 @@ struct TimingYaml {
     if (loop_fifo_priority < 0 || loop_fifo_priority > 99) return "loop_fifo_priority: expected 0..99";
     if (hal_fifo_priority < 0 || hal_fifo_priority > 99) return "hal_fifo_priority: expected 0..99";
     if (hal_cpu < -1) return "hal_cpu: expected -1 (any) or a CPU index";
+    if (!(imu_acc_lowpass_s == 0.0 || (imu_acc_lowpass_s >= 1.0 / hal_rate_hz - 1e-12 && imu_acc_lowpass_s <= 0.1)))
+      return "imu_acc_lowpass_s: expected 0 (off) or in [1 / hal_rate_hz, 0.1] s";
     return {};
   }
 };
@@ -230,6 +236,8 @@ struct VelocityFeedbackYaml {
              "keep the corrected command inside the shaper's crouched and bent velocity envelopes (docs/controller.md)");
     a->Visit("yaw_beyond_envelopes", &f.yaw_beyond_envelopes,
              "with within_posture_envelopes: the yaw-rate correction is not bound by those envelopes, v_x and v_y are (true|false)");
+    a->Visit("headroom_in_envelopes", &f.headroom_in_envelopes,
+             "with within_posture_envelopes: max_velocity_headroom applies at the crouched and bent envelopes' edges too (true|false)");
     a->Visit("max_tilt_rad", &f.max_tilt_rad, "above this pelvis tilt the correction decays to zero, (0, 1.5] rad");
     a->Visit("decay_time_s", &f.decay_time_s, "time constant of that decay, (0, 5] s");
     a->Visit("decay_feedforward", &f.decay_feedforward, "while tilted the feed-forward's share decays too, and returns once upright (true|false)");
@@ -396,6 +404,7 @@ HalStackConfig ControllerConfig::halStack() const {
   h.soft_stand_duration_s = soft_stand_duration;
   h.damping_kd_scale = damping_kd_scale;
   h.q_rate_max = q_rate_max;
+  h.imu_acc_lowpass_s = imu_acc_lowpass_s;
   return h;
 }
 
@@ -437,6 +446,7 @@ ControllerConfig loadControllerConfig(const std::string& path) {
   c.hal_fifo_priority = y.timing.hal_fifo_priority;
   c.hal_cpu = y.timing.hal_cpu;
   c.lock_memory = y.timing.lock_memory;
+  c.imu_acc_lowpass_s = y.timing.imu_acc_lowpass_s;
   c.mujoco.timestep = y.mujoco.timestep;
   c.mujoco.cycle_period = 1.0 / c.hal_rate_hz;
   c.mujoco.encoder_offsets = y.mujoco.encoder_offsets;

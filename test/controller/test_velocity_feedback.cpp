@@ -237,6 +237,34 @@ TEST(VelocityFeedback, WithinPostureEnvelopesKeepsTheCorrectedCommandOnTheEnvelo
   EXPECT_EQ(fb.scaleDown(0.5).vx, before.vx);
 }
 
+// velocity_feedback.headroom_in_envelopes passes min_limit = |u_i| + h_i to the envelope scale: an
+// axis's limit is never below it, so a command at the crouched envelope's edge may be corrected up
+// to h beyond it, and one further inside is bound exactly as before.
+TEST(VelocityFeedback, EnvelopeMinLimitOpensAnAxisOnlyAsFarAsItAsks) {
+  CommandLimits limits = envelopeLimits();
+  limits.crouched_per_axis = true;
+  CommandShaper shaper(limits);
+  CommandSample s;
+  s.command = Command{0.0, 0.3, 0.0, 0.0, 0.0, 0.62};  // fully crouched, lateral at the edge (0.3)
+  for (int k = 0; k < 500; ++k) {
+    s.velocity_time = s.posture_time = k * 0.01;
+    shaper.update(s, k * 0.01, 0.01);
+  }
+  ASSERT_NEAR(shaper.crouchFraction(), 1.0, 1e-12);
+  ASSERT_NEAR(shaper.velocity().vy, 0.3, 1e-9);
+  const VelocityCommand corrected{0.0, 0.4, 0.0};
+  EXPECT_NEAR(shaper.envelopeScale(corrected), 0.4 / 0.3, 1e-12) << "without: bound at the edge";
+  EXPECT_NEAR(shaper.envelopeScale(corrected, {0.0, 0.3 + 0.1, 0.0}), 1.0, 1e-12) << "h = 0.1: up to 0.4";
+  EXPECT_NEAR(shaper.envelopeScale(corrected, {0.0, 0.35, 0.0}), 0.4 / 0.35, 1e-12);
+  // Below the limit min_limit changes nothing, on this axis or the others.
+  EXPECT_EQ(shaper.envelopeScale({0.2, 0.2, 0.3}, {0.1, 0.25, 0.5}), shaper.envelopeScale({0.2, 0.2, 0.3}));
+  // The other axes keep their limits: v_x 0.6 against the crouched 0.3.
+  EXPECT_NEAR(shaper.envelopeScale({0.6, 0.4, 0.0}, {0.0, 0.4, 0.0}), 2.0, 1e-12);
+  // Beside yaw, the same.
+  EXPECT_NEAR(shaper.envelopeScaleBesideYaw(corrected, {0.0, 0.4, 0.0}), 1.0, 1e-9);
+  EXPECT_NEAR(shaper.envelopeScaleBesideYaw(corrected), 0.4 / 0.3, 1e-9);
+}
+
 // velocity_feedback.yaw_beyond_envelopes: crouched to 0.66 m, a turn with a slow forward walk on a
 // plant that turns at half of what it is sent (the default actor crouched: 0.36 rad/s for 0.63).
 // Within the envelopes, all axes together, the turn's correction stops at the envelope's edge; with ω

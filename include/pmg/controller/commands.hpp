@@ -152,7 +152,10 @@ class CommandShaper {
   /// posture of the last update: the larger of the two envelopes' scales s (CommandLimits::
   /// crouched_height, bent_pitch); v / s is on the envelope's edge when s > 1, and v is inside when
   /// s <= 1 (0 with both envelopes off or upright at the standing height). noexcept.
-  double envelopeScale(const VelocityCommand& v) const noexcept;
+  /// @p min_limit (v_x, v_y [m/s], ω [rad/s], each >= 0; zeros by default): each axis's limit in
+  /// both envelopes (and the max_velocity it blends from) is at least this, so an envelope never
+  /// binds an axis below it (VelocityFeedbackConfig::headroom_in_envelopes passes |u_i| + h_i).
+  double envelopeScale(const VelocityCommand& v, const std::array<double, 3>& min_limit = {}) const noexcept;
   /// For VelocityFeedbackConfig::yaw_beyond_envelopes: the scale s >= 1 by which @p v's v_x and v_y
   /// must be divided so that (v_x / s, v_y / s, ω of the shaped command) is inside the envelopes, on
   /// their edge (scale 1) as envelopeScale() would put it, or, while the shaped ω alone lies beyond
@@ -160,8 +163,8 @@ class CommandShaper {
   /// no division is needed. With ω = 0 it equals envelopeScale(v) (the envelopes are homogeneous).
   /// The envelope scale falls monotonically with s, so s is found by bisection of fixed length (at
   /// most 20 doublings, to 2^21, then 50 halvings; relative error below 1e-12); noexcept, no
-  /// allocation.
-  double envelopeScaleBesideYaw(const VelocityCommand& v) const noexcept;
+  /// allocation. @p min_limit as for envelopeScale().
+  double envelopeScaleBesideYaw(const VelocityCommand& v, const std::array<double, 3>& min_limit = {}) const noexcept;
   /// How crouched the shaped posture of the last update is, in [0, 1]: the crouched envelope's
   /// crouch f = (standing − h) / (standing − crouched_height), clamped (the blend factor of
   /// envelopeScale()); 0 with the crouched envelope off (crouched_height 0) or at the standing height,
@@ -172,7 +175,8 @@ class CommandShaper {
 
  private:
   /// The crouched and the bent envelope's scales of @p v at the shaped posture (envelopeScale()).
-  void envelopeScales(const VelocityCommand& v, double* crouch_scale, double* bent_scale) const noexcept;
+  void envelopeScales(const VelocityCommand& v, const std::array<double, 3>& min_limit, double* crouch_scale,
+                      double* bent_scale) const noexcept;
 
   CommandLimits limits_;
   VelocityCommand target_{}, velocity_{};

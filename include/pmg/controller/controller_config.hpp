@@ -53,6 +53,9 @@ struct ControllerConfig {
   int hal_fifo_priority = 0;     ///< SCHED_FIFO priority of the HAL thread (0: normal)
   int hal_cpu = -1;              ///< CPU of the HAL thread (-1: any)
   bool lock_memory = false;      ///< mlockall() before real-time operation
+  /// Low-pass of the IMU's specific force in the HAL before the loop samples it [s] (`timing:
+  /// imu_acc_lowpass_s`; hal::safety::SafeBackendOptions::imu_acc_lowpass_s); 0 = raw samples.
+  double imu_acc_lowpass_s = 0.0;
   MujocoBackendOptions mujoco;
   GeneratorParams generator;
   std::string gco_file;          ///< absolute path of the GCO options ("" = defaults)

@@ -272,6 +272,14 @@ struct VelocityFeedbackConfig {
   /// sent 0.79, and the run-on the bound prevents is in v_x (docs/controller.md "Running on after a
   /// crouched bent walk", "What it costs on the crouched probe").
   bool yaw_beyond_envelopes = false;
+  /// With within_posture_envelopes: true lets max_velocity_headroom reach inside the crouched and bent
+  /// envelopes too. Each axis's envelope limit is at least |u_i| + h_i (CommandShaper::envelopeScale's
+  /// min_limit), so a command at an envelope's edge may be corrected up to h beyond it, as one at
+  /// max_velocity may be standing; one h or more inside the edge, nothing changes (continuous in u).
+  /// false (the default): the envelopes bind the corrected command at their edge. Why: crouched to
+  /// 0.66 m and told the largest lateral speed, 0.4 m/s, H10a stepped 0.30 while the corrected command
+  /// sat at the edge, 0.400 (docs/controller.md "Headroom inside the posture envelopes").
+  bool headroom_in_envelopes = false;
   /// Upset guard (UpsetGuard; needs enabled: it runs on this loop's estimate). Off by default.
   UpsetGuardConfig upset_guard{};
   /// Empty when valid, else "<field>: expected ..." for the first bad field.

@@ -53,6 +53,9 @@ struct HalStackConfig {
   std::vector<double> kp_max, kd_max;
   /// Per-joint soft-stand gains (n values or empty = the robot config's kp / kd).
   std::vector<double> stand_kp, stand_kd;
+  /// The IMU specific force's low-pass before the loop [s] (hal::safety::SafeBackendOptions::
+  /// imu_acc_lowpass_s): 0 (off) or in [one HAL cycle, 0.1].
+  double imu_acc_lowpass_s = 0.0;
 };
 
 /// The stack: the outermost backend (owns the others) and its supervisor.

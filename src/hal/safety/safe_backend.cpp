@@ -122,6 +122,15 @@ pmg::BackendStatus SafeBackend::exchange(const pmg::LowCommand& command, pmg::Lo
       if (all) st = pmg::BackendStatus::kPartial;
     }
   }
+  if (bopt_.imu_acc_lowpass_s > 0.0 && state.imu.valid) {
+    const double T = inner_->cyclePeriod();
+    const double a = acc_lowpass_started_ ? T / (bopt_.imu_acc_lowpass_s + T) : 1.0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      acc_lowpass_[i] += a * (state.imu.acc[i] - acc_lowpass_[i]);
+      state.imu.acc[i] = acc_lowpass_[i];
+    }
+    acc_lowpass_started_ = true;
+  }
   ++cycles_;
   last_status_ = st;
   state.mode = out_.mode;

@@ -19,6 +19,8 @@
 ///     has not expired: a single lost CAN frame is the HAL's business, not the loop's. Once the
 ///     watchdog expires the loop sees valid = false (and the HAL is already in damping). A cycle
 ///     with no reply at all whose values could all be held is returned as kPartial, not kFault;
+///  4b. with SafeBackendOptions::imu_acc_lowpass_s > 0, low-passes the IMU's specific force it hands
+///     the loop (first order, at the HAL rate; the supervisor still sees the raw samples);
 ///  5. writes the supervisor's mode, fault and stand progress into the LowState the loop reads, and
 ///     publishes a SafetyStatus for telemetry through a lock-free LatestValue;
 ///  6. a cycle whose wrapped backend returned kFault (after step 4) is a backend fault for the
@@ -58,6 +60,15 @@ struct SafetyStatus {
 
 struct SafeBackendOptions {
   bool hold_missing = true;  ///< See step 4 above.
+  /// Time constant [s] of a first-order low-pass on the IMU's specific force (ImuState::acc, IMU
+  /// frame, m/s²) handed to the loop, run on every HAL cycle: y += T / (τ + T) · (acc − y), with T
+  /// the cycle period; it starts from the first valid sample. 0 (the default): the raw samples. Why:
+  /// the 100 Hz loop takes one HAL sample in five, and the base-velocity estimator integrates it; the
+  /// foot impacts' acceleration spikes, phase-locked to the gait, then alias into a bias. In the SIL
+  /// (MuJoCo's point accelerations at 1 kHz) H10a's fast crouched walks drifted the estimate 0.06-0.2
+  /// m/s above the truth (docs/controller.md "The accelerometer aliased into the velocity estimate").
+  /// Valid: 0 or in [T, 0.1] s (checked by makeHalStack()).
+  double imu_acc_lowpass_s = 0.0;
 };
 
 class SafeBackend final : public pmg::HalBackend {
@@ -93,6 +104,8 @@ class SafeBackend final : public pmg::HalBackend {
   pmg::LowState held_{};                ///< Last valid value per motor and of the IMU.
   std::array<double, pmg::kMaxMotors> held_at_{};  ///< When each was valid [s] (cycle time).
   double imu_held_at_ = -1e9;
+  std::array<double, 3> acc_lowpass_{};  ///< imu_acc_lowpass_s's state (IMU frame) [m/s²]
+  bool acc_lowpass_started_ = false;
   std::uint64_t held_count_ = 0;
   std::uint64_t nonfinite_replies_ = 0;
   pmg::BackendStatus last_status_ = pmg::BackendStatus::kOk;
