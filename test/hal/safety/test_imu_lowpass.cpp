@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "alloc_counter.hpp"
 #include "g1_fixture.hpp"
 #include "pmg/hal/hal_stack.hpp"
 #include "pmg/hal/safety/safe_backend.hpp"
@@ -149,6 +150,21 @@ TEST(ImuLowpass, TheSupervisorStillSeesTheRawSpike) {
   EXPECT_EQ(status.fault.code, pmg::hal::safety::FaultCode::kImuInvalid)
       << "a 400 m/s^2 sample is beyond imu_acc_max for the supervisor, which sees the raw IMU";
   EXPECT_NEAR(status.fault.value, std::hypot(400.0, 9.81), 1e-9);
+}
+
+TEST(ImuLowpass, TheHalCycleWithTheLowpassDoesNotAllocate) {
+  const pmg::RobotConfig& robot = pmg::test::g1Robot();
+  pmg::HalStackConfig hs;
+  hs.imu_acc_lowpass_s = 0.005;
+  pmg::HalStack stack = pmg::makeHalStack(robot, hs, std::make_unique<SpikyImuBackend>(robot, 100.0));
+  pmg::LowCommand cmd;
+  cmd.num_motors = static_cast<int>(robot.numJoints());
+  pmg::LowState st;
+  stack.backend->exchange(cmd, st);  // first cycle outside the count
+  EXPECT_EQ(pmg::test::allocationsDuring([&] {
+              for (int k = 0; k < 500; ++k) stack.backend->exchange(cmd, st);
+            }),
+            0u);
 }
 
 TEST(ImuLowpass, ATimeConstantOutsideItsRangeIsRefused) {
