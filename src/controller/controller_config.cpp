@@ -70,9 +70,7 @@ struct TimingYaml {
     if (loop_fifo_priority < 0 || loop_fifo_priority > 99) return "loop_fifo_priority: expected 0..99";
     if (hal_fifo_priority < 0 || hal_fifo_priority > 99) return "hal_fifo_priority: expected 0..99";
     if (hal_cpu < -1) return "hal_cpu: expected -1 (any) or a CPU index";
-    if (!(imu_acc_lowpass_s == 0.0 || (imu_acc_lowpass_s >= 1.0 / hal_rate_hz - 1e-12 && imu_acc_lowpass_s <= 0.1)))
-      return "imu_acc_lowpass_s: expected 0 (off) or in [1 / hal_rate_hz, 0.1] s";
-    return {};
+    return imuAccLowpassError(imu_acc_lowpass_s, 1.0 / hal_rate_hz);
   }
 };
 

@@ -58,6 +58,15 @@ struct HalStackConfig {
   double imu_acc_lowpass_s = 0.0;
 };
 
+/// Empty if @p lowpass_s is a valid HalStackConfig::imu_acc_lowpass_s for a HAL cycle of
+/// @p cycle_period_s [s] (0, or in [one cycle, 0.1] s), else "imu_acc_lowpass_s: expected ...". The one
+/// rule for the YAML loader (timing:) and makeHalStack().
+inline std::string imuAccLowpassError(double lowpass_s, double cycle_period_s) {
+  if (lowpass_s == 0.0 || (lowpass_s >= cycle_period_s - 1e-12 && lowpass_s <= 0.1)) return {};
+  return "imu_acc_lowpass_s: expected 0 (off) or in [1 / hal_rate_hz, 0.1] s (one HAL cycle: " +
+         std::to_string(cycle_period_s) + " s), got " + std::to_string(lowpass_s);
+}
+
 /// The stack: the outermost backend (owns the others) and its supervisor.
 struct HalStack {
   std::unique_ptr<HalBackend> backend;

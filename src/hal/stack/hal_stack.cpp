@@ -59,10 +59,8 @@ HalStack makeHalStack(const RobotConfig& robot, const HalStackConfig& config, st
     if (!config.kp_max.empty()) options.joints[j].kp_max = std::max(options.joints[j].kp_max, config.kp_max[j]);
     if (!config.kd_max.empty()) options.joints[j].kd_max = std::max(options.joints[j].kd_max, config.kd_max[j]);
   }
-  const double period = backend->cyclePeriod();
-  if (!(config.imu_acc_lowpass_s == 0.0 || (config.imu_acc_lowpass_s >= period - 1e-12 && config.imu_acc_lowpass_s <= 0.1)))
-    throw std::invalid_argument("timing.imu_acc_lowpass_s: expected 0 (off) or in [" + std::to_string(period) +
-                      " (one HAL cycle), 0.1] s, got " + std::to_string(config.imu_acc_lowpass_s));
+  if (const std::string e = imuAccLowpassError(config.imu_acc_lowpass_s, backend->cyclePeriod()); !e.empty())
+    throw std::invalid_argument("timing." + e);
   hal::safety::SafeBackendOptions backend_options;
   backend_options.imu_acc_lowpass_s = config.imu_acc_lowpass_s;
   auto safe = std::make_unique<hal::safety::SafeBackend>(std::move(backend), options, backend_options);
