@@ -40,7 +40,11 @@ realtime_threads() {  # $1 = controller config
   sed -i -e "s/^  loop_fifo_priority: 0 /  loop_fifo_priority: 40 /" -e "s/^  hal_fifo_priority: 0$/  hal_fifo_priority: 50/" "$1"
   grep -q "loop_fifo_priority: 40" "$1" && grep -q "hal_fifo_priority: 50" "$1" || fail "could not set the FIFO priorities in $1"
 }
-fail() { echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true; exit 1; }
+fail() {
+  echo "FAIL: $*"; echo "--- controller"; cat "$tmp/controller.txt" || true
+  if [ -f "$tmp/bridge.txt" ]; then echo "--- bridge"; cat "$tmp/bridge.txt"; fi
+  exit 1
+}
 wait_listening() {  # until the controller has opened its authenticated LCM input (setup can be slow under load)
   for _ in $(seq 1 200); do
     grep -q "LCM commands authenticated" "$tmp/controller.txt" 2>/dev/null && { sleep 1.0; return 0; }
@@ -105,11 +109,14 @@ bridge)
   [ -x "$chromium" ] || { echo "SKIP: chromium not found ($chromium)"; exit 0; }
   make_config "$src/config/controller/g1_sil_teleop.yaml" "$tmp/ctl.yaml"
   realtime_threads "$tmp/ctl.yaml"
-  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 16 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  # The stream is timed from the page's first connection, not from the bridge's start: a fixed 11 s
+  # bridge window once left 2.2 s of stream on CI (156 poses; stop 116), the rest spent starting
+  # Chromium. The controller runs until it is stopped (SIGINT, a clean stop).
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 90 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
   wait_listening
   "$bin/pmg_vr_bridge" --port 0 --bind 127.0.0.1 --cert-dir "$tmp/vr" --key "$tmp/commands.key" --lcm-url "$url" \
-      --duration 11 > "$tmp/bridge.txt" 2>&1 &
+      > "$tmp/bridge.txt" 2>&1 &
   pids+=($!); bridge=$!
   for _ in $(seq 1 100); do grep -q "synthetic=1" "$tmp/bridge.txt" && break; sleep 0.1; done
   page=$(grep -o "https://127.0.0.1:[0-9]*/?token=[a-z0-9]*&synthetic=1" "$tmp/bridge.txt" | head -1)
@@ -119,10 +126,18 @@ bridge)
       --disable-component-update --disable-sync --mute-audio --user-data-dir="$tmp/profile" "$page" > "$tmp/chromium.txt" 2>&1 &
   browser=$!
   pids+=(-$browser)
+  t_browser=$SECONDS
+  for _ in $(seq 1 600); do grep -q "client #[0-9]* connected" "$tmp/bridge.txt" && break; sleep 0.1; done
+  grep -q "client #[0-9]* connected" "$tmp/bridge.txt" || { cat "$tmp/bridge.txt"; fail "the page never connected to the bridge in 60 s"; }
+  echo "the page connected $((SECONDS - t_browser)) s after Chromium was started"
+  sleep 8  # 8 s of stream at 72 Hz: about 576 poses
+  kill -TERM "$bridge" 2>/dev/null || true
   wait "$bridge" || true
   kill -- -"$browser" 2>/dev/null || true
+  sleep 1
+  kill -INT "$ctl" 2>/dev/null || true
   wait "$ctl" || true
-  cat "$tmp/bridge.txt" | tail -2
+  echo "--- bridge"; cat "$tmp/bridge.txt"; mv "$tmp/bridge.txt" "$tmp/bridge_shown.txt"
   cat "$tmp/controller.txt"
   grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
   accepted=$(sed -n 's/.*LCM command packets: accepted \([0-9]*\).*/\1/p' "$tmp/controller.txt")
