@@ -52,6 +52,14 @@ wait_listening() {  # until the controller has opened its authenticated LCM inpu
   done
   fail "the controller never opened its LCM input"
 }
+# Every test's controller runs until the commander is done and is then stopped (SIGINT, a clean stop
+# that prints its summary): a fixed --duration counted from the controller's start lost the end of the
+# session whenever start-up was slow on a loaded CI host (bridge, stop 116).
+stop_controller() {  # $1 = seconds to let the controller run on first
+  sleep "$1"
+  kill -INT "$ctl" 2>/dev/null || true
+  wait "$ctl" || true
+}
 column_max() {  # $1 = csv, $2 = column name -> max value
   python3 - "$1" "$2" <<'PY'
 import csv, sys
@@ -65,12 +73,12 @@ gamepad)
   make_config "$src/config/controller/g1_sil.yaml" "$tmp/ctl.yaml"
   sed -i 's/^  startup: active/  startup: passive/' "$tmp/ctl.yaml"
   grep -q "startup: passive" "$tmp/ctl.yaml" || fail "could not set startup: passive"
-  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 14 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 90 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
   wait_listening
   "$bin/pmg_gamepad" --key "$tmp/commands.key" --lcm-url "$url" \
       --virtual-script "$src/test/teleop/mode/gamepad_short_script.yaml" > "$tmp/gamepad.txt" 2>&1 || fail "pmg_gamepad: $(cat "$tmp/gamepad.txt")"
-  wait "$ctl" || true
+  stop_controller 3  # the damping request comes 1 s after the unplug, at the script's end
   cat "$tmp/controller.txt"
   grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
   accepted=$(sed -n 's/.*LCM command packets: accepted \([0-9]*\).*/\1/p' "$tmp/controller.txt")
@@ -87,11 +95,11 @@ vr)
   # The scripted operator (config/teleop/vr_walk_script.yaml) recorded into an LCM log, replayed
   # re-signed with the key, as a recorded headset session would be.
   "$bin/pmg_vr_script" --script "$src/config/teleop/vr_walk_script.yaml" --log "$tmp/session.lcmlog" > /dev/null
-  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 20 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
+  "$bin/pmg_controller" --config "$tmp/ctl.yaml" --realtime --duration 90 --log "$tmp/run.lcmlog" > "$tmp/controller.txt" 2>&1 &
   pids+=($!); ctl=$!
   wait_listening  # then the robot has stood up (soft stand 0.2 s) before the session starts
   "$bin/pmg_vr_replay" --log "$tmp/session.lcmlog" --key "$tmp/commands.key" --lcm-url "$url" > "$tmp/replay.txt" 2>&1 || fail "pmg_vr_replay: $(cat "$tmp/replay.txt")"
-  wait "$ctl" || true
+  stop_controller 3  # the stream dropped 2.5 s before the session's end; stale after 0.25 s
   cat "$tmp/controller.txt"
   grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
   grep -q "VR teleop: engaged 1 times; stream went stale while engaged 1 times" "$tmp/controller.txt" || fail "teleop did not engage once and see the stream drop once"
@@ -134,9 +142,7 @@ bridge)
   kill -TERM "$bridge" 2>/dev/null || true
   wait "$bridge" || true
   kill -- -"$browser" 2>/dev/null || true
-  sleep 1
-  kill -INT "$ctl" 2>/dev/null || true
-  wait "$ctl" || true
+  stop_controller 1
   echo "--- bridge"; cat "$tmp/bridge.txt"; mv "$tmp/bridge.txt" "$tmp/bridge_shown.txt"
   cat "$tmp/controller.txt"
   grep -q "rejected 0" "$tmp/controller.txt" || fail "packets rejected"
