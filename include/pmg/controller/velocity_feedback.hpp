@@ -279,8 +279,8 @@ struct VelocityFeedbackConfig {
   /// false (the default): the envelopes bind the corrected command at their edge. Why: crouched to
   /// 0.66 m and told the largest lateral speed, 0.4 m/s, H10a stepped 0.30 while the corrected command
   /// sat at the edge, 0.400; with it 0.34-0.35. Not on in the default config: its lateral estimate reads 0.03-0.04 m/s
-  /// low in side-steps, and the side-steps at 0.74 / 0.70 m went from 0.38 to 0.44-0.46 (docs/controller.md "Headroom
-  /// inside the posture envelopes").
+  /// low in side-steps (H10a's stance soles slide along the step: training/results/fidelity/foot_slip/), and the
+  /// side-steps at 0.74 / 0.70 m went from 0.38 to 0.44-0.46 (docs/controller.md "Headroom inside the posture envelopes").
   bool headroom_in_envelopes = false;
   /// Upset guard (UpsetGuard; needs enabled: it runs on this loop's estimate). Off by default.
   UpsetGuardConfig upset_guard{};

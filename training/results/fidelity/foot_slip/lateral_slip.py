@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""Why the lateral leg odometry reads low in side-steps: the stance soles slide.
+
+Replays pmg_policy_sil's --probe CSV (MuJoCo's qpos/qvel when each loop tick read its state) in MuJoCo
+and reports, per side-step segment (last 60 %), in the heading frame H, signed along the step:
+  - the sole point's velocity in W of each foot by how many of its four contact spheres touch the floor;
+  - leg odometry with exact kinematics (v_base - v_sole of the foot in the 2 cm stance band nearer the
+    truth, gated at 0.15 m/s against the truth): what the estimator would read if its kinematics, IMU
+    and gate were perfect. What remains is the stance sole's own slide.
+Usage (the training venv has mujoco):
+  .venv-training/bin/python training/results/fidelity/foot_slip/lateral_slip.py OUT/probe.csv OUT/seed0.csv [MJCF]
+"""
+import csv
+import sys
+
+import mujoco
+import numpy as np
+
+P_FS = np.array([0.035, 0.0, -0.035])  # sole point in the foot link (include/pmg/gco/leg_kinematics.hpp)
+
+
+def main():
+    probe, seed_csv = sys.argv[1], sys.argv[2]
+    mjcf = sys.argv[3] if len(sys.argv) > 3 else "config/robots/g1/g1_29dof_rev_1_0.xml"
+    m = mujoco.MjModel.from_xml_path(mjcf)
+    d = mujoco.MjData(m)
+    hdr = open(probe).readline().strip().split(",")
+    keep = [i for i, h in enumerate(hdr) if h != "mode"]
+    hdr = [hdr[i] for i in keep]
+    P = np.loadtxt(probe, delimiter=",", skiprows=1, usecols=keep)
+    iq = [i for i, h in enumerate(hdr) if h.startswith("qpos")]
+    iv = [i for i, h in enumerate(hdr) if h.startswith("qvel")]
+    segs = [r["segment"] for r in csv.DictReader(open(seed_csv))]
+    feet = [m.body("left_ankle_roll_link").id, m.body("right_ankle_roll_link").id]
+    per_seg = {}
+    for k in range(min(len(P), len(segs))):
+        if not segs[k].startswith(("left", "right")):
+            continue
+        d.qpos[:] = P[k, iq]
+        d.qvel[:] = P[k, iv]
+        mujoco.mj_forward(m, d)
+        qw, qx, qy, qz = d.qpos[3:7]
+        yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+        c, s = np.cos(yaw), np.sin(yaw)
+        R_HW = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+        v_base = (R_HW @ d.qvel[0:3])[:2]
+        z, v_leg, ncon, v_sole = np.zeros(2), np.zeros((2, 2)), [0, 0], np.zeros((2, 2))
+        for f, b in enumerate(feet):
+            R = d.xmat[b].reshape(3, 3)
+            p = d.xpos[b] + R @ P_FS
+            z[f] = p[2]
+            jp = np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jp, None, p, b)
+            v_sole[f] = (R_HW @ (jp @ d.qvel))[:2]
+            v_leg[f] = v_base - v_sole[f]
+            ncon[f] = sum(1 for i in range(d.ncon)
+                          if b in (m.geom_bodyid[d.contact[i].geom1], m.geom_bodyid[d.contact[i].geom2]))
+        per_seg.setdefault(segs[k], []).append((v_base, z, v_leg, ncon, v_sole))
+    for name, rows in per_seg.items():
+        rows = rows[int(0.4 * len(rows)):]
+        sign = -1.0 if name.startswith("right") else 1.0
+        by_contacts = {}
+        acc, truth = [], []
+        for v_base, z, v_leg, ncon, v_sole in rows:
+            for f in range(2):
+                if ncon[f]:
+                    by_contacts.setdefault(ncon[f], []).append(sign * v_sole[f][1])
+            band = [f for f in range(2) if z[f] - z.min() <= 0.02]
+            f = min(band, key=lambda f: np.hypot(*(v_leg[f] - v_base)))
+            if np.hypot(*(v_leg[f] - v_base)) <= 0.15:
+                acc.append(sign * v_leg[f][1])
+                truth.append(sign * v_base[1])
+        print(f"{name}: {len(rows)} ticks; lateral along the step [m/s]")
+        for n in sorted(by_contacts):
+            print(f"  sole slide, {n} of 4 corners touching: {np.mean(by_contacts[n]):+.3f} ({len(by_contacts[n])} foot-ticks)")
+        print(f"  exact leg odometry, accepted {len(acc)}: {np.mean(acc):.3f} against the truth {np.mean(truth):.3f}"
+              f" ({np.mean(acc) - np.mean(truth):+.3f})")
+
+
+if __name__ == "__main__":
+    main()
