@@ -136,7 +136,7 @@ bridge)
   pids+=(-$browser)
   t_browser=$SECONDS
   for _ in $(seq 1 600); do grep -q "client #[0-9]* connected" "$tmp/bridge.txt" && break; sleep 0.1; done
-  grep -q "client #[0-9]* connected" "$tmp/bridge.txt" || { cat "$tmp/bridge.txt"; fail "the page never connected to the bridge in 60 s"; }
+  grep -q "client #[0-9]* connected" "$tmp/bridge.txt" || fail "the page never connected to the bridge in 60 s"
   echo "the page connected $((SECONDS - t_browser)) s after Chromium was started"
   sleep 8  # 8 s of stream at 72 Hz: about 576 poses
   kill -TERM "$bridge" 2>/dev/null || true
