@@ -87,7 +87,8 @@
 // supervisor's slew limit, hal_q_rate_max, held a joint's command back; --q-rate-max sets it).
 // --probe FILE writes the first seed's first episode tick by tick for training/probe_sil.py: MuJoCo's
 // qpos/qvel when the tick read its state, the state it read, the actor's observation and action, the
-// motor commands it wrote, and hal_slew, the joint-cycles the slew held back since the previous row.
+// motor commands it wrote, hal_slew, the joint-cycles the slew held back since the previous row, and last
+// acc_x/y/z, the specific force the tick read (IMU frame, after the HAL's low-pass).
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -336,8 +337,9 @@ int main(int argc, char** argv) {
       ->check(pmg::cli::finiteIn(0.01, 10.0));
   app.add_option("--probe", probe_path,
                  "CSV of the first seed's first episode, one row per loop tick: MuJoCo's qpos and qvel (truth when "
-                 "the tick read its state), the state the tick read, the actor's observation and action, and the "
-                 "motor commands it wrote (q, qd, kp, kd, tau_ff of every motor); for sim-to-sim comparisons "
+                 "the tick read its state), the state the tick read (joints, IMU orientation, gyro, and at the end of the row its "
+                 "specific force), the actor's observation and action, and the motor commands it wrote (q, qd, kp, "
+                 "kd, tau_ff of every motor); for sim-to-sim comparisons "
                  "(training/probe_sil.py)");
   // A number that overrides one config key, range-checked: empty (< 0 here) keeps the config's.
   const auto override_option = [&app](const char* name, double* value, const char* help, double lo, double hi) {
@@ -591,7 +593,8 @@ int main(int argc, char** argv) {
           for (int i = 0; i < na; ++i) probe << ",action" << i;
           for (const char* f : {"cmd_q", "cmd_qd", "cmd_kp", "cmd_kd", "cmd_tau"})
             for (int j = 0; j < nj; ++j) probe << ',' << f << j;
-          probe << '\n';
+          // acc_*: the specific force the tick read, IMU frame [m/s^2] (after the HAL's low-pass)
+          probe << ",acc_x,acc_y,acc_z\n";
         }
         std::atomic<bool> stop{false};
         double fall_time = -1;
@@ -775,6 +778,7 @@ int main(int argc, char** argv) {
                 const pmg::MotorCommand& mc = lc.motors[static_cast<std::size_t>(j)];
                 probe << ',' << (f == 0 ? mc.q : f == 1 ? mc.qd : f == 2 ? mc.kp : f == 3 ? mc.kd : mc.tau_ff);
               }
+            for (double x : st.imu.acc) probe << ',' << x;
             probe << '\n';
           }
           if (k++ % frame_every == 0) {  // world positions of every body origin (x y z) for frame strips

@@ -79,6 +79,18 @@ def main():
           f"physics ({p['label']}): next leg qd rms {qd['rms']:.3f} of {qd['signal_rms']:.3f} rad/s a period; "
           f"slew-limited periods {r['hal_slew']['periods with a slew-limited joint']:.3f}")
 
+    # The specific force the ticks read (the probe's last columns, after the HAL's low-pass), rotated into W by the
+    # orientation they read: gravity's reaction, +9.81 m/s^2 up, on average over the run (the pelvis ends where it
+    # started in height), and no horizontal mean beyond the walk's own accelerations.
+    import numpy as np  # after relaunch(): the training environment's
+    from probe_sil import quat_to_rot, read_probe
+    cols = read_probe(os.path.join(work, "probe_slew600.csv"))
+    acc = np.stack([cols["acc_x"], cols["acc_y"], cols["acc_z"]], axis=1)
+    quat = np.stack([cols["imu_qw"], cols["imu_qx"], cols["imu_qy"], cols["imu_qz"]], axis=1)
+    f_w = np.array([quat_to_rot(q) @ a for q, a in zip(quat, acc)]).mean(axis=0)
+    check(abs(f_w[2] - 9.81) < 0.3 and np.hypot(f_w[0], f_w[1]) < 0.3,
+          f"specific force in W, mean over the run: ({f_w[0]:+.3f}, {f_w[1]:+.3f}, {f_w[2]:.3f}) m/s^2")
+
     s = run("slew20", ["--q-rate-max", "20"])
     ps = s["physics"][0]
     share = s["hal_slew"]["periods with a slew-limited joint"]

@@ -7,11 +7,14 @@ and reports, per side-step segment (last 60 %), in the heading frame H, signed a
   - leg odometry with exact kinematics (v_base - v_sole of the foot in the 2 cm stance band nearer the
     truth, gated at 0.15 m/s against the truth): what the estimator would read if its kinematics, IMU
     and gate were perfect. What remains is the stance sole's own slide.
+Segments named left*/right* are signed along the step; others (--segments PREFIX ...) are reported in H as they are,
+forward (x) and left (y).
 Usage (the training venv has mujoco):
-  .venv-training/bin/python training/results/fidelity/foot_slip/lateral_slip.py OUT/probe.csv OUT/seed0.csv [MJCF]
+  .venv-training/bin/python training/results/fidelity/foot_slip/lateral_slip.py OUT/probe.csv OUT/seed0.csv
+      [--mjcf MJCF] [--segments PREFIX ...]
 """
+import argparse
 import csv
-import sys
 
 import mujoco
 import numpy as np
@@ -20,8 +23,14 @@ P_FS = np.array([0.035, 0.0, -0.035])  # sole point in the foot link (include/pm
 
 
 def main():
-    probe, seed_csv = sys.argv[1], sys.argv[2]
-    mjcf = sys.argv[3] if len(sys.argv) > 3 else "config/robots/g1/g1_29dof_rev_1_0.xml"
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("probe")
+    ap.add_argument("seed_csv")
+    ap.add_argument("--mjcf", default="config/robots/g1/g1_29dof_rev_1_0.xml")
+    ap.add_argument("--segments", nargs="+", default=["left", "right"], metavar="PREFIX")
+    args = ap.parse_args()
+    probe, seed_csv, mjcf = args.probe, args.seed_csv, args.mjcf
+    prefixes = tuple(args.segments)
     m = mujoco.MjModel.from_xml_path(mjcf)
     d = mujoco.MjData(m)
     hdr = open(probe).readline().strip().split(",")
@@ -34,7 +43,7 @@ def main():
     feet = [m.body("left_ankle_roll_link").id, m.body("right_ankle_roll_link").id]
     per_seg = {}
     for k in range(min(len(P), len(segs))):
-        if not segs[k].startswith(("left", "right")):
+        if not segs[k].startswith(prefixes):
             continue
         d.qpos[:] = P[k, iq]
         d.qvel[:] = P[k, iv]
@@ -58,23 +67,35 @@ def main():
         per_seg.setdefault(segs[k], []).append((v_base, z, v_leg, ncon, v_sole))
     for name, rows in per_seg.items():
         rows = rows[int(0.4 * len(rows)):]
+        step = name.startswith(("left", "right"))
         sign = -1.0 if name.startswith("right") else 1.0
         by_contacts = {}
         acc, truth = [], []
         for v_base, z, v_leg, ncon, v_sole in rows:
             for f in range(2):
                 if ncon[f]:
-                    by_contacts.setdefault(ncon[f], []).append(sign * v_sole[f][1])
+                    by_contacts.setdefault(ncon[f], []).append(sign * v_sole[f])
             band = [f for f in range(2) if z[f] - z.min() <= 0.02]
             f = min(band, key=lambda f: np.hypot(*(v_leg[f] - v_base)))
             if np.hypot(*(v_leg[f] - v_base)) <= 0.15:
-                acc.append(sign * v_leg[f][1])
-                truth.append(sign * v_base[1])
-        print(f"{name}: {len(rows)} ticks; lateral along the step [m/s]")
+                acc.append(sign * v_leg[f])
+                truth.append(sign * v_base)
+        acc, truth = np.array(acc), np.array(truth)
+        if step:
+            print(f"{name}: {len(rows)} ticks; lateral along the step [m/s]")
+            for n in sorted(by_contacts):
+                print(f"  sole slide, {n} of 4 corners touching: {np.mean(by_contacts[n], axis=0)[1]:+.3f}"
+                      f" ({len(by_contacts[n])} foot-ticks)")
+            print(f"  exact leg odometry, accepted {len(acc)}: {acc[:, 1].mean():.3f} against the truth"
+                  f" {truth[:, 1].mean():.3f} ({acc[:, 1].mean() - truth[:, 1].mean():+.3f})")
+            continue
+        print(f"{name}: {len(rows)} ticks; in H, (forward, left) [m/s]")
         for n in sorted(by_contacts):
-            print(f"  sole slide, {n} of 4 corners touching: {np.mean(by_contacts[n]):+.3f} ({len(by_contacts[n])} foot-ticks)")
-        print(f"  exact leg odometry, accepted {len(acc)}: {np.mean(acc):.3f} against the truth {np.mean(truth):.3f}"
-              f" ({np.mean(acc) - np.mean(truth):+.3f})")
+            m = np.mean(by_contacts[n], axis=0)
+            print(f"  sole slide, {n} of 4 corners touching: ({m[0]:+.3f}, {m[1]:+.3f}) ({len(by_contacts[n])} foot-ticks)")
+        a, t = acc.mean(axis=0), truth.mean(axis=0)
+        print(f"  exact leg odometry, accepted {len(acc)}: ({a[0]:.3f}, {a[1]:.3f}) against the truth"
+              f" ({t[0]:.3f}, {t[1]:.3f}) ({a[0] - t[0]:+.3f}, {a[1] - t[1]:+.3f})")
 
 
 if __name__ == "__main__":
