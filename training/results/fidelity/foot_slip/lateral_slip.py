@@ -6,7 +6,8 @@ and reports, per side-step segment (last 60 %), in the heading frame H, signed a
   - the sole point's velocity in W of each foot by how many of its four contact spheres touch the floor;
   - leg odometry with exact kinematics (v_base - v_sole of the foot in the 2 cm stance band nearer the
     truth, gated at 0.15 m/s against the truth): what the estimator would read if its kinematics, IMU
-    and gate were perfect. What remains is the stance sole's own slide.
+    and gate were perfect. What remains is the stance sole's own slide. With --gate-centre estimate the
+    choice and the gate are centred on the run's own estimate instead, as the estimator's are.
 Segments named left*/right* are signed along the step; others (--segments PREFIX ...) are reported in H as they are,
 forward (x) and left (y).
 Usage (the training venv has mujoco):
@@ -28,6 +29,9 @@ def main():
     ap.add_argument("seed_csv")
     ap.add_argument("--mjcf", default="config/robots/g1/g1_29dof_rev_1_0.xml")
     ap.add_argument("--segments", nargs="+", default=["left", "right"], metavar="PREFIX")
+    ap.add_argument("--gate-centre", choices=["truth", "estimate"], default="truth",
+                    help="what the emulated gate and nearest-foot choice are centred on: the true base velocity, or the "
+                         "run's own estimate (seed CSV vx_est, vy_est), to see the gate's selection")
     args = ap.parse_args()
     probe, seed_csv, mjcf = args.probe, args.seed_csv, args.mjcf
     prefixes = tuple(args.segments)
@@ -39,7 +43,8 @@ def main():
     P = np.loadtxt(probe, delimiter=",", skiprows=1, usecols=keep)
     iq = [i for i, h in enumerate(hdr) if h.startswith("qpos")]
     iv = [i for i, h in enumerate(hdr) if h.startswith("qvel")]
-    segs = [r["segment"] for r in csv.DictReader(open(seed_csv))]
+    seed_rows = list(csv.DictReader(open(seed_csv)))
+    segs = [r["segment"] for r in seed_rows]
     feet = [m.body("left_ankle_roll_link").id, m.body("right_ankle_roll_link").id]
     per_seg = {}
     for k in range(min(len(P), len(segs))):
@@ -64,20 +69,22 @@ def main():
             v_leg[f] = v_base - v_sole[f]
             ncon[f] = sum(1 for i in range(d.ncon)
                           if b in (m.geom_bodyid[d.contact[i].geom1], m.geom_bodyid[d.contact[i].geom2]))
-        per_seg.setdefault(segs[k], []).append((v_base, z, v_leg, ncon, v_sole))
+        centre = v_base if args.gate_centre == "truth" else np.array(
+            [float(seed_rows[k]["vx_est"]), float(seed_rows[k]["vy_est"])])
+        per_seg.setdefault(segs[k], []).append((v_base, z, v_leg, ncon, v_sole, centre))
     for name, rows in per_seg.items():
         rows = rows[int(0.4 * len(rows)):]
         step = name.startswith(("left", "right"))
         sign = -1.0 if name.startswith("right") else 1.0
         by_contacts = {}
         acc, truth = [], []
-        for v_base, z, v_leg, ncon, v_sole in rows:
+        for v_base, z, v_leg, ncon, v_sole, centre in rows:
             for f in range(2):
                 if ncon[f]:
                     by_contacts.setdefault(ncon[f], []).append(sign * v_sole[f])
             band = [f for f in range(2) if z[f] - z.min() <= 0.02]
-            f = min(band, key=lambda f: np.hypot(*(v_leg[f] - v_base)))
-            if np.hypot(*(v_leg[f] - v_base)) <= 0.15:
+            f = min(band, key=lambda f: np.hypot(*(v_leg[f] - centre)))
+            if np.hypot(*(v_leg[f] - centre)) <= 0.15:
                 acc.append(sign * v_leg[f])
                 truth.append(sign * v_base)
         acc, truth = np.array(acc), np.array(truth)
