@@ -337,10 +337,9 @@ int main(int argc, char** argv) {
       ->check(pmg::cli::finiteIn(0.01, 10.0));
   app.add_option("--probe", probe_path,
                  "CSV of the first seed's first episode, one row per loop tick: MuJoCo's qpos and qvel (truth when "
-                 "the tick read its state), the state the tick read (joints, IMU orientation, gyro, and at the end of the row its "
-                 "specific force), the actor's observation and action, and the motor commands it wrote (q, qd, kp, "
-                 "kd, tau_ff of every motor); for sim-to-sim comparisons "
-                 "(training/probe_sil.py)");
+                 "the tick read its state), the state the tick read (joints, IMU orientation, gyro, and at the end "
+                 "of the row its specific force), the actor's observation and action, and the motor commands it "
+                 "wrote (q, qd, kp, kd, tau_ff of every motor); for sim-to-sim comparisons (training/probe_sil.py)");
   // A number that overrides one config key, range-checked: empty (< 0 here) keeps the config's.
   const auto override_option = [&app](const char* name, double* value, const char* help, double lo, double hi) {
     app.add_option(name, *value, help)->check(pmg::cli::finiteIn(lo, hi));

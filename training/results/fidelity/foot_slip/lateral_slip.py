@@ -16,9 +16,14 @@ Usage (the training venv has mujoco):
 """
 import argparse
 import csv
+import os
+import sys
 
 import mujoco
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "../../.."))  # training/
+from probe_sil import block, read_probe  # noqa: E402
 
 P_FS = np.array([0.035, 0.0, -0.035])  # sole point in the foot link (include/pmg/gco/leg_kinematics.hpp)
 
@@ -37,21 +42,17 @@ def main():
     prefixes = tuple(args.segments)
     m = mujoco.MjModel.from_xml_path(mjcf)
     d = mujoco.MjData(m)
-    hdr = open(probe).readline().strip().split(",")
-    keep = [i for i, h in enumerate(hdr) if h != "mode"]
-    hdr = [hdr[i] for i in keep]
-    P = np.loadtxt(probe, delimiter=",", skiprows=1, usecols=keep)
-    iq = [i for i, h in enumerate(hdr) if h.startswith("qpos")]
-    iv = [i for i, h in enumerate(hdr) if h.startswith("qvel")]
+    cols = read_probe(probe)
+    qpos, qvel = block(cols, "qpos"), block(cols, "qvel")
     seed_rows = list(csv.DictReader(open(seed_csv)))
     segs = [r["segment"] for r in seed_rows]
     feet = [m.body("left_ankle_roll_link").id, m.body("right_ankle_roll_link").id]
     per_seg = {}
-    for k in range(min(len(P), len(segs))):
+    for k in range(min(len(qpos), len(segs))):
         if not segs[k].startswith(prefixes):
             continue
-        d.qpos[:] = P[k, iq]
-        d.qvel[:] = P[k, iv]
+        d.qpos[:] = qpos[k]
+        d.qvel[:] = qvel[k]
         mujoco.mj_forward(m, d)
         qw, qx, qy, qz = d.qpos[3:7]
         yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
