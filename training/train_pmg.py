@@ -307,9 +307,11 @@ def parse_args(argv=None):
                     help="PD gains: nominal = the robot config's kp/kd (Baseline); physically_informed = kp = I w_n^2, "
                          "kd = 2 zeta I w_n with the reflected rotor inertia I (also the armature; "
                          "pmg_train/gains.py, config/robots/g1/g1_pig.yaml, which the ONNX contract then carries)")
-    ap.add_argument("--action-scale", default="motion", choices=["motion", "torque_matched"],
-                    help="leg action scale: motion = from the clips' joint ranges; torque_matched = that x kp_nominal/kp, "
-                         "the same PD torque per unit action whatever --gains (EnvConfig.action_scale_rule)")
+    ap.add_argument("--action-scale", default="motion", choices=["motion", "torque_matched", "posture"],
+                    help="leg action scale: motion = from the walking clips' joint ranges; torque_matched = that x "
+                         "kp_nominal/kp, the same PD torque per unit action whatever --gains; posture = motion widened "
+                         "to the static clips' offsets over the --command-range pitch, roll and height, so that the "
+                         "deep crouch lies inside the actor's reach (EnvConfig.action_scale_rule)")
     ap.add_argument("--action-offset", default="default", choices=["default", "reference"],
                     help="leg targets: default = standing pose + scale x action; reference = the PMG reference + scale x "
                          "action, a residual on the generated motion (EnvConfig.action_offset; not exported to ONNX: the "

@@ -357,7 +357,11 @@ class EnvConfig:
     # from the standing pose, clipped to [0.25, 1.2] rad; "torque_matched" = that x kp_nominal / kp, so
     # that an action commands the same PD torque offset whatever the gains (with physically informed
     # gains, 1.5-3.7x softer, the motion scale leaves the hip pitch 19 of the nominal 70 N m; issue 15).
-    # With nominal gains both rules are the same. The ONNX contract carries the scale.
+    # With nominal gains both rules are the same. "posture" = the larger of "motion" and 1.2 x each static
+    # clip's largest offset from its neutral row over this config's pitch, roll and height ranges, clipped to
+    # [0.25, 2.0] rad: "motion" looks at the walking clips only, and with it the squat's rows below about
+    # 0.66 m lie outside every target the actor can command (training/results/fidelity/action_range/README.md).
+    # The ONNX contract carries the scale.
     action_scale_rule: str = "motion"
     # What an action is added to (leg joints): "default" = the standing pose (q_des = q_stand + scale a,
     # the paper's and every shipped actor's); "reference" = the PMG reference of this control step
@@ -629,6 +633,39 @@ def focus_box(cfg, standing_height):
     return lo.astype(np.float32), hi.astype(np.float32)
 
 
+_LEG_MIRROR = [6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]
+
+
+def motion_action_scale(pmg, js):
+    """The "motion" rule's leg action scale (LEG,) [rad per unit action]: 1.2 x the walking clips' largest deviation
+    from the standing pose, left/right symmetric, clipped to [0.25, 1.2]."""
+    dev = np.zeros(LEG)
+    for d in pmg.dynamic:
+        if d is not None:
+            dev = np.maximum(dev, np.abs(d.q[:, :LEG] - js.q_stand[None, :LEG]).max(0))
+    dev = np.maximum(dev, dev[_LEG_MIRROR])
+    return np.clip(1.2 * dev, 0.25, 1.2)
+
+
+def posture_action_scale(pmg, js, ranges):
+    """The "posture" rule's leg action scale (LEG,) [rad per unit action]: the larger of motion_action_scale and
+    1.2 x each static clip's largest offset from its neutral row (the posture offset PMG eq. 10 adds to the standing
+    pose) at values inside @p ranges ({static axis 0 pitch, 1 roll, 2 height: (lo, hi)} [rad, rad, m]; the clip's
+    own rows inside the range and the range's ends, interpolated as the generator does), left/right symmetric,
+    clipped to [0.25, 2.0]."""
+    dev = np.zeros(LEG)
+    for s in pmg.static:
+        if s is None or s.axis not in ranges:
+            continue
+        lo, hi = ranges[s.axis]
+        values = [v for v in s.values if lo <= v <= hi] + [lo, hi]
+        neutral = np.asarray(pg._interp_static(np, s, s.neutral))[:LEG]
+        for v in values:
+            dev = np.maximum(dev, np.abs(np.asarray(pg._interp_static(np, s, v))[:LEG] - neutral))
+    dev = np.maximum(dev, dev[_LEG_MIRROR])
+    return np.maximum(motion_action_scale(pmg, js), np.clip(1.2 * dev, 0.25, 2.0))
+
+
 class G1PmgEnv(Env):
     def __init__(self, cfg: EnvConfig, clip_files=None, action_scale=None):
         """@p clip_files: a clip folder or a list of clip files (consistency_map.yaml among them or
@@ -710,18 +747,17 @@ class G1PmgEnv(Env):
             self.gco_chains, self.gco_opt = gco_port.load_model(cfg.gco_model)
 
         if action_scale is None:
-            dev = np.zeros(LEG)
-            for d in self.pmg.dynamic:
-                if d is not None:
-                    dev = np.maximum(dev, np.abs(d.q[:, :LEG] - self.js.q_stand[None, :LEG]).max(0))
-            dev = np.maximum(dev, dev[[6, 7, 8, 9, 10, 11, 0, 1, 2, 3, 4, 5]])  # left/right symmetric
-            action_scale = np.clip(1.2 * dev, 0.25, 1.2)
+            if cfg.action_scale_rule not in ("motion", "torque_matched", "posture"):
+                raise ValueError(f"EnvConfig.action_scale_rule = {cfg.action_scale_rule!r}: expected 'motion', "
+                                 "'torque_matched' or 'posture'")
+            if cfg.action_scale_rule == "posture":
+                ranges = {0: cfg.pitch, 1: cfg.roll, 2: cfg.height}
+                action_scale = posture_action_scale(self.pmg, self.js, ranges)
+            else:
+                action_scale = motion_action_scale(self.pmg, self.js)
             if cfg.action_scale_rule == "torque_matched":
                 kp_nominal = np.array([j["kp"] for j in joints[:LEG]], np.float64)
                 action_scale = action_scale * kp_nominal / self.kp[:LEG]
-            elif cfg.action_scale_rule != "motion":
-                raise ValueError(f"EnvConfig.action_scale_rule = {cfg.action_scale_rule!r}: expected 'motion' or "
-                                 "'torque_matched'")
         self.action_scale = np.asarray(action_scale, np.float32)
 
         mj = mujoco.MjModel.from_xml_string(mjx_friendly_mjcf(cfg.mjcf, leg_collisions=cfg.leg_collisions))
