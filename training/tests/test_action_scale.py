@@ -12,6 +12,9 @@ Checks, on the shipped clips (config/clips/g1_walking_height; no physics, no env
   pitch -0.1..0.5 rad and every lean row in roll -0.2..0.2 rad lie inside q_stand +- scale on every leg joint.
 - It is never below the motion rule, left/right symmetric, within [0.25, 2.0], and follows the range: with heights
   0.70..0.78 m its knee scale is smaller than with 0.59..0.78 m.
+- rescale_actor.py carries H10a's actor to the posture scale: the rule's scale, the targets of small actions
+  (|a| < 0.3) within 0.02 rad, the last_action normaliser times old/new scale, nothing else changed before the
+  last layer.
 - G1PmgEnv builds its scale by the rule from the config's ranges (--command-range), refuses an unknown rule naming
   EnvConfig.action_scale_rule, and train_pmg.py parses --action-scale posture.
 It re-runs itself in the training environment (test_smoke_cpu.relaunch; exit 77 with PMG_SKIP_TRAINING_TESTS=1).
@@ -91,6 +94,35 @@ def main():
         check("action_scale_rule" in str(e) and "posture" in str(e), f"unknown rule's error: {e}")
     check(train_pmg.parse_args(["--out", "/tmp/x", "--action-scale", "posture"]).action_scale == "posture",
           "--action-scale posture does not parse")
+
+    # rescale_actor.py carries H10a's actor to the posture scale: the new scale is the rule's, small actions keep
+    # their targets, the last_action normaliser follows the factor, and the rest of the actor is unchanged.
+    import tempfile
+    import rescale_actor
+    src = os.path.join(ROOT, "training/results/fidelity/crouched_box/H10a/actor.npz")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "actor.npz")
+        rescale_actor.main([src, "--action-scale", "posture", "--command-range", "height=0.59,0.78",
+                            "--command-range", "pitch=-0.1,0.5", "--samples", "512", "--out", out])
+        with np.load(src) as z:
+            old = {k: z[k] for k in z.files}
+        with np.load(out) as z:
+            new = {k: z[k] for k in z.files}
+    check(np.allclose(new["action_scale"], posture, atol=1e-6), f"rescaled actor's scale {new['action_scale']}")
+    r = old["action_scale"] / new["action_scale"]
+    check(np.allclose(new["obs_std"][rescale_actor.LAST_ACTION], old["obs_std"][rescale_actor.LAST_ACTION] * r,
+                      rtol=1e-5), "last_action normaliser not scaled by old/new scale")
+    check(np.array_equal(new["w0"], old["w0"]) and np.array_equal(new["obs_std"][:36], old["obs_std"][:36]),
+          "rescale_actor changed more than the last layer and the last_action normaliser")
+    rng = np.random.default_rng(1)
+    obs = old["obs_mean"] + 0.3 * old["obs_std"] * rng.standard_normal((256, old["obs_mean"].shape[0]))
+    a_old, _ = rescale_actor.mean_action(old, obs)
+    obs_new = obs.copy()
+    obs_new[:, rescale_actor.LAST_ACTION] *= r
+    a_new, _ = rescale_actor.mean_action(new, obs_new)
+    small = np.abs(a_old) < 0.3
+    d = np.abs(a_new * new["action_scale"] - a_old * old["action_scale"])[small]
+    check(small.sum() > 100 and d.max() < 0.02, f"small actions' targets moved by up to {d.max():.4f} rad")
 
     print(f"motion  scale (left leg) {np.round(motion[:6], 3)}")
     print(f"posture scale (left leg) {np.round(posture[:6], 3)}")
