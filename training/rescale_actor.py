@@ -61,7 +61,10 @@ def main(argv=None):
     ranges = {0: cfg.pitch, 1: cfg.roll, 2: cfg.height}
     for item in args.command_range:
         axis, _, value = item.partition("=")
-        lo, hi = (float(x) for x in value.split(","))
+        try:
+            lo, hi = (float(x) for x in value.split(","))
+        except ValueError:
+            lo = hi = float("nan")
         if axis not in ("pitch", "roll", "height") or not lo < hi:
             ap.error(f"--command-range {item!r}: expected pitch, roll or height=LO,HI with LO < HI")
         ranges[{"pitch": 0, "roll": 1, "height": 2}[axis]] = (lo, hi)
@@ -69,8 +72,14 @@ def main(argv=None):
     clips = sorted(glob.glob(os.path.join(ROOT, args.clips, "*.yaml")))
     new_scale = posture_action_scale(pg.load_library(clips, js), js, ranges).astype(np.float32)
 
-    with np.load(args.actor) as z:
-        actor = {k: z[k] for k in z.files}
+    try:
+        with np.load(args.actor) as z:
+            actor = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as e:
+        ap.error(f"{args.actor}: cannot read an actor.npz ({e})")
+    for field, shape in (("obs_mean", (62,)), ("obs_std", (62,)), ("action_scale", (LEG,))):
+        if field not in actor or actor[field].shape != shape:
+            ap.error(f"{args.actor}: {field} should have shape {shape} (a G1 leg actor.npz of train_pmg.py)")
     old_scale = np.asarray(actor["action_scale"], np.float64)
     r = old_scale / new_scale
     last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
