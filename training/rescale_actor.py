@@ -18,6 +18,7 @@ leg targets [rad] among samples whose old |a| < 0.7 on that joint, and among all
 
     .venv-training/bin/python training/rescale_actor.py ACTOR_NPZ --action-scale posture \\
         --command-range height=0.59,0.78 --command-range pitch=-0.1,0.5 [--clips DIR] --out NEW_ACTOR_NPZ
+    .venv-training/bin/python training/rescale_actor.py ACTOR_NPZ --action-scale factor --factor knee=1.2 ... --out F
 """
 import argparse
 import glob
@@ -30,6 +31,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 ROOT = os.path.dirname(HERE)
 LEG = 12
+KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")  # per leg, left then right
 LAST_ACTION = slice(36, 48)  # OBS_TERMS: gyro 3, gravity 3, command 6, joint_pos_rel 12, joint_vel 12, last_action 12
 
 
@@ -48,7 +50,12 @@ def mean_action(actor, obs):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("actor", help="actor.npz of the trained actor")
-    ap.add_argument("--action-scale", required=True, choices=["posture"], help="the new scale's rule (train_pmg.py)")
+    ap.add_argument("--action-scale", required=True, choices=["posture", "factor"],
+                    help="the new scale: posture = train_pmg.py's rule (for a fine-tune with --action-scale posture); "
+                         "factor = the actor's own times --factor per joint kind (both legs; for trying a reach in the SIL)")
+    ap.add_argument("--factor", action="append", default=[], metavar="JOINT=F",
+                    help="with --action-scale factor: JOINT one of hip_pitch, hip_roll, hip_yaw, knee, ankle_pitch, "
+                         "ankle_roll; F in (0, 2]")
     ap.add_argument("--command-range", action="append", default=[], metavar="AXIS=LO,HI",
                     help="the fine-tune's pitch, roll and height ranges (as train_pmg.py; defaults EnvConfig's)")
     ap.add_argument("--clips", default="config/clips/g1_walking_height")
@@ -68,9 +75,18 @@ def main(argv=None):
         if axis not in ("pitch", "roll", "height") or not lo < hi:
             ap.error(f"--command-range {item!r}: expected pitch, roll or height=LO,HI with LO < HI")
         ranges[{"pitch": 0, "roll": 1, "height": 2}[axis]] = (lo, hi)
-    js = pg.joint_space_from_robot_yaml(os.path.join(ROOT, "config/robots/g1/g1.yaml"))
-    clips = sorted(glob.glob(os.path.join(ROOT, args.clips, "*.yaml")))
-    new_scale = posture_action_scale(pg.load_library(clips, js), js, ranges).astype(np.float32)
+    factors = np.ones(LEG)
+    for item in args.factor:
+        name, _, value = item.partition("=")
+        try:
+            f = float(value)
+        except ValueError:
+            f = float("nan")
+        if name not in KINDS or not 0.0 < f <= 2.0:
+            ap.error(f"--factor {item!r}: expected JOINT=F with JOINT one of {', '.join(KINDS)} and F in (0, 2]")
+        factors[KINDS.index(name)] = factors[KINDS.index(name) + 6] = f
+    if args.factor and args.action_scale != "factor":
+        ap.error("--factor needs --action-scale factor")
 
     try:
         with np.load(args.actor) as z:
@@ -81,6 +97,12 @@ def main(argv=None):
         if field not in actor or actor[field].shape != shape:
             ap.error(f"{args.actor}: {field} should have shape {shape} (a G1 leg actor.npz of train_pmg.py)")
     old_scale = np.asarray(actor["action_scale"], np.float64)
+    if args.action_scale == "posture":
+        js = pg.joint_space_from_robot_yaml(os.path.join(ROOT, "config/robots/g1/g1.yaml"))
+        clips = sorted(glob.glob(os.path.join(ROOT, args.clips, "*.yaml")))
+        new_scale = posture_action_scale(pg.load_library(clips, js), js, ranges).astype(np.float32)
+    else:
+        new_scale = (old_scale * factors).astype(np.float32)
     r = old_scale / new_scale
     last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
     # The mean outputs' factor c per joint: the one in [min(r, 1), max(r, 1)] whose targets tanh(c x) new_scale are
@@ -116,7 +138,7 @@ def main(argv=None):
     a_new, _ = mean_action(new, obs_new)
     d = np.abs(a_new * new_scale - a_old * old_scale)
     small = np.abs(a_old) < 0.7
-    names = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")
+    names = KINDS
     print(f"old scale {np.round(old_scale[:6], 3).tolist()}\nnew scale {np.round(new_scale[:6], 3).tolist()}\n"
           f"r {np.round(r[:6], 3).tolist()}\nc {np.round(c[:6], 3).tolist()}")
     for j in range(6):

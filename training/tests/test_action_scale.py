@@ -14,7 +14,7 @@ Checks, on the shipped clips (config/clips/g1_walking_height; no physics, no env
   0.70..0.78 m its knee scale is smaller than with 0.59..0.78 m.
 - rescale_actor.py carries H10a's actor to the posture scale: the rule's scale, the targets of small actions
   (|a| < 0.3) within 0.02 rad, the last_action normaliser times old/new scale, nothing else changed before the
-  last layer.
+  last layer; --action-scale factor --factor knee=1.2 multiplies both knees' scale and nothing else.
 - G1PmgEnv builds its scale by the rule from the config's ranges (--command-range), refuses an unknown rule naming
   EnvConfig.action_scale_rule, and train_pmg.py parses --action-scale posture.
 It re-runs itself in the training environment (test_smoke_cpu.relaunch; exit 77 with PMG_SKIP_TRAINING_TESTS=1).
@@ -123,6 +123,15 @@ def main():
     small = np.abs(a_old) < 0.3
     d = np.abs(a_new * new["action_scale"] - a_old * old["action_scale"])[small]
     check(small.sum() > 100 and d.max() < 0.02, f"small actions' targets moved by up to {d.max():.4f} rad")
+
+    # --action-scale factor: the actor's own scale times the factor on the named joints of both legs.
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "actor.npz")
+        rescale_actor.main([src, "--action-scale", "factor", "--factor", "knee=1.2", "--samples", "256", "--out", out])
+        with np.load(out) as z:
+            knee_only = z["action_scale"]
+    want = old["action_scale"] * np.where(np.isin(np.arange(LEG), [3, 9]), 1.2, 1.0)
+    check(np.allclose(knee_only, want, rtol=1e-6), f"--factor knee=1.2 gave {knee_only}, expected {want}")
 
     print(f"motion  scale (left leg) {np.round(motion[:6], 3)}")
     print(f"posture scale (left leg) {np.round(posture[:6], 3)}")
