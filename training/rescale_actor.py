@@ -5,10 +5,9 @@ An actor's leg target is q_stand + scale * a with a = tanh(mean output) (Brax's 
 and the controller use the mean). A fine-tune cannot change the scale (graft_actor refuses a mismatch), yet the
 default actor's scale cannot command the deep crouch (training/results/fidelity/action_range/README.md). This writes
 the actor with the new scale and, per leg joint with r = old / new scale:
-- the mean outputs' last layer (weights and bias) times c, the factor between r and 1 whose targets are nearest
-  (least squares, over the actor's own observation statistics) to the old ones: a linear layer cannot map
-  tanh(x) to r tanh(x) exactly (c = r keeps small actions and pushes those near the clamp further: an old 0.96
-  becomes tanh(r atanh(0.96)) > 0.96 r);
+- the mean outputs' last layer (weights and bias) times r: a small action a becomes about r a, the same target;
+  near the clamp the target grows (a linear layer cannot map tanh(x) to r tanh(x): an old 0.96 becomes
+  tanh(r atanh(0.96)) > 0.96 r), which is the reach the fine-tune is for;
 - the standard deviation outputs' bias plus ln r: Brax's scale is softplus(x) + 0.001, about e^x for the trained
   actors' x < -1, so the exploration noise stays the same in radians;
 - the observation normaliser of the last_action term (the actor's previous a) times r, so the network sees the
@@ -30,21 +29,18 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 ROOT = os.path.dirname(HERE)
+from pmg_train.contract import actor_forward  # noqa: E402
 LEG = 12
 KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")  # per leg, left then right
 LAST_ACTION = slice(36, 48)  # OBS_TERMS: gyro 3, gravity 3, command 6, joint_pos_rel 12, joint_vel 12, last_action 12
 
 
 def mean_action(actor, obs):
-    """(N, LEG) tanh of the mean outputs of @p actor (dict of arrays) on observations @p obs (N, 62)."""
-    h = (obs - actor["obs_mean"]) / actor["obs_std"]
-    i = 0
-    while f"w{i + 1}" in actor:
-        h = h @ actor[f"w{i}"] + actor[f"b{i}"]
-        h = h / (1.0 + np.exp(-h))  # swish, Brax's MLP activation here
-        i += 1
-    out = h @ actor[f"w{i}"] + actor[f"b{i}"]
-    return np.tanh(out[:, :LEG]), out[:, LEG:]
+    """(N, LEG) deterministic actions tanh(mean output) of @p actor (dict of arrays) on observations @p obs (N, 62):
+    the exported graph's float32 forward pass (pmg_train.contract.actor_forward)."""
+    last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
+    layers = [(actor[f"w{i}"], actor[f"b{i}"]) for i in range(last + 1)]
+    return actor_forward(actor["obs_mean"], actor["obs_std"], layers, LEG, obs)
 
 
 def main(argv=None):
@@ -105,24 +101,12 @@ def main(argv=None):
         new_scale = (old_scale * factors).astype(np.float32)
     r = old_scale / new_scale
     last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
-    # The mean outputs' factor c per joint: the one in [min(r, 1), max(r, 1)] whose targets tanh(c x) new_scale are
-    # nearest (least squares) to the old tanh(x) old_scale over the actor's own observation statistics.
     rng = np.random.default_rng(0)
     obs = actor["obs_mean"] + actor["obs_std"] * rng.standard_normal((args.samples, actor["obs_mean"].shape[0]))
-    h = (obs - actor["obs_mean"]) / actor["obs_std"]
-    for i in range(last):
-        h = h @ actor[f"w{i}"] + actor[f"b{i}"]
-        h = h / (1.0 + np.exp(-h))
-    x = h @ actor[f"w{last}"][:, :LEG] + actor[f"b{last}"][:LEG]
-    c = np.empty(LEG)
-    for j in range(LEG):
-        grid = np.linspace(min(r[j], 1.0), max(r[j], 1.0), 201)
-        err = [np.mean((np.tanh(g * x[:, j]) * new_scale[j] - np.tanh(x[:, j]) * old_scale[j]) ** 2) for g in grid]
-        c[j] = grid[int(np.argmin(err))]
     new = dict(actor)
     w, b = actor[f"w{last}"].astype(np.float64).copy(), actor[f"b{last}"].astype(np.float64).copy()
-    w[:, :LEG] *= c
-    b[:LEG] *= c
+    w[:, :LEG] *= r
+    b[:LEG] *= r
     b[LEG:] += np.log(r)
     new[f"w{last}"], new[f"b{last}"] = w.astype(actor[f"w{last}"].dtype), b.astype(actor[f"b{last}"].dtype)
     mean, std = actor["obs_mean"].astype(np.float64).copy(), actor["obs_std"].astype(np.float64).copy()
@@ -132,15 +116,15 @@ def main(argv=None):
     new["action_scale"] = new_scale
     np.savez(args.out, **new)
 
-    a_old, _ = mean_action(actor, obs)
+    a_old = mean_action(actor, obs)
     obs_new = obs.copy()
     obs_new[:, LAST_ACTION] *= r  # the same previous targets, in the new action's units
-    a_new, _ = mean_action(new, obs_new)
+    a_new = mean_action(new, obs_new)
     d = np.abs(a_new * new_scale - a_old * old_scale)
     small = np.abs(a_old) < 0.7
     names = KINDS
     print(f"old scale {np.round(old_scale[:6], 3).tolist()}\nnew scale {np.round(new_scale[:6], 3).tolist()}\n"
-          f"r {np.round(r[:6], 3).tolist()}\nc {np.round(c[:6], 3).tolist()}")
+          f"r {np.round(r[:6], 3).tolist()}")
     for j in range(6):
         ds = d[:, [j, j + 6]][small[:, [j, j + 6]]]
         print(f"{names[j]:12s} target change [rad]: |a|<0.7 max {ds.max() if ds.size else 0:.4f}, all max "

@@ -116,10 +116,10 @@ def main():
           "rescale_actor changed more than the last layer and the last_action normaliser")
     rng = np.random.default_rng(1)
     obs = old["obs_mean"] + 0.3 * old["obs_std"] * rng.standard_normal((256, old["obs_mean"].shape[0]))
-    a_old, _ = rescale_actor.mean_action(old, obs)
+    a_old = rescale_actor.mean_action(old, obs)
     obs_new = obs.copy()
     obs_new[:, rescale_actor.LAST_ACTION] *= r
-    a_new, _ = rescale_actor.mean_action(new, obs_new)
+    a_new = rescale_actor.mean_action(new, obs_new)
     small = np.abs(a_old) < 0.3
     d = np.abs(a_new * new["action_scale"] - a_old * old["action_scale"])[small]
     check(small.sum() > 100 and d.max() < 0.02, f"small actions' targets moved by up to {d.max():.4f} rad")
