@@ -30,15 +30,22 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 ROOT = os.path.dirname(HERE)
 from pmg_train.contract import actor_forward  # noqa: E402
+from train_pmg import axis_bounds  # noqa: E402
 LEG = 12
 KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")  # per leg, left then right
 LAST_ACTION = slice(36, 48)  # OBS_TERMS: gyro 3, gravity 3, command 6, joint_pos_rel 12, joint_vel 12, last_action 12
 
 
-def mean_action(actor, obs):
-    """(N, LEG) deterministic actions tanh(mean output) of @p actor (dict of arrays) on observations @p obs (N, 62):
-    the exported graph's float32 forward pass (pmg_train.contract.actor_forward)."""
-    last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
+def last_layer(actor):
+    """Index of the last dense layer (w{i}, b{i}) of @p actor (dict of arrays)."""
+    return max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
+
+
+def mean_action(actor, obs, last=None):
+    """(N, LEG) deterministic actions tanh(mean output) of @p actor (dict of arrays; @p last its last dense layer's
+    index, last_layer(actor) when None) on observations @p obs (N, 62): the exported graph's float32 forward pass
+    (pmg_train.contract.actor_forward)."""
+    last = last_layer(actor) if last is None else last
     layers = [(actor[f"w{i}"], actor[f"b{i}"]) for i in range(last + 1)]
     return actor_forward(actor["obs_mean"], actor["obs_std"], layers, LEG, obs)
 
@@ -61,16 +68,11 @@ def main(argv=None):
     from pmg_train import pmg_generator as pg
     from pmg_train.g1_env import EnvConfig, posture_action_scale
     cfg = EnvConfig()
-    ranges = {0: cfg.pitch, 1: cfg.roll, 2: cfg.height}
-    for item in args.command_range:
-        axis, _, value = item.partition("=")
-        try:
-            lo, hi = (float(x) for x in value.split(","))
-        except ValueError:
-            lo = hi = float("nan")
-        if axis not in ("pitch", "roll", "height") or not lo < hi:
-            ap.error(f"--command-range {item!r}: expected pitch, roll or height=LO,HI with LO < HI")
-        ranges[{"pitch": 0, "roll": 1, "height": 2}[axis]] = (lo, hi)
+    ranges = {"pitch": cfg.pitch, "roll": cfg.roll, "height": cfg.height}
+    try:
+        ranges.update(axis_bounds("--command-range", args.command_range, strict=True, axes=tuple(ranges)))
+    except ValueError as e:
+        ap.error(str(e))
     factors = np.ones(LEG)
     for item in args.factor:
         name, _, value = item.partition("=")
@@ -96,11 +98,12 @@ def main(argv=None):
     if args.action_scale == "posture":
         js = pg.joint_space_from_robot_yaml(os.path.join(ROOT, "config/robots/g1/g1.yaml"))
         clips = sorted(glob.glob(os.path.join(ROOT, args.clips, "*.yaml")))
-        new_scale = posture_action_scale(pg.load_library(clips, js), js, ranges).astype(np.float32)
+        new_scale = posture_action_scale(pg.load_library(clips, js), js,
+                                         {0: ranges["pitch"], 1: ranges["roll"], 2: ranges["height"]}).astype(np.float32)
     else:
         new_scale = (old_scale * factors).astype(np.float32)
     r = old_scale / new_scale
-    last = max(int(k[1:]) for k in actor if k.startswith("w") and k[1:].isdigit())
+    last = last_layer(actor)
     rng = np.random.default_rng(0)
     obs = actor["obs_mean"] + actor["obs_std"] * rng.standard_normal((args.samples, actor["obs_mean"].shape[0]))
     new = dict(actor)
@@ -116,18 +119,17 @@ def main(argv=None):
     new["action_scale"] = new_scale
     np.savez(args.out, **new)
 
-    a_old = mean_action(actor, obs)
+    a_old = mean_action(actor, obs, last)
     obs_new = obs.copy()
     obs_new[:, LAST_ACTION] *= r  # the same previous targets, in the new action's units
-    a_new = mean_action(new, obs_new)
+    a_new = mean_action(new, obs_new, last)
     d = np.abs(a_new * new_scale - a_old * old_scale)
     small = np.abs(a_old) < 0.7
-    names = KINDS
     print(f"old scale {np.round(old_scale[:6], 3).tolist()}\nnew scale {np.round(new_scale[:6], 3).tolist()}\n"
           f"r {np.round(r[:6], 3).tolist()}")
     for j in range(6):
         ds = d[:, [j, j + 6]][small[:, [j, j + 6]]]
-        print(f"{names[j]:12s} target change [rad]: |a|<0.7 max {ds.max() if ds.size else 0:.4f}, all max "
+        print(f"{KINDS[j]:12s} target change [rad]: |a|<0.7 max {ds.max() if ds.size else 0:.4f}, all max "
               f"{d[:, [j, j + 6]].max():.4f}")
     print(f"wrote {args.out}")
     return 0

@@ -34,6 +34,29 @@ PINNED_JAX = "0.10.2"  # training/pyproject.toml
 COMMAND_AXES = ("vx", "vy", "wz", "pitch", "roll", "height")  # EnvConfig command ranges (--command-range)
 
 
+def axis_bounds(flag, items, strict, axes=COMMAND_AXES):
+    """{axis: (lo, hi)} from repeated AXIS=LO,HI command-line items of @p flag (e.g. --command-range height=0.59,0.78;
+    units of the command: m/s, rad/s, rad, m). AXIS must be one of @p axes, LO and HI finite with LO < HI when
+    @p strict (else LO <= HI), and a height's LO >= 0.3 m. Raises ValueError with a message that names the flag,
+    the item and what was expected (the caller passes it to argparse's error)."""
+    out = {}
+    for item in items:
+        axis, _, value = item.partition("=")
+        axis = axis.strip()
+        try:
+            lo, hi = (float(x) for x in value.split(","))
+        except ValueError:
+            lo = hi = math.nan
+        ordered = lo < hi if strict else lo <= hi
+        if axis not in axes or not (math.isfinite(lo) and math.isfinite(hi) and ordered):
+            raise ValueError(f"{flag} {item!r}: expected AXIS=LO,HI with AXIS one of {', '.join(axes)} "
+                             f"and finite LO {'<' if strict else '<='} HI")
+        out[axis] = (lo, hi)
+    if "height" in out and not 0.3 <= out["height"][0]:
+        raise ValueError(f"{flag} height={out['height'][0]},{out['height'][1]}: expected LO >= 0.3 m")
+    return out
+
+
 def log(*a):
     print(f"[{time.strftime('%H:%M:%S')}]", *a, flush=True)
 
@@ -477,26 +500,11 @@ def parse_args(argv=None):
     if args.yaw_rate_weight is not None:  # the older spelling of --reward-weight yaw_rate=W
         weights["yaw_rate"] = args.yaw_rate_weight
     args.reward_weight = weights
-    def axis_bounds(flag, items, strict):
-        """{axis: (lo, hi)} from repeated AXIS=LO,HI items (LO < HI when strict, else LO <= HI)."""
-        out = {}
-        for item in items:
-            axis, _, value = item.partition("=")
-            axis = axis.strip()
-            try:
-                lo, hi = (float(x) for x in value.split(","))
-            except ValueError:
-                lo = hi = math.nan
-            ordered = lo < hi if strict else lo <= hi
-            if axis not in COMMAND_AXES or not (math.isfinite(lo) and math.isfinite(hi) and ordered):
-                ap.error(f"{flag} {item!r}: expected AXIS=LO,HI with AXIS one of {', '.join(COMMAND_AXES)} "
-                         f"and finite LO {'<' if strict else '<='} HI")
-            out[axis] = (lo, hi)
-        if "height" in out and not 0.3 <= out["height"][0]:
-            ap.error(f"{flag} height={out['height'][0]},{out['height'][1]}: expected LO >= 0.3 m")
-        return out
-    args.command_range = axis_bounds("--command-range", args.command_range, strict=True)
-    args.command_focus = axis_bounds("--command-focus", args.command_focus, strict=False)
+    try:
+        args.command_range = axis_bounds("--command-range", args.command_range, strict=True)
+        args.command_focus = axis_bounds("--command-focus", args.command_focus, strict=False)
+    except ValueError as e:
+        ap.error(str(e))
     if args.p_focus is not None and not 0.0 <= args.p_focus <= 1.0:
         ap.error(f"--p-focus = {args.p_focus}: expected in [0, 1]")
     if bool(args.command_focus) != bool(args.p_focus):
