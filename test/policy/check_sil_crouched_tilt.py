@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks velocity_feedback.max_tilt_rad through the product path (ctest pmg_policy_sil_crouched_tilt, label sil):
-the default config (H10a) runs test/data/policy/eval_crouched_tilt.yaml (crouched to the 0.66 m walking floor, a
+the default config with H10a's actor (--model; F13, the default's actor since 2026-12-07, gains less here) runs test/data/policy/eval_crouched_tilt.yaml (crouched to the 0.66 m walking floor, a
 forward side-step (0.9, 0.3) and a forward turn (0.9, -0.6), each stopped) on seed 0,
 off: --max-tilt-rad 0.3 (the gate before 2026-12-06), on: as shipped (0.6), both with --walking-ki 3 0 (roll not
 fed back while walking, the config the gate was measured on; the roll feedback adopted after it raises the side-step's

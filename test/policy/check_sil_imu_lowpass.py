@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks timing.imu_acc_lowpass_s through the product path (ctest pmg_policy_sil_imu_lowpass, label sil): the
-default config (H10a) runs test/data/policy/eval_fast_crouched.yaml (crouched to 0.70 m, a 1.0 m/s walk and a
+default config (written on H10a; F13, its actor since 2026-12-07, shows the effect too) runs test/data/policy/eval_fast_crouched.yaml (crouched to 0.70 m, a 1.0 m/s walk and a
 diagonal turn (0.5, 0.3, 0.5), then a stop) on seed 0, off: --imu-acc-lowpass-s 0 (the raw accelerometer, before
 2026-12-06), on: as shipped (0.005 s).
 The hidden effect: the 100 Hz loop takes one HAL sample of the accelerometer in five, and the foot impacts' spikes,

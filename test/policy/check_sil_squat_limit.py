@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks the default config's height limit through the product path (ctest pmg_policy_sil_squat_limit,
 label sil): test/data/policy/eval_squat_deep.yaml (a squat standing still to 0.45 m, held 5 s, then
-standing up) on seed 5, with the default config's commands.height_range minimum (0.59 m, the lowest
+standing up) on seed 5 with H10a's actor (--model; F13, the default's actor since 2026-12-07, does not fall
+here without the limit), with the default config's commands.height_range minimum (0.59 m, the lowest
 height its actor was trained to) replaced by the old 0.45 (off) and as shipped (on).
 The hidden effect: told 0.45 m, below anything it was trained on, the actor walks backwards at about
 0.7 m/s while told to stand still, and in seed 5 falls. On:

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks velocity_feedback.stance_foot_nearest through the product path (ctest
-pmg_policy_sil_stance_foot_nearest, label sil): the default config (H10a) runs
+pmg_policy_sil_stance_foot_nearest, label sil): the default config (written on H10a; F13, its actor since 2026-12-07, shows the effect too) runs
 test/data/policy/eval_forward_steps.yaml (forward 0.5 and 0.75 m/s at the standing height, a stop) on seed 0,
 off: --stance-foot-nearest off (the mean of the feet in the stance band), on: as shipped.
 The hidden effect: H10a lifts its swing foot less than the estimate's 2 cm stance band, so both soles count as

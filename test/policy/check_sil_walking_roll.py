@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Checks the walking posture feedback on roll through the product path (ctest pmg_policy_sil_walking_roll, label
-sil): the default config (H10a) runs test/data/policy/eval_crouched_side_turn.yaml (crouched to 0.70 m, a side-step
+sil): the default config with H10a's actor (--model; F13, the default's actor since 2026-12-07, rolls 0.02 rad) runs test/data/policy/eval_crouched_side_turn.yaml (crouched to 0.70 m, a side-step
 while turning, (0, 0.3, 0.6), for 8 s, a stop) on seed 0, off: --walking-ki 3 0 (roll not fed back while walking,
 the default config before 2026-12-06), on: as shipped (posture_feedback.walking_ki [3, 3]).
 The hidden effect: walking this command H10a's torso rolls about 0.06 rad toward the side-step, beyond issue 12's
