@@ -10,7 +10,6 @@ for R in "$@"; do
   $B --model $M --commands training/results/fidelity/crouched/probe_heights.yaml --seeds 3 --first-seed 36 --restart-after-fall --out $O/probe_36 > $O/probe_36.log 2>&1
   wait
   python3 scripts/segment_band.py $O/probe_36/summary.json > $O/probe_36_band.txt 2>&1
-  echo stage1 > $O/stage1
 done
 for R in "$@"; do
   M=training/results/fidelity/action_range/$R/g1_pmg_policy.onnx; O=training/results/fidelity/action_range/$R/sil
@@ -19,5 +18,4 @@ for R in "$@"; do
   wait
   python3 scripts/segment_band.py $O/probe_39/summary.json > $O/probe_39_band.txt 2>&1
   python3 scripts/segment_band.py $O/grid/summary.json > $O/grid_band.txt 2>&1
-  echo done > $O/done
 done
