@@ -79,6 +79,8 @@
 // --stance-foot-nearest on|off (the velocity estimate's foot choice; summary.json stance_foot_nearest);
 // --max-tilt-rad X (the pelvis tilt beyond which the velocity feedback's correction decays; summary.json max_tilt_rad);
 // --walking-ki P R (the walking posture feedback's gains on pitch and roll; summary.json walking_ki);
+// --walking-filter-time-s X, --stop-settle-s X (the posture feedback's walking low-pass and its wait after a stop;
+// summary.json walking_filter_time_s, stop_settle_s);
 // --imu-acc-lowpass-s X (the HAL's low-pass of the accelerometer before the loop; summary.json imu_acc_lowpass_s),
 // --headroom-in-envelopes on|off (summary.json headroom_in_envelopes);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
@@ -256,6 +258,8 @@ int main(int argc, char** argv) {
   double max_tilt_rad = -1;          // < 0: the controller config's
   double imu_acc_lowpass_s = -1;     // < 0: the controller config's
   std::vector<double> walking_ki;    // empty: the controller config's
+  double walking_filter_time_s = -1;  // < 0: the controller config's
+  double stop_settle_s = -1;          // < 0: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -364,6 +368,14 @@ int main(int argc, char** argv) {
                   "time constant of the HAL's low-pass on the IMU's specific force before the loop samples it [s] "
                   "(timing.imu_acc_lowpass_s; 0 = raw samples; default: the controller config's)",
                   0.0, 0.1);
+  override_option("--walking-filter-time-s", &walking_filter_time_s,
+                  "time constant of the posture feedback's walking low-pass of the torso attitude [s] "
+                  "(posture_feedback.walking_filter_time_s; default: the controller config's)",
+                  0.0, 5.0);
+  override_option("--stop-settle-s", &stop_settle_s,
+                  "standing, the posture feedback integrates once the velocity command has been still this long [s] "
+                  "(posture_feedback.stop_settle_s; 0 = from the first still tick; default: the controller config's)",
+                  0.0, 5.0);
   app.add_option("--walking-ki", walking_ki,
                  "the walking posture feedback's integral gains on torso pitch and roll [1/s], two values in [0, 5] "
                  "(posture_feedback.walking_ki; 0 = not fed back while walking; default: the controller config's)")
@@ -397,6 +409,8 @@ int main(int argc, char** argv) {
     if (imu_acc_lowpass_s >= 0) base.imu_acc_lowpass_s = imu_acc_lowpass_s;
     if (!posture_feedback.empty()) base.posture_feedback.enabled = posture_feedback == "on";
     if (walking_ki.size() == 2) base.posture_feedback.walking_ki = {walking_ki[0], walking_ki[1]};
+    if (walking_filter_time_s >= 0) base.posture_feedback.walking_filter_time_s = walking_filter_time_s;
+    if (stop_settle_s >= 0) base.posture_feedback.stop_settle_s = stop_settle_s;
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
                               base.posture_feedback.envelope_max == open_posture.envelope_max;
@@ -926,6 +940,8 @@ int main(int argc, char** argv) {
        << ", \"max_tilt_rad\": " << base.velocity_feedback.max_tilt_rad
        << ", \"imu_acc_lowpass_s\": " << base.imu_acc_lowpass_s
        << ", \"walking_ki\": [" << base.posture_feedback.walking_ki[0] << ", " << base.posture_feedback.walking_ki[1] << "]"
+       << ", \"walking_filter_time_s\": " << base.posture_feedback.walking_filter_time_s
+       << ", \"stop_settle_s\": " << base.posture_feedback.stop_settle_s
        << ", \"max_velocity_headroom\": [" << headroom[0] << ", " << headroom[1] << ", " << headroom[2] << "]"
        << ", \"posture_envelope\": [" << base.posture_feedback.envelope_min[0] << ", " << base.posture_feedback.envelope_min[1]
        << ", " << base.posture_feedback.envelope_max[0] << ", " << base.posture_feedback.envelope_max[1] << "]"
