@@ -2,9 +2,9 @@
 """Checks velocity_feedback.max_tilt_rad through the product path (ctest pmg_policy_sil_crouched_tilt, label sil):
 the default config with H10a's actor (--model; F13, the default's actor since 2026-12-07, gains less here) runs test/data/policy/eval_crouched_tilt.yaml (crouched to the 0.66 m walking floor, a
 forward side-step (0.9, 0.3) and a forward turn (0.9, -0.6), each stopped) on seed 0,
-off: --max-tilt-rad 0.3 (the gate before 2026-12-06), on: as shipped (0.6), both with --walking-ki 3 0 (roll not
-fed back while walking, the config the gate was measured on; the roll feedback adopted after it raises the side-step's
-v_y at 0.3 by itself).
+off: --max-tilt-rad 0.3 (the gate before 2026-12-06), on: as shipped (0.6), both with --walking-ki 3 0
+--walking-filter-time-s 1 --stop-settle-s 0 (roll not fed back while walking and the walking posture loop undamped, the
+config the gate was measured on; the roll feedback adopted after it raises the side-step's v_y at 0.3 by itself).
 The hidden effect: H10a walks these gaits with its pelvis 0.3-0.43 rad from vertical, so with the gate at 0.3 the
 velocity feedback's correction decays for most of the walk and the robot walks what the actor makes of the
 feed-forward's command. Read from summary.json (pooled segments; feedback_decayed_fraction: the share of the window's
