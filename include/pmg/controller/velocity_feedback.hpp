@@ -565,7 +565,10 @@ struct PostureFeedbackConfig {
   std::array<double, 2> walking_ki{0.0, 0.0};
   /// Largest walking correction c_w [rad], [0, 0.3].
   double walking_max_correction_rad = 0.05;
-  /// Time constant of the walking low-pass [s], [0, 5].
+  /// Time constant τ of the walking low-pass [s], [0, 5]. With the torso following its command, the
+  /// walking integrator on this low-pass is a second-order loop, ω_n = √(walking_ki/τ), damping
+  /// ζ = 1/(2√(walking_ki·τ)): 0.29 at 3 /s and 1 s, 0.41 at 0.5 s (g1_sil_policy.yaml since
+  /// 2026-12-07; docs/controller.md "The walking posture loop's damping").
   double walking_filter_time_s = 1.0;
   /// While walking, an axis integrates only once its posture command has stayed within 0.01 rad of
   /// where it settled for this long [s], [0, 5]: the torso lags a posture ramp (the shaper's
