@@ -938,6 +938,8 @@ int main(int argc, char** argv) {
        << ", \"headroom_in_envelopes\": " << (base.velocity_feedback.enabled && base.velocity_feedback.within_posture_envelopes && base.velocity_feedback.headroom_in_envelopes ? "true" : "false")
        << ", \"stance_foot_nearest\": " << (base.velocity_feedback.enabled && base.velocity_feedback.stance_foot_nearest ? "true" : "false")
        << ", \"max_tilt_rad\": " << base.velocity_feedback.max_tilt_rad
+       << ", \"small_command_bound\": [" << base.velocity_feedback.small_command_bound[0] << ", "
+       << base.velocity_feedback.small_command_bound[1] << ", " << base.velocity_feedback.small_command_bound[2] << "]"
        << ", \"imu_acc_lowpass_s\": " << base.imu_acc_lowpass_s
        << ", \"walking_ki\": [" << base.posture_feedback.walking_ki[0] << ", " << base.posture_feedback.walking_ki[1] << "]"
        << ", \"walking_filter_time_s\": " << base.posture_feedback.walking_filter_time_s

@@ -219,6 +219,8 @@ struct VelocityFeedbackYaml {
     a->Visit("enabled", &f.enabled, "integral correction of the velocity command on leg odometry");
     a->Visit("ki", &f.ki, "integral gains for v_x, v_y, w, 0..20 [1/s]");
     a->Visit("max_ratio", &f.max_ratio, "largest correction as a share of |u|, 0..2");
+    a->Visit("small_command_bound", &f.small_command_bound,
+             "v_x, v_y [m/s], w [rad/s], each 0..0.5: a small command's correction may grow to |u| itself up to this");
     a->Visit("envelope_min", &f.envelope_min, "v_x, v_y [m/s], w [rad/s] below which no correction pushes (training range)");
     a->Visit("envelope_max", &f.envelope_max, "v_x, v_y [m/s], w [rad/s] above which no correction pushes (training range)");
     a->Visit("max_velocity_headroom", &f.max_velocity_headroom,

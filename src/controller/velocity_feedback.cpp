@@ -140,6 +140,9 @@ std::string VelocityFeedbackConfig::validate() const {
     if (!(envelope_min[i] <= 0.0 && envelope_max[i] >= 0.0 && envelope_max[i] - envelope_min[i] > 0.0))
       return "envelope_min/envelope_max[" + std::to_string(i) + "]: expected min <= 0 <= max, min < max";
   for (std::size_t i = 0; i < 3; ++i)
+    if (!(std::isfinite(small_command_bound[i]) && small_command_bound[i] >= 0.0 && small_command_bound[i] <= 0.5))
+      return std::string("small_command_bound[") + std::to_string(i) + "] (" + kAxis[i] + "): expected 0..0.5 [m/s, rad/s]";
+  for (std::size_t i = 0; i < 3; ++i)
     if (!(std::isfinite(max_velocity_headroom[i]) && max_velocity_headroom[i] >= 0.0 && max_velocity_headroom[i] <= 1.0))
       return std::string("max_velocity_headroom[") + std::to_string(i) + "] (" + kAxis[i] + "): expected 0..1 [m/s, rad/s]";
   if (!(stance_band_m > 0.0 && stance_band_m <= 0.1)) return "stance_band_m: expected (0, 0.1] m";
@@ -459,7 +462,8 @@ const VelocityCommand& VelocityFeedback::correct(const VelocityCommand& u, const
     const double hi = std::min(config_.envelope_max[i], ceiling);
     // The feed-forward stays inside the limits (a command already beyond them is passed on).
     u_ff_[i] = std::clamp(u_ff_[i], std::min(lo, u[i]), std::max(hi, u[i]));
-    const double bound = config_.max_ratio * std::fabs(u[i]);
+    const double bound = std::max(config_.max_ratio * std::fabs(u[i]),
+                                  std::min(std::fabs(u[i]), config_.small_command_bound[i]));
     double c = c_[i] * keep;
     if (std::fabs(u[i] - u_anchor_[i]) > std::max(config_.steady_band, 0.05 * std::fabs(u_anchor_[i]))) {
       u_anchor_[i] = u[i];  // the command moved: it settles again from here

@@ -154,6 +154,59 @@ TEST(VelocityFeedback, BringsAnUnderachievingPlantToTheCommandWithinTheBound) {
   EXPECT_LT(max_step, 1.5 * 0.5 * 0.01 + 1e-9) << "u_fb moves at most k_i |e| per second";
 }
 
+// A plant with a dead band, a stand-in for the default actor's slow start walking backward upright:
+// sent |u| ≤ d it barely moves (it achieves 0.3 |u|), beyond it 0.3 d + 1.5 (|u| − d). Returns the
+// achieved v_x after 20 s of a command u_x, and the largest |u_fb − u| / |u| over the run.
+double deadBandWalk(const VelocityFeedbackConfig& config, double u_x, double* max_share) {
+  Legs legs;
+  VelocityFeedback fb(config, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  const double d = 0.15, tau = 0.3, dt = 0.01;
+  double v = 0.0;
+  *max_share = 0.0;
+  BaseVelocityEstimate est;
+  for (int k = 0; k < 2000; ++k) {
+    const VelocityCommand& out = fb.correct(VelocityCommand{u_x, 0.0, 0.0}, est, dt);
+    *max_share = std::max(*max_share, std::fabs(out.vx - u_x) / std::fabs(u_x));
+    const double a = std::fabs(out.vx);
+    const double target = std::copysign(a <= d ? 0.3 * a : 0.3 * d + (a - d) * 1.5, out.vx);
+    v += dt / tau * (target - v);
+    est.valid = true;
+    est.stance_feet = 1;
+    est.v_x = v;
+  }
+  return v;
+}
+
+TEST(VelocityFeedback, SmallCommandBoundCrossesADeadBandWhereTheRatioCannot) {
+  VelocityFeedbackConfig c = enabledConfig();
+  double share = 0.0;
+  // The ratio bound alone: told -0.1, at most -0.16 is sent and the plant creeps at about -0.06.
+  const double v_ratio = deadBandWalk(c, -0.1, &share);
+  EXPECT_LE(share, 0.6 + 1e-12);
+  EXPECT_GT(v_ratio, -0.07) << "the dead band holds the ratio-bounded command back";
+  // With b = 0.1 the correction may reach |u| = 0.1: -0.2 is allowed and the plant reaches -0.1.
+  c.small_command_bound = {0.1, 0.0, 0.0};
+  const double v_small = deadBandWalk(c, -0.1, &share);
+  EXPECT_NEAR(v_small, -0.1, 0.005);
+  EXPECT_GT(share, 0.6) << "the correction went beyond r |u|";
+  EXPECT_LE(share, 1.0 + 1e-12) << "but never beyond |u| itself";
+  // A command large enough that r |u| >= b is bounded exactly as before: -0.3 under the same plant.
+  double share_ratio = 0.0, share_small = 0.0;
+  VelocityFeedbackConfig r = enabledConfig();
+  const double v_big_ratio = deadBandWalk(r, -0.3, &share_ratio);
+  const double v_big_small = deadBandWalk(c, -0.3, &share_small);
+  EXPECT_DOUBLE_EQ(v_big_ratio, v_big_small);
+  EXPECT_DOUBLE_EQ(share_ratio, share_small);
+  // At zero the bound is zero: nothing is steered while standing.
+  Legs legs;
+  VelocityFeedback fb(c, legs.model, legs.idx, {1.0, 0.4, 0.8});
+  BaseVelocityEstimate moving;
+  moving.valid = true;
+  moving.stance_feet = 1;
+  moving.v_x = 0.2;
+  for (int k = 0; k < 300; ++k) EXPECT_EQ(fb.correct(VelocityCommand{0.0, 0.0, 0.0}, moving, 0.01).vx, 0.0);
+}
+
 // The controller's path (Controller::tick) with velocity_feedback.within_posture_envelopes: the
 // shaper's command, the feedback on a plant that achieves 80 % of what it is sent, then scaleDown by
 // the shaper's envelope scale of u_fb. Returns the largest envelope scale of u_fb over the ticks.

@@ -152,6 +152,14 @@ struct VelocityFeedbackConfig {
   std::array<double, 3> ki{1.0, 1.0, 1.0};
   /// r: largest correction as a share of |u_i|, [0, 2].
   double max_ratio = 0.6;
+  /// b per axis (v_x, v_y [m/s], ω [rad/s]), each in [0, 0.5]: for a small command the correction may
+  /// grow to |u_i| itself, up to b_i. The bound is max(r |u_i|, min(|u_i|, b_i)): continuous in u, zero
+  /// at u = 0 (a robot told to stand is still not steered), and unchanged wherever r |u_i| ≥ b_i.
+  /// 0 (the default here; [0.1, 0, 0] in config/controller/g1_sil_policy.yaml). Why: told −0.1 m/s
+  /// upright, the default actor is slow to start; sent the full r-bound (−0.16) it averaged −0.04 to
+  /// −0.05 m/s over the last 2.4 s of a 4 s walk (docs/controller.md "Small commands and the actor's
+  /// slow start").
+  std::array<double, 3> small_command_bound{0.0, 0.0, 0.0};
   /// The range u_fb stays in (v_x, v_y [m/s], ω [rad/s]): the policy's training command range (the
   /// issue-12 envelope), intersected with the shaper's limits. A correction never pushes a command
   /// beyond it (a command already beyond it is passed on uncorrected).
