@@ -80,7 +80,8 @@
 // --max-tilt-rad X (the pelvis tilt beyond which the velocity feedback's correction decays; summary.json max_tilt_rad);
 // --walking-ki P R (the walking posture feedback's gains on pitch and roll; summary.json walking_ki);
 // --walking-filter-time-s X, --stop-settle-s X (the posture feedback's walking low-pass and its wait after a stop;
-// summary.json walking_filter_time_s, stop_settle_s);
+// summary.json walking_filter_time_s, stop_settle_s); --small-command-bound-vx X (velocity_feedback.small_command_bound's
+// v_x; summary.json small_command_bound);
 // --imu-acc-lowpass-s X (the HAL's low-pass of the accelerometer before the loop; summary.json imu_acc_lowpass_s),
 // --headroom-in-envelopes on|off (summary.json headroom_in_envelopes);
 // vx_fb, vy_fb, wz_fb, pitch_fb, roll_fb, height_fb: the command after the feedback and feed-forward, the one the
@@ -260,6 +261,7 @@ int main(int argc, char** argv) {
   std::vector<double> walking_ki;    // empty: the controller config's
   double walking_filter_time_s = -1;  // < 0: the controller config's
   double stop_settle_s = -1;          // < 0: the controller config's
+  double small_command_bound_vx = -1;  // < 0: the controller config's
   double sliding_friction = -1;  // < 0: the controller config's mujoco.sliding_friction
   app.add_option("--model", model_path, "ONNX actor with pmg.contract (default: the controller config's policy.model)");
   app.add_option("--controller", controller_path, "controller config YAML (the product path)")->capture_default_str();
@@ -376,6 +378,10 @@ int main(int argc, char** argv) {
                   "standing, the posture feedback integrates once the velocity command has been still this long [s] "
                   "(posture_feedback.stop_settle_s; 0 = from the first still tick; default: the controller config's)",
                   0.0, 5.0);
+  override_option("--small-command-bound-vx", &small_command_bound_vx,
+                  "a small v_x command's correction may grow to |u| itself, up to this [m/s] "
+                  "(velocity_feedback.small_command_bound[0]; 0 = the ratio bound alone; default: the controller config's)",
+                  0.0, 0.5);
   app.add_option("--walking-ki", walking_ki,
                  "the walking posture feedback's integral gains on torso pitch and roll [1/s], two values in [0, 5] "
                  "(posture_feedback.walking_ki; 0 = not fed back while walking; default: the controller config's)")
@@ -411,6 +417,7 @@ int main(int argc, char** argv) {
     if (walking_ki.size() == 2) base.posture_feedback.walking_ki = {walking_ki[0], walking_ki[1]};
     if (walking_filter_time_s >= 0) base.posture_feedback.walking_filter_time_s = walking_filter_time_s;
     if (stop_settle_s >= 0) base.posture_feedback.stop_settle_s = stop_settle_s;
+    if (small_command_bound_vx >= 0) base.velocity_feedback.small_command_bound[0] = small_command_bound_vx;
     const pmg::PostureFeedbackConfig open_posture;  // the keys' defaults: wide open
     const bool posture_open = base.posture_feedback.envelope_min == open_posture.envelope_min &&
                               base.posture_feedback.envelope_max == open_posture.envelope_max;
