@@ -917,6 +917,19 @@ def warmup_staging_checks(check, workdir):
           f"PPO loss restored")
 
 
+def run_eval_mjx(args):
+    """eval_mjx.py with @p args, in an interpreter of its own (this one's environment: the XLA flags, the allocator
+    and JAX's persistent cache). Runs that differ only in an input of the compiled programs (--hold-reference,
+    --stochastic) then compile to the same programs, and the cache serves the first run's compiles: one process
+    traces each later eval_mjx.main into a module with its own private function names (JAX numbers them per
+    process), which the cache keys on, so in-process every run compiled its reset and rollout anew (about 45 s of
+    compile in this part, docs/ci_timing.md "Stop 122"). A failing run fails the part."""
+    import subprocess
+    r = subprocess.run([sys.executable, os.path.join(TRAINING, "eval_mjx.py")] + list(args))
+    if r.returncode != 0:
+        raise RuntimeError(f"eval_mjx.py {' '.join(args)}: exit code {r.returncode}")
+
+
 def mjx_eval_checks(check, workdir, run_dir, tc):
     """2b. eval_mjx.py on the tiny run's actor: the environment is the run's own (its train_config.json
     beside the actor) made nominal, the schedule's command is the one the environment runs and reports
@@ -933,11 +946,7 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
     with open(sched, "w") as f:
         yaml.safe_dump({"ramp": 0.0, "duration": 0.4, "segments": segs}, f)
     out = os.path.join(workdir, "mjx_eval.npz")
-    cwd = os.getcwd()
-    try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", out, "--commands", sched, "--start-reference"])
-    finally:
-        os.chdir(cwd)
+    run_eval_mjx([os.path.join(run_dir, "actor.npz"), "--out", out, "--commands", sched, "--start-reference"])
     z = np.load(out)
     want = np.array([[s[k] for k in eval_mjx.KEYS] for s in segs])
     check(z["command"].shape[0] == 40 and np.allclose(z["command_env"], z["command"], atol=1e-6) and
@@ -963,11 +972,8 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"eval_mjx: the run's environment (lin_vel_sigma {env['lin_vel_sigma']}, clips {env['clips']}) made "
           f"nominal (deterministic reset, no delay, noise {env['noise']})")
     hold_out = os.path.join(workdir, "mjx_hold.npz")
-    try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", hold_out, "--commands", sched, "--start-reference",
-                       "--hold-reference"])  # the actor's rollout's program, the flag an input (cache hit, no compile)
-    finally:
-        os.chdir(cwd)
+    run_eval_mjx([os.path.join(run_dir, "actor.npz"), "--out", hold_out, "--commands", sched, "--start-reference",
+                 "--hold-reference"])  # the actor's rollout's program, the flag an input (JAX's cache serves it)
     h = np.load(hold_out)
     dev_hold, dev_actor = np.abs(h["q"][:10] - h["q_ref"][:10]).mean(), np.abs(z["q"][:10] - z["q_ref"][:10]).mean()
     check(np.isfinite(h["reward"]).all() and np.isfinite(z["reward"]).all() and dev_hold < 0.1 and
@@ -990,11 +996,8 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"eval_mjx.policy_action: a draw equals Brax's NormalTanhDistribution's for the same key (max |diff| "
           f"{np.abs(np.asarray(ours_a) - brax_a).max():.1e}); noise 0 is its mode, tanh(loc), bit for bit")
     stoch_out = os.path.join(workdir, "mjx_stochastic.npz")
-    try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", stoch_out, "--commands", sched, "--start-reference",
-                       "--stochastic"])  # the actor's rollout's program again, the noise's scale an input
-    finally:
-        os.chdir(cwd)
+    run_eval_mjx([os.path.join(run_dir, "actor.npz"), "--out", stoch_out, "--commands", sched, "--start-reference",
+                 "--stochastic"])  # the actor's rollout's program again, the noise's scale an input
     st = np.load(stoch_out)
     apart_st = float(np.abs(st["q"] - z["q"]).max())
     check(not z["action_std"].any() and float(st["action_std"].min()) > 0.01 and apart_st > 0.01 and
@@ -1005,11 +1008,8 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
     # first 0.2 s stay close to MJX's 5 ms implicit ones (a sign error in the explicit D term, or a physics step
     # whose result is dropped, would not).
     cpu_out = os.path.join(workdir, "mjx_mujoco.npz")
-    try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", cpu_out, "--commands", sched, "--start-reference",
-                       "--physics", "mujoco", "--pd-damping", "explicit", "--sim-dt", "0.001", "--duration", "0.2"])
-    finally:
-        os.chdir(cwd)
+    run_eval_mjx([os.path.join(run_dir, "actor.npz"), "--out", cpu_out, "--commands", sched, "--start-reference",
+                 "--physics", "mujoco", "--pd-damping", "explicit", "--sim-dt", "0.001", "--duration", "0.2"])
     c = np.load(cpu_out)
     cenv = json.loads(str(c["env_config"]))
     moved = float(np.abs(z["q"][:20] - z["q"][0]).max())
@@ -1024,11 +1024,8 @@ def mjx_eval_checks(check, workdir, run_dir, tc):
           f"{want[0][5]} m commanded (standing: 0.79; p_reset_reference {env['p_reset_reference']}, the run's "
           f"{tc['env']['p_reset_reference']})")
     rand_out = os.path.join(workdir, "mjx_randomized.npz")
-    try:
-        eval_mjx.main([os.path.join(run_dir, "actor.npz"), "--out", rand_out, "--commands", sched, "--randomized", "3",
-                       "--seed", "1", "--duration", "0.2"])
-    finally:
-        os.chdir(cwd)
+    run_eval_mjx([os.path.join(run_dir, "actor.npz"), "--out", rand_out, "--commands", sched, "--randomized", "3",
+                 "--seed", "1", "--duration", "0.2"])
     r = np.load(rand_out)
     renv = json.loads(str(r["env_config"]))
     lo, hi = tc["env"]["friction"]
