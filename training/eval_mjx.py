@@ -404,7 +404,8 @@ def main(argv=None):
         info["command_goal"] = info["command"]  # the step shapes "command" towards "command_goal" (command_slew)
         state = state.replace(info=info)
         # --hold-reference is an input of the compiled rollout, not a Python branch: the actor's rollout and the
-        # reference's compile to one program (JAX's persistent cache serves the second the first's compile).
+        # reference's compile to one program (JAX's persistent cache serves a later run the first's compile, when
+        # each run is its own process: main() called twice in one process traces a differently named module).
         # --stochastic likewise: the noise's scale is an input (0: the mean action, bit for bit).
         a_actor, a_std = actor(p, state.obs["state"], jax.random.normal(key, (n, LEG)), noise)
         a = jnp.where(hold, jax.vmap(env.hold_action)(state.info["ref_q"][:, :LEG]), a_actor)
