@@ -925,9 +925,7 @@ def run_eval_mjx(args):
     process), which the cache keys on, so in-process every run compiled its reset and rollout anew (about 45 s of
     compile in this part, docs/ci_timing.md "Stop 122"). A failing run fails the part."""
     import subprocess
-    r = subprocess.run([sys.executable, os.path.join(TRAINING, "eval_mjx.py")] + list(args))
-    if r.returncode != 0:
-        raise RuntimeError(f"eval_mjx.py {' '.join(args)}: exit code {r.returncode}")
+    subprocess.run([sys.executable, os.path.join(TRAINING, "eval_mjx.py")] + list(args), check=True)
 
 
 def mjx_eval_checks(check, workdir, run_dir, tc):
