@@ -54,7 +54,30 @@ std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string
                                  const Mujoco22Options& options = {});
 
 /// Reads @p mjcf_path, adapts it and compiles it with MuJoCo 2.2.
+///
+/// Compiled-model cache (opt-in): when the environment variable `PMG_MJCF_CACHE_DIR` names a folder
+/// (created if missing), the compiled model is kept there as `<key>.mjb` (MuJoCo's binary model) with
+/// `<key>.mjb.b2`, the BLAKE2b-256 of its bytes. The key is the BLAKE2b-256 of the adapted text, the
+/// content of every file its `file="..."` attributes name (meshes resolved against the absolute
+/// meshdir, else the MJCF's folder), MuJoCo's run-time version and sizeof(mjtNum); a file that cannot
+/// be found disables the cache for that load. A later load with the same key reads the binary instead
+/// of compiling (the G1: about 0.4-0.7 s of compile, mostly qhull's convex hulls, against a few ms),
+/// and the model is the same bytes (test_mujoco_model). An entry whose checksum does not match its
+/// bytes, or that MuJoCo rejects, is counted (mujocoModelCacheStats().rejected), reported on stderr,
+/// compiled again and rewritten. Entries are written to a private temporary file and renamed into
+/// place, so concurrent processes never read a partial entry. scripts/run_tests.sh sets the variable
+/// (build/mjcf_cache); unset, nothing is read or written. Not for the real-time path: it allocates
+/// and does file I/O, like the compile it replaces.
 /// @throws std::runtime_error with MuJoCo's message and the file name on failure.
 MjModelPtr loadMujocoModel(const std::string& mjcf_path, const Mujoco22Options& options = {});
+
+/// Counters of the compiled-model cache since the process started (all loads, every thread).
+struct MujocoModelCacheStats {
+  long hits = 0;      ///< loads served from an entry
+  long misses = 0;    ///< loads with the cache on that compiled (no entry, or a rejected one)
+  long rejected = 0;  ///< entries found but not used: checksum mismatch, unreadable, or refused by MuJoCo
+  long stored = 0;    ///< entries written
+};
+MujocoModelCacheStats mujocoModelCacheStats();
 
 }  // namespace pmg
