@@ -58,6 +58,10 @@ from concurrent.futures import ThreadPoolExecutor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
+# The battery's processes share MuJoCo's compiled model (loadMujocoModel's opt-in cache, docs/robot_model.md):
+# about 0.3-0.6 s saved per seed. A PMG_MJCF_CACHE_DIR already set wins.
+ENV = dict(os.environ)
+ENV.setdefault("PMG_MJCF_CACHE_DIR", os.path.join(REPO, "build", "mjcf_cache"))
 sys.path.insert(0, HERE)
 import segment_band  # noqa: E402
 import standing_reference  # noqa: E402
@@ -102,7 +106,7 @@ def run(cmd, folder, log_name="log.txt", ok=(0,)):
     with open(os.path.join(folder, "command.txt"), "w") as f:
         f.write(" ".join(shlex.quote(c) for c in cmd) + "\n")
     with open(os.path.join(folder, log_name), "w") as log:
-        rc = subprocess.run(cmd, cwd=REPO, stdout=log, stderr=subprocess.STDOUT).returncode
+        rc = subprocess.run(cmd, cwd=REPO, stdout=log, stderr=subprocess.STDOUT, env=ENV).returncode
     if rc not in ok:
         raise RuntimeError(f"{' '.join(cmd[:2])} ... exited {rc}; see {os.path.join(folder, log_name)}")
     return rc
