@@ -188,17 +188,6 @@ void throwMujocoLoadError(const char* message) {
   throw MujocoLoadError(std::string("MuJoCo: ") + (message ? message : "unknown error"));
 }
 
-class MujocoErrorToException {
- public:
-  MujocoErrorToException() : previous_(mju_user_error) { mju_user_error = throwMujocoLoadError; }
-  ~MujocoErrorToException() { mju_user_error = previous_; }
-  MujocoErrorToException(const MujocoErrorToException&) = delete;
-  MujocoErrorToException& operator=(const MujocoErrorToException&) = delete;
-
- private:
-  void (*previous_)(const char*);
-};
-
 void rejectEntry(const fs::path& entry, const char* why) {
   ++g_cache_rejected;
   std::fprintf(stderr, "pmg: MJCF cache entry %s rejected (%s); compiling the model again\n", entry.c_str(), why);
@@ -230,11 +219,9 @@ MjModelPtr loadEntry(const fs::path& entry) {
   mjModel* model = nullptr;
   std::string error;
   {
-    // mj_loadModel reports a malformed image through mju_error, whose default handler prints, waits for
-    // Enter and exits: while it reads, an error throws instead (libmujoco has unwind tables; as in
-    // src/render/scene_renderer.cpp). What it had allocated for the image is lost; this happens only for an
-    // entry that passed its checksum and is still malformed.
-    const MujocoErrorToException guard;
+    // mj_loadModel reports a malformed image through mju_error: while it reads, an error throws instead. What
+    // it had allocated for the image is lost; this happens only for an entry that passed its checksum.
+    const ScopedMujocoErrorHandler guard(throwMujocoLoadError);
     try {
       model = mj_loadModel("model.mjb", vfs.get());
     } catch (const MujocoLoadError& e) {

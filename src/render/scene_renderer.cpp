@@ -5,6 +5,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "pmg/common/mujoco_model.hpp"
 #include "pmg/render/gl_context.hpp"
 
 namespace pmg::render {
@@ -16,22 +17,11 @@ void check(bool ok, const std::string& what) {
 }
 
 // MuJoCo reports renderer failures through mju_error, whose default handler prints, waits for
-// Enter and exits. While a guard lives, such errors become RenderError exceptions instead
-// (libmujoco is built with unwind tables, so the exception crosses its C frames).
+// Enter and exits. While a guard (ScopedMujocoErrorHandler, pmg/common/mujoco_model.hpp) lives, such
+// errors become RenderError exceptions instead.
 void throwingMujocoError(const char* message) {
   throw RenderError(std::string("MuJoCo renderer: ") + (message ? message : "unknown error"));
 }
-
-class MujocoErrorGuard {
- public:
-  MujocoErrorGuard() : previous_(mju_user_error) { mju_user_error = throwingMujocoError; }
-  ~MujocoErrorGuard() { mju_user_error = previous_; }
-  MujocoErrorGuard(const MujocoErrorGuard&) = delete;
-  MujocoErrorGuard& operator=(const MujocoErrorGuard&) = delete;
-
- private:
-  void (*previous_)(const char*);
-};
 
 }  // namespace
 
@@ -96,7 +86,7 @@ SceneRenderer::SceneRenderer(MjModelPtr model, const RobotConfig& robot, const R
 
   if (!GlContext::isCurrent())
     throw RenderError("SceneRenderer: no OpenGL context is current on this thread (create a pmg::render::GlContext first)");
-  MujocoErrorGuard guard;
+  const ScopedMujocoErrorHandler guard(throwingMujocoError);
   mjv_makeScene(m, &scene_, 4000);
   scene_.flags[mjRND_SHADOW] = options_.shadows ? 1 : 0;
   scene_.flags[mjRND_REFLECTION] = options_.reflections ? 1 : 0;
@@ -186,7 +176,7 @@ void SceneRenderer::render(const StateSample& sample, const std::string& label_l
   for (int a = 0; a < 3; ++a) camera_.lookat[a] = sample.p_WB[a];
   camera_.lookat[2] += options_.camera.lookat_dz;
   const mjrRect viewport{0, 0, options_.width, options_.height};
-  MujocoErrorGuard guard;
+  const ScopedMujocoErrorHandler guard(throwingMujocoError);
   mjv_updateScene(model_.get(), data_.get(), &vis_options_, nullptr, &camera_, mjCAT_ALL, &scene_);
   if (options_.tether && scene_.ngeom < scene_.maxgeom) addTether();
   mjr_setBuffer(mjFB_OFFSCREEN, &context_);

@@ -33,6 +33,23 @@ struct MjDataDeleter {
 using MjModelPtr = std::unique_ptr<mjModel, MjModelDeleter>;
 using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
 
+/// While alive, MuJoCo's fatal errors (mju_error) call @p handler instead of MuJoCo's default, which
+/// prints, waits for Enter and exits the process; the previous handler comes back on destruction. A
+/// handler may throw: libmujoco is built with unwind tables, so the exception crosses its C frames (what
+/// MuJoCo had allocated in the failed call is lost). mju_user_error is process-wide: setup code only.
+class ScopedMujocoErrorHandler {
+ public:
+  explicit ScopedMujocoErrorHandler(void (*handler)(const char*)) : previous_(mju_user_error) {
+    mju_user_error = handler;
+  }
+  ~ScopedMujocoErrorHandler() { mju_user_error = previous_; }
+  ScopedMujocoErrorHandler(const ScopedMujocoErrorHandler&) = delete;
+  ScopedMujocoErrorHandler& operator=(const ScopedMujocoErrorHandler&) = delete;
+
+ private:
+  void (*previous_)(const char*);
+};
+
 /// Options of the MuJoCo 2.2 adaptation.
 struct Mujoco22Options {
   double timestep = 0.001;      ///< physics step [s] (≥ 1 kHz for the SIL), in (0, 0.01]
