@@ -1,6 +1,8 @@
 #include "pmg/common/mujoco_model.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <climits>
 #include <cstdint>
 #include <cstdio>
@@ -13,6 +15,8 @@
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <sodium.h>
 #include <unistd.h>
@@ -233,11 +237,36 @@ MjModelPtr loadEntry(const fs::path& entry) {
   return MjModelPtr(model);
 }
 
+/// Keeps the folder at kMujocoModelCacheMaxEntries entries, the least recently used going first (a served entry's
+/// time is renewed), and removes temporary files a killed writer left (older than 10 minutes).
+void evictEntries(const fs::path& dir) {
+  std::vector<std::pair<fs::file_time_type, fs::path>> images;
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const fs::path& p = it->path();
+    const auto time = fs::last_write_time(p, ec);
+    if (ec) continue;
+    if (p.extension() == ".mjb") {
+      images.emplace_back(time, p);
+    } else if (p.filename().string().rfind(".pmg_mjb_", 0) == 0 && now - time > std::chrono::minutes(10)) {
+      fs::remove(p, ec);
+    }
+  }
+  if (images.size() <= kMujocoModelCacheMaxEntries) return;
+  std::sort(images.begin(), images.end());
+  for (std::size_t i = 0; i + kMujocoModelCacheMaxEntries < images.size(); ++i) {
+    fs::remove(images[i].second, ec);
+    fs::remove(fs::path(images[i].second.string() + ".b2"), ec);
+  }
+}
+
 void storeEntry(const fs::path& entry, const mjModel* model) {
   std::string bytes(static_cast<std::size_t>(mj_sizeModel(model)), '\0');
   mj_saveModel(model, nullptr, bytes.data(), static_cast<int>(bytes.size()));
   if (writeAtomically(fs::path(entry.string() + ".b2"), checksumOf(bytes)) && writeAtomically(entry, bytes))
     ++g_cache_stored;
+  evictEntries(entry.parent_path());
 }
 
 MjModelPtr compileMjcf(const std::string& mjcf_path, const std::string& xml) {
@@ -288,6 +317,7 @@ MjModelPtr loadMujocoModel(const std::string& mjcf_path, const Mujoco22Options& 
   const fs::path entry = fs::path(cache_dir) / (key + ".mjb");
   if (MjModelPtr cached = loadEntry(entry)) {
     ++g_cache_hits;
+    fs::last_write_time(entry, fs::file_time_type::clock::now(), ec);  // recently used: evicted last
     return cached;
   }
   ++g_cache_misses;

@@ -2,7 +2,9 @@
 // second load is served from the entry and is the same model, byte for byte, as a compile; a corrupted
 // or unchecked entry is rejected, counted and rewritten; the key follows the options and the content of
 // the mesh files; a model MuJoCo cannot compile still throws and leaves no entry.
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -11,6 +13,7 @@
 #include <iterator>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <sodium.h>
@@ -230,6 +233,46 @@ TEST(MujocoModelCache, TheKeyFollowsTheMeshFilesContent) {
   EXPECT_EQ(d.misses, 1);
   // The bounding radius of the geom follows the mesh: a stale entry would have kept 0.1 m's.
   EXPECT_GT(large->geom_rbound[0], 1.5 * small->geom_rbound[0]);
+}
+
+TEST(MujocoModelCache, KeepsTheMostRecentlyUsedEntriesUpToItsLimit) {
+  const test::TempDir tmp;
+  tmp.write("robot/meshes/tet.stl", tetrahedronStl(0.1F));
+  const std::string mjcf = tmp.write("robot/tiny.xml", kTinyMjcf);
+  const fs::path dir = tmp.path() / "cache";
+  const CacheDirGuard guard(dir.string());
+  const std::size_t n = kMujocoModelCacheMaxEntries + 2;
+  auto options = [](std::size_t i) {
+    Mujoco22Options o;
+    o.timestep = 0.001 + 1e-5 * static_cast<double>(i);  // another key each
+    return o;
+  };
+  // Entry i is given the time (an hour ago) + i s, so "least recently used" is exact whatever the clock's
+  // resolution; a new entry (now) is the newest.
+  const auto base = fs::file_time_type::clock::now() - std::chrono::hours(1);
+  std::vector<fs::path> known;
+  for (std::size_t i = 0; i < n; ++i) {
+    loadMujocoModel(mjcf, options(i));
+    for (const fs::path& p : entries(dir, ".mjb")) {
+      if (std::find(known.begin(), known.end(), p) != known.end()) continue;
+      fs::last_write_time(p, base + std::chrono::seconds(i));
+      known.push_back(p);
+    }
+    ASSERT_EQ(known.size(), i + 1);
+  }
+  EXPECT_EQ(entries(dir, ".mjb").size(), kMujocoModelCacheMaxEntries);
+  EXPECT_EQ(entries(dir, ".b2").size(), kMujocoModelCacheMaxEntries);
+  EXPECT_FALSE(fs::exists(known[0]));
+  EXPECT_FALSE(fs::exists(known[1]));
+
+  MujocoModelCacheStats before = mujocoModelCacheStats();
+  loadMujocoModel(mjcf, options(2));  // the oldest kept; served, and its time renewed
+  EXPECT_EQ(delta(before).hits, 1);
+  before = mujocoModelCacheStats();
+  loadMujocoModel(mjcf, options(0));  // evicted: compiled and stored again, evicting entry 3, not entry 2
+  EXPECT_EQ(delta(before).misses, 1);
+  EXPECT_TRUE(fs::exists(known[2]));
+  EXPECT_FALSE(fs::exists(known[3]));
 }
 
 TEST(MujocoModelCache, AModelMuJoCoCannotCompileStillThrowsAndLeavesNoEntry) {

@@ -17,6 +17,7 @@
 ///  5. a `framequat` sensor on the IMU site (orientation of the IMU frame in world, w x y z), as an
 ///     IMU's attitude filter would report it.
 
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -83,11 +84,16 @@ std::string adaptMjcfForMujoco22(const std::string& mjcf_text, const std::string
 /// (test_mujoco_model). An entry whose checksum does not match its
 /// bytes, or that MuJoCo rejects, is counted (mujocoModelCacheStats().rejected), reported on stderr,
 /// compiled again and rewritten. Entries are written to a private temporary file and renamed into
-/// place, so concurrent processes never read a partial entry. scripts/run_tests.sh sets the variable
+/// place, so concurrent processes never read a partial entry. The folder keeps at most
+/// kMujocoModelCacheMaxEntries entries: storing one more removes the least recently used (about 15 MB each
+/// for the G1). scripts/run_tests.sh sets the variable
 /// (build/mjcf_cache); unset, nothing is read or written. Not for the real-time path: it allocates
 /// and does file I/O, like the compile it replaces.
 /// @throws std::runtime_error with MuJoCo's message and the file name on failure.
 MjModelPtr loadMujocoModel(const std::string& mjcf_path, const Mujoco22Options& options = {});
+
+/// Entries the compiled-model cache keeps in its folder (loadMujocoModel).
+inline constexpr std::size_t kMujocoModelCacheMaxEntries = 32;
 
 /// Counters of the compiled-model cache since the process started (all loads, every thread).
 struct MujocoModelCacheStats {
