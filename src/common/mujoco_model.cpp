@@ -86,16 +86,6 @@ bool readWholeFile(const fs::path& path, std::string& out) {
   return !in.bad();
 }
 
-std::string hexOf(const unsigned char* bytes, std::size_t n) {
-  static const char digits[] = "0123456789abcdef";
-  std::string hex(2 * n, '0');
-  for (std::size_t i = 0; i < n; ++i) {
-    hex[2 * i] = digits[bytes[i] >> 4];
-    hex[2 * i + 1] = digits[bytes[i] & 0xf];
-  }
-  return hex;
-}
-
 class Blake2b {
  public:
   Blake2b() { crypto_generichash_init(&state_, nullptr, 0, crypto_generichash_BYTES); }
@@ -110,7 +100,8 @@ class Blake2b {
   std::string hex() {
     unsigned char out[crypto_generichash_BYTES];
     crypto_generichash_final(&state_, out, sizeof out);
-    return hexOf(out, sizeof out);
+    char hex[2 * crypto_generichash_BYTES + 1];
+    return sodium_bin2hex(hex, sizeof hex, out, sizeof out);
   }
 
  private:
@@ -147,10 +138,15 @@ std::string cacheKeyOf(const std::string& xml, const fs::path& mjcf_dir) {
   const std::regex file_re(R"(\sfile(?:right|left|up|down|front|back)?=\"([^\"]*)\")");
   for (auto it = std::sregex_iterator(xml.begin(), xml.end(), file_re); it != std::sregex_iterator(); ++it) {
     const fs::path name((*it)[1].str());
-    bool found = false;
     // Every folder MuJoCo might resolve the name against: a change to whichever it uses changes the key.
-    for (const fs::path& dir : name.is_absolute() ? std::vector<fs::path>{fs::path()} : dirs) {
-      const fs::path candidate = name.is_absolute() ? name : dir / name;
+    std::vector<fs::path> candidates;
+    if (name.is_absolute()) {
+      candidates.push_back(name);
+    } else {
+      for (const fs::path& dir : dirs) candidates.push_back(dir / name);
+    }
+    bool found = false;
+    for (const fs::path& candidate : candidates) {
       std::error_code ec;
       if (!fs::is_regular_file(candidate, ec)) continue;
       std::string content;
@@ -200,8 +196,7 @@ void rejectEntry(const fs::path& entry, const char* why) {
 /// The cached model at @p entry, or null (no entry, or one rejected and counted).
 MjModelPtr loadEntry(const fs::path& entry) {
   std::string bytes;
-  std::error_code ec;
-  if (!fs::exists(entry, ec) || !readWholeFile(entry, bytes)) return nullptr;
+  if (!readWholeFile(entry, bytes)) return nullptr;  // no entry
   std::string checksum;
   if (!readWholeFile(fs::path(entry.string() + ".b2"), checksum) || checksum != checksumOf(bytes)) {
     rejectEntry(entry, "its BLAKE2b checksum file is missing or does not match its bytes");
