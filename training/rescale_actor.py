@@ -30,9 +30,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 ROOT = os.path.dirname(HERE)
 from pmg_train.contract import actor_forward  # noqa: E402
-from train_pmg import axis_bounds  # noqa: E402
+from train_pmg import LEG_JOINT_KINDS, axis_bounds, joint_action_factors  # noqa: E402
 LEG = 12
-KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")  # per leg, left then right
 LAST_ACTION = slice(36, 48)  # OBS_TERMS: gyro 3, gravity 3, command 6, joint_pos_rel 12, joint_vel 12, last_action 12
 
 
@@ -73,16 +72,10 @@ def main(argv=None):
         ranges.update(axis_bounds("--command-range", args.command_range, strict=True, axes=tuple(ranges)))
     except ValueError as e:
         ap.error(str(e))
-    factors = np.ones(LEG)
-    for item in args.factor:
-        name, _, value = item.partition("=")
-        try:
-            f = float(value)
-        except ValueError:
-            f = float("nan")
-        if name not in KINDS or not 0.0 < f <= 2.0:
-            ap.error(f"--factor {item!r}: expected JOINT=F with JOINT one of {', '.join(KINDS)} and F in (0, 2]")
-        factors[KINDS.index(name)] = factors[KINDS.index(name) + 6] = f
+    try:
+        factors = joint_action_factors(args.factor)
+    except ValueError as e:
+        ap.error(str(e))
     if args.factor and args.action_scale != "factor":
         ap.error("--factor needs --action-scale factor")
 
@@ -129,7 +122,7 @@ def main(argv=None):
           f"r {np.round(r[:6], 3).tolist()}")
     for j in range(6):
         ds = d[:, [j, j + 6]][small[:, [j, j + 6]]]
-        print(f"{KINDS[j]:12s} target change [rad]: |a|<0.7 max {ds.max() if ds.size else 0:.4f}, all max "
+        print(f"{LEG_JOINT_KINDS[j]:12s} target change [rad]: |a|<0.7 max {ds.max() if ds.size else 0:.4f}, all max "
               f"{d[:, [j, j + 6]].max():.4f}")
     print(f"wrote {args.out}")
     return 0

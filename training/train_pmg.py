@@ -175,6 +175,35 @@ def _scale_factor(text):
     return f
 
 
+LEG_JOINT_KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "ankle_roll")  # per leg, left then right
+
+
+def joint_action_factors(items, flag="--factor"):
+    """Per-joint factors (12,) of the leg action scale from JOINT=F items (JOINT one of LEG_JOINT_KINDS, F in (0, 2]); each applies to that
+    joint of both legs, joints not named keep 1.0, a joint named twice takes its last factor. Raises ValueError
+    naming @p flag, the item and the expected form."""
+    factors = np.ones(12)
+    for item in items:
+        name, _, value = item.partition("=")
+        try:
+            f = float(value)
+        except ValueError:
+            f = float("nan")
+        if name not in LEG_JOINT_KINDS or not 0.0 < f <= 2.0:
+            raise ValueError(f"{flag} {item!r}: expected JOINT=F with JOINT one of {', '.join(LEG_JOINT_KINDS)} "
+                             "and F in (0, 2]")
+        k = LEG_JOINT_KINDS.index(name)
+        factors[k] = factors[k + 6] = f
+    return factors
+
+
+def leg_action_scale(scale, args):
+    """The run's leg action scale (12,) [rad per unit action]: @p scale (the rule's or --action-scale-from's) times
+    --action-scale-factor, then times --action-scale-joint-factor's per-joint factors (both legs)."""
+    factors = joint_action_factors(args.action_scale_joint_factor, "--action-scale-joint-factor")
+    return (np.asarray(scale, np.float64) * args.action_scale_factor * factors).astype(np.float32)
+
+
 def action_scale_from(path):
     """The leg action scale (12,) of an earlier run, from its train_config.json ("action_scale").
     Raises SystemExit naming --action-scale-from, the file and the expected form."""
@@ -341,6 +370,11 @@ def parse_args(argv=None):
                          "controller deploys standing-pose offsets only)")
     ap.add_argument("--action-scale-factor", type=_scale_factor, default=1.0, metavar="F",
                     help="multiplies the leg action scale (the rule's or --action-scale-from's), e.g. 0.5 for residual actions")
+    ap.add_argument("--action-scale-joint-factor", action="append", default=[], metavar="JOINT=F",
+                    help="multiplies one joint's action scale on both legs (after --action-scale-factor); JOINT one of "
+                         "hip_pitch, hip_roll, hip_yaw, knee, ankle_pitch, ankle_roll, F in (0, 2]; repeatable, e.g. "
+                         "--action-scale-from N24b.json --action-scale-joint-factor knee=1.2 for a reach between that "
+                         "run's and the posture rule's")
     ap.add_argument("--tracking-sigma", type=float, default=None, metavar="S",
                     help="width of both velocity-tracking rewards exp(-err^2/S) (EnvConfig.lin_vel_sigma, yaw_rate_sigma; "
                          "default 0.25)")
@@ -451,6 +485,11 @@ def parse_args(argv=None):
             ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: has no effect without --warmup-steps N > 0")
         if not 0.0 <= args.warmup_p_posture_walk <= 1.0:
             ap.error(f"--warmup-p-posture-walk = {args.warmup_p_posture_walk}: expected in [0, 1]")
+    if args.action_scale_joint_factor:
+        try:
+            joint_action_factors(args.action_scale_joint_factor, "--action-scale-joint-factor")
+        except ValueError as e:
+            ap.error(str(e))
     if not (math.isfinite(args.action_noise_scale) and args.action_noise_scale > 0):
         ap.error(f"--action-noise-scale = {args.action_noise_scale}: expected a finite scale > 0")
     if args.warmup_evals != 1 and args.warmup_steps == 0:
@@ -667,8 +706,8 @@ def main(argv=None):
     cfg = dataclasses.replace(cfg, clips=args.clips)
     action_scale = action_scale_from(args.action_scale_from) if args.action_scale_from else None
     env = G1PmgEnv(cfg, clip_files, action_scale=action_scale)
-    if args.action_scale_factor != 1.0:  # the rule's or the earlier run's scale, scaled (before any step is traced)
-        env.action_scale = (env.action_scale * args.action_scale_factor).astype(np.float32)
+    env.action_scale = leg_action_scale(env.action_scale, args)  # scaled before any step is traced
+    log("leg action scale (left leg):", [round(float(v), 3) for v in env.action_scale[:6]])
     clip_files = env.clip_files
     if args.smoke:
         smoke(env, args.out)

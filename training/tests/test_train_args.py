@@ -11,7 +11,9 @@ default) parse and a value outside
 and --p-combined parses and a value outside [0, 0.6] is refused; --command-focus AXIS=LO,HI (LO <= HI) with --p-focus
 parses (off by default), and one without the other, p_focus 0 or outside [0, 1], an unknown axis, a reversed or
 non-finite bound or a height below 0.3 m is refused (the box inside the ranges: the smoke run's env); --action-offset (default | reference) and
---action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused;
+--action-scale-factor parse, and an unknown offset or a factor outside (0, 2] is refused; --action-scale-joint-factor
+JOINT=F (repeatable) multiplies that joint of both legs after the uniform factor, and an unknown joint, a missing F or
+one outside (0, 2] is refused;
 --discounting (default 0.97), --reward-scaling (default 1.0) and --mirror-loss (default 0) parse, and a
 discount outside (0, 1), a non-positive or non-finite scale or a negative or non-finite mirror weight is refused;
 --warmup-steps (default 0: no warm-up config) parses, its config changes the three tracking widths and
@@ -58,6 +60,16 @@ if (args.action_offset, args.action_scale_factor) != ("reference", 0.5):
 args = train_pmg.parse_args(["--out", "/tmp/x"])
 if (args.action_offset, args.action_scale_factor) != ("default", 1.0):
     failures.append(f"--action-offset / --action-scale-factor defaults: {args.action_offset}, {args.action_scale_factor}")
+base = [0.4, 0.5, 1.0, 1.0, 0.6, 0.3] * 2  # a leg action scale, left then right
+scale = train_pmg.leg_action_scale(base, args)
+if not all(abs(a - b) < 1e-6 for a, b in zip(scale, base)):
+    failures.append(f"leg_action_scale without factors changed the scale: {list(scale)}")
+args = train_pmg.parse_args(["--out", "/tmp/x", "--action-scale-factor", "0.5", "--action-scale-joint-factor",
+                             "knee=1.2", "--action-scale-joint-factor", "hip_pitch=1.5"])
+scale = train_pmg.leg_action_scale(base, args)
+want = [b * 0.5 * {0: 1.5, 3: 1.2}.get(j % 6, 1.0) for j, b in enumerate(base)]
+if not all(abs(a - b) < 1e-6 for a, b in zip(scale, want)):
+    failures.append(f"--action-scale-factor 0.5 with knee=1.2, hip_pitch=1.5 gave {list(scale)}, expected {want}")
 if train_pmg.parse_args(["--out", "/tmp/x", "--joint-stop-timeconst", "0.01"]).joint_stop_timeconst != 0.01:
     failures.append("--joint-stop-timeconst 0.01 not parsed")
 if (args.discounting, args.reward_scaling, args.mirror_loss) != (0.97, 1.0, 0.0):
@@ -122,6 +134,11 @@ for bad, flag in ((["--p-stop", "1.5"], "--p-stop"),
                   (["--action-scale-factor", "0"], "--action-scale-factor"),
                   (["--action-scale-factor", "nan"], "--action-scale-factor"),
                   (["--action-scale-factor", "3"], "--action-scale-factor"),
+                  (["--action-scale-joint-factor", "shin=1.2"], "--action-scale-joint-factor"),
+                  (["--action-scale-joint-factor", "knee"], "--action-scale-joint-factor"),
+                  (["--action-scale-joint-factor", "knee=0"], "--action-scale-joint-factor"),
+                  (["--action-scale-joint-factor", "knee=2.5"], "--action-scale-joint-factor"),
+                  (["--action-scale-joint-factor", "knee=nan"], "--action-scale-joint-factor"),
                   (["--discounting", "1"], "--discounting"),
                   (["--discounting", "0"], "--discounting"),
                   (["--discounting", "nan"], "--discounting"),
