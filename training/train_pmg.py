@@ -179,9 +179,9 @@ LEG_JOINT_KINDS = ("hip_pitch", "hip_roll", "hip_yaw", "knee", "ankle_pitch", "a
 
 
 def joint_action_factors(items, flag="--factor"):
-    """Per-joint factors (12,) of the leg action scale from JOINT=F items (JOINT one of LEG_JOINT_KINDS, F in (0, 2]); each applies to that
-    joint of both legs, joints not named keep 1.0, a joint named twice takes its last factor. Raises ValueError
-    naming @p flag, the item and the expected form."""
+    """Per-joint factors (12,) of the leg action scale from JOINT=F items (JOINT one of LEG_JOINT_KINDS, F in
+    (0, 2]); each applies to that joint of both legs, joints not named keep 1.0, a joint named twice takes its last
+    factor. Raises ValueError naming @p flag, the item and the expected form."""
     factors = np.ones(12)
     for item in items:
         name, _, value = item.partition("=")
