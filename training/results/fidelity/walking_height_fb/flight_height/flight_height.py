@@ -24,8 +24,9 @@ def main(argv):
             rows = [r for r in csv.DictReader(f) if t0 <= float(r["t"]) <= t1]
         if not rows:
             sys.exit(f"{out}/seed{s}.csv: no ticks in [{t0}, {t1}] s")
-        flight = [r for r in rows if float(r["contact_l"]) < 0.5 and float(r["contact_r"]) < 0.5]
-        contact = [r for r in rows if r not in flight]
+        flight, contact = [], []
+        for r in rows:
+            (flight if float(r["contact_l"]) < 0.5 and float(r["contact_r"]) < 0.5 else contact).append(r)
 
         def mean(sel, key="height"):
             return sum(float(r[key]) for r in sel) / len(sel) if sel else float("nan")
