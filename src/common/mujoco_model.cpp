@@ -295,12 +295,10 @@ MujocoModelCacheStats mujocoModelCacheStats() {
 }
 
 MjModelPtr loadMujocoModel(const std::string& mjcf_path, const Mujoco22Options& options) {
-  std::ifstream in(mjcf_path);
-  if (!in) throw std::runtime_error(mjcf_path + ": cannot open MJCF file");
-  std::stringstream ss;
-  ss << in.rdbuf();
+  std::string text;
+  if (!readWholeFile(mjcf_path, text)) throw std::runtime_error(mjcf_path + ": cannot open MJCF file");
   const std::string dir = fs::absolute(fs::path(mjcf_path)).parent_path().string();
-  const std::string xml = adaptMjcfForMujoco22(ss.str(), dir, options);
+  const std::string xml = adaptMjcfForMujoco22(text, dir, options);
   const char* cache_dir = std::getenv("PMG_MJCF_CACHE_DIR");
   if (cache_dir == nullptr || *cache_dir == '\0') return compileMjcf(mjcf_path, xml);
 
